@@ -1,0 +1,109 @@
+// pmz streaming decoder: C++ API.
+//
+// Push model after zstd's ZSTD_decompressStream: feed() any slice of the .pmz byte stream
+// (one byte or the whole file give the same result); decoded vertex splits become
+// *available*; refine()/coarsen()/set_face_target() move the current mesh between the base
+// mesh and the finest level available without re-reading bytes. The mesh is valid (a
+// consistent indexed triangle mesh) after every call.
+//
+// Depends on the standard library and zstd only. Not thread-safe: one thread per Decoder.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace pmz {
+
+enum class Status : int {
+  ok = 0,
+  bad_magic = 1,       // not a .pmz stream
+  bad_version = 2,     // a major version this decoder does not read
+  bad_checksum = 3,    // a chunk's checksum does not match its bytes
+  corrupt = 4,         // bytes that parse but describe an impossible mesh or stream
+  limit_exceeded = 5,  // counts beyond DecoderLimits or beyond what the input can hold
+  truncated = 6,       // only from finish(): the stream ended before its end marker
+  out_of_memory = 7,
+};
+
+const char* status_name(Status s);
+
+struct DecoderLimits {
+  // Hard caps, checked against header counts before any allocation.
+  uint64_t max_vertices = 1ull << 27;
+  uint64_t max_faces = 1ull << 28;
+  uint64_t max_chunk_bytes = 1ull << 28;  // compressed or decompressed size of one chunk
+};
+
+struct StreamInfo {
+  bool header_done = false;   // header parsed: the fields below are valid
+  bool base_done = false;     // base mesh decoded: the mesh is drawable
+  bool complete = false;      // end marker seen: every split is available
+  uint32_t version_major = 0, version_minor = 0;
+  uint32_t flags = 0;
+  uint32_t position_bits = 0;  // 0 = lossless float32
+  uint64_t base_vertices = 0, base_faces = 0;
+  uint64_t full_vertices = 0, full_faces = 0;
+  uint64_t total_splits = 0;
+  float bbox_min[3] = {0, 0, 0}, bbox_max[3] = {0, 0, 0};
+};
+
+// What changed in the mesh buffers since the last clear_changes(), for uploading deltas.
+struct MeshChanges {
+  // Vertices [vertex_begin, vertex_count()) and faces [face_begin, face_count()) are new or
+  // rewritten; vertex_begin == vertex_count() means none. After coarsening these shrink, so
+  // a renderer simply draws face_count() faces.
+  uint32_t vertex_begin = 0;
+  uint32_t face_begin = 0;
+  // Faces below face_begin whose indices were rewritten (may repeat; unsorted).
+  std::vector<uint32_t> modified_faces;
+  bool all = false;  // everything should be re-uploaded (e.g. first base mesh)
+};
+
+class Decoder {
+ public:
+  explicit Decoder(const DecoderLimits& limits = {});
+  ~Decoder();
+  Decoder(Decoder&&) noexcept;
+  Decoder& operator=(Decoder&&) noexcept;
+  Decoder(const Decoder&) = delete;
+  Decoder& operator=(const Decoder&) = delete;
+
+  // Consume bytes. Returns ok or the first error; after an error further feeds return the
+  // same error and the mesh stays at the last good level (still usable).
+  Status feed(const void* data, size_t size);
+  // Call at end of input: truncated if the end marker was not seen, else ok (or the error).
+  Status finish();
+  Status status() const;
+  const std::string& error_message() const;  // one line, empty when ok
+  const StreamInfo& info() const;
+  uint64_t bytes_consumed() const;
+
+  // Level of detail. Each returns the number of splits applied/undone.
+  uint64_t refine(uint64_t max_splits = UINT64_MAX);  // apply up to N available splits
+  uint64_t coarsen(uint64_t max_splits = UINT64_MAX);  // undo up to N applied splits
+  // Go to the smallest level whose face count >= faces (clamped to what is available).
+  void set_face_target(uint64_t faces);
+  void set_split_target(uint64_t splits);
+  uint64_t splits_applied() const;
+  uint64_t splits_available() const;
+
+  // Current mesh: float xyz per vertex, three uint32 indices per counter-clockwise face.
+  uint32_t vertex_count() const;
+  uint32_t face_count() const;
+  const float* positions() const;
+  const uint32_t* indices() const;
+  // For geomorphs: the vertex each vertex was split from (UINT32_MAX for base vertices).
+  // Valid for all vertices below vertex_count().
+  const uint32_t* split_parents() const;
+
+  const MeshChanges& changes() const;
+  void clear_changes();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace pmz

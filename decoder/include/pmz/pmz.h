@@ -1,0 +1,47 @@
+/* pmz streaming decoder: C API (a thin layer over pmz::Decoder). */
+#ifndef PMZ_H
+#define PMZ_H
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct pmz_decoder pmz_decoder;
+
+enum {
+  PMZ_OK = 0,
+  PMZ_ERR_MAGIC = 1,
+  PMZ_ERR_VERSION = 2,
+  PMZ_ERR_CHECKSUM = 3,
+  PMZ_ERR_CORRUPT = 4,
+  PMZ_ERR_LIMIT = 5,
+  PMZ_ERR_TRUNCATED = 6,
+  PMZ_ERR_MEMORY = 7
+};
+
+/* Limits of 0 take the defaults. Returns NULL only when out of memory. */
+pmz_decoder* pmz_decoder_create(uint64_t max_vertices, uint64_t max_faces);
+void pmz_decoder_destroy(pmz_decoder* d);
+
+int pmz_decoder_feed(pmz_decoder* d, const void* data, size_t size);
+int pmz_decoder_finish(pmz_decoder* d);
+const char* pmz_decoder_error(const pmz_decoder* d); /* one line; "" when ok */
+
+uint64_t pmz_decoder_refine(pmz_decoder* d, uint64_t max_splits);
+uint64_t pmz_decoder_coarsen(pmz_decoder* d, uint64_t max_splits);
+void pmz_decoder_set_face_target(pmz_decoder* d, uint64_t faces);
+uint64_t pmz_decoder_splits_applied(const pmz_decoder* d);
+uint64_t pmz_decoder_splits_available(const pmz_decoder* d);
+uint64_t pmz_decoder_total_splits(const pmz_decoder* d); /* 0 until the header is in */
+
+uint32_t pmz_decoder_vertex_count(const pmz_decoder* d);
+uint32_t pmz_decoder_face_count(const pmz_decoder* d);
+const float* pmz_decoder_positions(const pmz_decoder* d);  /* 3 floats per vertex */
+const uint32_t* pmz_decoder_indices(const pmz_decoder* d); /* 3 indices per face */
+
+#ifdef __cplusplus
+}
+#endif
+#endif

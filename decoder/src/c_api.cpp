@@ -1,0 +1,42 @@
+// C API: a thin layer over pmz::Decoder; no exception crosses it.
+#include <new>
+
+#include "pmz/decoder.hpp"
+#include "pmz/export.h"
+#include "pmz/pmz.h"
+
+struct pmz_decoder {
+  pmz::Decoder dec;
+  explicit pmz_decoder(const pmz::DecoderLimits& l) : dec(l) {}
+};
+
+extern "C" {
+
+PMZ_API pmz_decoder* pmz_decoder_create(uint64_t max_vertices, uint64_t max_faces) {
+  pmz::DecoderLimits limits;
+  if (max_vertices) limits.max_vertices = max_vertices;
+  if (max_faces) limits.max_faces = max_faces;
+  return new (std::nothrow) pmz_decoder(limits);
+}
+PMZ_API void pmz_decoder_destroy(pmz_decoder* d) { delete d; }
+PMZ_API int pmz_decoder_feed(pmz_decoder* d, const void* data, size_t size) {
+  try {
+    return int(d->dec.feed(data, size));
+  } catch (const std::bad_alloc&) {
+    return PMZ_ERR_MEMORY;
+  }
+}
+PMZ_API int pmz_decoder_finish(pmz_decoder* d) { return int(d->dec.finish()); }
+PMZ_API const char* pmz_decoder_error(const pmz_decoder* d) { return d->dec.error_message().c_str(); }
+PMZ_API uint64_t pmz_decoder_refine(pmz_decoder* d, uint64_t n) { return d->dec.refine(n); }
+PMZ_API uint64_t pmz_decoder_coarsen(pmz_decoder* d, uint64_t n) { return d->dec.coarsen(n); }
+PMZ_API void pmz_decoder_set_face_target(pmz_decoder* d, uint64_t f) { d->dec.set_face_target(f); }
+PMZ_API uint64_t pmz_decoder_splits_applied(const pmz_decoder* d) { return d->dec.splits_applied(); }
+PMZ_API uint64_t pmz_decoder_splits_available(const pmz_decoder* d) { return d->dec.splits_available(); }
+PMZ_API uint64_t pmz_decoder_total_splits(const pmz_decoder* d) { return d->dec.info().total_splits; }
+PMZ_API uint32_t pmz_decoder_vertex_count(const pmz_decoder* d) { return d->dec.vertex_count(); }
+PMZ_API uint32_t pmz_decoder_face_count(const pmz_decoder* d) { return d->dec.face_count(); }
+PMZ_API const float* pmz_decoder_positions(const pmz_decoder* d) { return d->dec.positions(); }
+PMZ_API const uint32_t* pmz_decoder_indices(const pmz_decoder* d) { return d->dec.indices(); }
+
+}  // extern "C"

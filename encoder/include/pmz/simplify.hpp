@@ -1,0 +1,47 @@
+// The collapse engine: the paper's multi-feature metric (or plain QEM) driving half-edge
+// collapses u -> v in a priority queue, recorded as a replayable sequence.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "pmz/mesh.hpp"
+
+namespace pmz {
+
+inline constexpr uint32_t kNoVertex = 0xFFFFFFFFu;
+
+enum class Metric { multifeature, qem };
+
+// One half-edge collapse u -> v (v keeps its position; u disappears), in *input* vertex ids.
+// vl: third vertex of the face (u, v, vl) holding the directed edge u->v; vr: third vertex of
+// the face (v, u, vr) holding v->u. One of them is kNoVertex when (u, v) is a boundary edge.
+// Its inverse, the vertex split, re-creates u at positions[u] and the faces (u,v,vl), (v,u,vr).
+struct HalfEdgeCollapse {
+  uint32_t u, v, vl, vr;
+  float cost;  // metric value when it was performed (non-decreasing only approximately)
+};
+
+struct SimplifyOptions {
+  Metric metric = Metric::multifeature;
+  uint64_t target_faces = 0;  // stop at this face count (0: as far as legal collapses go)
+  double max_cost = -1;       // stop when the cheapest collapse costs more (<0: no limit)
+  // Progress callback (fraction done 0..1); may be empty.
+  std::function<void(double)> progress;
+};
+
+struct CollapseSequence {
+  IndexedMesh mesh;  // the input as the engine saw it (after repair), full resolution
+  std::vector<HalfEdgeCollapse> collapses;  // in the order performed
+  std::vector<uint32_t> base_indices;       // faces left after all collapses, input vertex ids
+};
+
+// Runs the engine. Returns false with a one-line message on input it cannot handle.
+bool simplify(const IndexedMesh& input, const SimplifyOptions& options, CollapseSequence& out,
+              std::string& error);
+
+// The mesh after the first k collapses (faces in input ids compacted to the vertices left).
+IndexedMesh mesh_after(const CollapseSequence& seq, size_t k);
+
+}  // namespace pmz

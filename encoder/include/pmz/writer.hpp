@@ -1,0 +1,29 @@
+// Turns a collapse sequence into a .pmz byte stream (spec/format.md).
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "pmz/simplify.hpp"
+
+namespace pmz {
+
+struct WriteOptions {
+  uint32_t position_bits = 14;  // 0 = lossless float32; else quantized over the largest extent
+  uint64_t base_faces = 0;      // 0: as small as the sequence goes
+  int zstd_level = 19;
+};
+
+struct WriteStats {
+  uint64_t header_bytes = 0, base_bytes = 0, split_bytes = 0;
+  uint64_t connectivity_bits = 0, geometry_bits = 0;  // over all splits, before/after zstd
+};
+
+bool write_pmz(const CollapseSequence& seq, const WriteOptions& options,
+               std::vector<uint8_t>& out, std::string& error, WriteStats* stats = nullptr);
+
+// Vertex and face order of a full decode, relative to seq.mesh: decoded vertex i is input
+// vertex vertex_order[i]. The round-trip tests use it.
+std::vector<uint32_t> decoded_vertex_order(const CollapseSequence& seq, const WriteOptions& options);
+
+}  // namespace pmz

@@ -1,0 +1,13 @@
+// pmz-compare: placeholder until its issue lands. It says what it will do and refuses to
+// pretend: every run other than --help exits 2.
+#include <cstdio>
+#include <cstring>
+
+int main(int argc, char** argv) {
+  if (argc > 1 && (!std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h"))) {
+    std::puts("pmz-compare: Metro-style symmetric Hausdorff distance between two meshes.\n(not implemented yet in this build)");
+    return 0;
+  }
+  std::fputs("pmz-compare: not implemented yet in this build\n", stderr);
+  return 2;
+}

@@ -1,0 +1,87 @@
+#include "pmz/coding.hpp"
+
+#include <array>
+#include <cstring>
+
+namespace pmz {
+
+namespace {
+constexpr std::array<uint32_t, 256> make_crc_table() {
+  std::array<uint32_t, 256> t{};
+  for (uint32_t i = 0; i < 256; ++i) {
+    uint32_t c = i;
+    for (int k = 0; k < 8; ++k) c = (c & 1) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+    t[i] = c;
+  }
+  return t;
+}
+constexpr auto kCrcTable = make_crc_table();
+}  // namespace
+
+uint32_t crc32(const void* data, size_t size, uint32_t crc) {
+  const auto* p = static_cast<const uint8_t*>(data);
+  crc = ~crc;
+  for (size_t i = 0; i < size; ++i) crc = kCrcTable[(crc ^ p[i]) & 0xFF] ^ (crc >> 8);
+  return ~crc;
+}
+
+void put_varint(std::vector<uint8_t>& out, uint64_t v) {
+  while (v >= 0x80) {
+    out.push_back(uint8_t(v) | 0x80);
+    v >>= 7;
+  }
+  out.push_back(uint8_t(v));
+}
+
+uint8_t ByteReader::u8() {
+  if (p >= end) {
+    ok = false;
+    return 0;
+  }
+  return *p++;
+}
+
+uint32_t ByteReader::u32le() {
+  const uint8_t* b = bytes(4);
+  if (!b) return 0;
+  return uint32_t(b[0]) | uint32_t(b[1]) << 8 | uint32_t(b[2]) << 16 | uint32_t(b[3]) << 24;
+}
+
+uint64_t ByteReader::u64le() {
+  uint64_t lo = u32le();
+  uint64_t hi = u32le();
+  return lo | hi << 32;
+}
+
+float ByteReader::f32le() {
+  uint32_t u = u32le();
+  float f;
+  std::memcpy(&f, &u, 4);
+  return f;
+}
+
+uint64_t ByteReader::varint() {
+  uint64_t v = 0;
+  for (int shift = 0; shift < 70; shift += 7) {
+    if (p >= end) break;
+    uint8_t b = *p++;
+    if (shift == 63 && b > 1) break;  // would overflow 64 bits
+    v |= uint64_t(b & 0x7F) << shift;
+    if (!(b & 0x80)) return v;
+  }
+  ok = false;
+  return 0;
+}
+
+const uint8_t* ByteReader::bytes(size_t n) {
+  if (remaining() < n) {
+    ok = false;
+    p = end;
+    return nullptr;
+  }
+  const uint8_t* r = p;
+  p += n;
+  return r;
+}
+
+}  // namespace pmz
