@@ -1,0 +1,47 @@
+// Metro-style surface distance (Cignoni, Rocchini, Scopigno 1998): dense deterministic sampling
+// of one mesh (vertices, edges, faces), nearest point on the other surface through a BVH,
+// both directions. The measuring stick for every quality figure of the project.
+#pragma once
+#include <cstdint>
+#include <string>
+
+#include "pmz/mesh.hpp"
+
+namespace pmz {
+
+struct CompareOptions {
+  // Area-proportional face samples per direction; 0 = default: 10 x the larger face count,
+  // clamped to [200k, 2M]. Each direction adds all referenced vertices and edge samples
+  // (a tenth of the face samples, proportional to length).
+  uint64_t samples = 0;
+  uint64_t seed = 0x706d7a2d6d6574ull;  // fixed: results are reproducible run to run
+  unsigned threads = 2;                 // results do not depend on it (fixed-block reduction)
+  bool both_directions = true;          // false: only ORIGINAL -> OTHER (backward stays zero)
+};
+
+// Distances from samples on one surface to the other, absolute (model units).
+// max is over every sample (vertices, edges, faces); mean and rms are over the
+// area-proportional face samples, i.e. estimates of the surface integrals divided by area,
+// so vertex-dense regions do not bias them.
+struct DistanceStats {
+  double max = 0, mean = 0, rms = 0;
+  uint64_t samples = 0;  // all samples taken
+};
+
+struct CompareResult {
+  double diag = 0;          // bounding-box diagonal of ORIGINAL (divide by it for relative)
+  DistanceStats forward;    // samples on ORIGINAL, distance to OTHER
+  DistanceStats backward;   // samples on OTHER, distance to ORIGINAL
+  DistanceStats symmetric;  // max of both maxima (the Hausdorff distance); mean and rms of
+                            // both directions with equal weight
+  double seconds = 0;       // wall time of the comparison (BVH builds + queries)
+};
+
+// Returns false with a one-line message when a mesh has no faces or indices out of range.
+bool compare(const IndexedMesh& original, const IndexedMesh& other, const CompareOptions& options,
+             CompareResult& result, std::string& error);
+
+// Default number of face samples per direction for meshes of these face counts.
+uint64_t default_compare_samples(uint64_t faces_a, uint64_t faces_b);
+
+}  // namespace pmz

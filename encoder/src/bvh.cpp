@@ -1,0 +1,253 @@
+// Triangle BVH: binned SAH build, nearest-first closest-point traversal with pruning.
+#include "bvh.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+namespace pmz {
+
+namespace {
+
+constexpr int kBins = 16;
+constexpr unsigned kMaxDepth = 80;   // deeper ranges become leaves; the query stack fits it
+constexpr unsigned kStackSize = kMaxDepth + 8;
+constexpr uint32_t kLeafSize = 4;
+
+struct Box {
+  float lo[3] = {std::numeric_limits<float>::max(), std::numeric_limits<float>::max(),
+                 std::numeric_limits<float>::max()};
+  float hi[3] = {-std::numeric_limits<float>::max(), -std::numeric_limits<float>::max(),
+                 -std::numeric_limits<float>::max()};
+  void grow(const float* p) {
+    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
+  }
+  void grow(const Box& b) {
+    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], b.lo[k]), hi[k] = std::max(hi[k], b.hi[k]);
+  }
+  double half_area() const {
+    if (lo[0] > hi[0]) return 0;
+    double dx = hi[0] - lo[0], dy = hi[1] - lo[1], dz = hi[2] - lo[2];
+    return dx * dy + dy * dz + dz * dx;
+  }
+};
+
+inline double dot3(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+inline double ratio(double num, double den) { return den != 0 ? num / den : 0.0; }
+
+double segment_distance2(const double p[3], const double a[3], const double b[3]) {
+  double ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  double ap[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]};
+  double t = std::clamp(ratio(dot3(ap, ab), dot3(ab, ab)), 0.0, 1.0);
+  double d[3] = {ap[0] - t * ab[0], ap[1] - t * ab[1], ap[2] - t * ab[2]};
+  return dot3(d, d);
+}
+
+template <class Node>
+inline double box_distance2(const Node& n, const double p[3]) {
+  double d2 = 0;
+  for (int k = 0; k < 3; ++k) {
+    double d = std::max({double(n.lo[k]) - p[k], 0.0, p[k] - double(n.hi[k])});
+    d2 += d * d;
+  }
+  return d2;
+}
+
+}  // namespace
+
+double point_triangle_distance2(const double p[3], const float* fa, const float* fb, const float* fc) {
+  const double a[3] = {fa[0], fa[1], fa[2]}, b[3] = {fb[0], fb[1], fb[2]}, c[3] = {fc[0], fc[1], fc[2]};
+  const double ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  const double ac[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  const double ap[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]};
+  auto dist2_to = [&](double x, double y, double z) {
+    double d[3] = {p[0] - x, p[1] - y, p[2] - z};
+    return dot3(d, d);
+  };
+  double d1 = dot3(ab, ap), d2 = dot3(ac, ap);
+  if (d1 <= 0 && d2 <= 0) return dot3(ap, ap);  // vertex region a
+  const double bp[3] = {p[0] - b[0], p[1] - b[1], p[2] - b[2]};
+  double d3 = dot3(ab, bp), d4 = dot3(ac, bp);
+  if (d3 >= 0 && d4 <= d3) return dot3(bp, bp);  // vertex region b
+  double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) {  // edge region ab
+    double v = ratio(d1, d1 - d3);
+    return dist2_to(a[0] + v * ab[0], a[1] + v * ab[1], a[2] + v * ab[2]);
+  }
+  const double cp[3] = {p[0] - c[0], p[1] - c[1], p[2] - c[2]};
+  double d5 = dot3(ab, cp), d6 = dot3(ac, cp);
+  if (d6 >= 0 && d5 <= d6) return dot3(cp, cp);  // vertex region c
+  double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) {  // edge region ac
+    double w = ratio(d2, d2 - d6);
+    return dist2_to(a[0] + w * ac[0], a[1] + w * ac[1], a[2] + w * ac[2]);
+  }
+  double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) {  // edge region bc
+    double w = ratio(d4 - d3, (d4 - d3) + (d5 - d6));
+    return dist2_to(b[0] + w * (c[0] - b[0]), b[1] + w * (c[1] - b[1]), b[2] + w * (c[2] - b[2]));
+  }
+  double sum = va + vb + vc;
+  if (!(sum > 0)) {  // degenerate (zero-area) triangle: nearest of its edges
+    return std::min({segment_distance2(p, a, b), segment_distance2(p, b, c), segment_distance2(p, c, a)});
+  }
+  double v = vb / sum, w = vc / sum;
+  return dist2_to(a[0] + ab[0] * v + ac[0] * w, a[1] + ab[1] * v + ac[1] * w, a[2] + ab[2] * v + ac[2] * w);
+}
+
+void TriangleBvh::build(const float* positions, const uint32_t* indices, size_t face_count) {
+  std::vector<Box> boxes(face_count);
+  std::vector<float> centroids(face_count * 3);
+  for (size_t f = 0; f < face_count; ++f) {
+    for (int j = 0; j < 3; ++j) {
+      const float* p = positions + size_t(indices[f * 3 + j]) * 3;
+      boxes[f].grow(p);
+      for (int k = 0; k < 3; ++k) centroids[f * 3 + k] += p[k] * (1.0f / 3.0f);
+    }
+  }
+  std::vector<uint32_t> order(face_count);
+  std::iota(order.begin(), order.end(), 0u);
+
+  nodes_.clear();
+  nodes_.reserve(face_count / 2 + 1);
+  nodes_.push_back({});
+  struct Range {
+    uint32_t node, begin, end, depth;
+  };
+  std::vector<Range> todo;
+  todo.push_back({0, 0, uint32_t(face_count), 0});
+  while (!todo.empty()) {
+    Range r = todo.back();
+    todo.pop_back();
+    Box bounds, cbounds;
+    for (uint32_t i = r.begin; i < r.end; ++i) {
+      bounds.grow(boxes[order[i]]);
+      cbounds.grow(&centroids[size_t(order[i]) * 3]);
+    }
+    Node& node = nodes_[r.node];
+    std::copy(bounds.lo, bounds.lo + 3, node.lo);
+    std::copy(bounds.hi, bounds.hi + 3, node.hi);
+    const uint32_t count = r.end - r.begin;
+    auto make_leaf = [&] {
+      nodes_[r.node].first = r.begin;
+      nodes_[r.node].count = count;
+    };
+    if (count <= 2 || r.depth >= kMaxDepth) {
+      make_leaf();
+      continue;
+    }
+    int axis = 0;
+    float extent[3];
+    for (int k = 0; k < 3; ++k) extent[k] = cbounds.hi[k] - cbounds.lo[k];
+    if (extent[1] > extent[axis]) axis = 1;
+    if (extent[2] > extent[axis]) axis = 2;
+
+    uint32_t mid = r.begin;
+    if (extent[axis] > 0) {
+      // Binned SAH along the widest centroid axis.
+      Box bin_box[kBins];
+      uint32_t bin_count[kBins] = {};
+      const float scale = kBins / extent[axis];
+      auto bin_of = [&](uint32_t f) {
+        int b = int((centroids[size_t(f) * 3 + axis] - cbounds.lo[axis]) * scale);
+        return std::min(b, kBins - 1);
+      };
+      for (uint32_t i = r.begin; i < r.end; ++i) {
+        int b = bin_of(order[i]);
+        bin_box[b].grow(boxes[order[i]]);
+        bin_count[b]++;
+      }
+      double right_cost[kBins] = {};
+      Box acc;
+      uint32_t n = 0;
+      for (int b = kBins - 1; b > 0; --b) {
+        acc.grow(bin_box[b]);
+        n += bin_count[b];
+        right_cost[b] = acc.half_area() * n;
+      }
+      acc = Box();
+      n = 0;
+      double best_cost = std::numeric_limits<double>::max();
+      int best_split = -1;
+      for (int b = 0; b + 1 < kBins; ++b) {
+        acc.grow(bin_box[b]);
+        n += bin_count[b];
+        if (n == 0 || n == count) continue;
+        double cost = acc.half_area() * n + right_cost[b + 1];
+        if (cost < best_cost) best_cost = cost, best_split = b;
+      }
+      // Leaf when splitting does not pay (traversal cost ~ one triangle test).
+      const double leaf_cost = bounds.half_area() * count;
+      if (count <= kLeafSize && (best_split < 0 || best_cost + bounds.half_area() >= leaf_cost)) {
+        make_leaf();
+        continue;
+      }
+      if (best_split >= 0) {
+        auto it = std::partition(order.begin() + r.begin, order.begin() + r.end,
+                                 [&](uint32_t f) { return bin_of(f) <= best_split; });
+        mid = uint32_t(it - order.begin());
+      }
+    } else if (count <= kLeafSize * 2) {  // coincident centroids: nothing to separate
+      make_leaf();
+      continue;
+    }
+    if (mid == r.begin || mid == r.end) {  // no useful SAH split: median by index
+      mid = r.begin + count / 2;
+      std::nth_element(order.begin() + r.begin, order.begin() + mid, order.begin() + r.end,
+                       [&](uint32_t x, uint32_t y) {
+                         return centroids[size_t(x) * 3 + axis] < centroids[size_t(y) * 3 + axis];
+                       });
+    }
+    const uint32_t left = uint32_t(nodes_.size());
+    nodes_[r.node].first = left;
+    nodes_[r.node].count = 0;
+    nodes_.push_back({});
+    nodes_.push_back({});
+    todo.push_back({left + 1, mid, r.end, r.depth + 1});
+    todo.push_back({left, r.begin, mid, r.depth + 1});
+  }
+
+  triangles_.resize(face_count * 9);
+  for (size_t i = 0; i < face_count; ++i)
+    for (int j = 0; j < 3; ++j)
+      std::copy_n(positions + size_t(indices[size_t(order[i]) * 3 + j]) * 3, 3, &triangles_[i * 9 + j * 3]);
+}
+
+double TriangleBvh::closest_distance2(const double p[3], uint32_t& hint) const {
+  double best = std::numeric_limits<double>::infinity();
+  const size_t tri_count = triangle_count();
+  if (tri_count == 0) return best;
+  auto test = [&](uint32_t t) {
+    const float* v = &triangles_[size_t(t) * 9];
+    double d = point_triangle_distance2(p, v, v + 3, v + 6);
+    if (d < best) best = d, hint = t;
+  };
+  if (hint < tri_count) test(hint);
+
+  struct Entry {
+    uint32_t node;
+    double dist2;
+  };
+  Entry stack[kStackSize];
+  unsigned sp = 0;
+  stack[sp++] = {0, box_distance2(nodes_[0], p)};
+  while (sp > 0) {
+    Entry e = stack[--sp];
+    if (e.dist2 >= best) continue;
+    const Node& n = nodes_[e.node];
+    if (n.count > 0) {
+      for (uint32_t t = n.first; t < n.first + n.count; ++t) test(t);
+      continue;
+    }
+    Entry near = {n.first, box_distance2(nodes_[n.first], p)};
+    Entry far = {n.first + 1, box_distance2(nodes_[n.first + 1], p)};
+    if (far.dist2 < near.dist2) std::swap(near, far);
+    if (far.dist2 < best) stack[sp++] = far;
+    if (near.dist2 < best) stack[sp++] = near;
+  }
+  return best;
+}
+
+}  // namespace pmz

@@ -1,0 +1,37 @@
+// Triangle BVH for closest-point queries (binned SAH, flat node array, triangles copied in
+// leaf order so a leaf reads one contiguous run). Private to the encoder library.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace pmz {
+
+class TriangleBvh {
+ public:
+  // positions: xyz per vertex; indices: three per triangle (validated by the caller).
+  void build(const float* positions, const uint32_t* indices, size_t face_count);
+
+  // Squared distance from p to the nearest point of the surface. hint is a triangle (leaf
+  // order) whose distance seeds the search bound; it is updated to the nearest triangle, so
+  // passing the previous result for spatially coherent queries prunes most of the tree.
+  double closest_distance2(const double p[3], uint32_t& hint) const;
+
+  size_t triangle_count() const { return triangles_.size() / 9; }
+
+ private:
+  struct Node {
+    float lo[3];
+    uint32_t first;  // leaf: first triangle; interior: left child (right child is first + 1)
+    float hi[3];
+    uint32_t count;  // triangles in a leaf; 0 for an interior node
+  };
+  std::vector<Node> nodes_;
+  std::vector<float> triangles_;  // 9 floats per triangle, in leaf order
+};
+
+// Squared distance from p to triangle (a, b, c), closest point by Voronoi regions (Ericson,
+// Real-Time Collision Detection, 5.1.5); degenerate triangles fall back to their edges.
+double point_triangle_distance2(const double p[3], const float* a, const float* b, const float* c);
+
+}  // namespace pmz
