@@ -23,8 +23,26 @@ struct HalfEdgeCollapse {
   float cost;  // metric value when it was performed (non-decreasing only approximately)
 };
 
+// The multi-feature metric's free parameters (spec/algorithm.md says how the defaults were
+// chosen). Cost of collapsing u -> v, with L the mean initial edge length:
+//   (quadric_floor + C_norm(u)) * (Q_u + Q_v)(p_v) / L^4 + torsion_weight * sigma(uv) * T(u) * L
+struct MetricParams {
+  float epsilon = 0.5f;          // eq. 2: faces with n.n_i <= epsilon add nothing to B
+  float quadric_floor = 1.0f;    // keeps flat-but-displaced regions' accumulated error
+  float torsion_weight = 1.0f;   // CB relative to CA
+  float boundary_weight = 1.0f;  // boundary-plane quadrics (both metrics)
+};
+
+// Where the time went (seconds), filled when SimplifyOptions::stats is set.
+struct SimplifyStats {
+  double setup = 0, initial_costs = 0, collapse = 0, update_terms = 0, update_costs = 0, total = 0;
+  uint64_t cost_evaluations = 0, legality_checks = 0;
+};
+
 struct SimplifyOptions {
   Metric metric = Metric::multifeature;
+  MetricParams params;
+  SimplifyStats* stats = nullptr;
   uint64_t target_faces = 0;  // stop at this face count (0: as far as legal collapses go)
   double max_cost = -1;       // stop when the cheapest collapse costs more (<0: no limit)
   // Progress callback (fraction done 0..1); may be empty.

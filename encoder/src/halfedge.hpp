@@ -1,0 +1,72 @@
+// Internal: a triangle mesh as flat half-edge arrays, the collapse engine's working topology.
+// Half-edge h = 3 * face + corner runs from the vertex at corner h to the vertex at next(h);
+// twin[h] is the opposite half-edge in the neighbouring face (kNone on the boundary).
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "pmz/mesh.hpp"
+
+namespace pmz::detail {
+
+inline constexpr uint32_t kNone = 0xFFFFFFFFu;
+
+struct HalfEdgeMesh {
+  std::vector<float> pos;      // xyz per vertex
+  std::vector<uint32_t> vert;  // origin vertex per half-edge; kNone once its face is deleted
+  std::vector<uint32_t> twin;  // per half-edge
+  // Per vertex: one outgoing half-edge; for a boundary vertex the one without a twin, so a
+  // rotation from it sweeps the whole fan. kNone for isolated or collapsed vertices.
+  std::vector<uint32_t> out;
+
+  static uint32_t next(uint32_t h) { return h % 3 == 2 ? h - 2 : h + 1; }
+  static uint32_t prev(uint32_t h) { return h % 3 == 0 ? h + 2 : h - 1; }
+  uint32_t dest(uint32_t h) const { return vert[next(h)]; }
+  bool face_alive(uint32_t f) const { return vert[3 * f] != kNone; }
+  bool is_boundary(uint32_t v) const { return twin[out[v]] == kNone; }
+  // The next outgoing half-edge around the origin of h; kNone past the boundary.
+  uint32_t rotate(uint32_t h) const { return twin[prev(h)]; }
+  uint32_t face_count() const { return uint32_t(vert.size() / 3); }
+  uint32_t vertex_count() const { return uint32_t(out.size()); }
+  const float* p(uint32_t v) const { return &pos[size_t(v) * 3]; }
+};
+
+// Builds the half-edge arrays. Fails with a one-line message on out-of-range indices, faces
+// with a repeated vertex, and non-manifold edges or vertices (the engine needs a
+// manifold-with-boundary mesh; mesh_io repairs ordinary input before it gets here).
+bool build_halfedge(const IndexedMesh& in, HalfEdgeMesh& m, std::string& error);
+
+// f(h) for each outgoing half-edge of v, one per incident face, in rotation order.
+template <class F>
+void for_each_outgoing(const HalfEdgeMesh& m, uint32_t v, F&& f) {
+  uint32_t start = m.out[v];
+  if (start == kNone) return;
+  uint32_t h = start;
+  do {
+    f(h);
+    h = m.rotate(h);
+  } while (h != kNone && h != start);
+}
+
+// f(w, h) for each neighbour w of v; h is a half-edge of the edge (v, w): outgoing v->w, except
+// for the last neighbour of a boundary vertex, where it is the incoming boundary half-edge w->v.
+template <class F>
+void for_each_neighbour(const HalfEdgeMesh& m, uint32_t v, F&& f) {
+  uint32_t start = m.out[v];
+  if (start == kNone) return;
+  uint32_t h = start;
+  for (;;) {
+    f(m.dest(h), h);
+    uint32_t p = HalfEdgeMesh::prev(h);
+    uint32_t n = m.twin[p];
+    if (n == kNone) {
+      f(m.vert[p], p);
+      return;
+    }
+    if (n == start) return;
+    h = n;
+  }
+}
+
+}  // namespace pmz::detail

@@ -1,0 +1,151 @@
+// The multi-feature metric's terms (Wang, Qiao & Zhou): quadrics, C_norm (eq. 1), torsion
+// (eq. 2) and the edge-length ratio (eq. 3). The readings the paper leaves open are argued in
+// spec/algorithm.md.
+#include "metric.hpp"
+
+#include <cmath>
+
+namespace pmz::detail {
+
+namespace {
+
+inline float length(const float* a, const float* b) {
+  float dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
+  return std::sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+}  // namespace
+
+void Quadric::add_plane(const double n[3], double d, double w) {
+  a[0] += w * n[0] * n[0], a[1] += w * n[0] * n[1], a[2] += w * n[0] * n[2];
+  a[3] += w * n[1] * n[1], a[4] += w * n[1] * n[2], a[5] += w * n[2] * n[2];
+  a[6] += w * n[0] * d, a[7] += w * n[1] * d, a[8] += w * n[2] * d;
+  a[9] += w * d * d;
+}
+
+double Quadric::error(const float pf[3]) const {
+  const double x = pf[0], y = pf[1], z = pf[2];
+  return x * (a[0] * x + 2 * (a[1] * y + a[2] * z + a[6])) + y * (a[3] * y + 2 * (a[4] * z + a[7])) +
+         z * (a[5] * z + 2 * a[8]) + a[9];
+}
+
+void initial_quadrics(const HalfEdgeMesh& m, double boundary_weight, std::vector<Quadric>& q) {
+  q.assign(m.vertex_count(), Quadric{});
+  for (uint32_t f = 0; f < m.face_count(); ++f) {
+    const float *p0 = m.p(m.vert[3 * f]), *p1 = m.p(m.vert[3 * f + 1]), *p2 = m.p(m.vert[3 * f + 2]);
+    const double e1[3] = {double(p1[0]) - p0[0], double(p1[1]) - p0[1], double(p1[2]) - p0[2]};
+    const double e2[3] = {double(p2[0]) - p0[0], double(p2[1]) - p0[1], double(p2[2]) - p0[2]};
+    double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (len == 0) continue;
+    for (double& c : n) c /= len;
+    const double d = -(n[0] * p0[0] + n[1] * p0[1] + n[2] * p0[2]);
+    Quadric face;
+    face.add_plane(n, d, 0.5 * len);  // weight = area
+    for (int k = 0; k < 3; ++k) q[m.vert[3 * f + k]].add(face);
+    if (boundary_weight <= 0) continue;
+    for (uint32_t h = 3 * f; h < 3 * f + 3; ++h) {
+      if (m.twin[h] != kNone) continue;
+      const float *a = m.p(m.vert[h]), *b = m.p(m.dest(h));
+      const double e[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
+      double bn[3] = {e[1] * n[2] - e[2] * n[1], e[2] * n[0] - e[0] * n[2], e[0] * n[1] - e[1] * n[0]};
+      const double el2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+      const double bl = std::sqrt(bn[0] * bn[0] + bn[1] * bn[1] + bn[2] * bn[2]);
+      if (bl == 0) continue;
+      for (double& c : bn) c /= bl;
+      Quadric edge;
+      edge.add_plane(bn, -(bn[0] * a[0] + bn[1] * a[1] + bn[2] * a[2]), boundary_weight * el2);
+      q[m.vert[h]].add(edge);
+      q[m.dest(h)].add(edge);
+    }
+  }
+}
+
+void Features::resize(uint32_t vertex_count, uint32_t face_count) {
+  face_normal.assign(size_t(face_count) * 3, 0.f);
+  face_area.assign(face_count, 0.f);
+  normal.assign(size_t(vertex_count) * 3, 0.f);
+  c_norm.assign(vertex_count, 0.f);
+  b.assign(size_t(vertex_count) * 3, 0.f);
+  torsion.assign(vertex_count, 0.f);
+}
+
+void Features::update_face(const HalfEdgeMesh& m, uint32_t f) {
+  const float *p0 = m.p(m.vert[3 * f]), *p1 = m.p(m.vert[3 * f + 1]), *p2 = m.p(m.vert[3 * f + 2]);
+  const float e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+  const float e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+  float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+  const float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  const float inv = len > 0 ? 1.f / len : 0.f;
+  for (int k = 0; k < 3; ++k) face_normal[size_t(f) * 3 + k] = n[k] * inv;
+  face_area[f] = 0.5f * len;
+}
+
+void Features::update_normal_terms(const HalfEdgeMesh& m, uint32_t v) {
+  float n[3] = {0, 0, 0};
+  uint32_t k = 0;
+  for_each_outgoing(m, v, [&](uint32_t h) {
+    const uint32_t f = h / 3;
+    for (int i = 0; i < 3; ++i) n[i] += face_area[f] * face_normal[size_t(f) * 3 + i];
+    ++k;
+  });
+  const float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  if (len > 0)
+    for (float& c : n) c /= len;
+  float c_sum = 0, bv[3] = {0, 0, 0};
+  for_each_outgoing(m, v, [&](uint32_t h) {
+    const float* ni = &face_normal[size_t(h / 3) * 3];
+    const float dot = n[0] * ni[0] + n[1] * ni[1] + n[2] * ni[2];
+    c_sum += 1.f - dot;
+    if (dot > epsilon) {
+      const float w = (dot - epsilon) * (dot - epsilon);
+      for (int i = 0; i < 3; ++i) bv[i] += w * ni[i];
+    }
+  });
+  const float inv_k = k ? 1.f / float(k) : 0.f;
+  for (int i = 0; i < 3; ++i) normal[size_t(v) * 3 + i] = n[i], b[size_t(v) * 3 + i] = bv[i] * inv_k;
+  c_norm[v] = c_sum * inv_k;
+}
+
+void Features::update_torsion(const HalfEdgeMesh& m, uint32_t v) {
+  float num = 0, den = 0;
+  const float* bv = &b[size_t(v) * 3];
+  for_each_neighbour(m, v, [&](uint32_t w, uint32_t) {
+    num += length(&b[size_t(w) * 3], bv);
+    den += length(m.p(w), m.p(v));
+  });
+  torsion[v] = den > 0 ? num / den : 0.f;
+}
+
+void Features::compute_all(const HalfEdgeMesh& m) {
+  resize(m.vertex_count(), m.face_count());
+  for (uint32_t f = 0; f < m.face_count(); ++f)
+    if (m.face_alive(f)) update_face(m, f);
+  for (uint32_t v = 0; v < m.vertex_count(); ++v) update_normal_terms(m, v);
+  for (uint32_t v = 0; v < m.vertex_count(); ++v) update_torsion(m, v);
+}
+
+float edge_length_ratio(const HalfEdgeMesh& m, uint32_t h) {
+  const float* a = m.p(m.vert[h]);
+  const float* b = m.p(m.dest(h));
+  const float* c = m.p(m.vert[HalfEdgeMesh::prev(h)]);
+  float others = length(b, c) + length(c, a);
+  if (const uint32_t t = m.twin[h]; t != kNone) {
+    const float* d = m.p(m.vert[HalfEdgeMesh::prev(t)]);
+    others += length(a, d) + length(d, b);
+  }
+  return others > 0 ? length(a, b) / others : 0.f;
+}
+
+double mean_edge_length(const HalfEdgeMesh& m) {
+  double sum = 0;
+  uint64_t count = 0;
+  for (uint32_t h = 0; h < m.vert.size(); ++h) {
+    if (m.vert[h] == kNone || (m.twin[h] != kNone && m.twin[h] < h)) continue;
+    sum += length(m.p(m.vert[h]), m.p(m.dest(h)));
+    ++count;
+  }
+  return count ? sum / double(count) : 0.0;
+}
+
+}  // namespace pmz::detail

@@ -1,0 +1,222 @@
+// The collapse engine: every recorded collapse replays exactly as the contract says, topology
+// is preserved at every step, targets are met, bad input is refused.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+
+#include "pmz/simplify.hpp"
+#include "simplify_test_meshes.hpp"
+
+using pmz_test::topology;
+
+namespace {
+
+using Face = std::array<uint32_t, 3>;
+
+// The face rotated so its smallest vertex comes first (same cyclic order, same orientation).
+Face canonical(Face f) {
+  while (f[0] > f[1] || f[0] > f[2]) f = {f[1], f[2], f[0]};
+  return f;
+}
+
+std::vector<Face> sorted_faces(const std::vector<uint32_t>& indices) {
+  std::vector<Face> faces;
+  for (size_t i = 0; i < indices.size(); i += 3) faces.push_back(canonical({indices[i], indices[i + 1], indices[i + 2]}));
+  std::sort(faces.begin(), faces.end());
+  return faces;
+}
+
+// Replays the sequence literally as the contract states it: collapse i replaces u by v in all
+// faces and deletes the faces holding both, which must be exactly (u, v, vl) and (v, u, vr).
+// Checks topology after every `check_every` collapses; returns the final faces.
+std::vector<uint32_t> replay(const pmz::CollapseSequence& seq, size_t check_every) {
+  std::vector<uint32_t> faces = seq.mesh.indices;
+  const auto start = topology(seq.mesh);
+  const bool failed_before = ::testing::Test::HasFailure();
+  std::vector<char> removed(seq.mesh.vertex_count(), 0);
+  for (size_t i = 0; i < seq.collapses.size(); ++i) {
+    const auto& c = seq.collapses[i];
+    EXPECT_FALSE(removed[c.u]) << "collapse " << i << " removes a vertex twice";
+    EXPECT_FALSE(removed[c.v]) << "collapse " << i << " keeps a removed vertex";
+    removed[c.u] = 1;
+    std::vector<Face> deleted;
+    std::vector<uint32_t> kept;
+    for (size_t f = 0; f < faces.size(); f += 3) {
+      Face t{faces[f], faces[f + 1], faces[f + 2]};
+      const bool has_u = std::count(t.begin(), t.end(), c.u), has_v = std::count(t.begin(), t.end(), c.v);
+      if (has_u && has_v) {
+        deleted.push_back(canonical(t));
+        continue;
+      }
+      for (uint32_t& x : t) x = x == c.u ? c.v : x;
+      kept.insert(kept.end(), t.begin(), t.end());
+    }
+    std::vector<Face> expected;
+    if (c.vl != pmz::kNoVertex) expected.push_back(canonical({c.u, c.v, c.vl}));
+    if (c.vr != pmz::kNoVertex) expected.push_back(canonical({c.v, c.u, c.vr}));
+    std::sort(deleted.begin(), deleted.end());
+    std::sort(expected.begin(), expected.end());
+    EXPECT_EQ(deleted, expected) << "collapse " << i << " (" << c.u << " -> " << c.v << ")";
+    faces = std::move(kept);
+    if ((i + 1) % check_every == 0 || i + 1 == seq.collapses.size()) {
+      pmz::IndexedMesh now{seq.mesh.positions, faces};
+      const auto t = topology(now);
+      EXPECT_TRUE(t.manifold) << "after collapse " << i << ": " << t.error;
+      EXPECT_EQ(t.euler, start.euler) << "after collapse " << i;
+      EXPECT_EQ(t.boundary_loops, start.boundary_loops) << "after collapse " << i;
+      if (!failed_before && ::testing::Test::HasFailure()) return faces;  // one report is enough
+    }
+  }
+  return faces;
+}
+
+// target_reachable: the mesh can go down to target (+1 for parity) faces; a mesh with many
+// holes cannot, every hole keeps at least three boundary edges.
+void expect_valid_sequence(const pmz::IndexedMesh& mesh, pmz::Metric metric, uint64_t target, size_t check_every,
+                           bool target_reachable = true) {
+  pmz::SimplifyOptions options;
+  options.metric = metric;
+  options.target_faces = target;
+  pmz::CollapseSequence seq;
+  std::string error;
+  ASSERT_TRUE(pmz::simplify(mesh, options, seq, error)) << error;
+  ASSERT_FALSE(seq.collapses.empty());
+  const std::vector<uint32_t> faces = replay(seq, check_every);
+  EXPECT_EQ(sorted_faces(faces), sorted_faces(seq.base_indices));
+  // mesh_after agrees with the literal replay, in compacted ids.
+  const pmz::IndexedMesh after = pmz::mesh_after(seq, seq.collapses.size());
+  EXPECT_EQ(after.face_count() * 3, seq.base_indices.size());
+  EXPECT_EQ(after.vertex_count(), mesh.vertex_count() - seq.collapses.size());
+  if (target && target_reachable) {
+    EXPECT_LE(after.face_count(), target + 1);
+  }
+}
+
+}  // namespace
+
+TEST(Simplify, ClosedSphereEveryStepValid) {
+  for (auto metric : {pmz::Metric::multifeature, pmz::Metric::qem}) expect_valid_sequence(pmz_test::icosphere(3), metric, 0, 1);
+}
+
+TEST(Simplify, SphereGoesDownToATetrahedron) {
+  pmz::CollapseSequence seq;
+  std::string error;
+  ASSERT_TRUE(pmz::simplify(pmz_test::icosphere(2), {}, seq, error)) << error;
+  EXPECT_EQ(seq.base_indices.size(), 4u * 3);
+}
+
+TEST(Simplify, TorusKeepsItsHandle) {
+  const auto mesh = pmz_test::torus(24, 12);
+  for (auto metric : {pmz::Metric::multifeature, pmz::Metric::qem}) expect_valid_sequence(mesh, metric, 0, 1);
+  pmz::CollapseSequence seq;
+  std::string error;
+  ASSERT_TRUE(pmz::simplify(mesh, {}, seq, error)) << error;
+  EXPECT_EQ(topology(pmz::mesh_after(seq, seq.collapses.size())).euler, 0);
+}
+
+TEST(Simplify, GridWithBoundaryEveryStepValid) {
+  for (auto metric : {pmz::Metric::multifeature, pmz::Metric::qem}) expect_valid_sequence(pmz_test::grid(16), metric, 0, 1);
+  // A flat disc goes down to a single triangle.
+  pmz::CollapseSequence seq;
+  std::string error;
+  ASSERT_TRUE(pmz::simplify(pmz_test::grid(6), {}, seq, error)) << error;
+  EXPECT_EQ(seq.base_indices.size(), 3u);
+}
+
+TEST(Simplify, HitsExactFaceCountWithBoundary) {
+  // Odd targets need one boundary collapse at the end.
+  for (uint64_t target : {101u, 100u, 37u}) {
+    pmz::SimplifyOptions options;
+    options.target_faces = target;
+    pmz::CollapseSequence seq;
+    std::string error;
+    ASSERT_TRUE(pmz::simplify(pmz_test::grid(16), options, seq, error)) << error;
+    EXPECT_EQ(seq.base_indices.size() / 3, target);
+  }
+}
+
+TEST(Simplify, ClosedMeshStopsWithinOneFaceOfTarget) {
+  pmz::SimplifyOptions options;
+  options.target_faces = 301;  // closed meshes have an even face count
+  pmz::CollapseSequence seq;
+  std::string error;
+  ASSERT_TRUE(pmz::simplify(pmz_test::icosphere(3), options, seq, error)) << error;
+  EXPECT_EQ(seq.base_indices.size() / 3, 302u);
+}
+
+TEST(Simplify, MeshAfterIntermediateLevels) {
+  pmz::CollapseSequence seq;
+  std::string error;
+  const auto mesh = pmz_test::icosphere(3);
+  ASSERT_TRUE(pmz::simplify(mesh, {}, seq, error)) << error;
+  EXPECT_EQ(pmz::mesh_after(seq, 0).indices, mesh.indices);
+  for (size_t k : {size_t(1), seq.collapses.size() / 2}) {
+    const auto m = pmz::mesh_after(seq, k);
+    EXPECT_EQ(m.vertex_count(), mesh.vertex_count() - k);
+    EXPECT_EQ(m.face_count(), mesh.face_count() - 2 * k);  // closed: every collapse removes two
+  }
+}
+
+TEST(Simplify, IsolatedVerticesStayInTheBase) {
+  auto mesh = pmz_test::grid(4);
+  pmz_test::add_vertex(mesh, 9, 9, 9);
+  pmz::CollapseSequence seq;
+  std::string error;
+  ASSERT_TRUE(pmz::simplify(mesh, {}, seq, error)) << error;
+  for (const auto& c : seq.collapses) EXPECT_NE(c.u, mesh.vertex_count() - 1);
+}
+
+TEST(Simplify, RefusesNonManifoldInput) {
+  pmz::IndexedMesh fin;  // three triangles on one edge
+  for (auto p : {std::array<float, 3>{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}})
+    pmz_test::add_vertex(fin, p[0], p[1], p[2]);
+  fin.indices = {0, 1, 2, 1, 0, 3, 0, 1, 4};
+  pmz::CollapseSequence seq;
+  std::string error;
+  EXPECT_FALSE(pmz::simplify(fin, {}, seq, error));
+  EXPECT_NE(error.find("non-manifold"), std::string::npos) << error;
+
+  pmz::IndexedMesh bowtie;  // two triangles meeting at one vertex
+  for (auto p : {std::array<float, 3>{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {-1, 0, 0}, {-1, -1, 0}})
+    pmz_test::add_vertex(bowtie, p[0], p[1], p[2]);
+  bowtie.indices = {0, 1, 2, 0, 3, 4};
+  EXPECT_FALSE(pmz::simplify(bowtie, {}, seq, error));
+  EXPECT_NE(error.find("non-manifold vertex"), std::string::npos) << error;
+
+  pmz::IndexedMesh bad = pmz_test::grid(2);
+  bad.indices[4] = 1000;
+  EXPECT_FALSE(pmz::simplify(bad, {}, seq, error));
+  EXPECT_NE(error.find("out of range"), std::string::npos) << error;
+}
+
+TEST(Simplify, MaxCostStopsEarly) {
+  pmz::SimplifyOptions options;
+  options.max_cost = 0;  // flat regions cost nothing under QEM; curved ones cost more
+  options.metric = pmz::Metric::qem;
+  pmz::CollapseSequence seq;
+  std::string error;
+  ASSERT_TRUE(pmz::simplify(pmz_test::icosphere(3), options, seq, error)) << error;
+  EXPECT_TRUE(seq.collapses.empty());
+  ASSERT_TRUE(pmz::simplify(pmz_test::grid(8), options, seq, error)) << error;
+  EXPECT_FALSE(seq.collapses.empty());
+  for (const auto& c : seq.collapses) EXPECT_LE(c.cost, 0.f);
+}
+
+// Real meshes of the corpus (libcgal-demo): both metrics, topology checked along the way.
+TEST(Simplify, CorpusMeshesStayManifold) {
+  bool any = false;
+  for (const char* name : {"fandisk", "elephant-with-holes", "mushroom", "cow"}) {
+    const std::string path = pmz_test::corpus_mesh(name);
+    if (path.empty()) continue;
+    pmz::IndexedMesh mesh;
+    std::string error;
+    ASSERT_TRUE(pmz::read_mesh(path, mesh, error)) << error;
+    any = true;
+    SCOPED_TRACE(name);
+    for (auto metric : {pmz::Metric::multifeature, pmz::Metric::qem})
+      expect_valid_sequence(mesh, metric, mesh.face_count() / 50, std::max<size_t>(1, mesh.vertex_count() / 40),
+                            std::string(name) != "elephant-with-holes");
+  }
+  if (!any) GTEST_SKIP() << "no corpus meshes (set PMZ_CORPUS or run scripts/fetch_corpus.sh)";
+}
