@@ -1,13 +1,375 @@
-// pmz-view: placeholder until the viewer issue lands. It says what it will do and refuses to
-// pretend: every run other than --help exits 2.
+// pmz-view: streams a .pmz file, stdin or URL and shows the mesh refining as bytes arrive.
+// The worker thread (stream.cpp) reads and feeds the decoder; this thread moves the level of
+// detail within a per-frame time budget, mirrors the changes and uploads only those.
+#include <epoxy/gl.h>
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+#include <backends/imgui_impl_glfw.h>
+#include <backends/imgui_impl_opengl3.h>
+#include <curl/curl.h>
+#include <imgui.h>
+#include <stb/stb_image_write.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cinttypes>
+#include <cmath>
 #include <cstdio>
-#include <cstring>
+#include <cstdlib>
+#include <string>
+#include <thread>
+
+#include "camera.hpp"
+#include "lod.hpp"
+#include "mesh_mirror.hpp"
+#include "renderer.hpp"
+#include "source.hpp"
+#include "stream.hpp"
+#include "ui.hpp"
+
+using namespace pmzview;
+
+namespace {
+
+struct Options {
+  std::string source;
+  double rate_kbps = 0;
+  std::string screenshot;
+  int width = 1024, height = 768;
+  uint64_t faces = 0;
+  double ratio = 0;
+  uint64_t bytes = 0;
+  bool log = false, exit_when_complete = false;
+  bool flat = false, wireframe = false, no_geomorph = false;
+  float yaw_degrees = 34, pitch_degrees = 20;
+  double budget_ms = 6;
+};
+
+int fail(const std::string& message) {
+  std::fprintf(stderr, "pmz-view: %s\n", message.c_str());
+  return 1;
+}
+
+std::string g_glfw_error;
+void on_glfw_error(int, const char* description) { g_glfw_error = description ? description : "unknown GLFW error"; }
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+void read_stats(const pmz::Decoder& decoder, Stats& s, pmz::StreamInfo& info) {
+  info = decoder.info();
+  s.faces = decoder.face_count();
+  s.vertices = decoder.vertex_count();
+  s.base_faces = info.base_faces;
+  s.full_faces = info.full_faces;
+  s.total_splits = info.total_splits;
+  s.splits_applied = decoder.splits_applied();
+  s.splits_available = decoder.splits_available();
+  s.base_done = info.base_done;
+  s.complete = info.complete;
+}
+
+// Frames the header's bounding box, or the mesh's own when the header has none.
+bool frame_camera(Camera& camera, const pmz::StreamInfo& info, const MeshMirror& mesh, float aspect) {
+  float lo[3], hi[3];
+  bool from_header = info.header_done;
+  for (int i = 0; i < 3; ++i) {
+    lo[i] = info.bbox_min[i];
+    hi[i] = info.bbox_max[i];
+    from_header = from_header && hi[i] >= lo[i];
+  }
+  from_header = from_header && (hi[0] > lo[0] || hi[1] > lo[1] || hi[2] > lo[2]);
+  if (!from_header) {
+    if (mesh.vertex_count == 0) return false;
+    for (int i = 0; i < 3; ++i) lo[i] = hi[i] = mesh.positions[i];
+    for (uint32_t v = 0; v < mesh.vertex_count; ++v)
+      for (int i = 0; i < 3; ++i) {
+        lo[i] = std::min(lo[i], mesh.positions[3 * size_t(v) + i]);
+        hi[i] = std::max(hi[i], mesh.positions[3 * size_t(v) + i]);
+      }
+  }
+  camera.frame(lo, hi, aspect);
+  return true;
+}
+
+void log_line(double t, const Stats& s, const char* note) {
+  std::fprintf(stderr,
+               "t=%.3f bytes=%" PRIu64 " total=%" PRIu64 " faces=%u full=%" PRIu64 " vertices=%u splits=%" PRIu64
+               "/%" PRIu64 " fps=%.0f%s%s\n",
+               t, s.bytes, s.bytes_total, s.faces, s.full_faces, s.vertices, s.splits_applied, s.total_splits,
+               s.frames_per_second, note[0] ? " " : "", note);
+}
+
+bool write_png(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb, std::string& error) {
+  std::string temp = path + ".tmp." + std::to_string(getpid());
+  if (!stbi_write_png(temp.c_str(), width, height, 3, rgb.data(), width * 3)) {
+    std::remove(temp.c_str());
+    error = "cannot write " + path;
+    return false;
+  }
+  if (std::rename(temp.c_str(), path.c_str()) != 0) {
+    std::remove(temp.c_str());
+    error = "cannot write " + path;
+    return false;
+  }
+  return true;
+}
+
+int parse(int argc, char** argv, Options& o) {
+  CLI::App app{"pmz-view: stream a .pmz mesh and watch it refine as its bytes arrive.", "pmz-view"};
+  app.add_option("source", o.source, "a .pmz file, - for stdin, or an http:// or https:// URL")->required();
+  app.add_option("--rate", o.rate_kbps, "throttle the source to KBPS kilobytes (1000 B) per second")->type_name("KBPS")->check(CLI::PositiveNumber);
+  app.add_option("--screenshot", o.screenshot, "render one frame off screen to FILE.png and exit")->type_name("FILE.png");
+  std::string size;
+  app.add_option("--size", size, "screenshot size WxH (default 1024x768; also the window size)")->type_name("WxH");
+  auto* faces = app.add_option("--faces", o.faces, "level of detail: at least N faces")->type_name("N");
+  auto* ratio = app.add_option("--ratio", o.ratio, "level of detail: this fraction of the full face count")->type_name("R")->check(CLI::Range(0.0, 1.0));
+  auto* bytes = app.add_option("--bytes", o.bytes, "read only the first N bytes, show all they hold")->type_name("N")->check(CLI::PositiveNumber);
+  faces->excludes(ratio)->excludes(bytes);
+  ratio->excludes(bytes);
+  app.add_flag("--log", o.log, "print 't=... bytes=... faces=...' lines to stderr ten times per second");
+  app.add_flag("--exit-when-complete", o.exit_when_complete, "exit 0 once the whole stream is shown (1 on a stream error)");
+  app.add_flag("--flat", o.flat, "start with flat shading");
+  app.add_flag("--wireframe", o.wireframe, "start with the wireframe overlay");
+  app.add_flag("--no-geomorph", o.no_geomorph, "start with geomorphs off");
+  app.add_option("--yaw", o.yaw_degrees, "initial view azimuth in degrees")->type_name("DEG");
+  app.add_option("--pitch", o.pitch_degrees, "initial view elevation in degrees")->type_name("DEG")->check(CLI::Range(-89.0, 89.0));
+  app.add_option("--budget-ms", o.budget_ms, "refinement time per frame in milliseconds")->type_name("MS")->check(CLI::PositiveNumber);
+  app.footer(kKeyHelp);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  } catch (const CLI::ParseError& e) {
+    std::fprintf(stderr, "pmz-view: %s (see --help)\n", e.what());
+    return 2;
+  }
+  if (!size.empty()) {
+    char x = 0;
+    char extra = 0;
+    if (std::sscanf(size.c_str(), "%d%c%d%c", &o.width, &x, &o.height, &extra) != 3 || (x != 'x' && x != 'X') ||
+        o.width < 16 || o.height < 16 || o.width > 16384 || o.height > 16384) {
+      std::fprintf(stderr, "pmz-view: --size wants WxH, e.g. 800x600 (16..16384), got '%s'\n", size.c_str());
+      return 2;
+    }
+  }
+  return -1;  // go on
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
-  if (argc > 1 && (!std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h"))) {
-    std::puts("pmz-view SOURCE: stream a .pmz file, stdin or URL and show it refining\n(not implemented yet in this build)");
-    return 0;
+  Options o;
+  if (int rc = parse(argc, argv, o); rc >= 0) return rc;
+  const bool screenshot = !o.screenshot.empty();
+
+  std::string error;
+  std::unique_ptr<Source> source = open_source(o.source, error);
+  if (!source) return fail(error);
+  curl_global_init(CURL_GLOBAL_DEFAULT);
+
+  if (!std::getenv("DISPLAY") && !std::getenv("WAYLAND_DISPLAY"))
+    return fail("no display: DISPLAY is not set (run in a desktop session, or headless under xvfb-run -a)");
+  glfwSetErrorCallback(on_glfw_error);
+  if (!glfwInit()) return fail("cannot open a window: " + g_glfw_error + " (no usable display? try xvfb-run -a)");
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+  glfwWindowHint(GLFW_SAMPLES, 4);
+  // A screenshot renders into its own framebuffer: the window only carries the context.
+  glfwWindowHint(GLFW_VISIBLE, screenshot ? GLFW_FALSE : GLFW_TRUE);
+  GLFWwindow* window = screenshot ? glfwCreateWindow(64, 64, "pmz-view", nullptr, nullptr)
+                                  : glfwCreateWindow(o.width, o.height, ("pmz-view: " + o.source).c_str(), nullptr, nullptr);
+  if (!window) {
+    glfwTerminate();
+    return fail("cannot create an OpenGL 3.3 core window: " + g_glfw_error);
   }
-  std::fputs("pmz-view: not implemented yet in this build\n", stderr);
-  return 2;
+  glfwMakeContextCurrent(window);
+  glfwSwapInterval(1);
+
+  int rc = 0;
+  {
+    Renderer renderer;
+    if (!renderer.init(error)) {
+      glfwDestroyWindow(window);
+      glfwTerminate();
+      return fail(error);
+    }
+    Camera camera;
+    camera.yaw = o.yaw_degrees * float(M_PI / 180);
+    camera.pitch = o.pitch_degrees * float(M_PI / 180);
+    ViewState state;
+    state.smooth = !o.flat;
+    state.wireframe = o.wireframe;
+    state.geomorph = !o.no_geomorph;
+    state.lod.follow = o.faces == 0 && o.ratio == 0;
+    state.lod.faces = o.faces;
+    bool ratio_pending = o.ratio > 0;  // needs the header's full face count
+    Stats stats;
+    pmz::StreamInfo info;
+    MeshMirror mirror;
+    LodStepper stepper;
+
+    Stream stream;
+    StreamOptions stream_options;
+    stream_options.bytes_per_second = o.rate_kbps * 1000;
+    stream_options.byte_limit = o.bytes;
+    stream.start(std::move(source), stream_options);
+    const auto t0 = Clock::now();
+
+    if (screenshot) {
+      // The whole requested prefix first, then exactly that level of detail.
+      while (!stream.done()) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      if (!stream.error().empty()) {
+        rc = fail(o.source + ": " + stream.error());
+      } else {
+        {
+          std::lock_guard<std::mutex> lock(stream.mutex);
+          pmz::Decoder& decoder = stream.decoder;
+          if (decoder.info().base_done) {
+            if (ratio_pending) state.lod.faces = uint64_t(std::llround(o.ratio * double(decoder.info().full_faces)));
+            stepper.step(decoder, state.lod, -1);
+            mirror.sync(decoder, 0, 0);
+          }
+          read_stats(decoder, stats, info);
+        }
+        if (!stats.base_done) {
+          rc = fail(o.bytes ? "the first " + std::to_string(o.bytes) + " bytes do not hold the base mesh"
+                            : o.source + ": the stream ended before its base mesh");
+        } else {
+          renderer.upload(mirror);
+          frame_camera(camera, info, mirror, float(o.width) / float(o.height));
+          RenderOptions render_options;
+          render_options.smooth = state.smooth;
+          render_options.wireframe = state.wireframe;
+          std::vector<uint8_t> rgb;
+          if (!renderer.capture(camera, o.width, o.height, render_options, rgb, error) ||
+              !write_png(o.screenshot, o.width, o.height, rgb, error))
+            rc = fail(error);
+          else
+            std::printf("pmz-view: wrote %s (%dx%d): %u faces, %u vertices, %" PRIu64 " bytes read\n",
+                        o.screenshot.c_str(), o.width, o.height, stats.faces, stats.vertices, stream.bytes_received());
+        }
+      }
+    } else {
+      install_input(window, &camera, &state, &stats);
+      IMGUI_CHECKVERSION();
+      ImGui::CreateContext();
+      ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini in the working directory
+      ImGui::StyleColorsDark();
+      ImGui_ImplGlfw_InitForOpenGL(window, true);
+      ImGui_ImplOpenGL3_Init("#version 330 core");
+
+      bool framed = false, error_reported = false;
+      int lock_misses = 0;
+      double next_log = 0, window_start = 0;
+      uint64_t window_splits = 0, window_frames = 0;
+      while (!glfwWindowShouldClose(window)) {
+        const double t = seconds_since(t0);
+        const float now = float(t);
+        const float morph_seconds = state.geomorph ? state.morph_seconds : 0;
+        // Never wait on the worker for long: a busy lock costs a frame or two at most.
+        bool locked = lock_misses >= 3 ? (stream.mutex.lock(), true) : stream.mutex.try_lock();
+        if (locked) {
+          lock_misses = 0;
+          pmz::Decoder& decoder = stream.decoder;
+          if (ratio_pending && decoder.info().header_done) {
+            state.lod.faces = uint64_t(std::llround(o.ratio * double(decoder.info().full_faces)));
+            ratio_pending = false;
+          }
+          if (decoder.info().base_done) {
+            window_splits += stepper.step(decoder, state.lod, o.budget_ms / 1000);
+            mirror.sync(decoder, now, morph_seconds);
+          }
+          read_stats(decoder, stats, info);
+          stream.mutex.unlock();
+        } else {
+          ++lock_misses;
+        }
+        renderer.upload(mirror);
+        stats.bytes = stream.bytes_received();
+        stats.bytes_total = stream.bytes_total();
+
+        const bool stream_done = stream.done();
+        if (stream_done && !stream.error().empty() && !error_reported) {
+          error_reported = true;
+          stats.error = stream.error();
+          // Nothing to show, or a run that promised to end on success: give up now.
+          if (!stats.base_done || o.exit_when_complete) {
+            rc = fail(o.source + ": " + stats.error);
+            break;
+          }
+          std::fprintf(stderr, "pmz-view: %s: %s (showing what was decoded)\n", o.source.c_str(), stats.error.c_str());
+        }
+        if (stream_done && stream.error().empty() && !stats.base_done) {
+          rc = fail(o.bytes ? "the first " + std::to_string(o.bytes) + " bytes do not hold the base mesh"
+                            : o.source + ": the stream ended before its base mesh");
+          break;
+        }
+
+        int fb_width = 0, fb_height = 0;
+        glfwGetFramebufferSize(window, &fb_width, &fb_height);
+        if ((!framed || state.reset_view) && fb_height > 0) {
+          framed = frame_camera(camera, info, mirror, float(fb_width) / float(fb_height));
+          if (state.reset_view) {
+            camera.yaw = o.yaw_degrees * float(M_PI / 180);
+            camera.pitch = o.pitch_degrees * float(M_PI / 180);
+          }
+          state.reset_view = false;
+        }
+
+        RenderOptions render_options;
+        render_options.smooth = state.smooth;
+        render_options.wireframe = state.wireframe;
+        render_options.morph_seconds = morph_seconds;
+        render_options.now = now;
+        renderer.draw(camera, fb_width, fb_height, render_options);
+        ImGui_ImplOpenGL3_NewFrame();
+        ImGui_ImplGlfw_NewFrame();
+        ImGui::NewFrame();
+        draw_overlay(state, stats);
+        ImGui::Render();
+        ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+        glfwSwapBuffers(window);
+
+        ++window_frames;
+        if (t - window_start >= 0.5) {
+          stats.splits_per_second = double(window_splits) / (t - window_start);
+          stats.frames_per_second = double(window_frames) / (t - window_start);
+          window_start = t;
+          window_splits = window_frames = 0;
+        }
+        const bool finished = stream_done && stream.error().empty() && stepper.settled() &&
+                              (stats.complete || o.bytes) &&
+                              (!state.lod.follow || stats.splits_applied == stats.splits_available);
+        if (o.log && (t >= next_log || (finished && o.exit_when_complete))) {
+          log_line(t, stats, finished ? "complete" : "");
+          next_log = t + 0.1;
+        }
+        if (finished && o.exit_when_complete) break;
+
+        // Idle (nothing arriving, refining or gliding): sleep until input instead of spinning.
+        const bool idle = stream_done && stepper.settled() && now - mirror.last_morph_start > morph_seconds;
+        const double frame_seconds = seconds_since(t0) - t;
+        if (idle) {
+          glfwWaitEventsTimeout(0.25);
+        } else {
+          // Cap at ~60 fps where swaps do not wait for vblank (e.g. Xvfb).
+          if (frame_seconds < 1.0 / 60) std::this_thread::sleep_for(std::chrono::duration<double>(1.0 / 60 - frame_seconds));
+          glfwPollEvents();
+        }
+      }
+      ImGui_ImplOpenGL3_Shutdown();
+      ImGui_ImplGlfw_Shutdown();
+      ImGui::DestroyContext();
+    }
+    stream.stop();
+  }
+  glfwDestroyWindow(window);
+  glfwTerminate();
+  curl_global_cleanup();
+  return rc;
 }

@@ -1,0 +1,158 @@
+#include "mesh_mirror.hpp"
+
+#include <algorithm>
+#include <cstring>
+
+namespace pmzview {
+namespace {
+
+constexpr float kStatic = -1e30f;  // morph start far in the past: the vertex sits at its position
+
+// Smoothstep of the geomorph's progress; the vertex shader computes the same.
+float morph_weight(float now, float start, float seconds) {
+  if (seconds <= 0) return 1;
+  float t = std::clamp((now - start) / seconds, 0.0f, 1.0f);
+  return t * t * (3 - 2 * t);
+}
+
+}  // namespace
+
+void MeshMirror::clear_dirty() {
+  dirty_all = false;
+  dirty_vertex_begin = UINT32_MAX;
+  dirty_normals.clear();
+  dirty_faces.clear();
+}
+
+void MeshMirror::sync(pmz::Decoder& decoder, float now, float morph_seconds) {
+  const pmz::MeshChanges& changes = decoder.changes();
+  const uint32_t nv = decoder.vertex_count(), nf = decoder.face_count();
+  const float* src_positions = decoder.positions();
+  const uint32_t* src_indices = decoder.indices();
+  const uint32_t* parents = decoder.split_parents();
+  if (nf == 0 || !src_positions || !src_indices) {
+    vertex_count = face_count = 0;
+    decoder.clear_changes();
+    return;
+  }
+
+  auto face_normal = [&](uint32_t f, float out[3]) {
+    const uint32_t* t = &indices[3 * size_t(f)];
+    const float* a = &positions[3 * size_t(t[0])];
+    const float* b = &positions[3 * size_t(t[1])];
+    const float* c = &positions[3 * size_t(t[2])];
+    float e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    float e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    // Unnormalized: the length is twice the area, which weights the vertex sums.
+    out[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    out[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    out[2] = e1[0] * e2[1] - e1[1] * e2[0];
+  };
+  auto add_face = [&](uint32_t f, float sign) {
+    const float* n = &face_normals[3 * size_t(f)];
+    for (int k = 0; k < 3; ++k) {
+      uint32_t v = indices[3 * size_t(f) + k];
+      for (int i = 0; i < 3; ++i) normals[3 * size_t(v) + i] += sign * n[i];
+      dirty_normals.push_back(v);
+    }
+  };
+  auto copy_face = [&](uint32_t f) {
+    const uint32_t* t = &src_indices[3 * size_t(f)];
+    bool valid = t[0] < nv && t[1] < nv && t[2] < nv;  // never index past the buffers
+    for (int k = 0; k < 3; ++k) indices[3 * size_t(f) + k] = valid ? t[k] : 0;
+    face_normal(f, &face_normals[3 * size_t(f)]);
+  };
+
+  if (changes.all || vertex_count == 0) {
+    positions.assign(src_positions, src_positions + 3 * size_t(nv));
+    morph_from = positions;
+    morph_start.assign(nv, kStatic);
+    normals.assign(3 * size_t(nv), 0.0f);
+    indices.resize(3 * size_t(nf));
+    face_normals.resize(3 * size_t(nf));
+    vertex_count = nv;
+    face_count = nf;
+    for (uint32_t f = 0; f < nf; ++f) copy_face(f);
+    for (uint32_t f = 0; f < nf; ++f) add_face(f, 1);
+    dirty_normals.clear();
+    dirty_all = true;
+    decoder.clear_changes();
+    return;
+  }
+
+  const uint32_t vertex_begin = std::min({changes.vertex_begin, vertex_count, nv});
+  const uint32_t face_begin = std::min({changes.face_begin, face_count, nf});
+  const uint32_t old_faces = face_count;
+  // Rewritten faces below face_begin, each once: a repeat would subtract its normal twice.
+  std::vector<uint32_t> modified;
+  modified.reserve(changes.modified_faces.size());
+  for (uint32_t f : changes.modified_faces)
+    if (f < face_begin) modified.push_back(f);
+  std::sort(modified.begin(), modified.end());
+  modified.erase(std::unique(modified.begin(), modified.end()), modified.end());
+
+  // 1. Take the old faces' contributions out of their old vertices.
+  for (uint32_t f : modified) add_face(f, -1);
+  for (uint32_t f = face_begin; f < old_faces; ++f) add_face(f, -1);
+
+  // 2. New and rewritten vertices. All their faces are among the changed ones (a vertex
+  // split only touches faces it reports), so their normal sums restart from zero.
+  positions.resize(3 * size_t(nv));
+  morph_from.resize(3 * size_t(nv));
+  morph_start.resize(nv);
+  normals.resize(3 * size_t(nv));
+  std::memcpy(&positions[3 * size_t(vertex_begin)], &src_positions[3 * size_t(vertex_begin)],
+              sizeof(float) * 3 * size_t(nv - vertex_begin));
+  for (uint32_t v = vertex_begin; v < nv; ++v) {
+    uint32_t parent = parents ? parents[v] : UINT32_MAX;
+    float* from = &morph_from[3 * size_t(v)];
+    if (parent < v) {
+      // Start where the parent is drawn right now, even if it is still morphing itself.
+      float w = morph_weight(now, morph_start[parent], morph_seconds);
+      for (int i = 0; i < 3; ++i)
+        from[i] = morph_from[3 * size_t(parent) + i] + w * (positions[3 * size_t(parent) + i] - morph_from[3 * size_t(parent) + i]);
+      morph_start[v] = now;
+      last_morph_start = now;
+    } else {
+      std::memcpy(from, &positions[3 * size_t(v)], sizeof(float) * 3);
+      morph_start[v] = kStatic;
+    }
+    for (int i = 0; i < 3; ++i) normals[3 * size_t(v) + i] = 0;
+  }
+  vertex_count = nv;
+  dirty_vertex_begin = std::min(dirty_vertex_begin, vertex_begin);
+
+  // 3. The new faces' contributions.
+  indices.resize(3 * size_t(nf));
+  face_normals.resize(3 * size_t(nf));
+  face_count = nf;
+  for (uint32_t f : modified) {
+    if (f >= nf) continue;
+    copy_face(f);
+    add_face(f, 1);
+    dirty_faces.push_back(f);
+  }
+  for (uint32_t f = face_begin; f < nf; ++f) {
+    copy_face(f);
+    add_face(f, 1);
+    dirty_faces.push_back(f);
+  }
+  // Vertices past the end are gone; their normal slots are not drawn.
+  dirty_normals.erase(std::remove_if(dirty_normals.begin(), dirty_normals.end(), [&](uint32_t v) { return v >= nv; }),
+                      dirty_normals.end());
+  decoder.clear_changes();
+}
+
+void coalesce(std::vector<uint32_t>& ids, uint32_t gap, std::vector<Run>& runs) {
+  runs.clear();
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  for (uint32_t id : ids) {
+    if (!runs.empty() && id <= runs.back().end + gap)
+      runs.back().end = id + 1;
+    else
+      runs.push_back({id, id + 1});
+  }
+}
+
+}  // namespace pmzview

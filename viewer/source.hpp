@@ -1,0 +1,36 @@
+// Byte sources for pmz-view: a file, stdin or an http(s) URL, read on the worker thread and
+// optionally throttled to simulate a slow network.
+#pragma once
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+
+namespace pmzview {
+
+// Receives the stream's bytes in order; returns false to stop reading.
+using ByteSink = std::function<bool(const uint8_t* data, size_t size)>;
+
+class Source {
+ public:
+  virtual ~Source() = default;
+  // Reads to the end of the stream, until the sink returns false, or until stop is set.
+  // Returns "" on success (including a requested stop), else a one-line error.
+  virtual std::string run(const ByteSink& sink, const std::atomic<bool>& stop) = 0;
+  // Stream size when known (file size, Content-Length), else 0. Set during run() for URLs.
+  uint64_t total_bytes() const { return total_.load(std::memory_order_relaxed); }
+
+ protected:
+  std::atomic<uint64_t> total_{0};
+};
+
+// SOURCE is "-" (stdin), an http:// or https:// URL, or a path. Files are opened here so a bad
+// path fails at once (null + error); a URL can only fail once run() connects.
+std::unique_ptr<Source> open_source(const std::string& spec, std::string& error);
+
+// Passes bytes on in small slices at no more than bytes_per_second (<= 0: unthrottled).
+ByteSink throttled(ByteSink sink, double bytes_per_second, const std::atomic<bool>& stop);
+
+}  // namespace pmzview

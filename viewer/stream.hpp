@@ -1,0 +1,55 @@
+// The decode worker: reads a Source on its own thread and feeds the shared decoder, so the
+// render thread never waits on IO. The decoder is not thread-safe; `mutex` guards it. The
+// worker holds it only while feeding one slice (<= 64 KiB), the render thread while it
+// refines within its per-frame budget and copies the changes out.
+#pragma once
+#include <pmz/decoder.hpp>
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "source.hpp"
+
+namespace pmzview {
+
+struct StreamOptions {
+  double bytes_per_second = 0;  // 0 = as fast as the source delivers
+  uint64_t byte_limit = 0;      // stop after this many bytes (0 = read everything)
+};
+
+class Stream {
+ public:
+  Stream() = default;
+  ~Stream();  // stops and joins the worker
+  Stream(const Stream&) = delete;
+  Stream& operator=(const Stream&) = delete;
+
+  void start(std::unique_ptr<Source> source, const StreamOptions& options);
+  void stop();
+
+  std::mutex mutex;  // guards decoder
+  pmz::Decoder decoder;
+
+  uint64_t bytes_received() const { return received_.load(); }
+  uint64_t bytes_total() const;  // 0 when unknown (stdin, no Content-Length)
+  bool done() const { return done_.load(); }  // the worker has finished (any reason)
+  // Valid once done(): "" or a one-line error (source failure or a decoder error).
+  const std::string& error() const { return error_; }
+
+ private:
+  void run();
+
+  std::unique_ptr<Source> source_;
+  StreamOptions options_;
+  std::thread thread_;
+  std::atomic<uint64_t> received_{0};
+  std::atomic<bool> done_{false};
+  std::atomic<bool> stop_{false};
+  std::string error_;
+};
+
+}  // namespace pmzview
