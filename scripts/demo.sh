@@ -10,4 +10,4 @@ if ! build/bin/pmz-encode --help >/dev/null 2>&1 || build/bin/pmz-encode --help 
   echo "demo: the encoder is not implemented yet in this build; stopping here." >&2
   exit 0
 fi
-exec build/bin/pmz-demo "$out"
+exec build/bin/pmz-demo "$out" "$@"
