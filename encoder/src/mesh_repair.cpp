@@ -1,0 +1,310 @@
+// Polygon soup -> manifold-with-boundary triangle mesh without losing a face.
+//
+// 1. Each face is cleaned (consecutive repeated corners removed; a polygon pinched at a repeated
+//    vertex is split into its loops) and triangulated by ear clipping in its best-fit plane.
+//    Faces with fewer than three distinct corners are the only ones dropped (counted).
+// 2. Faces on each undirected edge are glued in pairs: a manifold edge (two faces, opposite
+//    directions) is glued; on a non-manifold edge (3+ faces, or two in the same direction) each
+//    face is glued to the earliest unglued face running the other way, in input order, and the
+//    rest become boundary. This keeps both sheets of double-sided geometry intact.
+// 3. Corners around each vertex joined by glued edges form fans (each corner has two edges, so a
+//    fan is a path or a cycle); each fan gets its own vertex. The fan with the vertex's first
+//    corner keeps the input id; other fans get copies appended after the input vertices.
+// 4. Two unglued faces can still land on the same (copied) edge when they are fan-connected at
+//    both ends; such a face is detached at one corner and step 3 is redone until every edge has
+//    at most two faces of opposite orientation. Each pass removes glue, so this terminates.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <unordered_map>
+
+#include "pmz/mesh.hpp"
+
+namespace pmz {
+
+namespace {
+
+constexpr uint32_t kNone = 0xFFFFFFFFu;
+constexpr size_t kMaxEarClipCorners = 64;  // beyond this, a fan (ear clipping is quadratic)
+
+uint32_t next_corner(uint32_t h) { return h % 3 == 2 ? h - 2 : h + 1; }
+uint32_t prev_corner(uint32_t h) { return h % 3 == 0 ? h + 2 : h - 1; }
+
+// Removes cyclically consecutive repeats in place (a b b c a -> a b c).
+void remove_consecutive_repeats(std::vector<uint32_t>& loop) {
+  size_t n = 0;
+  for (uint32_t v : loop)
+    if (n == 0 || loop[n - 1] != v) loop[n++] = v;
+  while (n > 1 && loop[n - 1] == loop[0]) --n;
+  loop.resize(n);
+}
+
+// Position j of the first corner whose vertex already occurred at an earlier position i.
+bool find_repeat(const std::vector<uint32_t>& loop, std::vector<uint32_t>& sorted,
+                 std::unordered_map<uint32_t, uint32_t>& seen, size_t& i, size_t& j) {
+  sorted.assign(loop.begin(), loop.end());
+  std::sort(sorted.begin(), sorted.end());
+  if (std::adjacent_find(sorted.begin(), sorted.end()) == sorted.end()) return false;
+  seen.clear();
+  for (j = 0; j < loop.size(); ++j) {
+    auto [it, fresh] = seen.emplace(loop[j], uint32_t(j));
+    if (!fresh) {
+      i = it->second;
+      return true;
+    }
+  }
+  return false;
+}
+
+// Triangulates a simple loop of distinct vertices into n-2 triangles with its winding.
+void triangulate_loop(const std::vector<uint32_t>& loop, const std::vector<float>& pos,
+                      std::vector<uint32_t>& tris) {
+  const size_t n = loop.size();
+  if (n == 3 || n > kMaxEarClipCorners) {
+    for (size_t k = 1; k + 1 < n; ++k) tris.insert(tris.end(), {loop[0], loop[k], loop[k + 1]});
+    return;
+  }
+  // Newell normal; project on the plane of its two minor axes, counter-clockwise.
+  double normal[3] = {0, 0, 0};
+  for (size_t k = 0; k < n; ++k) {
+    const float* a = &pos[size_t(loop[k]) * 3];
+    const float* b = &pos[size_t(loop[(k + 1) % n]) * 3];
+    for (int d = 0; d < 3; ++d)
+      normal[d] +=
+          (double(a[(d + 1) % 3]) - b[(d + 1) % 3]) * (double(a[(d + 2) % 3]) + b[(d + 2) % 3]);
+  }
+  int axis = 0;
+  for (int d = 1; d < 3; ++d)
+    if (std::fabs(normal[d]) > std::fabs(normal[axis])) axis = d;
+  int u = (axis + 1) % 3, w = (axis + 2) % 3;
+  if (normal[axis] < 0) std::swap(u, w);
+  double x[kMaxEarClipCorners], y[kMaxEarClipCorners];
+  uint8_t next[kMaxEarClipCorners], prev[kMaxEarClipCorners];
+  for (size_t k = 0; k < n; ++k) {
+    x[k] = pos[size_t(loop[k]) * 3 + u];
+    y[k] = pos[size_t(loop[k]) * 3 + w];
+    next[k] = uint8_t((k + 1) % n);
+    prev[k] = uint8_t((k + n - 1) % n);
+  }
+  auto cross = [&](size_t a, size_t b, size_t c) {
+    return (x[b] - x[a]) * (y[c] - y[a]) - (y[b] - y[a]) * (x[c] - x[a]);
+  };
+  auto is_ear = [&](size_t b) {
+    size_t a = prev[b], c = next[b];
+    if (!(cross(a, b, c) > 0)) return false;
+    for (size_t v = next[c]; v != a; v = next[v])  // a vertex inside or on the ear blocks it
+      if (cross(a, b, v) >= 0 && cross(b, c, v) >= 0 && cross(c, a, v) >= 0) return false;
+    return true;
+  };
+  size_t b = 1;  // starting at corner 1 turns a convex polygon into the usual fan from corner 0
+  for (size_t left = n; left > 3; --left) {
+    size_t tries = 0;
+    while (tries < left && !is_ear(b)) b = next[b], ++tries;
+    // No ear (self-intersecting or degenerate loop): clip the current corner anyway.
+    tris.insert(tris.end(), {loop[prev[b]], loop[b], loop[next[b]]});
+    next[prev[b]] = next[b];
+    prev[next[b]] = prev[b];
+    b = next[b];
+  }
+  tris.insert(tris.end(), {loop[prev[b]], loop[b], loop[next[b]]});
+}
+
+uint64_t edge_key(uint32_t a, uint32_t b) {
+  return a < b ? uint64_t(a) << 32 | b : uint64_t(b) << 32 | a;
+}
+
+// Half-edge h of the triangle list, keyed by its undirected edge, sorted (ties in input order).
+void sort_edges(const std::vector<uint32_t>& tris,
+                std::vector<std::pair<uint64_t, uint32_t>>& edges) {
+  edges.resize(tris.size());
+  for (uint32_t h = 0; h < tris.size(); ++h)
+    edges[h] = {edge_key(tris[h], tris[next_corner(h)]), h};
+  std::sort(edges.begin(), edges.end());
+}
+
+struct UnionFind {
+  std::vector<uint32_t> parent;
+  void reset(size_t n) {
+    parent.resize(n);
+    for (uint32_t i = 0; i < n; ++i) parent[i] = i;
+  }
+  uint32_t find(uint32_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  }
+  void unite(uint32_t a, uint32_t b) {
+    a = find(a), b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+};
+
+}  // namespace
+
+std::string MeshRepairStats::summary() const {
+  std::string s;
+  auto add = [&](uint64_t n, const char* verb, const char* one, const char* many) {
+    if (!n) return;
+    if (!s.empty()) s += "; ";
+    s += std::string(verb) + " " + std::to_string(n) + " " + (n == 1 ? one : many);
+  };
+  add(degenerate_faces_dropped, "dropped", "degenerate face (repeated vertex)",
+      "degenerate faces (repeated vertex)");
+  add(repeated_corners_removed, "removed repeated corners from", "face", "faces");
+  add(duplicate_faces, "kept", "duplicate face", "duplicate faces");
+  add(nonmanifold_edges, "cut", "non-manifold edge", "non-manifold edges");
+  add(nonmanifold_vertices, "split", "non-manifold vertex", "non-manifold vertices");
+  add(vertices_added, "appended", "vertex copy", "vertex copies");
+  add(isolated_vertices, "kept", "isolated vertex", "isolated vertices");
+  return s;
+}
+
+void repair_mesh(const PolygonSoup& soup, IndexedMesh& out, MeshRepairStats& stats) {
+  stats = MeshRepairStats();
+  stats.input_faces = soup.face_count();
+  const uint32_t input_vertices = soup.vertex_count();
+
+  // 1. Clean and triangulate, keeping face order.
+  std::vector<uint32_t> tris;
+  tris.reserve(soup.corners.size());
+  std::vector<uint32_t> loop, rest, sorted;
+  std::unordered_map<uint32_t, uint32_t> seen;
+  for (uint32_t f = 0; f < soup.face_count(); ++f) {
+    uint32_t begin = soup.face_offsets[f], end = soup.face_offsets[f + 1];
+    if (end - begin > 3) ++stats.polygons_triangulated;
+    rest.assign(soup.corners.begin() + begin, soup.corners.begin() + end);
+    size_t before = tris.size();
+    bool repeats = false;
+    for (;;) {
+      size_t n = rest.size();
+      remove_consecutive_repeats(rest);
+      repeats |= rest.size() != n;
+      size_t i, j;
+      if (!find_repeat(rest, sorted, seen, i, j)) break;
+      // rest[i..j) is a simple loop; the remainder keeps rest[i] once.
+      repeats = true;
+      loop.assign(rest.begin() + i, rest.begin() + j);
+      if (loop.size() >= 3) triangulate_loop(loop, soup.positions, tris);
+      rest.erase(rest.begin() + i + 1, rest.begin() + j + 1);
+    }
+    if (rest.size() >= 3) triangulate_loop(rest, soup.positions, tris);
+    if (tris.size() == before)
+      ++stats.degenerate_faces_dropped;
+    else if (repeats)
+      ++stats.repeated_corners_removed;
+  }
+  const uint32_t corner_count = uint32_t(tris.size());
+
+  // Duplicate triangles (same vertex set) are kept; steps 2-4 separate them. Counted only.
+  {
+    std::vector<std::array<uint32_t, 3>> keys(corner_count / 3);
+    for (uint32_t t = 0; t < keys.size(); ++t) {
+      keys[t] = {tris[t * 3], tris[t * 3 + 1], tris[t * 3 + 2]};
+      std::sort(keys[t].begin(), keys[t].end());
+    }
+    std::sort(keys.begin(), keys.end());
+    for (size_t t = 1; t < keys.size(); ++t) stats.duplicate_faces += keys[t] == keys[t - 1];
+  }
+
+  // 2. Glue faces in pairs along each edge.
+  std::vector<uint32_t> mate(corner_count, kNone);
+  std::vector<std::pair<uint64_t, uint32_t>> edges;
+  sort_edges(tris, edges);
+  auto forward = [&](uint32_t h) { return tris[h] < tris[next_corner(h)]; };
+  std::vector<uint32_t> open[2];  // unglued half-edges of the current edge, by direction
+  for (size_t g = 0; g < edges.size();) {
+    size_t e = g;
+    while (e < edges.size() && edges[e].first == edges[g].first) ++e;
+    if (e - g == 2 && forward(edges[g].second) != forward(edges[g + 1].second)) {
+      mate[edges[g].second] = edges[g + 1].second;
+      mate[edges[g + 1].second] = edges[g].second;
+    } else if (e - g >= 2) {
+      ++stats.nonmanifold_edges;
+      size_t head[2] = {0, 0};
+      open[0].clear(), open[1].clear();
+      for (size_t k = g; k < e; ++k) {
+        uint32_t h = edges[k].second;
+        int d = forward(h), o = 1 - d;
+        if (head[o] < open[o].size()) {
+          uint32_t m = open[o][head[o]++];
+          mate[h] = m, mate[m] = h;
+        } else {
+          open[d].push_back(h);
+        }
+      }
+    }
+    g = e;
+  }
+
+  // 3 + 4. One vertex per fan; detach faces that still share an edge beyond a manifold pair.
+  UnionFind fans;
+  std::vector<uint32_t> fan_vertex(corner_count), copy_source;
+  std::vector<uint8_t> claimed;
+  out.indices.resize(corner_count);
+  for (;;) {
+    fans.reset(corner_count);
+    for (uint32_t h = 0; h < corner_count; ++h)
+      if (mate[h] != kNone && h < mate[h]) {
+        fans.unite(h, next_corner(mate[h]));  // the corners at h's start vertex
+        fans.unite(next_corner(h), mate[h]);  // the corners at h's end vertex
+      }
+    claimed.assign(input_vertices, 0);
+    copy_source.clear();
+    std::fill(fan_vertex.begin(), fan_vertex.end(), kNone);
+    for (uint32_t c = 0; c < corner_count; ++c) {
+      uint32_t root = fans.find(c);
+      if (fan_vertex[root] == kNone) {
+        uint32_t v = tris[c];
+        if (!claimed[v]) {
+          claimed[v] = 1;
+          fan_vertex[root] = v;
+        } else {
+          fan_vertex[root] = input_vertices + uint32_t(copy_source.size());
+          copy_source.push_back(v);
+        }
+      }
+      out.indices[c] = fan_vertex[root];
+    }
+    sort_edges(out.indices, edges);
+    auto forward_out = [&](uint32_t h) { return out.indices[h] < out.indices[next_corner(h)]; };
+    bool detached = false;
+    for (size_t g = 0; g < edges.size();) {
+      size_t e = g;
+      while (e < edges.size() && edges[e].first == edges[g].first) ++e;
+      if (e - g > 2 ||
+          (e - g == 2 && forward_out(edges[g].second) == forward_out(edges[g + 1].second))) {
+        // Keep a glued pair if the group has one (else the first face); detach the others at
+        // their start corner, which then forms a fan of its own.
+        uint32_t keep = edges[g].second;
+        for (size_t k = g; k < e; ++k) {
+          uint32_t m = mate[edges[k].second];
+          if (m != kNone &&
+              edge_key(out.indices[m], out.indices[next_corner(m)]) == edges[g].first) {
+            keep = edges[k].second;
+            break;
+          }
+        }
+        for (size_t k = g; k < e; ++k) {
+          uint32_t h = edges[k].second;
+          if (h == keep || h == mate[keep]) continue;
+          for (uint32_t x : {h, prev_corner(h)})
+            if (mate[x] != kNone) mate[mate[x]] = kNone, mate[x] = kNone, detached = true;
+        }
+      }
+      g = e;
+    }
+    if (!detached) break;
+  }
+
+  out.positions.assign(soup.positions.begin(), soup.positions.end());
+  out.positions.reserve(out.positions.size() + copy_source.size() * 3);
+  for (uint32_t v : copy_source)
+    for (int k = 0; k < 3; ++k) out.positions.push_back(soup.positions[size_t(v) * 3 + k]);
+  stats.vertices_added = copy_source.size();
+  std::vector<uint8_t> split(input_vertices, 0);
+  for (uint32_t v : copy_source) stats.nonmanifold_vertices += !split[v], split[v] = 1;
+  std::vector<uint8_t> used(input_vertices, 0);
+  for (uint32_t v : tris) used[v] = 1;
+  stats.isolated_vertices = uint64_t(std::count(used.begin(), used.end(), 0));
+}
+
+}  // namespace pmz
