@@ -1,7 +1,41 @@
 #!/usr/bin/env bash
-# Builds everything and runs the whole test suite with ctest.
+# The whole test suite, as CI runs it:
+#   1. Release build + ctest (with the real-mesh corpus from libcgal-demo when it can be fetched;
+#      tests that need it skip cleanly otherwise),
+#   2. the same suite under AddressSanitizer + UndefinedBehaviorSanitizer,
+#   3. each libFuzzer target for a short fixed time (PMZ_FUZZ_SECONDS, default 30).
+# PMZ_TEST_STAGES selects stages (default "release asan fuzz").
 set -euo pipefail
 cd "$(dirname "$0")/.."
+stages=${PMZ_TEST_STAGES:-release asan fuzz}
+jobs=$(nproc)
+
 bash scripts/setup.sh build
-cd build
-ctest --output-on-failure -j "$(nproc)" --timeout 900
+if ! bash scripts/fetch_corpus.sh build; then
+  echo "test: corpus unavailable; real-mesh tests will skip" >&2
+fi
+export PMZ_CORPUS=$PWD/corpus
+
+for stage in $stages; do
+  case $stage in
+    release)
+      echo "== stage: release"
+      (cd build && ctest --output-on-failure -j "$jobs" --timeout 900)
+      ;;
+    asan)
+      echo "== stage: address,undefined sanitizers"
+      cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+        -DPMZ_SANITIZE=address,undefined -DPMZ_BUILD_VIEWER=OFF >/dev/null
+      cmake --build build-asan -j "$jobs"
+      (cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+        ctest --output-on-failure -j "$jobs" --timeout 1800)
+      ;;
+    fuzz)
+      if [ -x tests/fuzz/run.sh ] || [ -f tests/fuzz/run.sh ]; then
+        echo "== stage: fuzz (${PMZ_FUZZ_SECONDS:-30} s per target)"
+        bash tests/fuzz/run.sh "${PMZ_FUZZ_SECONDS:-30}"
+      fi
+      ;;
+    *) echo "test: unknown stage $stage" >&2; exit 2 ;;
+  esac
+done
