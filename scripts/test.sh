@@ -4,10 +4,10 @@
 #      tests that need it skip cleanly otherwise),
 #   2. the same suite under AddressSanitizer + UndefinedBehaviorSanitizer,
 #   3. each libFuzzer target for a short fixed time (PMZ_FUZZ_SECONDS, default 30).
-# PMZ_TEST_STAGES selects stages (default "release asan fuzz").
+# PMZ_TEST_STAGES selects stages (default "release fuzz asan": ctest's summary comes last).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-stages=${PMZ_TEST_STAGES:-release asan fuzz}
+stages=${PMZ_TEST_STAGES:-release fuzz asan}
 jobs=$(nproc)
 
 bash scripts/setup.sh build
