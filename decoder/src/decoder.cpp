@@ -1,5 +1,17 @@
-// Placeholder until the format issue lands: every stream is refused with a clear message.
+// The streaming decoder: frames chunks out of whatever slices arrive, decodes each split chunk
+// into flat arrays once (validated before anything is appended), and moves the mesh between
+// levels with the shared ProgressiveMesh core.
 #include "pmz/decoder.hpp"
+
+#include <zstd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <new>
+
+#include "pmz/format.hpp"
+#include "pmz/progressive_mesh.hpp"
 
 namespace pmz {
 
@@ -17,6 +29,14 @@ const char* status_name(Status s) {
   return "unknown status";
 }
 
+namespace {
+struct SplitCode {
+  uint32_t v, code_l, code_r;
+  int32_t residual[3];
+};
+constexpr uint8_t kHasLeft = 1, kHasRight = 2;
+}  // namespace
+
 struct Decoder::Impl {
   DecoderLimits limits;
   Status status = Status::ok;
@@ -24,6 +44,46 @@ struct Decoder::Impl {
   StreamInfo info;
   MeshChanges changes;
   uint64_t consumed = 0;
+
+  std::vector<uint8_t> pending;  // bytes of an incomplete signature or chunk
+  bool signature_done = false;
+  uint64_t chunk_index = 0, chunk_offset = 0;
+  uint64_t parse_base = 0;  // stream offset of the buffer parse() is looking at
+  ZSTD_DCtx* dctx = nullptr;
+  Quantizer quant;
+
+  ProgressiveMesh mesh;
+  std::vector<SplitCode> splits;  // available (decoded) splits
+  std::vector<uint8_t> sides;     // per applied split: kHasLeft | kHasRight
+  uint64_t available = 0, applied = 0;
+  std::vector<int32_t> coords;    // 3 per computed vertex (computed >= vertex_count)
+  std::vector<float> positions;
+  std::vector<uint32_t> parents;
+  std::vector<uint8_t> scratch[kSplitStreamCount];
+
+  ~Impl() { ZSTD_freeDCtx(dctx); }
+  Status fail(Status s, const std::string& what) {
+    status = s;
+    message = std::string("pmz: ") + status_name(s) + ": " + what + " (chunk " +
+              std::to_string(chunk_index) + " at byte " + std::to_string(chunk_offset) + ")";
+    return s;
+  }
+  size_t parse(const uint8_t* p, size_t n);
+  Status chunk(uint32_t type, const uint8_t* p, size_t n);
+  Status head(const uint8_t* p, size_t n);
+  Status base(const uint8_t* p, size_t n);
+  Status split_chunk(const uint8_t* p, size_t n);
+  bool apply();
+  void undo();
+  void note_rewritten(const std::vector<uint32_t>& faces) {
+    if (changes.all) return;
+    for (uint32_t f : faces)
+      if (f < changes.face_begin) changes.modified_faces.push_back(f);
+    if (changes.modified_faces.size() > mesh.face_count() + 64u) {
+      changes.all = true;
+      changes.modified_faces.clear();
+    }
+  }
 };
 
 Decoder::Decoder(const DecoderLimits& limits) : impl_(new Impl) { impl_->limits = limits; }
@@ -31,29 +91,343 @@ Decoder::~Decoder() = default;
 Decoder::Decoder(Decoder&&) noexcept = default;
 Decoder& Decoder::operator=(Decoder&&) noexcept = default;
 
-Status Decoder::feed(const void*, size_t size) {
-  if (size == 0) return impl_->status;
-  impl_->status = Status::corrupt;
-  impl_->message = "pmz decoder not implemented yet";
-  return impl_->status;
+// Consumes complete items from p; returns the bytes used (the rest waits for more input).
+size_t Decoder::Impl::parse(const uint8_t* p, size_t n) {
+  size_t at = 0;
+  if (!signature_done) {
+    size_t k = std::min<size_t>(n, 8);
+    if (std::memcmp(p, kSignature, k) != 0) {
+      fail(Status::bad_magic, "not a .pmz stream");
+      return n;
+    }
+    if (n < 8) return 0;
+    signature_done = true;
+    at = 8;
+  }
+  while (status == Status::ok && n - at >= kChunkHeaderSize) {
+    ByteReader r(p + at, kChunkHeaderSize);
+    uint32_t type = r.u32le(), size = r.u32le(), crc = r.u32le();
+    chunk_offset = parse_base + at;
+    if (size > limits.max_chunk_bytes) {
+      fail(Status::limit_exceeded, "chunk of " + std::to_string(size) + " bytes");
+      return n;
+    }
+    if (n - at - kChunkHeaderSize < size) break;
+    const uint8_t* payload = p + at + kChunkHeaderSize;
+    if (chunk_crc(p + at, payload, size) != crc) {
+      fail(Status::bad_checksum, "chunk checksum mismatch");
+      return n;
+    }
+    if (info.complete) {
+      at += kChunkHeaderSize + size;  // bytes after the end marker are ignored
+      continue;
+    }
+    if (chunk(type, payload, size) != Status::ok) return n;
+    at += kChunkHeaderSize + size;
+    ++chunk_index;
+  }
+  return at;
 }
-Status Decoder::finish() { return impl_->status == Status::ok ? Status::truncated : impl_->status; }
+
+Status Decoder::Impl::chunk(uint32_t type, const uint8_t* p, size_t n) {
+  if (chunk_index == 0 && type != kChunkHead) return fail(Status::corrupt, "first chunk is not HEAD");
+  if (type == kChunkHead) {
+    if (info.header_done) return fail(Status::corrupt, "second HEAD chunk");
+    return head(p, n);
+  }
+  if (type == kChunkBase) {
+    if (info.base_done) return fail(Status::corrupt, "second BASE chunk");
+    return base(p, n);
+  }
+  if (type == kChunkSplits) {
+    if (!info.base_done) return fail(Status::corrupt, "SPLT before BASE");
+    return split_chunk(p, n);
+  }
+  if (type == kChunkEnd) {
+    if (!info.base_done || splits.size() != info.total_splits)
+      return fail(Status::corrupt, "END before all splits");
+    info.complete = true;
+    return Status::ok;
+  }
+  return Status::ok;  // unknown chunk type: skipped (forward compatibility)
+}
+
+Status Decoder::Impl::head(const uint8_t* p, size_t n) {
+  FileHeader h;
+  if (!read_head_payload(p, n, h)) return fail(Status::corrupt, "HEAD too short");
+  if (h.version_major != kVersionMajor)
+    return fail(Status::bad_version, "format version " + std::to_string(h.version_major) + "." +
+                                         std::to_string(h.version_minor));
+  if (h.position_bits > 30) return fail(Status::corrupt, "position bits above 30");
+  for (int a = 0; a < 3; ++a)
+    if (!std::isfinite(h.bbox_min[a]) || !std::isfinite(h.bbox_max[a]) || h.bbox_min[a] > h.bbox_max[a])
+      return fail(Status::corrupt, "bad bounding box");
+  if (uint64_t(h.base_vertices) + h.total_splits != h.full_vertices || h.base_faces > h.full_faces ||
+      h.full_faces > uint64_t(h.base_faces) + 2ull * h.total_splits)
+    return fail(Status::corrupt, "inconsistent counts in HEAD");
+  if (h.full_vertices > limits.max_vertices || h.full_faces > limits.max_faces)
+    return fail(Status::limit_exceeded, std::to_string(h.full_vertices) + " vertices, " +
+                                            std::to_string(h.full_faces) + " faces");
+  info.header_done = true;
+  info.version_major = h.version_major;
+  info.version_minor = h.version_minor;
+  info.flags = h.flags;
+  info.position_bits = h.position_bits;
+  info.base_vertices = h.base_vertices;
+  info.base_faces = h.base_faces;
+  info.full_vertices = h.full_vertices;
+  info.full_faces = h.full_faces;
+  info.total_splits = h.total_splits;
+  std::memcpy(info.bbox_min, h.bbox_min, sizeof h.bbox_min);
+  std::memcpy(info.bbox_max, h.bbox_max, sizeof h.bbox_max);
+  quant.init(h.position_bits, h.bbox_min, h.bbox_max);
+  if (!dctx && !(dctx = ZSTD_createDCtx())) return fail(Status::out_of_memory, "zstd context");
+  return Status::ok;
+}
+
+Status Decoder::Impl::base(const uint8_t* p, size_t n) {
+  ByteReader r(p, n);
+  uint64_t vn = r.varint(), fn = r.varint();
+  if (!r.ok || vn != info.base_vertices || fn != info.base_faces)
+    return fail(Status::corrupt, "BASE counts differ from HEAD");
+  std::string err;
+  std::vector<uint8_t>& pos = scratch[0];
+  std::vector<uint8_t>& idx = scratch[1];
+  if (!read_stream(r, dctx, limits.max_chunk_bytes, pos, err) ||
+      !read_stream(r, dctx, limits.max_chunk_bytes, idx, err))
+    return fail(Status::corrupt, "BASE: " + err);
+  // Each value takes at least one byte: check before allocating per-vertex arrays.
+  if (pos.size() < vn * 3 || idx.size() < fn * 3) return fail(Status::corrupt, "BASE streams too short");
+  std::vector<int32_t> c(vn * 3);
+  std::vector<uint32_t> faces(fn * 3);
+  ByteReader pr(pos.data(), pos.size()), ir(idx.data(), idx.size());
+  uint32_t prev[3] = {0, 0, 0};
+  for (size_t i = 0; i < vn * 3; ++i) {
+    uint64_t z = pr.varint();
+    if (z > 0xFFFFFFFFu) pr.ok = false;
+    prev[i % 3] += uint32_t(zigzag_decode(uint32_t(z)));
+    c[i] = int32_t(prev[i % 3]);
+  }
+  uint32_t last = 0;
+  for (size_t i = 0; i < fn * 3; ++i) {
+    uint64_t z = ir.varint();
+    if (z > 0xFFFFFFFFu) ir.ok = false;
+    last += uint32_t(zigzag_decode(uint32_t(z)));
+    faces[i] = last;
+  }
+  if (!pr.ok || !ir.ok || pr.remaining() || ir.remaining())
+    return fail(Status::corrupt, "BASE streams malformed");
+  ProgressiveMesh m;
+  if (!m.build(uint32_t(vn), faces.data(), fn, err)) return fail(Status::corrupt, "BASE: " + err);
+  mesh = std::move(m);
+  coords = std::move(c);
+  positions.resize(vn * 3);
+  for (size_t i = 0; i < vn * 3; ++i) positions[i] = quant.dequantize(coords[i], int(i % 3));
+  parents.assign(vn, 0xFFFFFFFFu);
+  info.base_done = true;
+  changes = {};
+  changes.all = true;
+  return Status::ok;
+}
+
+Status Decoder::Impl::split_chunk(const uint8_t* p, size_t n) {
+  ByteReader r(p, n);
+  uint64_t count = r.varint();
+  if (!r.ok || count == 0 || count > info.total_splits - splits.size())
+    return fail(Status::corrupt, "SPLT split count");
+  std::string err;
+  for (int s = 0; s < kSplitStreamCount; ++s)
+    if (!read_stream(r, dctx, limits.max_chunk_bytes, scratch[s], err))
+      return fail(Status::corrupt, "SPLT: " + err);
+  for (int s = kStreamGaps; s < kSplitStreamCount; ++s)
+    if (scratch[s].size() < count) return fail(Status::corrupt, "SPLT streams too short");
+  ByteReader in[kSplitStreamCount] = {
+      {scratch[0].data(), scratch[0].size()}, {scratch[1].data(), scratch[1].size()},
+      {scratch[2].data(), scratch[2].size()}, {scratch[3].data(), scratch[3].size()},
+      {scratch[4].data(), scratch[4].size()}, {scratch[5].data(), scratch[5].size()},
+      {scratch[6].data(), scratch[6].size()}};
+  const size_t first = splits.size();
+  try {
+    splits.resize(first + count);
+  } catch (const std::bad_alloc&) {
+    splits.resize(first);
+    return fail(Status::out_of_memory, "split records");
+  }
+  bool ok = true;
+  uint64_t done = 0;
+  while (ok && done < count) {
+    uint64_t group = in[kStreamGroups].varint();
+    if (!in[kStreamGroups].ok || group == 0 || group > count - done) {
+      ok = false;
+      break;
+    }
+    // v is a vertex that exists when the group starts: below that vertex count.
+    const uint64_t limit = info.base_vertices + first + done;
+    uint64_t v = 0;
+    for (uint64_t i = 0; i < group; ++i) {
+      SplitCode& s = splits[first + done + i];
+      uint64_t g = in[kStreamGaps].varint();
+      v = i == 0 ? g : v + g + 1;
+      if (v >= limit) ok = false;
+      s.v = uint32_t(v);
+      uint64_t l = in[kStreamWedgeL].varint(), rr = in[kStreamWedgeR].varint();
+      if (l > 0xFFFFFFF0u || rr > 0xFFFFFFF0u) ok = false;
+      s.code_l = uint32_t(l);
+      s.code_r = uint32_t(rr);
+      for (int a = 0; a < 3; ++a) {
+        uint64_t z = in[kStreamResidualX + a].varint();
+        if (z > 0xFFFFFFFFu) ok = false;
+        s.residual[a] = zigzag_decode(uint32_t(z));
+      }
+    }
+    done += group;
+  }
+  for (auto& x : in) ok = ok && x.ok && x.remaining() == 0;
+  if (!ok) {
+    splits.resize(first);
+    return fail(Status::corrupt, "SPLT streams malformed");
+  }
+  available = splits.size();
+  return Status::ok;
+}
+
+bool Decoder::Impl::apply() {
+  const SplitCode& s = splits[applied];
+  if (mesh.face_count() + 2ull > limits.max_faces) {
+    fail(Status::limit_exceeded, "face limit reached while refining");
+    return false;
+  }
+  uint32_t a = kNoRank, b = kNoRank;
+  bool ok = mesh.gather_ring(s.v);
+  if (ok) {
+    const uint32_t k = uint32_t(mesh.ring().size());
+    if (mesh.ring_closed()) {
+      ok = s.code_l < k && s.code_r + 1 < k;
+      a = s.code_l;
+      b = uint32_t((uint64_t(a) + s.code_r + 1) % k);
+    } else {
+      a = s.code_l ? s.code_l - 1 : kNoRank;
+      b = s.code_r ? s.code_r - 1 : kNoRank;
+    }
+  }
+  if (!ok || !mesh.split_gathered(s.v, a, b)) {
+    fail(Status::corrupt, "split " + std::to_string(applied) + " has an invalid wedge");
+    splits.resize(applied);
+    available = applied;
+    return false;
+  }
+  const uint32_t u = mesh.vertex_count() - 1;
+  if (u * 3ull >= coords.size()) {
+    int32_t pred[3];
+    predict_position(coords.data(), mesh.u_ring(), pred);
+    for (int k = 0; k < 3; ++k) {
+      int32_t c = int32_t(uint32_t(pred[k]) + uint32_t(s.residual[k]));
+      coords.push_back(c);
+      positions.push_back(quant.dequantize(c, k));
+    }
+    parents.push_back(s.v);
+  }
+  sides.push_back(uint8_t((a != kNoRank ? kHasLeft : 0) | (b != kNoRank ? kHasRight : 0)));
+  note_rewritten(mesh.sector_faces());
+  ++applied;
+  return true;
+}
+
+void Decoder::Impl::undo() {
+  --applied;
+  uint8_t side = sides.back();
+  sides.pop_back();
+  mesh.undo_split(splits[applied].v, side & kHasLeft, side & kHasRight);
+  changes.face_begin = std::min(changes.face_begin, mesh.face_count());
+  changes.vertex_begin = std::min(changes.vertex_begin, mesh.vertex_count());
+  note_rewritten(mesh.sector_faces());
+}
+
+Status Decoder::feed(const void* data, size_t size) {
+  Impl& d = *impl_;
+  if (d.status != Status::ok || size == 0) return d.status;
+  const auto* p = static_cast<const uint8_t*>(data);
+  d.parse_base = d.consumed - d.pending.size();
+  d.consumed += size;
+  try {
+    if (d.pending.empty()) {
+      size_t used = d.parse(p, size);
+      if (d.status == Status::ok) d.pending.assign(p + used, p + size);
+    } else {
+      d.pending.insert(d.pending.end(), p, p + size);
+      size_t used = d.parse(d.pending.data(), d.pending.size());
+      if (d.status == Status::ok) d.pending.erase(d.pending.begin(), d.pending.begin() + ptrdiff_t(used));
+    }
+  } catch (const std::bad_alloc&) {
+    d.fail(Status::out_of_memory, "allocation failed");
+  }
+  if (d.status != Status::ok) d.pending.clear();
+  return d.status;
+}
+
+Status Decoder::finish() {
+  Impl& d = *impl_;
+  if (d.status == Status::ok && !d.info.complete)
+    d.fail(Status::truncated, "stream ended before its end marker");
+  return d.status;
+}
+
 Status Decoder::status() const { return impl_->status; }
 const std::string& Decoder::error_message() const { return impl_->message; }
 const StreamInfo& Decoder::info() const { return impl_->info; }
 uint64_t Decoder::bytes_consumed() const { return impl_->consumed; }
-uint64_t Decoder::refine(uint64_t) { return 0; }
-uint64_t Decoder::coarsen(uint64_t) { return 0; }
-void Decoder::set_face_target(uint64_t) {}
-void Decoder::set_split_target(uint64_t) {}
-uint64_t Decoder::splits_applied() const { return 0; }
-uint64_t Decoder::splits_available() const { return 0; }
-uint32_t Decoder::vertex_count() const { return 0; }
-uint32_t Decoder::face_count() const { return 0; }
-const float* Decoder::positions() const { return nullptr; }
-const uint32_t* Decoder::indices() const { return nullptr; }
-const uint32_t* Decoder::split_parents() const { return nullptr; }
+
+uint64_t Decoder::refine(uint64_t max_splits) {
+  Impl& d = *impl_;
+  uint64_t n = 0;
+  try {
+    while (n < max_splits && d.applied < d.available && d.apply()) ++n;
+  } catch (const std::bad_alloc&) {
+    d.fail(Status::out_of_memory, "allocation failed while refining");
+  }
+  return n;
+}
+
+uint64_t Decoder::coarsen(uint64_t max_splits) {
+  Impl& d = *impl_;
+  uint64_t n = 0;
+  for (; n < max_splits && d.applied > 0; ++n) d.undo();
+  return n;
+}
+
+void Decoder::set_face_target(uint64_t faces) {
+  Impl& d = *impl_;
+  auto faces_of_last = [&] {
+    uint8_t s = d.sides.back();
+    return uint32_t((s & kHasLeft ? 1 : 0) + (s & kHasRight ? 1 : 0));
+  };
+  while (d.applied > 0 && d.mesh.face_count() - faces_of_last() >= faces) d.undo();
+  while (d.mesh.face_count() < faces && d.applied < d.available && refine(1)) {
+  }
+}
+
+void Decoder::set_split_target(uint64_t splits) {
+  Impl& d = *impl_;
+  if (splits < d.applied) coarsen(d.applied - splits);
+  else refine(splits - d.applied);
+}
+
+uint64_t Decoder::splits_applied() const { return impl_->applied; }
+uint64_t Decoder::splits_available() const { return impl_->available; }
+uint32_t Decoder::vertex_count() const { return impl_->mesh.vertex_count(); }
+uint32_t Decoder::face_count() const { return impl_->mesh.face_count(); }
+const float* Decoder::positions() const { return impl_->positions.empty() ? nullptr : impl_->positions.data(); }
+const uint32_t* Decoder::indices() const {
+  return impl_->mesh.corner_vertex.empty() ? nullptr : impl_->mesh.corner_vertex.data();
+}
+const uint32_t* Decoder::split_parents() const { return impl_->parents.empty() ? nullptr : impl_->parents.data(); }
 const MeshChanges& Decoder::changes() const { return impl_->changes; }
-void Decoder::clear_changes() { impl_->changes = {}; }
+void Decoder::clear_changes() {
+  Impl& d = *impl_;
+  d.changes.all = false;
+  d.changes.modified_faces.clear();
+  d.changes.vertex_begin = d.mesh.vertex_count();
+  d.changes.face_begin = d.mesh.face_count();
+}
 
 }  // namespace pmz

@@ -1,0 +1,325 @@
+// The .pmz writer: inverts a collapse sequence into vertex splits, groups them into batches of
+// independent splits (within windows of the greedy order, so the mesh at every window boundary
+// is the greedy prefix), and codes them by replaying the decoder's own ProgressiveMesh.
+#include "pmz/writer.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+
+#include "pmz/decoder.hpp"
+#include "pmz/format.hpp"
+#include "pmz/progressive_mesh.hpp"
+
+namespace pmz {
+
+namespace {
+
+constexpr double kWindowGrowth = 1.25;  // a window grows the vertex count by at most 25%
+constexpr uint32_t kFirstChunkSplits = 256, kMaxChunkSplits = 16384;
+
+struct Plan {
+  uint32_t base_vertices = 0;
+  std::vector<uint32_t> base_faces;        // decoded ids (== greedy ids for base vertices)
+  std::vector<uint32_t> input_of;          // decoded id -> input id
+  std::vector<uint32_t> order;             // final position -> collapse index
+  std::vector<uint32_t> group_sizes;       // batches in final order
+  std::vector<uint32_t> decoded_id;        // input id -> decoded id
+};
+
+uint32_t find_root(std::vector<uint32_t>& parent, uint32_t x) {
+  while (parent[x] != x) {
+    parent[x] = parent[parent[x]];
+    x = parent[x];
+  }
+  return x;
+}
+
+// Ranks of vl/vr (kNoVertex -> kNoRank) in the ring gathered last; false if absent.
+bool find_ranks(const ProgressiveMesh& pm, uint32_t vl, uint32_t vr, uint32_t& rl, uint32_t& rr) {
+  const auto& ring = pm.ring();
+  rl = rr = kNoRank;
+  for (uint32_t i = 0; i < ring.size(); ++i) {
+    if (ring[i] == vl) rl = i;
+    if (ring[i] == vr) rr = i;
+  }
+  return (vl == kNoVertex || rl != kNoRank) && (vr == kNoVertex || rr != kNoRank);
+}
+
+bool make_plan(const CollapseSequence& seq, const WriteOptions& opt, Plan& plan, std::string& error) {
+  const IndexedMesh& mesh = seq.mesh;
+  const uint32_t n = mesh.vertex_count();
+  const size_t total = seq.collapses.size();
+  if (n == 0 || mesh.face_count() == 0) return error = "empty mesh", false;
+  // How many collapses the base mesh is behind: --base-faces stops early.
+  uint64_t faces = mesh.face_count();
+  size_t used = 0;
+  std::vector<uint8_t> removed(n, 0);
+  for (; used < total; ++used) {
+    if (opt.base_faces && faces <= opt.base_faces) break;
+    const HalfEdgeCollapse& c = seq.collapses[used];
+    auto bad = [&](uint32_t x) { return x != kNoVertex && (x >= n || removed[x]); };
+    if (c.u >= n || c.v >= n || c.u == c.v || removed[c.u] || removed[c.v] || bad(c.vl) ||
+        bad(c.vr) || (c.vl == kNoVertex && c.vr == kNoVertex))
+      return error = "collapse " + std::to_string(used) + " is inconsistent with the mesh", false;
+    removed[c.u] = 1;
+    faces -= (c.vl != kNoVertex) + (c.vr != kNoVertex);
+  }
+  std::vector<uint32_t> parent(n);
+  for (uint32_t i = 0; i < n; ++i) parent[i] = i;
+  for (size_t i = 0; i < used; ++i) parent[seq.collapses[i].u] = seq.collapses[i].v;
+
+  // Greedy ids: surviving input vertices ascending, then u of each split in decode order.
+  // For base vertices they are also the decoded ids.
+  std::vector<uint32_t> gid(n, kNoVertex), input_of_gid(n);
+  uint32_t base_n = 0;
+  for (uint32_t i = 0; i < n; ++i)
+    if (!removed[i]) input_of_gid[gid[i] = base_n++] = i;
+  for (size_t j = 0; j < used; ++j) {
+    uint32_t u = seq.collapses[used - 1 - j].u;
+    input_of_gid[gid[u] = base_n + uint32_t(j)] = u;
+  }
+  plan.base_vertices = base_n;
+  plan.base_faces.clear();
+  for (uint32_t f = 0; f < mesh.face_count(); ++f) {
+    uint32_t t[3];
+    for (int k = 0; k < 3; ++k) t[k] = gid[find_root(parent, mesh.indices[f * 3 + k])];
+    if (t[0] == t[1] || t[0] == t[2] || t[1] == t[2]) continue;
+    plan.base_faces.insert(plan.base_faces.end(), t, t + 3);
+  }
+  if (plan.base_faces.size() / 3 != faces)
+    return error = "collapse sequence does not reproduce the mesh's face count", false;
+
+  // Greedy replay: layer each split after every earlier split of its window whose
+  // footprint (closed one-ring of v, plus u) it overlaps.
+  ProgressiveMesh pm;
+  if (!pm.build(base_n, plan.base_faces.data(), faces, error)) return error = "base mesh: " + error, false;
+  std::vector<int32_t> last_layer(n, -1);
+  std::vector<uint32_t> layer(used);
+  int32_t window_first = 0, max_layer = -1;
+  uint32_t window_start = base_n;
+  for (size_t j = 0; j < used; ++j) {
+    const HalfEdgeCollapse& c = seq.collapses[used - 1 - j];
+    uint32_t v = gid[c.v];
+    uint32_t vl = c.vl == kNoVertex ? kNoVertex : gid[c.vl];
+    uint32_t vr = c.vr == kNoVertex ? kNoVertex : gid[c.vr];
+    uint32_t rl, rr;
+    if (!pm.gather_ring(v) || !find_ranks(pm, vl, vr, rl, rr))
+      return error = "collapse " + std::to_string(used - 1 - j) + " is not a manifold half-edge collapse", false;
+    if (pm.vertex_count() > uint64_t(double(window_start) * kWindowGrowth) ) {
+      window_first = max_layer + 1;
+      window_start = pm.vertex_count();
+    }
+    int32_t l = std::max(window_first, last_layer[v] + 1);
+    for (uint32_t w : pm.ring()) l = std::max(l, last_layer[w] + 1);
+    layer[j] = uint32_t(l);
+    max_layer = std::max(max_layer, l);
+    last_layer[v] = l;
+    for (uint32_t w : pm.ring()) last_layer[w] = l;
+    last_layer[pm.vertex_count()] = l;
+    if (!pm.split(v, rl, rr))
+      return error = "collapse " + std::to_string(used - 1 - j) + " cannot be inverted", false;
+  }
+
+  // Final order: by layer, then by v's decoded id (known: v exists before its layer).
+  std::vector<uint32_t> start(size_t(max_layer + 2), 0);
+  for (uint32_t l : layer) ++start[l + 1];
+  for (size_t i = 1; i < start.size(); ++i) start[i] += start[i - 1];
+  std::vector<uint32_t> by_layer(used);
+  for (uint32_t j = 0; j < used; ++j) by_layer[start[layer[j]]++] = j;
+  std::vector<uint32_t> did_of_gid(n);
+  for (uint32_t i = 0; i < base_n; ++i) did_of_gid[i] = i;
+  plan.order.clear();
+  plan.group_sizes.clear();
+  std::vector<std::pair<uint32_t, uint32_t>> batch;  // (decoded v, j)
+  size_t at = 0;
+  while (at < used) {
+    uint32_t l = layer[by_layer[at]];
+    batch.clear();
+    for (; at < used && layer[by_layer[at]] == l; ++at) {
+      uint32_t j = by_layer[at];
+      batch.push_back({did_of_gid[gid[seq.collapses[used - 1 - j].v]], j});
+    }
+    std::sort(batch.begin(), batch.end());
+    for (auto [dv, j] : batch) {
+      did_of_gid[base_n + j] = base_n + uint32_t(plan.order.size());
+      plan.order.push_back(uint32_t(used - 1 - j));
+    }
+    plan.group_sizes.push_back(uint32_t(batch.size()));
+  }
+  plan.input_of.assign(base_n + used, 0);
+  plan.decoded_id.assign(n, kNoVertex);
+  for (uint32_t g = 0; g < base_n + used; ++g) {
+    plan.input_of[did_of_gid[g]] = input_of_gid[g];
+    plan.decoded_id[input_of_gid[g]] = did_of_gid[g];
+  }
+  return true;
+}
+
+using Face = std::array<uint32_t, 3>;
+Face canonical_face(uint32_t a, uint32_t b, uint32_t c) {
+  if (b < a && b < c) return {b, c, a};
+  if (c < a && c < b) return {c, a, b};
+  return {a, b, c};
+}
+
+}  // namespace
+
+bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector<uint8_t>& out,
+               std::string& error, WriteStats* stats) {
+  if (opt.position_bits > 30) return error = "--position-bits must be 0..30", false;
+  for (float x : seq.mesh.positions)
+    if (!std::isfinite(x)) return error = "non-finite vertex coordinate", false;
+  Plan plan;
+  if (!make_plan(seq, opt, plan, error)) return false;
+  const IndexedMesh& mesh = seq.mesh;
+  const uint32_t base_n = plan.base_vertices;
+  const uint32_t total_v = uint32_t(plan.input_of.size());
+  const uint32_t splits = total_v - base_n;
+
+  FileHeader h;
+  h.position_bits = opt.position_bits;
+  for (int a = 0; a < 3; ++a) {
+    h.bbox_min[a] = INFINITY;
+    h.bbox_max[a] = -INFINITY;
+  }
+  for (uint32_t i = 0; i < mesh.vertex_count(); ++i)
+    for (int a = 0; a < 3; ++a) {
+      h.bbox_min[a] = std::min(h.bbox_min[a], mesh.positions[i * 3 + a]);
+      h.bbox_max[a] = std::max(h.bbox_max[a], mesh.positions[i * 3 + a]);
+    }
+  Quantizer quant;
+  quant.init(h.position_bits, h.bbox_min, h.bbox_max);
+  std::vector<int32_t> coords(size_t(total_v) * 3);  // decoded ids
+  for (uint32_t d = 0; d < total_v; ++d)
+    for (int a = 0; a < 3; ++a)
+      coords[d * 3 + a] = quant.quantize(mesh.positions[plan.input_of[d] * 3 + a], a);
+
+  h.base_vertices = base_n;
+  h.base_faces = uint32_t(plan.base_faces.size() / 3);
+  h.full_vertices = total_v;
+  h.full_faces = mesh.face_count();
+  h.total_splits = splits;
+
+  out.assign(kSignature, kSignature + 8);
+  std::vector<uint8_t> payload;
+  write_head_payload(payload, h);
+  append_chunk(out, kChunkHead, payload);
+  WriteStats st;
+  st.header_bytes = out.size();
+
+  // Base mesh: coordinates as per-axis deltas, faces as index deltas.
+  {
+    std::vector<uint8_t> pos, idx;
+    int32_t prev[3] = {0, 0, 0};
+    for (uint32_t d = 0; d < base_n; ++d)
+      for (int a = 0; a < 3; ++a) {
+        put_varint(pos, zigzag_encode(int32_t(uint32_t(coords[d * 3 + a]) - uint32_t(prev[a]))));
+        prev[a] = coords[d * 3 + a];
+      }
+    uint32_t last = 0;
+    for (uint32_t x : plan.base_faces) {
+      put_varint(idx, zigzag_encode(int32_t(x - last)));
+      last = x;
+    }
+    payload.clear();
+    put_varint(payload, base_n);
+    put_varint(payload, h.base_faces);
+    put_stream(payload, pos, opt.zstd_level);
+    put_stream(payload, idx, opt.zstd_level);
+    size_t before = out.size();
+    append_chunk(out, kChunkBase, payload);
+    st.base_bytes = out.size() - before;
+  }
+
+  // Splits: replay in final order with the decoder's core to get ranks and predictions.
+  ProgressiveMesh pm;
+  if (!pm.build(base_n, plan.base_faces.data(), h.base_faces, error)) return false;
+  std::vector<uint8_t> streams[kSplitStreamCount];
+  uint32_t chunk_splits = 0, chunk_limit = kFirstChunkSplits;
+  auto flush = [&]() {
+    if (!chunk_splits) return;
+    payload.clear();
+    put_varint(payload, chunk_splits);
+    for (int s = 0; s < kSplitStreamCount; ++s) {
+      size_t before = payload.size();
+      put_stream(payload, streams[s], opt.zstd_level);
+      uint64_t bits = (payload.size() - before) * 8;
+      (s <= kStreamWedgeR ? st.connectivity_bits : st.geometry_bits) += bits;
+      streams[s].clear();
+    }
+    size_t before = out.size();
+    append_chunk(out, kChunkSplits, payload);
+    st.split_bytes += out.size() - before;
+    chunk_splits = 0;
+    chunk_limit = std::min(chunk_limit * 2, kMaxChunkSplits);
+  };
+  uint32_t at = 0;
+  for (uint32_t group : plan.group_sizes) {
+    uint32_t left = group, piece = 0, prev_v = 0;
+    bool piece_start = false;
+    while (left) {
+      if (piece == 0) {
+        piece = std::min(left, chunk_limit - chunk_splits);
+        put_varint(streams[kStreamGroups], piece);
+        piece_start = true;
+      }
+      const HalfEdgeCollapse& c = seq.collapses[plan.order[at]];
+      uint32_t v = plan.decoded_id[c.v];
+      uint32_t vl = c.vl == kNoVertex ? kNoVertex : plan.decoded_id[c.vl];
+      uint32_t vr = c.vr == kNoVertex ? kNoVertex : plan.decoded_id[c.vr];
+      uint32_t rl, rr;
+      if (!pm.gather_ring(v) || !find_ranks(pm, vl, vr, rl, rr) || plan.decoded_id[c.u] != pm.vertex_count())
+        return error = "internal: reordered split does not replay", false;
+      const bool closed = pm.ring_closed();
+      const uint32_t k = uint32_t(pm.ring().size());
+      if (!pm.split(v, rl, rr)) return error = "internal: split rejected", false;
+      put_varint(streams[kStreamGaps], piece_start ? v : v - prev_v - 1);
+      piece_start = false;
+      prev_v = v;
+      if (closed) {
+        put_varint(streams[kStreamWedgeL], rl);
+        put_varint(streams[kStreamWedgeR], (rr + k - rl) % k - 1);
+      } else {
+        put_varint(streams[kStreamWedgeL], rl == kNoRank ? 0 : rl + 1);
+        put_varint(streams[kStreamWedgeR], rr == kNoRank ? 0 : rr + 1);
+      }
+      int32_t pred[3];
+      predict_position(coords.data(), pm.u_ring(), pred);
+      uint32_t u = pm.vertex_count() - 1;
+      for (int a = 0; a < 3; ++a)
+        put_varint(streams[kStreamResidualX + a],
+                   zigzag_encode(int32_t(uint32_t(coords[u * 3 + a]) - uint32_t(pred[a]))));
+      ++at;
+      --left;
+      --piece;
+      if (++chunk_splits == chunk_limit) flush();
+    }
+  }
+  flush();
+  append_chunk(out, kChunkEnd, {});
+
+  // The full decode must reproduce the input's faces (as a set, up to rotation).
+  std::vector<Face> want, got;
+  for (uint32_t f = 0; f < mesh.face_count(); ++f)
+    want.push_back(canonical_face(mesh.indices[f * 3], mesh.indices[f * 3 + 1], mesh.indices[f * 3 + 2]));
+  for (uint32_t f = 0; f < pm.face_count(); ++f) {
+    const uint32_t* t = &pm.corner_vertex[f * 3];
+    got.push_back(canonical_face(plan.input_of[t[0]], plan.input_of[t[1]], plan.input_of[t[2]]));
+  }
+  std::sort(want.begin(), want.end());
+  std::sort(got.begin(), got.end());
+  if (want != got) return error = "internal: decoded faces differ from the input", false;
+  if (stats) *stats = st;
+  return true;
+}
+
+std::vector<uint32_t> decoded_vertex_order(const CollapseSequence& seq, const WriteOptions& options) {
+  Plan plan;
+  std::string error;
+  if (!make_plan(seq, options, plan, error)) return {};
+  return plan.input_of;
+}
+
+}  // namespace pmz
