@@ -97,9 +97,9 @@ bool frame_camera(Camera& camera, const pmz::StreamInfo& info, const MeshMirror&
 void log_line(double t, const Stats& s, const char* note) {
   std::fprintf(stderr,
                "t=%.3f bytes=%" PRIu64 " total=%" PRIu64 " faces=%u full=%" PRIu64 " vertices=%u splits=%" PRIu64
-               "/%" PRIu64 " fps=%.0f%s%s\n",
+               "/%" PRIu64 " fps=%.0f update_ms=%.1f%s%s\n",
                t, s.bytes, s.bytes_total, s.faces, s.full_faces, s.vertices, s.splits_applied, s.total_splits,
-               s.frames_per_second, note[0] ? " " : "", note);
+               s.frames_per_second, s.update_ms, note[0] ? " " : "", note);
 }
 
 bool write_png(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb, std::string& error) {
@@ -267,10 +267,12 @@ int main(int argc, char** argv) {
       int lock_misses = 0;
       double next_log = 0, window_start = 0;
       uint64_t window_splits = 0, window_frames = 0;
+      double window_update_ms = 0;  // slowest decoder step + mirror + upload in the window
       while (!glfwWindowShouldClose(window)) {
         const double t = seconds_since(t0);
         const float now = float(t);
         const float morph_seconds = state.geomorph ? state.morph_seconds : 0;
+        const auto update_start = Clock::now();
         // Never wait on the worker for long: a busy lock costs a frame or two at most.
         bool locked = lock_misses >= 3 ? (stream.mutex.lock(), true) : stream.mutex.try_lock();
         if (locked) {
@@ -290,6 +292,7 @@ int main(int argc, char** argv) {
           ++lock_misses;
         }
         renderer.upload(mirror);
+        window_update_ms = std::max(window_update_ms, seconds_since(update_start) * 1000);
         stats.bytes = stream.bytes_received();
         stats.bytes_total = stream.bytes_total();
 
@@ -339,6 +342,8 @@ int main(int argc, char** argv) {
         if (t - window_start >= 0.5) {
           stats.splits_per_second = double(window_splits) / (t - window_start);
           stats.frames_per_second = double(window_frames) / (t - window_start);
+          stats.update_ms = window_update_ms;
+          window_update_ms = 0;
           window_start = t;
           window_splits = window_frames = 0;
         }

@@ -24,6 +24,22 @@ void MeshMirror::clear_dirty() {
   dirty_faces.clear();
 }
 
+void DirtyBits::take_runs(uint32_t count, uint32_t gap, std::vector<Run>& runs) {
+  runs.clear();
+  const size_t end_word = std::min(words.size(), (size_t(count) + 63) / 64);
+  for (size_t w = 0; w < end_word; ++w) {
+    for (uint64_t bits = words[w]; bits; bits &= bits - 1) {
+      uint32_t id = uint32_t(w * 64 + size_t(__builtin_ctzll(bits)));
+      if (id >= count) break;
+      if (!runs.empty() && id <= runs.back().end + gap)
+        runs.back().end = id + 1;
+      else
+        runs.push_back({id, id + 1});
+    }
+  }
+  clear();
+}
+
 void MeshMirror::sync(pmz::Decoder& decoder, float now, float morph_seconds) {
   const pmz::MeshChanges& changes = decoder.changes();
   const uint32_t nv = decoder.vertex_count(), nf = decoder.face_count();
@@ -53,7 +69,7 @@ void MeshMirror::sync(pmz::Decoder& decoder, float now, float morph_seconds) {
     for (int k = 0; k < 3; ++k) {
       uint32_t v = indices[3 * size_t(f) + k];
       for (int i = 0; i < 3; ++i) normals[3 * size_t(v) + i] += sign * n[i];
-      dirty_normals.push_back(v);
+      dirty_normals.mark(v);
     }
   };
   auto copy_face = [&](uint32_t f) {
@@ -64,6 +80,14 @@ void MeshMirror::sync(pmz::Decoder& decoder, float now, float morph_seconds) {
   };
 
   if (changes.all || vertex_count == 0) {
+    // Room for the finest level up front: no reallocation (and copy) while refining.
+    const pmz::StreamInfo& info = decoder.info();
+    const size_t full_vertices = std::max<size_t>(nv, size_t(std::min<uint64_t>(info.full_vertices, 1u << 27)));
+    const size_t full_faces = std::max<size_t>(nf, size_t(std::min<uint64_t>(info.full_faces, 1u << 28)));
+    for (auto* v : {&positions, &morph_from, &normals}) v->reserve(3 * full_vertices);
+    morph_start.reserve(full_vertices);
+    indices.reserve(3 * full_faces);
+    face_normals.reserve(3 * full_faces);
     positions.assign(src_positions, src_positions + 3 * size_t(nv));
     morph_from = positions;
     morph_start.assign(nv, kStatic);
@@ -74,7 +98,7 @@ void MeshMirror::sync(pmz::Decoder& decoder, float now, float morph_seconds) {
     face_count = nf;
     for (uint32_t f = 0; f < nf; ++f) copy_face(f);
     for (uint32_t f = 0; f < nf; ++f) add_face(f, 1);
-    dirty_normals.clear();
+    clear_dirty();
     dirty_all = true;
     decoder.clear_changes();
     return;
@@ -84,12 +108,14 @@ void MeshMirror::sync(pmz::Decoder& decoder, float now, float morph_seconds) {
   const uint32_t face_begin = std::min({changes.face_begin, face_count, nf});
   const uint32_t old_faces = face_count;
   // Rewritten faces below face_begin, each once: a repeat would subtract its normal twice.
-  std::vector<uint32_t> modified;
-  modified.reserve(changes.modified_faces.size());
-  for (uint32_t f : changes.modified_faces)
-    if (f < face_begin) modified.push_back(f);
-  std::sort(modified.begin(), modified.end());
-  modified.erase(std::unique(modified.begin(), modified.end()), modified.end());
+  std::vector<uint32_t>& modified = modified_;
+  modified.clear();
+  for (uint32_t f : changes.modified_faces) {
+    if (f >= face_begin || (f >> 6 < seen_faces_.words.size() && (seen_faces_.words[f >> 6] >> (f & 63) & 1))) continue;
+    seen_faces_.mark(f);
+    modified.push_back(f);
+  }
+  for (uint32_t f : modified) seen_faces_.words[f >> 6] = 0;
 
   // 1. Take the old faces' contributions out of their old vertices.
   for (uint32_t f : modified) add_face(f, -1);
@@ -130,29 +156,14 @@ void MeshMirror::sync(pmz::Decoder& decoder, float now, float morph_seconds) {
     if (f >= nf) continue;
     copy_face(f);
     add_face(f, 1);
-    dirty_faces.push_back(f);
+    dirty_faces.mark(f);
   }
   for (uint32_t f = face_begin; f < nf; ++f) {
     copy_face(f);
     add_face(f, 1);
-    dirty_faces.push_back(f);
+    dirty_faces.mark(f);
   }
-  // Vertices past the end are gone; their normal slots are not drawn.
-  dirty_normals.erase(std::remove_if(dirty_normals.begin(), dirty_normals.end(), [&](uint32_t v) { return v >= nv; }),
-                      dirty_normals.end());
   decoder.clear_changes();
-}
-
-void coalesce(std::vector<uint32_t>& ids, uint32_t gap, std::vector<Run>& runs) {
-  runs.clear();
-  std::sort(ids.begin(), ids.end());
-  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
-  for (uint32_t id : ids) {
-    if (!runs.empty() && id <= runs.back().end + gap)
-      runs.back().end = id + 1;
-    else
-      runs.push_back({id, id + 1});
-  }
 }
 
 }  // namespace pmzview

@@ -129,6 +129,19 @@ void Renderer::upload_range(GLenum target, GLuint buffer, size_t element_size, c
   bytes_uploaded += bytes;
 }
 
+void Renderer::upload_runs(GLenum target, GLuint buffer, size_t element_size, const void* base) {
+  if (runs_.empty()) return;
+  // Each call costs about as much as copying a few kB; past that one span is cheaper.
+  constexpr size_t kCallCost = 4096;
+  size_t run_cost = 0;
+  for (const Run& r : runs_) run_cost += element_size * (r.end - r.begin) + kCallCost;
+  if (run_cost > element_size * (runs_.back().end - runs_.front().begin)) {
+    upload_range(target, buffer, element_size, base, runs_.front().begin, runs_.back().end);
+    return;
+  }
+  for (const Run& r : runs_) upload_range(target, buffer, element_size, base, r.begin, r.end);
+}
+
 void Renderer::upload(MeshMirror& mesh) {
   const uint32_t nv = mesh.vertex_count, nf = mesh.face_count;
   const void* vertex_arrays[4] = {mesh.positions.data(), mesh.morph_from.data(), mesh.morph_start.data(),
@@ -157,19 +170,14 @@ void Renderer::upload(MeshMirror& mesh) {
     upload_range(GL_ARRAY_BUFFER, vbo_[i], sizeof(float) * kComponents[i], vertex_arrays[i], vertex_begin, nv);
   if (!all_vertices) {
     // Normals also change on old vertices next to a split.
-    auto& ids = mesh.dirty_normals;
-    ids.erase(std::remove_if(ids.begin(), ids.end(), [&](uint32_t v) { return v >= vertex_begin; }), ids.end());
-    coalesce(ids, 16, runs_);
-    if (runs_.size() > 256) runs_ = {{runs_.front().begin, runs_.back().end}};
-    for (const Run& r : runs_) upload_range(GL_ARRAY_BUFFER, vbo_[3], sizeof(float) * 3, vertex_arrays[3], r.begin, r.end);
+    mesh.dirty_normals.take_runs(vertex_begin, 16, runs_);
+    upload_runs(GL_ARRAY_BUFFER, vbo_[3], sizeof(float) * 3, vertex_arrays[3]);
   }
   if (all_faces) {
     upload_range(GL_ELEMENT_ARRAY_BUFFER, ebo_, sizeof(uint32_t) * 3, mesh.indices.data(), 0, nf);
   } else {
-    coalesce(mesh.dirty_faces, 16, runs_);
-    if (runs_.size() > 256) runs_ = {{runs_.front().begin, runs_.back().end}};
-    for (const Run& r : runs_)
-      upload_range(GL_ELEMENT_ARRAY_BUFFER, ebo_, sizeof(uint32_t) * 3, mesh.indices.data(), r.begin, std::min(r.end, nf));
+    mesh.dirty_faces.take_runs(nf, 16, runs_);
+    upload_runs(GL_ELEMENT_ARRAY_BUFFER, ebo_, sizeof(uint32_t) * 3, mesh.indices.data());
   }
   glBindVertexArray(0);
   face_count_ = nf;

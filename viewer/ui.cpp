@@ -139,7 +139,7 @@ void draw_overlay(ViewState& s, const Stats& stats) {
   ImGui::Text("splits    %" PRIu64 " applied, %" PRIu64 " received, %" PRIu64 " total", stats.splits_applied,
               stats.splits_available, stats.total_splits);
   ImGui::Text("refine    %.0f splits/s", stats.splits_per_second);
-  ImGui::Text("frame     %.0f fps", stats.frames_per_second);
+  ImGui::Text("frame     %.0f fps, update %.1f ms", stats.frames_per_second, stats.update_ms);
   if (!stats.base_done)
     ImGui::TextColored(ImVec4(1, 0.8f, 0.3f, 1), "waiting for the base mesh...");
   else if (stats.complete)

@@ -29,6 +29,7 @@ struct Stats {
   uint64_t splits_applied = 0, splits_available = 0, total_splits = 0;
   uint64_t bytes = 0, bytes_total = 0;  // total 0 = unknown
   double splits_per_second = 0, frames_per_second = 0;
+  double update_ms = 0;  // slowest recent frame's refine + mirror + upload time
   bool base_done = false, complete = false;
   std::string error;
 };
