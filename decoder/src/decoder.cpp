@@ -381,6 +381,16 @@ uint64_t Decoder::refine(uint64_t max_splits) {
   Impl& d = *impl_;
   uint64_t n = 0;
   try {
+    // Room for every available split up front (bounded by decoded input, not the header).
+    uint64_t target = d.applied + std::min(max_splits, d.available - d.applied);
+    if (target > d.applied) {
+      uint64_t nv = d.info.base_vertices + target;
+      d.mesh.reserve(nv, d.mesh.face_count() + 2 * (target - d.applied));
+      d.coords.reserve(nv * 3);
+      d.positions.reserve(nv * 3);
+      d.parents.reserve(nv);
+      d.sides.reserve(target);
+    }
     while (n < max_splits && d.applied < d.available && d.apply()) ++n;
   } catch (const std::bad_alloc&) {
     d.fail(Status::out_of_memory, "allocation failed while refining");

@@ -111,12 +111,13 @@ bool make_plan(const CollapseSequence& seq, const WriteOptions& opt, Plan& plan,
       window_first = max_layer + 1;
       window_start = pm.vertex_count();
     }
+    // Two splits commute when neither v is in the other's closed one-ring; a split only
+    // changes adjacency at its own v and u, so marking centres (v, u) is enough.
     int32_t l = std::max(window_first, last_layer[v] + 1);
     for (uint32_t w : pm.ring()) l = std::max(l, last_layer[w] + 1);
     layer[j] = uint32_t(l);
     max_layer = std::max(max_layer, l);
     last_layer[v] = l;
-    for (uint32_t w : pm.ring()) last_layer[w] = l;
     last_layer[pm.vertex_count()] = l;
     if (!pm.split(v, rl, rr))
       return error = "collapse " + std::to_string(used - 1 - j) + " cannot be inverted", false;

@@ -19,6 +19,12 @@ class ProgressiveMesh {
   std::vector<uint32_t> opposite;       // corner across the edge opposite c, or kNoCorner
   std::vector<uint32_t> vertex_corner;  // any corner of the vertex, or kNoCorner (isolated)
 
+  // Capacity for this many vertices and faces, so refinement does not reallocate.
+  void reserve(size_t vertices, size_t faces) {
+    corner_vertex.reserve(faces * 3);
+    opposite.reserve(faces * 3);
+    vertex_corner.reserve(vertices);
+  }
   uint32_t vertex_count() const { return uint32_t(vertex_corner.size()); }
   uint32_t face_count() const { return uint32_t(corner_vertex.size() / 3); }
 
