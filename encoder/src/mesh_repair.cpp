@@ -14,7 +14,6 @@
 //    both ends; such a face is detached at one corner and step 3 is redone until every edge has
 //    at most two faces of opposite orientation. Each pass removes glue, so this terminates.
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <unordered_map>
 
@@ -194,17 +193,6 @@ void repair_mesh(const PolygonSoup& soup, IndexedMesh& out, MeshRepairStats& sta
   }
   const uint32_t corner_count = uint32_t(tris.size());
 
-  // Duplicate triangles (same vertex set) are kept; steps 2-4 separate them. Counted only.
-  {
-    std::vector<std::array<uint32_t, 3>> keys(corner_count / 3);
-    for (uint32_t t = 0; t < keys.size(); ++t) {
-      keys[t] = {tris[t * 3], tris[t * 3 + 1], tris[t * 3 + 2]};
-      std::sort(keys[t].begin(), keys[t].end());
-    }
-    std::sort(keys.begin(), keys.end());
-    for (size_t t = 1; t < keys.size(); ++t) stats.duplicate_faces += keys[t] == keys[t - 1];
-  }
-
   // 2. Glue faces in pairs along each edge.
   std::vector<uint32_t> mate(corner_count, kNone);
   std::vector<std::pair<uint64_t, uint32_t>> edges;
@@ -214,6 +202,21 @@ void repair_mesh(const PolygonSoup& soup, IndexedMesh& out, MeshRepairStats& sta
   for (size_t g = 0; g < edges.size();) {
     size_t e = g;
     while (e < edges.size() && edges[e].first == edges[g].first) ++e;
+    // Duplicate triangles (same vertex set) are kept; the gluing separates them. Counted once,
+    // in the group of the face's smallest edge: a later face whose third vertex matches.
+    for (size_t k = g + 1; k < e; ++k) {
+      uint32_t h = edges[k].second, t = h - h % 3;
+      uint64_t smallest =
+          std::min({edge_key(tris[t], tris[t + 1]), edge_key(tris[t + 1], tris[t + 2]),
+                    edge_key(tris[t + 2], tris[t])});
+      if (smallest != edges[g].first) continue;
+      uint32_t apex = tris[prev_corner(h)];
+      for (size_t j = g; j < k; ++j)
+        if (tris[prev_corner(edges[j].second)] == apex) {
+          ++stats.duplicate_faces;
+          break;
+        }
+    }
     if (e - g == 2 && forward(edges[g].second) != forward(edges[g + 1].second)) {
       mate[edges[g].second] = edges[g + 1].second;
       mate[edges[g + 1].second] = edges[g].second;
@@ -264,6 +267,8 @@ void repair_mesh(const PolygonSoup& soup, IndexedMesh& out, MeshRepairStats& sta
       }
       out.indices[c] = fan_vertex[root];
     }
+    // Without a non-manifold edge every edge group was glued or single: nothing to detach.
+    if (stats.nonmanifold_edges == 0) break;
     sort_edges(out.indices, edges);
     auto forward_out = [&](uint32_t h) { return out.indices[h] < out.indices[next_corner(h)]; };
     bool detached = false;
