@@ -39,9 +39,21 @@ void Camera::frame(const float bmin[3], const float bmax[3], float aspect) {
     diagonal2 += (bmax[i] - bmin[i]) * (bmax[i] - bmin[i]);
   }
   radius = diagonal2 > 0 ? 0.5f * std::sqrt(diagonal2) : 1.0f;
-  float half_fov = 0.5f * fovy;
-  if (aspect < 1) half_fov = std::atan(std::tan(half_fov) * aspect);
-  distance = radius / std::sin(half_fov) * 1.02f;
+  // Back off along the current view direction until all eight box corners are inside the
+  // frustum: tighter than fitting the bounding sphere, so flat objects fill the frame.
+  float f[3], r[3], u[3];
+  basis(*this, f, r, u);
+  const float tan_y = std::tan(0.5f * fovy), tan_x = tan_y * aspect;
+  float fit = 0;
+  for (int corner = 0; corner < 8; ++corner) {
+    float offset[3];
+    for (int i = 0; i < 3; ++i) offset[i] = ((corner >> i) & 1 ? bmax[i] : bmin[i]) - target[i];
+    float x = offset[0] * r[0] + offset[1] * r[1] + offset[2] * r[2];
+    float y = offset[0] * u[0] + offset[1] * u[1] + offset[2] * u[2];
+    float z = offset[0] * f[0] + offset[1] * f[1] + offset[2] * f[2];  // toward the far side
+    fit = std::max({fit, std::abs(x) / tan_x - z, std::abs(y) / tan_y - z});
+  }
+  distance = fit > 0 ? fit * 1.08f : radius / std::sin(0.5f * fovy);
 }
 
 void Camera::orbit(float dx, float dy) {
