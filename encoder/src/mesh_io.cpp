@@ -489,6 +489,7 @@ bool read_ply(const std::string& path, const std::string& data, PolygonSoup& out
   PlyBody body{lines.rest, 0, format == 0, format == 2};
   bool have_vertices = false, have_faces = false;
   for (const PlyElement& e : elements) {
+    if (e.properties.empty()) continue;  // holds no bytes; its count must not drive a loop
     bool is_vertex = e.name == "vertex", is_face = e.name == "face";
     int xyz[3] = {-1, -1, -1}, list = -1;
     size_t min_bytes = 0;  // bytes an instance takes at least (binary)

@@ -281,6 +281,14 @@ TEST(MeshIO, HugeDeclaredCountsDoNotAllocate) {
                         "property list uint int vertex_indices\nend_header\n" +
                             std::string(12, '\0') + le32(0xFFFFFFFFu) + std::string(8, '\0'));
   auto ply3 = dir.write("huge.stl", std::string(80, ' ') + le32(300000000) + std::string(50, '\0'));
+  auto empty_element = dir.write("empty_element.ply",
+                                 "ply\nformat ascii 1.0\nelement junk 9000000000000000000\n"
+                                 "element vertex 3\nproperty float x\nproperty float y\n"
+                                 "property float z\nelement face 1\n"
+                                 "property list uchar int vertex_indices\nend_header\n"
+                                 "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  EXPECT_EQ(read_ok(empty_element).face_count(),
+            1u);  // an element without properties holds nothing
   expect_refused(off, "declares 9000000000 vertices, more than supported");
   expect_refused(off2, "file ends after 2 of 200000000 vertices");
   expect_refused(ply, "declares 200000000 entries, more than the file holds");
