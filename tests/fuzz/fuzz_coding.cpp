@@ -1,0 +1,202 @@
+// The coding layer under the decoder: ByteReader (fixed-width reads, LEB128 varints, byte
+// spans), zigzag, the stream reader (raw or zstd), the quantizer and float ordering, and the
+// corner-table core (build, split, exact undo). data[0] picks the part; the rest is its input.
+#include <zstd.h>
+
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "fuzz_common.hpp"
+#include "pmz/coding.hpp"
+#include "pmz/format.hpp"
+#include "pmz/progressive_mesh.hpp"
+
+namespace {
+
+// Random reads; the reader never passes its end, failures stick, and accepted varints
+// re-encode to no more bytes than they took.
+void fuzz_reader(const uint8_t* data, size_t size) {
+  if (size < 1) return;
+  const size_t ops = std::min<size_t>(data[0], size - 1);
+  const uint8_t* op = data + 1;
+  pmz::ByteReader r(data + 1 + ops, size - 1 - ops);
+  for (size_t i = 0; i < ops; ++i) {
+    const uint8_t* before = r.p;
+    const bool was_ok = r.ok;
+    switch (op[i] % 6) {
+      case 0: r.u8(); break;
+      case 1: r.u32le(); break;
+      case 2: r.u64le(); break;
+      case 3: {
+        float f = r.f32le();
+        (void)f;
+        break;
+      }
+      case 4: {
+        uint64_t v = r.varint();
+        if (r.ok) {
+          std::vector<uint8_t> enc;
+          pmz::put_varint(enc, v);
+          PMZ_FUZZ_CHECK(enc.size() <= size_t(r.p - before));
+          pmz::ByteReader again(enc.data(), enc.size());
+          PMZ_FUZZ_CHECK(again.varint() == v && again.ok && again.remaining() == 0);
+        }
+        break;
+      }
+      case 5: {
+        const uint8_t* b = r.bytes(op[i] / 6);
+        PMZ_FUZZ_CHECK((b != nullptr) == r.ok || !was_ok);
+        break;
+      }
+    }
+    PMZ_FUZZ_CHECK(r.p >= before && r.p <= r.end);
+    if (!was_ok) PMZ_FUZZ_CHECK(!r.ok);
+  }
+}
+
+// Values -> varints/zigzag -> values.
+void fuzz_round_trip(const uint8_t* data, size_t size) {
+  std::vector<uint8_t> enc;
+  std::vector<uint64_t> values;
+  for (size_t i = 0; i + 8 <= size; i += 8) {
+    uint64_t v;
+    std::memcpy(&v, data + i, 8);
+    v >>= (data[i] & 63);  // all lengths, not only 10-byte varints
+    values.push_back(v);
+    pmz::put_varint(enc, v);
+    const int32_t s = int32_t(uint32_t(v));
+    PMZ_FUZZ_CHECK(pmz::zigzag_decode(pmz::zigzag_encode(s)) == s);
+  }
+  pmz::ByteReader r(enc.data(), enc.size());
+  for (uint64_t v : values) PMZ_FUZZ_CHECK(r.varint() == v);
+  PMZ_FUZZ_CHECK(r.ok && r.remaining() == 0);
+}
+
+// Streams as chunks hold them: never more than max_raw bytes out, never past the input.
+void fuzz_streams(const uint8_t* data, size_t size) {
+  static ZSTD_DCtx* dctx = ZSTD_createDCtx();
+  const size_t max_raw = 1u << 20;
+  pmz::ByteReader r(data, size), s(data, size);
+  std::vector<uint8_t> out;
+  std::string error;
+  for (int i = 0; i < 8 && r.remaining(); ++i) {
+    const size_t left = r.remaining();
+    if (!pmz::read_stream(r, dctx, max_raw, out, error)) {
+      PMZ_FUZZ_CHECK(!error.empty());
+      break;
+    }
+    PMZ_FUZZ_CHECK(out.size() <= max_raw);
+    PMZ_FUZZ_CHECK(r.remaining() < left);
+    // skip_stream walks the same bytes.
+    uint64_t stored = 0;
+    PMZ_FUZZ_CHECK(pmz::skip_stream(s, stored));
+    PMZ_FUZZ_CHECK(s.p == r.p);
+  }
+}
+
+// Quantizer and float ordering.
+void fuzz_quantizer(const uint8_t* data, size_t size) {
+  if (size < 1 + 24) return;
+  float box[6];
+  std::memcpy(box, data + 1, 24);
+  for (int a = 0; a < 3; ++a) {
+    if (!std::isfinite(box[a]) || !std::isfinite(box[a + 3])) return;
+    if (box[a] > box[a + 3]) std::swap(box[a], box[a + 3]);
+  }
+  pmz::Quantizer q;
+  q.init(data[0] % 31, box, box + 3);
+  for (size_t i = 25; i + 4 <= size; i += 4) {
+    int32_t bits;
+    std::memcpy(&bits, data + i, 4);
+    float f;
+    std::memcpy(&f, &bits, 4);
+    const int32_t ordered = pmz::float_to_ordered(f);
+    const float back = pmz::ordered_to_float(ordered);
+    PMZ_FUZZ_CHECK(std::memcmp(&back, &f, 4) == 0);
+    const int axis = int(i % 3);
+    (void)q.dequantize(bits, axis);
+    if (!std::isfinite(f)) continue;
+    const int32_t k = q.quantize(f, axis);
+    if (q.bits) PMZ_FUZZ_CHECK(k >= 0 && uint32_t(k) <= q.max_q);
+  }
+}
+
+// Corner table: build from arbitrary faces, then splits and undos; every undo restores the
+// exact index and adjacency buffers (a vertex may keep a different, still valid, corner).
+struct Applied {
+  uint32_t v;
+  bool l, r;
+  std::vector<uint32_t> cv, op, vc;
+};
+
+void restored(const pmz::ProgressiveMesh& m, const Applied& a) {
+  PMZ_FUZZ_CHECK(m.corner_vertex == a.cv && m.opposite == a.op);
+  PMZ_FUZZ_CHECK(m.vertex_corner.size() == a.vc.size());
+  for (uint32_t x = 0; x < m.vertex_count(); ++x) {
+    const uint32_t c = m.vertex_corner[x];
+    PMZ_FUZZ_CHECK((c == pmz::kNoCorner) == (a.vc[x] == pmz::kNoCorner));
+    if (c != pmz::kNoCorner) PMZ_FUZZ_CHECK(c < m.corner_vertex.size() && m.corner_vertex[c] == x);
+  }
+}
+
+void fuzz_mesh(const uint8_t* data, size_t size) {
+  if (size < 2) return;
+  const uint32_t nv = 3 + data[0] % 29;
+  const size_t nf = std::min<size_t>(data[1] % 48, (size - 2) / 3);
+  std::vector<uint32_t> idx(nf * 3);
+  for (size_t i = 0; i < nf * 3; ++i) idx[i] = data[2 + i] % (nv + 1);  // some out of range
+  pmz::ProgressiveMesh m;
+  std::string error;
+  if (!m.build(nv, idx.data(), nf, error)) {
+    PMZ_FUZZ_CHECK(!error.empty());
+    return;
+  }
+  std::vector<Applied> stack;
+  for (size_t i = 2 + nf * 3; i + 3 <= size; i += 3) {
+    const uint8_t* s = data + i;
+    if (s[0] == 0xFF && !stack.empty()) {
+      Applied& a = stack.back();
+      m.undo_split(a.v, a.l, a.r);
+      restored(m, a);
+      stack.pop_back();
+      continue;
+    }
+    const uint32_t v = s[0] % (m.vertex_count() + 1);
+    const uint32_t l = s[1] == 0xFF ? pmz::kNoRank : s[1] % 16, r = s[2] == 0xFF ? pmz::kNoRank : s[2] % 16;
+    Applied a{v, l != pmz::kNoRank, r != pmz::kNoRank, m.corner_vertex, m.opposite, m.vertex_corner};
+    const uint32_t faces = m.face_count();
+    if (!m.split(v, l, r)) {
+      restored(m, a);
+      continue;
+    }
+    PMZ_FUZZ_CHECK(m.face_count() == faces + a.l + a.r);
+    for (uint32_t c : m.corner_vertex) PMZ_FUZZ_CHECK(c < m.vertex_count());
+    for (size_t c = 0; c < m.opposite.size(); ++c)
+      if (m.opposite[c] != pmz::kNoCorner) PMZ_FUZZ_CHECK(m.opposite[m.opposite[c]] == c);
+    stack.push_back(std::move(a));
+  }
+  while (!stack.empty()) {
+    Applied& a = stack.back();
+    m.undo_split(a.v, a.l, a.r);
+    restored(m, a);
+    stack.pop_back();
+  }
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  if (size < 1) return 0;
+  const uint8_t* p = data + 1;
+  const size_t n = size - 1;
+  switch (data[0] % 5) {
+    case 0: fuzz_reader(p, n); break;
+    case 1: fuzz_round_trip(p, n); break;
+    case 2: fuzz_streams(p, n); break;
+    case 3: fuzz_quantizer(p, n); break;
+    case 4: fuzz_mesh(p, n); break;
+  }
+  return 0;
+}

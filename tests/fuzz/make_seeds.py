@@ -1,0 +1,149 @@
+#!/usr/bin/env python3
+"""Seed corpora for the fuzz targets, from real encoded meshes.
+
+usage: make_seeds.py OUT_DIR [PMZ_ENCODE]
+
+Writes OUT_DIR/{decoder,container,coding}/. Tiny meshes (closed, open, with several
+components) are generated here and encoded with pmz-encode at a few settings; the committed
+tests/data/sample.pmz is always included. Without pmz-encode only that file seeds the corpus.
+Seeds stay small (a few KB each) so that libFuzzer mutates them quickly.
+"""
+import math
+import os
+import struct
+import subprocess
+import sys
+import tempfile
+
+SIGNATURE = bytes([0x89, ord('P'), ord('M'), ord('Z'), 0x0D, 0x0A, 0x1A, 0x0A])
+
+
+def sphere(rings, segments, bump=0.0):
+    v = [(0.0, 0.0, 1.0)]
+    for i in range(1, rings):
+        t = math.pi * i / rings
+        for j in range(segments):
+            p = 2 * math.pi * j / segments
+            r = 1.0 + bump * math.sin(3 * p) * math.sin(2 * t)
+            v.append((r * math.sin(t) * math.cos(p), r * math.sin(t) * math.sin(p), r * math.cos(t)))
+    v.append((0.0, 0.0, -1.0))
+    f = []
+    for j in range(segments):
+        f.append((0, 1 + j, 1 + (j + 1) % segments))
+    for i in range(rings - 2):
+        a, b = 1 + i * segments, 1 + (i + 1) * segments
+        for j in range(segments):
+            k = (j + 1) % segments
+            f.append((a + j, b + j, b + k))
+            f.append((a + j, b + k, a + k))
+    last = len(v) - 1
+    base = 1 + (rings - 2) * segments
+    for j in range(segments):
+        f.append((base + j, last, base + (j + 1) % segments))
+    return v, f
+
+
+def grid(n, height=0.2):
+    v = [(x / n, y / n, height * math.sin(x) * math.cos(y)) for y in range(n + 1) for x in range(n + 1)]
+    f = []
+    for y in range(n):
+        for x in range(n):
+            a = y * (n + 1) + x
+            f.append((a, a + 1, a + n + 2))
+            f.append((a, a + n + 2, a + n + 1))
+    return v, f
+
+
+def merge(*meshes):
+    v, f = [], []
+    for mv, mf in meshes:
+        o = len(v)
+        v += mv
+        f += [(a + o, b + o, c + o) for a, b, c in mf]
+    return v, f
+
+
+def write_off(path, mesh):
+    v, f = mesh
+    with open(path, 'w') as out:
+        out.write('OFF\n%d %d 0\n' % (len(v), len(f)))
+        for p in v:
+            out.write('%.6f %.6f %.6f\n' % p)
+        for t in f:
+            out.write('3 %d %d %d\n' % t)
+
+
+def main():
+    out_dir = sys.argv[1]
+    encoder = sys.argv[2] if len(sys.argv) > 2 else ''
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    files = {}
+    sample = os.path.join(root, 'tests', 'data', 'sample.pmz')
+    if os.path.exists(sample):
+        files['sample'] = open(sample, 'rb').read()
+    if encoder and os.access(encoder, os.X_OK):
+        shifted = sphere(4, 6)
+        shifted = ([(x + 3, y, z) for x, y, z in shifted[0]], shifted[1])
+        meshes = {
+            'octa': sphere(2, 4),
+            'sphere': sphere(6, 8, 0.2),
+            'grid': grid(5),
+            'two': merge(sphere(3, 5), shifted),
+        }
+        settings = {'q14': ['--position-bits', '14'], 'lossless': ['--position-bits', '0'],
+                    'q4': ['--position-bits', '4', '--zstd-level', '1']}
+        with tempfile.TemporaryDirectory() as tmp:
+            for name, mesh in meshes.items():
+                off = os.path.join(tmp, name + '.off')
+                write_off(off, mesh)
+                for tag, args in settings.items():
+                    pmz = os.path.join(tmp, '%s-%s.pmz' % (name, tag))
+                    r = subprocess.run([encoder, off, '-o', pmz] + args, capture_output=True, text=True)
+                    if r.returncode == 0 and os.path.exists(pmz):
+                        files['%s-%s' % (name, tag)] = open(pmz, 'rb').read()
+                    else:
+                        print('make_seeds: %s %s: %s' % (name, tag, (r.stderr or r.stdout).strip()),
+                              file=sys.stderr)
+    if not files:
+        sys.exit('make_seeds: no seed: neither tests/data/sample.pmz nor a working pmz-encode')
+
+    for sub in ('decoder', 'container', 'coding'):
+        os.makedirs(os.path.join(out_dir, sub), exist_ok=True)
+
+    def put(sub, name, data):
+        with open(os.path.join(out_dir, sub, name), 'wb') as out:
+            out.write(data)
+
+    for name, data in files.items():
+        put('container', name, data)
+        # fuzz_decoder: [n][n (slice, op) pairs][stream]. One call; byte-by-byte with refines;
+        # mixed slices with coarsen/face-target/round-trip moves.
+        put('decoder', name + '-whole', b'\x00' + data)
+        put('decoder', name + '-bytes', bytes([1, 0, 1 << 2]) + data)
+        put('decoder', name + '-mixed', bytes([4, 7, 5 << 2 | 1, 200, 9 << 2 | 2, 31, 3 << 2 | 3, 130, 2 << 2]) + data)
+        # fuzz_coding part 2 (streams): the payloads of the BASE and SPLT chunks after their counts.
+        at = 8
+        while at + 12 <= len(data):
+            kind, size = data[at:at + 4], struct.unpack('<I', data[at + 4:at + 8])[0]
+            payload = data[at + 12:at + 12 + size]
+            if kind in (b'BASE', b'SPLT'):
+                # Skip the leading counts (varints) to land on the first stream.
+                p, skip = 0, 2 if kind == b'BASE' else 1
+                for _ in range(skip):
+                    while p < len(payload) and payload[p] & 0x80:
+                        p += 1
+                    p += 1
+                put('coding', '%s-%s-%d' % (name, kind.decode().strip(), at), b'\x02' + payload[p:])
+            at += 12 + size
+    # fuzz_coding, other parts: a few hand-made inputs.
+    put('coding', 'reader', b'\x00\x10' + bytes(range(16)) + b'\x81\x80\x01\xff\xff\xff\xff\x0f' * 4)
+    put('coding', 'varints', b'\x01' + struct.pack('<8Q', 0, 1, 127, 128, 1 << 35, 2**63, 2**64 - 1, 300))
+    put('coding', 'quantizer', b'\x03\x0e' + struct.pack('<6f', -1, -2, -3, 1, 2, 3) + struct.pack('<4f', 0.5, -1, 3, 1e30))
+    put('coding', 'mesh', b'\x04\x05\x04' + bytes([0, 1, 2, 0, 2, 3, 0, 3, 4, 0, 4, 1, 0, 1, 0xff, 0xff, 0, 0]))
+    total = sum(os.path.getsize(os.path.join(out_dir, s, f)) for s in ('decoder', 'container', 'coding')
+                for f in os.listdir(os.path.join(out_dir, s)))
+    print('make_seeds: %d encoded files, %d bytes of seeds in %s' % (len(files), total, out_dir))
+
+
+if __name__ == '__main__':
+    main()
