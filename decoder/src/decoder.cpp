@@ -12,6 +12,7 @@
 
 #include "pmz/format.hpp"
 #include "pmz/progressive_mesh.hpp"
+#include "pmz/split_codec.hpp"
 
 namespace pmz {
 
@@ -30,10 +31,6 @@ const char* status_name(Status s) {
 }
 
 namespace {
-struct SplitCode {
-  uint32_t v, code_l, code_r;
-  int32_t residual[3];
-};
 constexpr uint8_t kHasLeft = 1, kHasRight = 2;
 }  // namespace
 
@@ -231,62 +228,9 @@ Status Decoder::Impl::base(const uint8_t* p, size_t n) {
 }
 
 Status Decoder::Impl::split_chunk(const uint8_t* p, size_t n) {
-  ByteReader r(p, n);
-  uint64_t count = r.varint();
-  if (!r.ok || count == 0 || count > info.total_splits - splits.size())
-    return fail(Status::corrupt, "SPLT split count");
   std::string err;
-  for (int s = 0; s < kSplitStreamCount; ++s)
-    if (!read_stream(r, dctx, limits.max_chunk_bytes, scratch[s], err))
-      return fail(Status::corrupt, "SPLT: " + err);
-  for (int s = kStreamGaps; s < kSplitStreamCount; ++s)
-    if (scratch[s].size() < count) return fail(Status::corrupt, "SPLT streams too short");
-  ByteReader in[kSplitStreamCount] = {
-      {scratch[0].data(), scratch[0].size()}, {scratch[1].data(), scratch[1].size()},
-      {scratch[2].data(), scratch[2].size()}, {scratch[3].data(), scratch[3].size()},
-      {scratch[4].data(), scratch[4].size()}, {scratch[5].data(), scratch[5].size()},
-      {scratch[6].data(), scratch[6].size()}};
-  const size_t first = splits.size();
-  try {
-    splits.resize(first + count);
-  } catch (const std::bad_alloc&) {
-    splits.resize(first);
-    return fail(Status::out_of_memory, "split records");
-  }
-  bool ok = true;
-  uint64_t done = 0;
-  while (ok && done < count) {
-    uint64_t group = in[kStreamGroups].varint();
-    if (!in[kStreamGroups].ok || group == 0 || group > count - done) {
-      ok = false;
-      break;
-    }
-    // v is a vertex that exists when the group starts: below that vertex count.
-    const uint64_t limit = info.base_vertices + first + done;
-    uint64_t v = 0;
-    for (uint64_t i = 0; i < group; ++i) {
-      SplitCode& s = splits[first + done + i];
-      uint64_t g = in[kStreamGaps].varint();
-      v = i == 0 ? g : v + g + 1;
-      if (v >= limit) ok = false;
-      s.v = uint32_t(v);
-      uint64_t l = in[kStreamWedgeL].varint(), rr = in[kStreamWedgeR].varint();
-      if (l > 0xFFFFFFF0u || rr > 0xFFFFFFF0u) ok = false;
-      s.code_l = uint32_t(l);
-      s.code_r = uint32_t(rr);
-      for (int a = 0; a < 3; ++a) {
-        uint64_t z = in[kStreamResidualX + a].varint();
-        if (z > 0xFFFFFFFFu) ok = false;
-        s.residual[a] = zigzag_decode(uint32_t(z));
-      }
-    }
-    done += group;
-  }
-  for (auto& x : in) ok = ok && x.ok && x.remaining() == 0;
-  if (!ok) {
-    splits.resize(first);
-    return fail(Status::corrupt, "SPLT streams malformed");
-  }
+  if (!decode_split_chunk(p, n, info.base_vertices + splits.size(), info.total_splits - splits.size(), splits, err))
+    return fail(Status::corrupt, err);
   available = splits.size();
   return Status::ok;
 }

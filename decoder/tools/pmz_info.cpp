@@ -10,6 +10,7 @@
 
 #include "pmz/decoder.hpp"
 #include "pmz/format.hpp"
+#include "pmz/split_codec.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"pmz-info: print a .pmz file's header, counts, bytes per section and bits per vertex split"};
@@ -57,13 +58,9 @@ int main(int argc, char** argv) {
     else if (type == pmz::kChunkSplits) {
       splits += total;
       ++chunks;
-      pmz::ByteReader p(data.data() + at + pmz::kChunkHeaderSize, size);
-      p.varint();
-      for (int k = 0; k < pmz::kSplitStreamCount; ++k) {
-        uint64_t stored = 0;
-        pmz::skip_stream(p, stored);
-        stream_bytes[k] += stored;
-      }
+      uint64_t count = 0, sizes[pmz::kSplitStreamCount] = {};
+      pmz::split_chunk_stream_sizes(data.data() + at + pmz::kChunkHeaderSize, size, count, sizes);
+      for (int k = 0; k < pmz::kSplitStreamCount; ++k) stream_bytes[k] += sizes[k];
     } else other += total;
     at += total;
   }

@@ -11,6 +11,7 @@
 #include "pmz/decoder.hpp"
 #include "pmz/format.hpp"
 #include "pmz/progressive_mesh.hpp"
+#include "pmz/split_codec.hpp"
 
 namespace pmz {
 
@@ -237,36 +238,28 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
   // Splits: replay in final order with the decoder's core to get ranks and predictions.
   ProgressiveMesh pm;
   if (!pm.build(base_n, plan.base_faces.data(), h.base_faces, error)) return false;
-  std::vector<uint8_t> streams[kSplitStreamCount];
-  uint32_t chunk_splits = 0, chunk_limit = kFirstChunkSplits;
+  std::vector<SplitCode> chunk;
+  std::vector<uint32_t> chunk_groups;
+  uint32_t chunk_limit = kFirstChunkSplits;
   auto flush = [&]() {
-    if (!chunk_splits) return;
+    if (chunk.empty()) return;
     payload.clear();
-    put_varint(payload, chunk_splits);
-    for (int s = 0; s < kSplitStreamCount; ++s) {
-      size_t before = payload.size();
-      put_stream(payload, streams[s], opt.zstd_level);
-      uint64_t bits = (payload.size() - before) * 8;
-      (s <= kStreamWedgeR ? st.connectivity_bits : st.geometry_bits) += bits;
-      streams[s].clear();
-    }
+    uint64_t sizes[kSplitStreamCount];
+    encode_split_chunk(chunk_groups, chunk.data(), chunk.size(), payload, sizes);
+    for (int s = 0; s < kSplitStreamCount; ++s)
+      (s <= kStreamWedgeR ? st.connectivity_bits : st.geometry_bits) += sizes[s] * 8;
     size_t before = out.size();
     append_chunk(out, kChunkSplits, payload);
     st.split_bytes += out.size() - before;
-    chunk_splits = 0;
+    chunk.clear();
+    chunk_groups.clear();
     chunk_limit = std::min(chunk_limit * 2, kMaxChunkSplits);
   };
   uint32_t at = 0;
   for (uint32_t group : plan.group_sizes) {
-    uint32_t left = group, piece = 0, prev_v = 0;
-    bool piece_start = false;
-    while (left) {
-      if (piece == 0) {
-        piece = std::min(left, chunk_limit - chunk_splits);
-        put_varint(streams[kStreamGroups], piece);
-        piece_start = true;
-      }
-      const HalfEdgeCollapse& c = seq.collapses[plan.order[at]];
+    for (uint32_t left = group; left; --left) {
+      if (chunk_groups.empty() || left == group) chunk_groups.push_back(0);  // a group, or its rest after a chunk cut
+      const HalfEdgeCollapse& c = seq.collapses[plan.order[at++]];
       uint32_t v = plan.decoded_id[c.v];
       uint32_t vl = c.vl == kNoVertex ? kNoVertex : plan.decoded_id[c.vl];
       uint32_t vr = c.vr == kNoVertex ? kNoVertex : plan.decoded_id[c.vr];
@@ -275,27 +268,23 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
         return error = "internal: reordered split does not replay", false;
       const bool closed = pm.ring_closed();
       const uint32_t k = uint32_t(pm.ring().size());
-      if (!pm.split(v, rl, rr)) return error = "internal: split rejected", false;
-      put_varint(streams[kStreamGaps], piece_start ? v : v - prev_v - 1);
-      piece_start = false;
-      prev_v = v;
+      if (!pm.split_gathered(v, rl, rr)) return error = "internal: split rejected", false;
+      SplitCode code;
+      code.v = v;
       if (closed) {
-        put_varint(streams[kStreamWedgeL], rl);
-        put_varint(streams[kStreamWedgeR], (rr + k - rl) % k - 1);
+        code.code_l = rl;
+        code.code_r = (rr + k - rl) % k - 1;
       } else {
-        put_varint(streams[kStreamWedgeL], rl == kNoRank ? 0 : rl + 1);
-        put_varint(streams[kStreamWedgeR], rr == kNoRank ? 0 : rr + 1);
+        code.code_l = rl == kNoRank ? 0 : rl + 1;
+        code.code_r = rr == kNoRank ? 0 : rr + 1;
       }
       int32_t pred[3];
       predict_position(coords.data(), pm.u_ring(), pred);
       uint32_t u = pm.vertex_count() - 1;
-      for (int a = 0; a < 3; ++a)
-        put_varint(streams[kStreamResidualX + a],
-                   zigzag_encode(int32_t(uint32_t(coords[u * 3 + a]) - uint32_t(pred[a]))));
-      ++at;
-      --left;
-      --piece;
-      if (++chunk_splits == chunk_limit) flush();
+      for (int a = 0; a < 3; ++a) code.residual[a] = int32_t(uint32_t(coords[u * 3 + a]) - uint32_t(pred[a]));
+      chunk.push_back(code);
+      ++chunk_groups.back();
+      if (chunk.size() == chunk_limit) flush();
     }
   }
   flush();

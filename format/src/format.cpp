@@ -87,6 +87,9 @@ bool read_stream(ByteReader& in, void* dctx, size_t max_raw, std::vector<uint8_t
   uint64_t take = stored ? stored : raw;
   const uint8_t* src = in.bytes(take);
   if (!src) return error = "stream overruns its chunk", false;
+  // zstd expands at most 128 KiB per 4-byte RLE block: a larger claim is a bomb, refused
+  // before allocating.
+  if (stored && raw / 32768 > stored) return error = "stream claims more than its frame can hold", false;
   out.resize(raw);
   if (!stored) {
     if (raw) std::memcpy(out.data(), src, raw);

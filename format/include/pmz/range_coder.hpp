@@ -1,0 +1,169 @@
+// Adaptive binary range coder (LZMA's: 11-bit probabilities, adaptation shift 5) and the
+// binarization of unsigned integers used by SPLT streams (spec/format.md, "Range coding").
+// Header-only so the per-bit work inlines into the stream loops.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace pmz {
+
+inline constexpr uint32_t kProbBits = 11, kProbInit = 1u << (kProbBits - 1), kMoveBits = 5;
+inline constexpr uint32_t kTop = 1u << 24;
+
+inline uint32_t bit_length(uint32_t x) { return x ? 32u - uint32_t(__builtin_clz(x)) : 0u; }
+
+class RangeEncoder {
+ public:
+  explicit RangeEncoder(std::vector<uint8_t>& out) : out_(out) {}
+  void bit(uint16_t& p, uint32_t b) {
+    uint32_t bound = (range_ >> kProbBits) * p;
+    if (!b) {
+      range_ = bound;
+      p = uint16_t(p + (((1u << kProbBits) - p) >> kMoveBits));
+    } else {
+      low_ += bound;
+      range_ -= bound;
+      p = uint16_t(p - (p >> kMoveBits));
+    }
+    while (range_ < kTop) {
+      range_ <<= 8;
+      shift_low();
+    }
+  }
+  void direct(uint32_t value, uint32_t bits) {
+    while (bits--) {
+      range_ >>= 1;
+      if ((value >> bits) & 1) low_ += range_;
+      while (range_ < kTop) {
+        range_ <<= 8;
+        shift_low();
+      }
+    }
+  }
+  void finish() {
+    for (int i = 0; i < 5; ++i) shift_low();
+  }
+
+ private:
+  void shift_low() {
+    if (uint32_t(low_) < 0xFF000000u || (low_ >> 32) != 0) {
+      uint8_t carry = uint8_t(low_ >> 32), temp = cache_;
+      do {
+        out_.push_back(uint8_t(temp + carry));
+        temp = 0xFF;
+      } while (--cache_size_ != 0);
+      cache_ = uint8_t(low_ >> 24);
+    }
+    ++cache_size_;
+    low_ = (low_ & 0x00FFFFFFu) << 8;
+  }
+  std::vector<uint8_t>& out_;
+  uint64_t low_ = 0;
+  uint32_t range_ = 0xFFFFFFFFu;
+  uint8_t cache_ = 0;
+  uint64_t cache_size_ = 1;
+};
+
+class RangeDecoder {
+ public:
+  // Reading past the end yields zeros and clears ok (a valid stream never does).
+  RangeDecoder(const uint8_t* p, size_t size) : p_(p), end_(p + size) {
+    if (size < 5 || *p_++ != 0) ok = false;
+    for (int i = 0; i < 4; ++i) code_ = (code_ << 8) | next();
+  }
+  uint32_t bit(uint16_t& p) {
+    uint32_t bound = (range_ >> kProbBits) * p, b;
+    if (code_ < bound) {
+      range_ = bound;
+      p = uint16_t(p + (((1u << kProbBits) - p) >> kMoveBits));
+      b = 0;
+    } else {
+      code_ -= bound;
+      range_ -= bound;
+      p = uint16_t(p - (p >> kMoveBits));
+      b = 1;
+    }
+    while (range_ < kTop) {
+      range_ <<= 8;
+      code_ = (code_ << 8) | next();
+    }
+    return b;
+  }
+  uint32_t direct(uint32_t bits) {
+    uint32_t r = 0;
+    while (bits--) {
+      range_ >>= 1;
+      uint32_t b = code_ >= range_ ? 1u : 0u;
+      if (b) code_ -= range_;
+      r = (r << 1) | b;
+      while (range_ < kTop) {
+        range_ <<= 8;
+        code_ = (code_ << 8) | next();
+      }
+    }
+    return r;
+  }
+  bool ok = true;
+
+ private:
+  uint8_t next() {
+    if (p_ < end_) return *p_++;
+    ok = false;
+    return 0;
+  }
+  const uint8_t* p_;
+  const uint8_t* end_;
+  uint32_t range_ = 0xFFFFFFFFu, code_ = 0;
+};
+
+// An adaptive model for uint32 values: the bit length n (0..32) through a 6-level binary
+// tree, then the two bits below the leading one adaptively (per n), the rest direct.
+struct UIntModel {
+  uint16_t length[64];
+  uint16_t high[33][4];
+  UIntModel() {
+    for (auto& p : length) p = kProbInit;
+    for (auto& h : high)
+      for (auto& p : h) p = kProbInit;
+  }
+};
+
+inline void encode_uint(RangeEncoder& rc, UIntModel& m, uint32_t x) {
+  uint32_t n = bit_length(x), node = 1;
+  for (int i = 5; i >= 0; --i) {
+    uint32_t b = (n >> i) & 1;
+    rc.bit(m.length[node], b);
+    node = node * 2 + b;
+  }
+  if (n < 2) return;
+  uint32_t rest = n - 1, hnode = 1;
+  for (uint32_t i = 0; i < 2 && rest; ++i) {
+    uint32_t b = (x >> --rest) & 1;
+    rc.bit(m.high[n][hnode], b);
+    hnode = hnode * 2 + b;
+  }
+  rc.direct(x, rest);  // only the low `rest` bits are written
+}
+
+// Returns false for a bit length above 32 (corrupt input).
+inline bool decode_uint(RangeDecoder& rc, UIntModel& m, uint32_t& x) {
+  uint32_t node = 1;
+  for (int i = 0; i < 6; ++i) node = node * 2 + rc.bit(m.length[node]);
+  uint32_t n = node - 64;
+  if (n > 32) return false;
+  if (n < 2) {
+    x = n;
+    return true;
+  }
+  uint32_t rest = n - 1, hnode = 1, v = 1;
+  for (uint32_t i = 0; i < 2 && rest; ++i, --rest) {
+    uint32_t b = rc.bit(m.high[n][hnode]);
+    hnode = hnode * 2 + b;
+    v = v * 2 + b;
+  }
+  x = (v << rest) | rc.direct(rest);
+  return true;
+}
+
+}  // namespace pmz
