@@ -160,9 +160,41 @@ class QuietHandler(http.server.SimpleHTTPRequestHandler):
         pass
 
 
+def check_stream(name, run, size, faces, seconds, elapsed):
+    """The log of a streamed run: the mesh shows early, refines in steps, ends at full."""
+    lines = [line for line in run.stderr.splitlines() if line.startswith("t=")]
+    log = [dict((k, float(v)) for k, v in re.findall(r"(\w+)=([\d.]+)", line)) for line in lines]
+    print("%s: %d bytes in about %.1f s, %d log lines, %.1f s in all" % (name, size, seconds, len(log), elapsed))
+    if run.returncode != 0:
+        fail("%s: pmz-view exited %d: %s" % (name, run.returncode, run.stderr.strip()[-500:]))
+    shown = [(e["t"], int(e["bytes"]), int(e["faces"])) for e in log if e.get("faces", 0) > 0]
+    if not shown:
+        fail(name + ": no log line shows a mesh")
+    for t, b, f in shown[:: max(1, len(shown) // 12)] + shown[-1:]:
+        print("  t=%.2f bytes=%d faces=%d" % (t, b, f))
+    first_t, first_bytes, first_faces = shown[0]
+    last_t, last_bytes, last_faces = shown[-1]
+    if last_faces != faces or last_bytes != size or not lines[-1].endswith("complete"):
+        fail("%s: did not end at full resolution: %d/%d faces, %d/%d bytes" % (name, last_faces, faces, last_bytes, size))
+    if first_bytes >= size or first_faces >= faces:
+        fail("%s: the mesh appeared only once every byte was in (%d bytes, %d faces)" % (name, first_bytes, first_faces))
+    if any(b[2] < a[2] for a, b in zip(shown, shown[1:])):
+        fail(name + ": the face count went down while following the stream")
+    levels = len(set(f for _, _, f in shown))
+    if levels < 5:
+        fail("%s: only %d distinct levels of detail seen while streaming" % (name, levels))
+    if last_t - first_t < seconds / 3:
+        fail("%s: refinement did not follow the slow arrival (%.2f s from first mesh to full)" % (name, last_t - first_t))
+    print("%s: PASS: %d levels from %d to %d faces over %.1f s" % (name, levels, first_faces, last_faces, last_t - first_t))
+
+
 def test_streaming(args):
     pmz, faces = encode(args)
     size = os.path.getsize(pmz)
+    with open(pmz, "rb") as f:
+        data = f.read()
+
+    # HTTP, throttled by the viewer's --rate.
     server = http.server.ThreadingHTTPServer(("127.0.0.1", 0),
                                              functools.partial(QuietHandler, directory=os.path.dirname(pmz)))
     threading.Thread(target=server.serve_forever, daemon=True).start()
@@ -171,32 +203,44 @@ def test_streaming(args):
     kbps = max(0.5, size / seconds / 1000)
     start = time.monotonic()
     run = xvfb(args, [args.view, url, "--rate", "%.3f" % kbps, "--log", "--exit-when-complete"], 60)
-    elapsed = time.monotonic() - start
     server.shutdown()
-    lines = [line for line in run.stderr.splitlines() if line.startswith("t=")]
-    log = [dict((k, float(v)) for k, v in re.findall(r"(\w+)=([\d.]+)", line)) for line in lines]
-    print("%d bytes at %.1f kB/s, %d log lines, %.1f s" % (size, kbps, len(log), elapsed))
-    if run.returncode != 0:
-        fail("pmz-view exited %d: %s" % (run.returncode, run.stderr.strip()[-500:]))
-    shown = [(e["t"], int(e["bytes"]), int(e["faces"])) for e in log if e.get("faces", 0) > 0]
-    if not shown:
-        fail("no log line shows a mesh")
-    for t, b, f in shown[:: max(1, len(shown) // 12)] + shown[-1:]:
-        print("  t=%.2f bytes=%d faces=%d" % (t, b, f))
-    first_t, first_bytes, first_faces = shown[0]
-    last_t, last_bytes, last_faces = shown[-1]
-    if last_faces != faces or last_bytes != size or not lines[-1].endswith("complete"):
-        fail("did not end at full resolution: %d/%d faces, %d/%d bytes" % (last_faces, faces, last_bytes, size))
-    if first_bytes >= size or first_faces >= faces:
-        fail("the mesh appeared only once every byte was in (%d bytes, %d faces)" % (first_bytes, first_faces))
-    if any(b[2] < a[2] for a, b in zip(shown, shown[1:])):
-        fail("the face count went down while following the stream")
-    levels = len(set(f for _, _, f in shown))
-    if levels < 5:
-        fail("only %d distinct levels of detail seen while streaming" % levels)
-    if last_t - first_t < seconds / 3:
-        fail("refinement did not follow the throttled arrival (%.2f s from first mesh to full)" % (last_t - first_t))
-    print("PASS: %d levels from %d to %d faces over %.1f s" % (levels, first_faces, last_faces, last_t - first_t))
+    check_stream("http --rate %.1f" % kbps, run, size, faces, seconds, time.monotonic() - start)
+
+    # stdin, from a pipe the writer fills slowly (the source itself is slow, no --rate).
+    seconds = 3.0
+    command = ["xvfb-run", "-a", args.view, "-", "--log", "--exit-when-complete"]
+    start = time.monotonic()
+    log_path = os.path.join(args.workdir, "stdin.log")
+    with open(log_path, "wb") as log:
+        viewer = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=log)
+        # Hold the bytes back until the viewer is up (X server start-up takes a while), or
+        # the pipe would buffer them and deliver a burst.
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline and viewer.poll() is None:
+            with open(log_path) as progress:
+                if "t=" in progress.read():
+                    break
+            time.sleep(0.05)
+        slices = 40
+        for k in range(slices):
+            try:
+                viewer.stdin.write(data[k * size // slices:(k + 1) * size // slices])
+                viewer.stdin.flush()
+            except BrokenPipeError:
+                break  # the viewer died; its log says why
+            time.sleep(seconds / slices)
+        try:
+            viewer.stdin.close()
+        except BrokenPipeError:
+            pass
+        try:
+            viewer.wait(timeout=60)
+        except subprocess.TimeoutExpired:
+            viewer.kill()
+            fail("stdin: pmz-view did not exit")
+    with open(log_path) as log:
+        run = subprocess.CompletedProcess(command, viewer.returncode, "", log.read())
+    check_stream("stdin pipe", run, size, faces, seconds, time.monotonic() - start)
 
 
 def test_errors(args):
