@@ -62,8 +62,7 @@ void initial_quadrics(const HalfEdgeMesh& m, double boundary_weight, std::vector
 }
 
 void Features::resize(uint32_t vertex_count, uint32_t face_count) {
-  face_normal.assign(size_t(face_count) * 3, 0.f);
-  face_area.assign(face_count, 0.f);
+  face.assign(size_t(face_count) * 4, 0.f);
   normal.assign(size_t(vertex_count) * 3, 0.f);
   c_norm.assign(vertex_count, 0.f);
   b.assign(size_t(vertex_count) * 3, 0.f);
@@ -77,31 +76,33 @@ void Features::update_face(const HalfEdgeMesh& m, uint32_t f) {
   float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
   const float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
   const float inv = len > 0 ? 1.f / len : 0.f;
-  for (int k = 0; k < 3; ++k) face_normal[size_t(f) * 3 + k] = n[k] * inv;
-  face_area[f] = 0.5f * len;
+  float* out = &face[size_t(f) * 4];
+  out[0] = n[0] * inv, out[1] = n[1] * inv, out[2] = n[2] * inv, out[3] = 0.5f * len;
 }
 
 void Features::update_normal_terms(const HalfEdgeMesh& m, uint32_t v) {
+  // One walk round v collects its faces; the second pass needs n(v) first.
+  scratch_faces.clear();
   float n[3] = {0, 0, 0};
-  uint32_t k = 0;
   for_each_outgoing(m, v, [&](uint32_t h) {
-    const uint32_t f = h / 3;
-    for (int i = 0; i < 3; ++i) n[i] += face_area[f] * face_normal[size_t(f) * 3 + i];
-    ++k;
+    const float* fd = &face[size_t(h / 3) * 4];
+    n[0] += fd[3] * fd[0], n[1] += fd[3] * fd[1], n[2] += fd[3] * fd[2];
+    scratch_faces.push_back(h / 3);
   });
   const float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
   if (len > 0)
     for (float& c : n) c /= len;
   float c_sum = 0, bv[3] = {0, 0, 0};
-  for_each_outgoing(m, v, [&](uint32_t h) {
-    const float* ni = &face_normal[size_t(h / 3) * 3];
+  for (uint32_t f : scratch_faces) {
+    const float* ni = &face[size_t(f) * 4];
     const float dot = n[0] * ni[0] + n[1] * ni[1] + n[2] * ni[2];
     c_sum += 1.f - dot;
     if (dot > epsilon) {
       const float w = (dot - epsilon) * (dot - epsilon);
       for (int i = 0; i < 3; ++i) bv[i] += w * ni[i];
     }
-  });
+  }
+  const size_t k = scratch_faces.size();
   const float inv_k = k ? 1.f / float(k) : 0.f;
   for (int i = 0; i < 3; ++i) normal[size_t(v) * 3 + i] = n[i], b[size_t(v) * 3 + i] = bv[i] * inv_k;
   c_norm[v] = c_sum * inv_k;

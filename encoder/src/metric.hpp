@@ -23,13 +23,16 @@ struct Quadric {
 void initial_quadrics(const HalfEdgeMesh& m, double boundary_weight, std::vector<Quadric>& q);
 
 struct Features {
-  std::vector<float> face_normal;  // unit normal per face (zero for a zero-area face)
-  std::vector<float> face_area;    // per face
+  std::vector<float> face;         // per face: unit normal xyz (zero if degenerate), area
   std::vector<float> normal;       // n(v): area-weighted unit vertex normal
   std::vector<float> c_norm;       // eq. 1
   std::vector<float> b;            // B(v) of eq. 2 (mean over the faces of v)
   std::vector<float> torsion;      // T(v), eq. 2, in 1 / length
   float epsilon = 0;
+  std::vector<uint32_t> scratch_faces;
+
+  const float* face_normal(uint32_t f) const { return &face[size_t(f) * 4]; }
+  float face_area(uint32_t f) const { return face[size_t(f) * 4 + 3]; }
 
   void resize(uint32_t vertex_count, uint32_t face_count);
   void update_face(const HalfEdgeMesh& m, uint32_t f);

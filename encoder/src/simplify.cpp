@@ -27,6 +27,95 @@ constexpr float kFoldCos = 0.2f;
 constexpr float kMinQuality = 0.05f;
 constexpr float kInfinity = std::numeric_limits<float>::infinity();
 
+// Min-heap of vertices keyed by their cheapest collapse: 4-ary with the keys inline, so a sift
+// walks one array (the heap dominated the profile when keys were a separate array).
+class VertexHeap {
+ public:
+  void reset(uint32_t vertex_count) {
+    entries.clear();
+    pos.assign(vertex_count, kNone);
+  }
+  bool empty() const { return entries.empty(); }
+  uint32_t top() const { return entries[0].v; }
+  bool contains(uint32_t v) const { return pos[v] != kNone; }
+  float key(uint32_t v) const { return entries[pos[v]].key; }
+  void push_unordered(uint32_t v, float key) {
+    pos[v] = uint32_t(entries.size());
+    entries.push_back({key, v});
+  }
+  void build() {
+    for (uint32_t i = uint32_t(entries.size()) / 4 + 1; i-- > 0;)
+      if (i < entries.size()) sift_down(i);
+  }
+  void set(uint32_t v, float key) {
+    if (pos[v] == kNone) {
+      push_unordered(v, key);
+      sift_up(pos[v]);
+      return;
+    }
+    Entry& e = entries[pos[v]];
+    const float old = e.key;
+    e.key = key;
+    if (key < old)
+      sift_up(pos[v]);
+    else
+      sift_down(pos[v]);
+  }
+  void remove(uint32_t v) {
+    const uint32_t i = pos[v];
+    if (i == kNone) return;
+    const float old = entries[i].key;
+    const Entry last = entries.back();
+    entries.pop_back();
+    pos[v] = kNone;
+    if (i == entries.size()) return;
+    entries[i] = last;
+    pos[last.v] = i;
+    if (last.key < old)
+      sift_up(i);
+    else
+      sift_down(i);
+  }
+
+ private:
+  struct Entry {
+    float key;
+    uint32_t v;
+  };
+  std::vector<Entry> entries;
+  std::vector<uint32_t> pos;
+
+  void place(uint32_t i, const Entry& e) {
+    entries[i] = e;
+    pos[e.v] = i;
+  }
+  void sift_up(uint32_t i) {
+    const Entry e = entries[i];
+    while (i > 0) {
+      const uint32_t parent = (i - 1) / 4;
+      if (!(e.key < entries[parent].key)) break;
+      place(i, entries[parent]);
+      i = parent;
+    }
+    place(i, e);
+  }
+  void sift_down(uint32_t i) {
+    const Entry e = entries[i];
+    const uint32_t n = uint32_t(entries.size());
+    for (;;) {
+      const uint32_t first = 4 * i + 1;
+      if (first >= n) break;
+      uint32_t best = first;
+      for (uint32_t c = first + 1; c < first + 4 && c < n; ++c)
+        if (entries[c].key < entries[best].key) best = c;
+      if (!(entries[best].key < e.key)) break;
+      place(i, entries[best]);
+      i = best;
+    }
+    place(i, e);
+  }
+};
+
 struct Candidate {
   float cost;
   uint32_t target;
@@ -37,6 +126,7 @@ class Engine {
   HalfEdgeMesh m;
   Features feat;
   std::vector<Quadric> quad;
+  std::vector<double> self_error;  // Q_v(p_v) / L^4, cached: half of every cost evaluation
   Metric metric = Metric::multifeature;
   MetricParams params;
   double inv_unit4 = 1, unit = 1;
@@ -49,10 +139,12 @@ class Engine {
   void run(const SimplifyOptions& options);
 
  private:
-  // Binary min-heap of vertices keyed by their cheapest collapse.
-  std::vector<uint32_t> heap, heap_pos;
-  std::vector<float> key;
+  VertexHeap heap;
   std::vector<uint32_t> target;
+  // Per vertex: T(v) is stale (recomputed when next needed); the key is stale (recomputed when
+  // it reaches the top of the heap).
+  enum : uint8_t { kTorsionStale = 1, kKeyStale = 2 };
+  std::vector<uint8_t> stale;
   // Scratch: a stamp per vertex for set membership, and buffers reused across collapses.
   std::vector<uint32_t> mark;
   uint32_t mark_id = 0;
@@ -63,80 +155,31 @@ class Engine {
   bool find_edge(uint32_t u, uint32_t v, uint32_t& ha, uint32_t& hb) const;
   bool legal(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb);
   Candidate best_candidate(uint32_t u);
+  void refresh_torsion(uint32_t u) {
+    if (stale[u] & kTorsionStale) feat.update_torsion(m, u), stale[u] &= uint8_t(~kTorsionStale);
+  }
   Candidate best_legal_candidate(uint32_t u);
   void set_key(uint32_t v, Candidate c);
   void perform(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb, float c);
   void fix_out(uint32_t w, uint32_t candidate);
-  void update_after(uint32_t v);
+  void update_after(uint32_t u, uint32_t v);
   bool final_boundary_collapse();
 
-  void heap_up(uint32_t i);
-  void heap_down(uint32_t i);
-  void heap_remove(uint32_t v);
-  bool less(uint32_t a, uint32_t b) const { return key[heap[a]] < key[heap[b]]; }
-  void heap_swap(uint32_t a, uint32_t b) {
-    std::swap(heap[a], heap[b]);
-    heap_pos[heap[a]] = a;
-    heap_pos[heap[b]] = b;
-  }
 };
-
-void Engine::heap_up(uint32_t i) {
-  while (i > 0) {
-    uint32_t parent = (i - 1) / 2;
-    if (!less(i, parent)) break;
-    heap_swap(i, parent);
-    i = parent;
-  }
-}
-
-void Engine::heap_down(uint32_t i) {
-  const uint32_t n = uint32_t(heap.size());
-  for (;;) {
-    uint32_t l = 2 * i + 1, r = l + 1, smallest = i;
-    if (l < n && less(l, smallest)) smallest = l;
-    if (r < n && less(r, smallest)) smallest = r;
-    if (smallest == i) return;
-    heap_swap(i, smallest);
-    i = smallest;
-  }
-}
-
-void Engine::heap_remove(uint32_t v) {
-  const uint32_t i = heap_pos[v];
-  if (i == kNone) return;
-  const uint32_t last = uint32_t(heap.size()) - 1;
-  if (i != last) heap_swap(i, last);
-  heap.pop_back();
-  heap_pos[v] = kNone;
-  if (i < heap.size()) {
-    const uint32_t moved = heap[i];
-    heap_up(i);
-    heap_down(heap_pos[moved]);
-  }
-}
 
 void Engine::set_key(uint32_t v, Candidate c) {
   if (c.target == kNone) {
-    heap_remove(v);
+    heap.remove(v);
     return;
   }
-  key[v] = c.cost;
   target[v] = c.target;
-  if (heap_pos[v] == kNone) {
-    heap_pos[v] = uint32_t(heap.size());
-    heap.push_back(v);
-    heap_up(heap_pos[v]);
-  } else {
-    heap_up(heap_pos[v]);
-    heap_down(heap_pos[v]);
-  }
+  heap.set(v, c.cost);
 }
 
 // Cost of u -> x, h a half-edge of the edge (u, x).
 float Engine::cost(uint32_t u, uint32_t x, uint32_t h) const {
   const float* px = m.p(x);
-  const double e = std::max(0.0, (quad[u].error(px) + quad[x].error(px)) * inv_unit4);
+  const double e = std::max(0.0, quad[u].error(px) * inv_unit4 + self_error[x]);
   if (metric == Metric::qem) return float(e);
   const double ca = (params.quadric_floor + feat.c_norm[u]) * e;
   const double cb = params.torsion_weight * edge_length_ratio(m, h) * feat.torsion[u] * unit;
@@ -215,6 +258,7 @@ bool Engine::legal(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb) {
 Candidate Engine::best_candidate(uint32_t u) {
   Candidate best{kInfinity, kNone};
   if (m.out[u] == kNone) return best;
+  refresh_torsion(u);
   const bool boundary = m.is_boundary(u);
   for_each_neighbour(m, u, [&](uint32_t x, uint32_t h) {
     if (boundary && m.twin[h] != kNone) return;  // interior directions are never legal for u
@@ -228,6 +272,7 @@ Candidate Engine::best_candidate(uint32_t u) {
 Candidate Engine::best_legal_candidate(uint32_t u) {
   candidates.clear();
   if (m.out[u] == kNone) return {kInfinity, kNone};
+  refresh_torsion(u);
   const bool boundary = m.is_boundary(u);
   for_each_neighbour(m, u, [&](uint32_t x, uint32_t h) {
     if (boundary && m.twin[h] != kNone) return;
@@ -263,6 +308,7 @@ void Engine::perform(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb, float c) 
   const uint32_t vr = hb != kNone ? m.vert[HalfEdgeMesh::prev(hb)] : kNone;
   record->push_back({u, v, vl, vr, c});
   quad[v].add(quad[u]);
+  self_error[v] = quad[v].error(m.p(v)) * inv_unit4;
   const uint32_t fa = ha != kNone ? ha / 3 : kNone, fb = hb != kNone ? hb / 3 : kNone;
   corners.clear();
   for_each_outgoing(m, u, [&](uint32_t h) {
@@ -291,35 +337,54 @@ void Engine::perform(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb, float c) 
     --faces;
   }
   m.out[u] = kNone;
-  heap_remove(u);
+  heap.remove(u);
   fix_out(v, v_vl != kNone ? v_vl : v_vr != kNone ? v_vr : corners.empty() ? kNone : corners[0]);
   if (vl != kNone) fix_out(vl, vl_v != kNone ? vl_v : v_vl != kNone ? HalfEdgeMesh::next(v_vl) : kNone);
   if (vr != kNone) fix_out(vr, vr_v != kNone ? vr_v : v_vr != kNone ? HalfEdgeMesh::next(v_vr) : kNone);
 }
 
-// Recomputes the cached terms and the keys a collapse onto v changed: faces around v, normal
-// terms on its 1-ring, torsion on its 2-ring (B changed on the 1-ring).
-void Engine::update_after(uint32_t v) {
+// Recomputes what a collapse onto v changed. Faces around v and the normal terms (n, C_norm,
+// B) of its 1-ring are recomputed now, and the keys of the 1-ring. T changes on the 2-ring (B
+// changed on the 1-ring): it is marked stale and recomputed when next used, and the keys of
+// the outer ring are marked stale and recomputed when they reach the top of the heap.
+// Under QEM only the edges to v changed cost: a 1-ring vertex whose best target was neither u
+// nor v only compares its old best with the edge to v.
+void Engine::update_after(uint32_t u, uint32_t v) {
   const auto t0 = stats_enabled ? Clock::now() : Clock::time_point{};
   if (++mark_id == 0) std::fill(mark.begin(), mark.end(), 0), mark_id = 1;
   ring1.clear();
   ring1.push_back(v);
   mark[v] = mark_id;
   for_each_neighbour(m, v, [&](uint32_t w, uint32_t) { ring1.push_back(w), mark[w] = mark_id; });
-  std::vector<uint32_t>* update = &ring1;
   if (metric == Metric::multifeature) {
     for_each_outgoing(m, v, [&](uint32_t h) { feat.update_face(m, h / 3); });
-    for (uint32_t w : ring1) feat.update_normal_terms(m, w);
-    ring2 = ring1;
-    for (uint32_t w : ring1)
-      for_each_neighbour(m, w, [&](uint32_t x, uint32_t) {
-        if (mark[x] != mark_id) ring2.push_back(x), mark[x] = mark_id;
+    for (uint32_t w : ring1) {
+      feat.update_normal_terms(m, w);
+      stale[w] |= kTorsionStale;
+    }
+    for (size_t i = 0, n = ring1.size(); i < n; ++i)
+      for_each_neighbour(m, ring1[i], [&](uint32_t x, uint32_t) {
+        if (mark[x] == mark_id) return;
+        mark[x] = mark_id;
+        stale[x] |= kTorsionStale | kKeyStale;
       });
-    for (uint32_t w : ring2) feat.update_torsion(m, w);
-    update = &ring2;
   }
   const auto t1 = stats_enabled ? Clock::now() : Clock::time_point{};
-  for (uint32_t w : *update) set_key(w, best_candidate(w));
+  if (metric == Metric::multifeature) {
+    for (uint32_t w : ring1) stale[w] &= uint8_t(~kKeyStale), set_key(w, best_candidate(w));
+  } else {
+    set_key(v, best_candidate(v));
+    for_each_neighbour(m, v, [&](uint32_t w, uint32_t h) {
+      const uint32_t t = target[w];
+      if (!heap.contains(w) || t == u || t == v || t == kNone) {
+        set_key(w, best_candidate(w));
+      } else if (!(m.twin[h] != kNone && m.is_boundary(w))) {  // boundary vertices move along the boundary
+        ++stats.cost_evaluations;
+        const float c = cost(w, v, h);
+        if (c < heap.key(w)) set_key(w, {c, v});
+      }
+    });
+  }
   if (stats_enabled) {
     stats.update_terms += std::chrono::duration<double>(t1 - t0).count();
     stats.update_costs += seconds_since(t1);
@@ -360,26 +425,26 @@ bool Engine::init(const IndexedMesh& input, const SimplifyOptions& options, std:
   initial_quadrics(m, params.boundary_weight, quad);
   feat.epsilon = params.epsilon;
   if (metric == Metric::multifeature) feat.compute_all(m);
+  self_error.resize(n);
+  for (uint32_t v = 0; v < n; ++v) self_error[v] = quad[v].error(m.p(v)) * inv_unit4;
+  stale.assign(n, 0);
   faces = m.face_count();
   mark.assign(n, 0);
-  key.assign(n, kInfinity);
   target.assign(n, kNone);
-  heap_pos.assign(n, kNone);
+  heap.reset(n);
   return true;
 }
 
 void Engine::run(const SimplifyOptions& options) {
   auto t0 = Clock::now();
   const uint32_t n = m.vertex_count();
-  heap.clear();
   for (uint32_t v = 0; v < n; ++v) {
     const Candidate c = best_candidate(v);
     if (c.target == kNone) continue;
-    key[v] = c.cost, target[v] = c.target;
-    heap_pos[v] = uint32_t(heap.size());
-    heap.push_back(v);
+    target[v] = c.target;
+    heap.push_unordered(v, c.cost);
   }
-  for (uint32_t i = uint32_t(heap.size()) / 2; i-- > 0;) heap_down(i);
+  heap.build();
   stats.initial_costs = seconds_since(t0);
   t0 = Clock::now();
 
@@ -389,8 +454,13 @@ void Engine::run(const SimplifyOptions& options) {
   uint64_t next_progress = progress_step;
   while (!heap.empty()) {
     if (goal && faces <= goal) break;
-    const uint32_t u = heap[0], v = target[u];
-    const float c = key[u];
+    const uint32_t u = heap.top(), v = target[u];
+    if (stale[u] & kKeyStale) {
+      stale[u] &= uint8_t(~kKeyStale);
+      set_key(u, best_candidate(u));
+      continue;
+    }
+    const float c = heap.key(u);
     if (options.max_cost >= 0 && c > options.max_cost) break;
     uint32_t ha, hb;
     if (!find_edge(u, v, ha, hb) || !legal(u, v, ha, hb)) {
@@ -403,7 +473,7 @@ void Engine::run(const SimplifyOptions& options) {
       break;
     }
     perform(u, v, ha, hb, c);
-    update_after(v);
+    update_after(u, v);
     if (options.progress && start_faces - faces >= next_progress) {
       next_progress += progress_step;
       const double span = double(start_faces - std::min(goal, start_faces));
@@ -413,23 +483,99 @@ void Engine::run(const SimplifyOptions& options) {
   stats.collapse = seconds_since(t0) - stats.update_terms - stats.update_costs;
 }
 
+// Renumbers vertices along a Morton curve and faces by their first vertex, so that neighbours
+// sit close in every per-vertex array (subdivided or scrambled input otherwise misses the cache
+// on almost every neighbour access). order[new id] = input id.
+void reorder_for_locality(const IndexedMesh& in, IndexedMesh& out, std::vector<uint32_t>& order) {
+  const uint32_t n = in.vertex_count();
+  float lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+  for (uint32_t v = 0; v < n; ++v)
+    for (int k = 0; k < 3; ++k) {
+      const float c = in.positions[size_t(v) * 3 + k];
+      lo[k] = v == 0 ? c : std::min(lo[k], c);
+      hi[k] = v == 0 ? c : std::max(hi[k], c);
+    }
+  const float extent = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-30f});
+  auto spread = [](uint64_t x) {  // 10 bits -> every third of 30
+    x &= 0x3ff;
+    x = (x | (x << 16)) & 0x30000ff;
+    x = (x | (x << 8)) & 0x300f00f;
+    x = (x | (x << 4)) & 0x30c30c3;
+    return (x | (x << 2)) & 0x9249249;
+  };
+  std::vector<std::pair<uint32_t, uint32_t>> keyed(n);
+  for (uint32_t v = 0; v < n; ++v) {
+    uint64_t code = 0;
+    for (int k = 0; k < 3; ++k)
+      code |= spread(uint64_t((in.positions[size_t(v) * 3 + k] - lo[k]) / extent * 1023.f)) << k;
+    keyed[v] = {uint32_t(code), v};
+  }
+  std::sort(keyed.begin(), keyed.end());
+  order.resize(n);
+  std::vector<uint32_t> new_id(n);
+  out.positions.resize(in.positions.size());
+  for (uint32_t i = 0; i < n; ++i) {
+    order[i] = keyed[i].second;
+    new_id[order[i]] = i;
+    for (int k = 0; k < 3; ++k) out.positions[size_t(i) * 3 + k] = in.positions[size_t(order[i]) * 3 + k];
+  }
+  // Faces bucketed by their smallest new vertex id (counting sort), winding kept.
+  const uint32_t faces = in.face_count();
+  std::vector<uint32_t> start(size_t(n) + 1, 0);
+  auto first = [&](uint32_t f) {
+    const uint32_t* t = &in.indices[size_t(f) * 3];
+    const uint32_t a = t[0] < n ? new_id[t[0]] : 0, b = t[1] < n ? new_id[t[1]] : 0, c = t[2] < n ? new_id[t[2]] : 0;
+    return std::min({a, b, c});
+  };
+  for (uint32_t f = 0; f < faces; ++f) ++start[first(f) + 1];
+  for (uint32_t v = 0; v < n; ++v) start[v + 1] += start[v];
+  out.indices.resize(in.indices.size());
+  for (uint32_t f = 0; f < faces; ++f) {
+    const uint32_t slot = start[first(f)]++;
+    for (int k = 0; k < 3; ++k) out.indices[size_t(slot) * 3 + k] = new_id[in.indices[size_t(f) * 3 + k]];
+  }
+}
+
 }  // namespace
 
 bool simplify(const IndexedMesh& input, const SimplifyOptions& options, CollapseSequence& out, std::string& error) {
   const auto t0 = Clock::now();
+  // Indices out of range are refused by the half-edge build; check first so reordering can
+  // index safely.
+  const uint32_t vertex_count = input.vertex_count();
+  for (uint32_t i : input.indices)
+    if (i >= vertex_count) {
+      error = "a face references vertex " + std::to_string(i) + ", out of range";
+      return false;
+    }
+  if (input.indices.size() % 3 != 0) {
+    error = "index count is not a multiple of three";
+    return false;
+  }
+  std::vector<uint32_t> order;
   Engine engine;
-  if (!engine.init(input, options, error)) return false;
+  {
+    IndexedMesh local;
+    reorder_for_locality(input, local, order);
+    if (!engine.init(local, options, error)) {
+      HalfEdgeMesh unordered;  // again in input numbering, so the message names input vertices
+      build_halfedge(input, unordered, error);
+      return false;
+    }
+  }
   out.mesh = input;
   out.collapses.clear();
   out.collapses.reserve(input.vertex_count());
   engine.record = &out.collapses;
   engine.stats.setup = seconds_since(t0);
   engine.run(options);
+  auto input_id = [&](uint32_t v) { return v == kNone ? kNoVertex : order[v]; };
+  for (HalfEdgeCollapse& c : out.collapses) c.u = input_id(c.u), c.v = input_id(c.v), c.vl = input_id(c.vl), c.vr = input_id(c.vr);
   out.base_indices.clear();
   out.base_indices.reserve(engine.faces * 3);
   for (uint32_t f = 0; f < engine.m.face_count(); ++f)
     if (engine.m.face_alive(f))
-      for (int k = 0; k < 3; ++k) out.base_indices.push_back(engine.m.vert[3 * f + k]);
+      for (int k = 0; k < 3; ++k) out.base_indices.push_back(order[engine.m.vert[3 * f + k]]);
   engine.stats.total = seconds_since(t0);
   if (options.stats) *options.stats = engine.stats;
   return true;
