@@ -398,6 +398,7 @@ bool Engine::final_boundary_collapse() {
   uint32_t best_u = kNone;
   for (uint32_t u = 0; u < m.vertex_count(); ++u) {
     if (m.out[u] == kNone || !m.is_boundary(u)) continue;
+    refresh_torsion(u);
     for_each_neighbour(m, u, [&](uint32_t x, uint32_t h) {
       if (m.twin[h] != kNone) return;
       const float c = cost(u, x, h);

@@ -82,7 +82,7 @@ int main(int argc, char** argv) {
   std::printf("%s: %llu -> %llu faces (target %llu%s), %s metric, %.3f s\n", input.c_str(),
               (unsigned long long)in_faces, (unsigned long long)result.face_count(),
               (unsigned long long)options.target_faces,
-              result.face_count() == options.target_faces ? "" : ", no legal collapse left", metric_name.c_str(), seconds);
+              result.face_count() == options.target_faces ? "" : "; no legal collapse gets closer", metric_name.c_str(), seconds);
   if (verbose)
     std::printf("time: setup %.3f, initial costs %.3f, collapse+checks %.3f, update terms %.3f, update costs %.3f; "
                 "%llu cost evaluations, %llu legality checks\n",
