@@ -121,24 +121,27 @@ def main():
         put('decoder', name + '-whole', b'\x00' + data)
         put('decoder', name + '-bytes', bytes([1, 0, 1 << 2]) + data)
         put('decoder', name + '-mixed', bytes([4, 7, 5 << 2 | 1, 200, 9 << 2 | 2, 31, 3 << 2 | 3, 130, 2 << 2]) + data)
-        # fuzz_coding part 2 (streams): the payloads of the BASE and SPLT chunks after their counts.
+        # fuzz_coding: BASE streams (part 2, after the two counts) and whole SPLT payloads
+        # (part 6, with 256 vertices before and a generous split budget).
         at = 8
         while at + 12 <= len(data):
             kind, size = data[at:at + 4], struct.unpack('<I', data[at + 4:at + 8])[0]
             payload = data[at + 12:at + 12 + size]
-            if kind in (b'BASE', b'SPLT'):
-                # Skip the leading counts (varints) to land on the first stream.
-                p, skip = 0, 2 if kind == b'BASE' else 1
-                for _ in range(skip):
+            if kind == b'BASE':
+                p = 0
+                for _ in range(2):
                     while p < len(payload) and payload[p] & 0x80:
                         p += 1
                     p += 1
-                put('coding', '%s-%s-%d' % (name, kind.decode().strip(), at), b'\x02' + payload[p:])
+                put('coding', '%s-BASE-%d' % (name, at), b'\x02' + payload[p:])
+            elif kind == b'SPLT':
+                put('coding', '%s-SPLT-%d' % (name, at), b'\x06\xff\xfb' + payload)
             at += 12 + size
     # fuzz_coding, other parts: a few hand-made inputs.
     put('coding', 'reader', b'\x00\x10' + bytes(range(16)) + b'\x81\x80\x01\xff\xff\xff\xff\x0f' * 4)
     put('coding', 'varints', b'\x01' + struct.pack('<8Q', 0, 1, 127, 128, 1 << 35, 2**63, 2**64 - 1, 300))
     put('coding', 'quantizer', b'\x03\x0e' + struct.pack('<6f', -1, -2, -3, 1, 2, 3) + struct.pack('<4f', 0.5, -1, 3, 1e30))
+    put('coding', 'range', b'\x05' + struct.pack('<8I', 0, 1, 2, 3, 1000, 65535, 2**31, 2**32 - 1))
     put('coding', 'mesh', b'\x04\x05\x04' + bytes([0, 1, 2, 0, 2, 3, 0, 3, 4, 0, 4, 1, 0, 1, 0xff, 0xff, 0, 0]))
     total = sum(os.path.getsize(os.path.join(out_dir, s, f)) for s in ('decoder', 'container', 'coding')
                 for f in os.listdir(os.path.join(out_dir, s)))
