@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numeric>
 
 namespace pmz {
 
@@ -98,17 +97,24 @@ double point_triangle_distance2(const double p[3], const float* fa, const float*
 }
 
 void TriangleBvh::build(const float* positions, const uint32_t* indices, size_t face_count) {
-  std::vector<Box> boxes(face_count);
-  std::vector<float> centroids(face_count * 3);
+  // Primitives are permuted in place (not through an index array): the build's passes then
+  // stream through memory instead of gathering.
+  struct Prim {
+    Box box;
+    float centroid[3];
+    uint32_t face;
+  };
+  std::vector<Prim> prims(face_count);
   for (size_t f = 0; f < face_count; ++f) {
+    Prim& t = prims[f];
+    t.face = uint32_t(f);
+    for (int k = 0; k < 3; ++k) t.centroid[k] = 0;
     for (int j = 0; j < 3; ++j) {
       const float* p = positions + size_t(indices[f * 3 + j]) * 3;
-      boxes[f].grow(p);
-      for (int k = 0; k < 3; ++k) centroids[f * 3 + k] += p[k] * (1.0f / 3.0f);
+      t.box.grow(p);
+      for (int k = 0; k < 3; ++k) t.centroid[k] += p[k] * (1.0f / 3.0f);
     }
   }
-  std::vector<uint32_t> order(face_count);
-  std::iota(order.begin(), order.end(), 0u);
 
   nodes_.clear();
   nodes_.reserve(face_count / 2 + 1);
@@ -123,8 +129,8 @@ void TriangleBvh::build(const float* positions, const uint32_t* indices, size_t 
     todo.pop_back();
     Box bounds, cbounds;
     for (uint32_t i = r.begin; i < r.end; ++i) {
-      bounds.grow(boxes[order[i]]);
-      cbounds.grow(&centroids[size_t(order[i]) * 3]);
+      bounds.grow(prims[i].box);
+      cbounds.grow(prims[i].centroid);
     }
     Node& node = nodes_[r.node];
     std::copy(bounds.lo, bounds.lo + 3, node.lo);
@@ -150,13 +156,13 @@ void TriangleBvh::build(const float* positions, const uint32_t* indices, size_t 
       Box bin_box[kBins];
       uint32_t bin_count[kBins] = {};
       const float scale = kBins / extent[axis];
-      auto bin_of = [&](uint32_t f) {
-        int b = int((centroids[size_t(f) * 3 + axis] - cbounds.lo[axis]) * scale);
+      auto bin_of = [&](const Prim& t) {
+        int b = int((t.centroid[axis] - cbounds.lo[axis]) * scale);
         return std::min(b, kBins - 1);
       };
       for (uint32_t i = r.begin; i < r.end; ++i) {
-        int b = bin_of(order[i]);
-        bin_box[b].grow(boxes[order[i]]);
+        int b = bin_of(prims[i]);
+        bin_box[b].grow(prims[i].box);
         bin_count[b]++;
       }
       double right_cost[kBins] = {};
@@ -185,9 +191,9 @@ void TriangleBvh::build(const float* positions, const uint32_t* indices, size_t 
         continue;
       }
       if (best_split >= 0) {
-        auto it = std::partition(order.begin() + r.begin, order.begin() + r.end,
-                                 [&](uint32_t f) { return bin_of(f) <= best_split; });
-        mid = uint32_t(it - order.begin());
+        auto it = std::partition(prims.begin() + r.begin, prims.begin() + r.end,
+                                 [&](const Prim& t) { return bin_of(t) <= best_split; });
+        mid = uint32_t(it - prims.begin());
       }
     } else if (count <= kLeafSize * 2) {  // coincident centroids: nothing to separate
       make_leaf();
@@ -195,10 +201,8 @@ void TriangleBvh::build(const float* positions, const uint32_t* indices, size_t 
     }
     if (mid == r.begin || mid == r.end) {  // no useful SAH split: median by index
       mid = r.begin + count / 2;
-      std::nth_element(order.begin() + r.begin, order.begin() + mid, order.begin() + r.end,
-                       [&](uint32_t x, uint32_t y) {
-                         return centroids[size_t(x) * 3 + axis] < centroids[size_t(y) * 3 + axis];
-                       });
+      std::nth_element(prims.begin() + r.begin, prims.begin() + mid, prims.begin() + r.end,
+                       [&](const Prim& x, const Prim& y) { return x.centroid[axis] < y.centroid[axis]; });
     }
     const uint32_t left = uint32_t(nodes_.size());
     nodes_[r.node].first = left;
@@ -212,7 +216,7 @@ void TriangleBvh::build(const float* positions, const uint32_t* indices, size_t 
   triangles_.resize(face_count * 9);
   for (size_t i = 0; i < face_count; ++i)
     for (int j = 0; j < 3; ++j)
-      std::copy_n(positions + size_t(indices[size_t(order[i]) * 3 + j]) * 3, 3, &triangles_[i * 9 + j * 3]);
+      std::copy_n(positions + size_t(indices[size_t(prims[i].face) * 3 + j]) * 3, 3, &triangles_[i * 9 + j * 3]);
 }
 
 double TriangleBvh::closest_distance2(const double p[3], uint32_t& hint) const {
