@@ -52,6 +52,8 @@ struct Decoder::Impl {
   ProgressiveMesh mesh;
   std::vector<SplitCode> splits;  // available (decoded) splits
   std::vector<uint8_t> sides;     // per applied split: kHasLeft | kHasRight
+  uint64_t ring_work = 0;         // sum of ring sizes over first applications
+  static constexpr uint64_t kRingWorkPerSplit = 64, kRingWorkSlack = 1u << 22;
   uint64_t available = 0, applied = 0;
   std::vector<int32_t> coords;    // 3 per computed vertex (computed >= vertex_count)
   std::vector<float> positions;
@@ -72,6 +74,37 @@ struct Decoder::Impl {
   Status split_chunk(const uint8_t* p, size_t n);
   bool apply();
   void undo();
+  // Refinement is bound by memory latency (a split's fan is anywhere in the buffers): start
+  // loading the fans of splits a few steps ahead.
+  void prefetch() {
+    constexpr uint64_t kFar = 24, kMid = 12, kNear = 4;
+    if (applied + kFar < available) __builtin_prefetch(&mesh.vertex_corner[splits[applied + kFar].v]);
+    const size_t corners = mesh.opposite.size();
+    auto corner_of = [&](uint64_t ahead) {
+      uint32_t v = splits[applied + ahead].v;
+      return v < mesh.vertex_corner.size() ? mesh.vertex_corner[v] : kNoCorner;
+    };
+    if (applied + kMid < available) {
+      uint32_t c = corner_of(kMid);
+      if (c < corners) {
+        __builtin_prefetch(&mesh.opposite[c]);
+        __builtin_prefetch(&mesh.corner_vertex[c]);
+      }
+    }
+    if (applied + kNear < available) {  // the faces on both sides of that corner's face
+      uint32_t c = corner_of(kNear);
+      if (c < corners) {
+        uint32_t f = c - c % 3;
+        for (uint32_t k = 0; k < 3; ++k) {
+          uint32_t o = mesh.opposite[f + k];
+          if (o < corners) {
+            __builtin_prefetch(&mesh.opposite[o]);
+            __builtin_prefetch(&mesh.corner_vertex[o]);
+          }
+        }
+      }
+    }
+  }
   void note_rewritten(const std::vector<uint32_t>& faces) {
     if (changes.all) return;
     for (uint32_t f : faces)
@@ -156,6 +189,7 @@ Status Decoder::Impl::head(const uint8_t* p, size_t n) {
     return fail(Status::bad_version, "format version " + std::to_string(h.version_major) + "." +
                                          std::to_string(h.version_minor));
   if (h.position_bits > 30) return fail(Status::corrupt, "position bits above 30");
+  if (h.flags & ~kKnownFlags) return fail(Status::corrupt, "unknown HEAD flags");
   for (int a = 0; a < 3; ++a)
     if (!std::isfinite(h.bbox_min[a]) || !std::isfinite(h.bbox_max[a]) || h.bbox_min[a] > h.bbox_max[a])
       return fail(Status::corrupt, "bad bounding box");
@@ -245,6 +279,17 @@ bool Decoder::Impl::apply() {
   bool ok = mesh.gather_ring(s.v);
   if (ok) {
     const uint32_t k = uint32_t(mesh.ring().size());
+    // Ring walks cost the valence: bound their total (first applications; re-applying after
+    // coarsening repeats the same work) so splits piling on one vertex cannot go quadratic.
+    if (mesh.vertex_count() * 3ull >= coords.size()) {
+      ring_work += k;
+      if (ring_work > kRingWorkPerSplit * (applied + 1) + kRingWorkSlack) {
+        fail(Status::limit_exceeded, "vertex valences beyond what a mesh needs");
+        splits.resize(applied);
+        available = applied;
+        return false;
+      }
+    }
     if (mesh.ring_closed()) {
       ok = s.code_l < k && s.code_r + 1 < k;
       a = s.code_l;
@@ -335,7 +380,11 @@ uint64_t Decoder::refine(uint64_t max_splits) {
       d.parents.reserve(nv);
       d.sides.reserve(target);
     }
-    while (n < max_splits && d.applied < d.available && d.apply()) ++n;
+    while (n < max_splits && d.applied < d.available) {
+      d.prefetch();
+      if (!d.apply()) break;
+      ++n;
+    }
   } catch (const std::bad_alloc&) {
     d.fail(Status::out_of_memory, "allocation failed while refining");
   }

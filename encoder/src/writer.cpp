@@ -39,12 +39,8 @@ uint32_t find_root(std::vector<uint32_t>& parent, uint32_t x) {
 
 // Ranks of vl/vr (kNoVertex -> kNoRank) in the ring gathered last; false if absent.
 bool find_ranks(const ProgressiveMesh& pm, uint32_t vl, uint32_t vr, uint32_t& rl, uint32_t& rr) {
-  const auto& ring = pm.ring();
-  rl = rr = kNoRank;
-  for (uint32_t i = 0; i < ring.size(); ++i) {
-    if (ring[i] == vl) rl = i;
-    if (ring[i] == vr) rr = i;
-  }
+  rl = vl == kNoVertex ? kNoRank : pm.rank_of(vl);
+  rr = vr == kNoVertex ? kNoRank : pm.rank_of(vr);
   return (vl == kNoVertex || rl != kNoRank) && (vr == kNoVertex || rr != kNoRank);
 }
 
@@ -204,14 +200,8 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
   h.full_faces = mesh.face_count();
   h.total_splits = splits;
 
-  out.assign(kSignature, kSignature + 8);
-  std::vector<uint8_t> payload;
-  write_head_payload(payload, h);
-  append_chunk(out, kChunkHead, payload);
-  WriteStats st;
-  st.header_bytes = out.size();
-
   // Base mesh: coordinates as per-axis deltas, faces as index deltas.
+  std::vector<uint8_t> base_payload;
   {
     std::vector<uint8_t> pos, idx;
     int32_t prev[3] = {0, 0, 0};
@@ -225,69 +215,81 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
       put_varint(idx, zigzag_encode(int32_t(x - last)));
       last = x;
     }
-    payload.clear();
-    put_varint(payload, base_n);
-    put_varint(payload, h.base_faces);
-    put_stream(payload, pos, opt.zstd_level);
-    put_stream(payload, idx, opt.zstd_level);
-    size_t before = out.size();
-    append_chunk(out, kChunkBase, payload);
-    st.base_bytes = out.size() - before;
+    put_varint(base_payload, base_n);
+    put_varint(base_payload, h.base_faces);
+    put_stream(base_payload, pos, opt.zstd_level);
+    put_stream(base_payload, idx, opt.zstd_level);
   }
 
   // Splits: replay in final order with the decoder's core to get ranks and predictions.
   ProgressiveMesh pm;
-  if (!pm.build(base_n, plan.base_faces.data(), h.base_faces, error)) return false;
-  std::vector<SplitCode> chunk;
-  std::vector<uint32_t> chunk_groups;
-  uint32_t chunk_limit = kFirstChunkSplits;
-  auto flush = [&]() {
-    if (chunk.empty()) return;
-    payload.clear();
-    uint64_t sizes[kSplitStreamCount];
-    encode_split_chunk(chunk_groups, chunk.data(), chunk.size(), payload, sizes);
-    for (int s = 0; s < kSplitStreamCount; ++s)
-      (s <= kStreamWedgeR ? st.connectivity_bits : st.geometry_bits) += sizes[s] * 8;
-    size_t before = out.size();
-    append_chunk(out, kChunkSplits, payload);
-    st.split_bytes += out.size() - before;
-    chunk.clear();
-    chunk_groups.clear();
-    chunk_limit = std::min(chunk_limit * 2, kMaxChunkSplits);
-  };
-  uint32_t at = 0;
-  for (uint32_t group : plan.group_sizes) {
-    for (uint32_t left = group; left; --left) {
-      if (chunk_groups.empty() || left == group) chunk_groups.push_back(0);  // a group, or its rest after a chunk cut
-      const HalfEdgeCollapse& c = seq.collapses[plan.order[at++]];
-      uint32_t v = plan.decoded_id[c.v];
-      uint32_t vl = c.vl == kNoVertex ? kNoVertex : plan.decoded_id[c.vl];
-      uint32_t vr = c.vr == kNoVertex ? kNoVertex : plan.decoded_id[c.vr];
-      uint32_t rl, rr;
-      if (!pm.gather_ring(v) || !find_ranks(pm, vl, vr, rl, rr) || plan.decoded_id[c.u] != pm.vertex_count())
-        return error = "internal: reordered split does not replay", false;
-      const bool closed = pm.ring_closed();
-      const uint32_t k = uint32_t(pm.ring().size());
-      if (!pm.split_gathered(v, rl, rr)) return error = "internal: split rejected", false;
-      SplitCode code;
-      code.v = v;
-      if (closed) {
-        code.code_l = rl;
-        code.code_r = (rr + k - rl) % k - 1;
-      } else {
-        code.code_l = rl == kNoRank ? 0 : rl + 1;
-        code.code_r = rr == kNoRank ? 0 : rr + 1;
+  auto encode_splits = [&](std::vector<uint8_t>& bytes, WriteStats& st) {
+    if (!pm.build(base_n, plan.base_faces.data(), h.base_faces, error)) return false;
+    std::vector<SplitCode> chunk;
+    std::vector<uint32_t> chunk_groups;
+    std::vector<uint8_t> payload;
+    uint32_t chunk_limit = kFirstChunkSplits;
+    auto flush = [&]() {
+      if (chunk.empty()) return;
+      payload.clear();
+      uint64_t sizes[kSplitStreamCount];
+      encode_split_chunk(chunk_groups, chunk.data(), chunk.size(), payload, sizes);
+      for (int s = 0; s < kSplitStreamCount; ++s)
+        (s <= kStreamWedgeR ? st.connectivity_bits : st.geometry_bits) += sizes[s] * 8;
+      size_t before = bytes.size();
+      append_chunk(bytes, kChunkSplits, payload);
+      st.split_bytes += bytes.size() - before;
+      chunk.clear();
+      chunk_groups.clear();
+      chunk_limit = std::min(chunk_limit * 2, kMaxChunkSplits);
+    };
+    uint32_t at = 0;
+    for (uint32_t group : plan.group_sizes) {
+      for (uint32_t left = group; left; --left) {
+        if (chunk_groups.empty() || left == group) chunk_groups.push_back(0);  // a group, or its rest after a chunk cut
+        const HalfEdgeCollapse& c = seq.collapses[plan.order[at++]];
+        uint32_t v = plan.decoded_id[c.v];
+        uint32_t vl = c.vl == kNoVertex ? kNoVertex : plan.decoded_id[c.vl];
+        uint32_t vr = c.vr == kNoVertex ? kNoVertex : plan.decoded_id[c.vr];
+        uint32_t rl, rr;
+        if (!pm.gather_ring(v) || !find_ranks(pm, vl, vr, rl, rr) || plan.decoded_id[c.u] != pm.vertex_count())
+          return error = "internal: reordered split does not replay", false;
+        const bool closed = pm.ring_closed();
+        const uint32_t k = uint32_t(pm.ring().size());
+        if (!pm.split_gathered(v, rl, rr)) return error = "internal: split rejected", false;
+        SplitCode code;
+        code.v = v;
+        if (closed) {
+          code.code_l = rl;
+          code.code_r = (rr + k - rl) % k - 1;
+        } else {
+          code.code_l = rl == kNoRank ? 0 : rl + 1;
+          code.code_r = rr == kNoRank ? 0 : rr + 1;
+        }
+        int32_t pred[3];
+        predict_position(coords.data(), pm.u_ring(), pred);
+        uint32_t u = pm.vertex_count() - 1;
+        for (int a = 0; a < 3; ++a) code.residual[a] = int32_t(uint32_t(coords[u * 3 + a]) - uint32_t(pred[a]));
+        chunk.push_back(code);
+        ++chunk_groups.back();
+        if (chunk.size() == chunk_limit) flush();
       }
-      int32_t pred[3];
-      predict_position(coords.data(), pm.u_ring(), pred);
-      uint32_t u = pm.vertex_count() - 1;
-      for (int a = 0; a < 3; ++a) code.residual[a] = int32_t(uint32_t(coords[u * 3 + a]) - uint32_t(pred[a]));
-      chunk.push_back(code);
-      ++chunk_groups.back();
-      if (chunk.size() == chunk_limit) flush();
     }
-  }
-  flush();
+    flush();
+    return true;
+  };
+  std::vector<uint8_t> split_bytes;
+  WriteStats st;
+  if (!encode_splits(split_bytes, st)) return false;
+
+  out.assign(kSignature, kSignature + 8);
+  std::vector<uint8_t> head;
+  write_head_payload(head, h);
+  append_chunk(out, kChunkHead, head);
+  st.header_bytes = out.size();
+  append_chunk(out, kChunkBase, base_payload);
+  st.base_bytes = out.size() - st.header_bytes;
+  out.insert(out.end(), split_bytes.begin(), split_bytes.end());
   append_chunk(out, kChunkEnd, {});
 
   // The full decode must reproduce the input's faces (as a set, up to rotation).

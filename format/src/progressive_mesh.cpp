@@ -43,15 +43,26 @@ bool ProgressiveMesh::build(uint32_t n, const uint32_t* indices, size_t faces, s
 
 bool ProgressiveMesh::gather_fan(uint32_t v) {
   fan_.clear();
+  ring_.clear();
+  start_ = 0;
   closed_ = false;
-  uint32_t c0 = vertex_corner[v];
+  const uint32_t c0 = vertex_corner[v];
   if (c0 == kNoCorner) return false;
+  const uint32_t* opp = opposite.data();
+  const uint32_t* cv = corner_vertex.data();
   const size_t cap = corner_vertex.size();
-  // Counter-clockwise: the next face shares edge (v, prev vertex), opposite next(c).
-  uint32_t c = c0;
+  // Counter-clockwise: the next face shares edge (v, prev vertex), opposite next(c). Collect
+  // the ring on the way and remember where the smallest neighbour is (closed fans start there).
+  uint32_t c = c0, best = 0xFFFFFFFFu;
   do {
+    const uint32_t n = next_corner(c), w = cv[n];
+    if (w < best) {
+      best = w;
+      start_ = uint32_t(fan_.size());
+    }
     fan_.push_back(c);
-    uint32_t o = opposite[next_corner(c)];
+    ring_.push_back(w);
+    const uint32_t o = opp[n];
     if (o == kNoCorner) break;
     c = next_corner(o);
     if (c == c0) {
@@ -60,32 +71,38 @@ bool ProgressiveMesh::gather_fan(uint32_t v) {
     }
   } while (fan_.size() <= cap);
   // Open fan: walk clockwise from c0 to the boundary and put those faces first.
+  start_ = 0;
   back_.clear();
   c = c0;
   for (;;) {
-    uint32_t o = opposite[prev_corner(c)];
+    const uint32_t o = opp[prev_corner(c)];
     if (o == kNoCorner || back_.size() > cap) break;
     c = prev_corner(o);
     back_.push_back(c);
   }
   if (!back_.empty()) {
     fan_.insert(fan_.begin(), back_.rbegin(), back_.rend());
+    ring_.clear();
+    for (uint32_t f : fan_) ring_.push_back(cv[next_corner(f)]);
   }
+  ring_.push_back(cv[prev_corner(fan_.back())]);
   return true;
 }
 
 bool ProgressiveMesh::gather_ring(uint32_t v) {
-  ring_.clear();
-  if (v >= vertex_count() || !gather_fan(v)) return false;
-  for (uint32_t c : fan_) ring_.push_back(corner_vertex[next_corner(c)]);
-  if (!closed_) {
-    ring_.push_back(corner_vertex[prev_corner(fan_.back())]);
-    return true;
+  if (v >= vertex_count()) {
+    fan_.clear();
+    ring_.clear();
+    return false;
   }
-  size_t start = size_t(std::min_element(ring_.begin(), ring_.end()) - ring_.begin());
-  std::rotate(ring_.begin(), ring_.begin() + ptrdiff_t(start), ring_.end());
-  std::rotate(fan_.begin(), fan_.begin() + ptrdiff_t(start), fan_.end());
-  return true;
+  return gather_fan(v);
+}
+
+uint32_t ProgressiveMesh::rank_of(uint32_t w) const {
+  const uint32_t k = uint32_t(ring_.size());
+  for (uint32_t i = 0; i < k; ++i)
+    if (ring_[i] == w) return (i + k - start_) % k;
+  return kNoRank;
 }
 
 bool ProgressiveMesh::split_gathered(uint32_t v, uint32_t a, uint32_t b) {
@@ -104,7 +121,9 @@ bool ProgressiveMesh::split_gathered(uint32_t v, uint32_t a, uint32_t b) {
   }
   const bool has_l = a != kNoRank, has_r = b != kNoRank;
   const uint32_t u = vertex_count(), F = face_count();
-  const uint32_t vl = has_l ? ring_[a] : kNoCorner, vr = has_r ? ring_[b] : kNoCorner;
+  if (closed_) s = (s + start_) % m;  // canonical rank -> position in the walk
+  const uint32_t vl = has_l ? ring_[(a + start_) % k] : kNoCorner;
+  const uint32_t vr = has_r ? ring_[(b + start_) % k] : kNoCorner;
 
   // Read every old link before writing any (see spec for the pairing).
   uint32_t pl = kNoCorner, ql = kNoCorner, pr = kNoCorner, qr = kNoCorner;
@@ -128,25 +147,30 @@ bool ProgressiveMesh::split_gathered(uint32_t v, uint32_t a, uint32_t b) {
   u_ring_.clear();
   u_ring_.push_back(v);
   sector_.clear();
-  for (uint32_t i = 0; i <= count; ++i) u_ring_.push_back(ring_[(s + i) % k]);
-  for (uint32_t i = 0; i < count; ++i) {
-    uint32_t c = fan_[(s + i) % m];
+  for (uint32_t i = 0, j = s; i <= count; ++i, j = j + 1 == k ? 0 : j + 1) u_ring_.push_back(ring_[j]);
+  for (uint32_t i = 0, j = s % m; i < count; ++i, j = j + 1 == m ? 0 : j + 1) {
+    uint32_t c = fan_[j];
     corner_vertex[c] = u;
     sector_.push_back(c / 3);
   }
 
-  uint32_t f0 = 3 * F, g0 = 3 * (F + (has_l ? 1 : 0));
+  const uint32_t f0 = 3 * F, g0 = 3 * (F + (has_l ? 1 : 0));
+  const size_t end = size_t(g0) + (has_r ? 3 : 0);
+  corner_vertex.resize(end);
+  opposite.resize(end);
+  uint32_t* cv = corner_vertex.data();
+  uint32_t* opp = opposite.data();
   if (has_l) {
-    corner_vertex.insert(corner_vertex.end(), {u, v, vl});
-    opposite.insert(opposite.end(), {ql, pl, kNoCorner});
-    if (ql != kNoCorner) opposite[ql] = f0;
-    if (pl != kNoCorner) opposite[pl] = f0 + 1;
+    cv[f0] = u, cv[f0 + 1] = v, cv[f0 + 2] = vl;
+    opp[f0] = ql, opp[f0 + 1] = pl, opp[f0 + 2] = kNoCorner;
+    if (ql != kNoCorner) opp[ql] = f0;
+    if (pl != kNoCorner) opp[pl] = f0 + 1;
   }
   if (has_r) {
-    corner_vertex.insert(corner_vertex.end(), {v, u, vr});
-    opposite.insert(opposite.end(), {pr, qr, kNoCorner});
-    if (pr != kNoCorner) opposite[pr] = g0;
-    if (qr != kNoCorner) opposite[qr] = g0 + 1;
+    cv[g0] = v, cv[g0 + 1] = u, cv[g0 + 2] = vr;
+    opp[g0] = pr, opp[g0 + 1] = qr, opp[g0 + 2] = kNoCorner;
+    if (pr != kNoCorner) opp[pr] = g0;
+    if (qr != kNoCorner) opp[qr] = g0 + 1;
   }
   if (has_l && has_r) {
     opposite[f0 + 2] = g0 + 2;
@@ -204,3 +228,4 @@ void ProgressiveMesh::undo_split(uint32_t v, bool has_l, bool has_r) {
 }
 
 }  // namespace pmz
+

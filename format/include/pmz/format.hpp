@@ -38,6 +38,7 @@ enum SplitStream : int {
 };
 
 inline constexpr size_t kHeadPayloadSize = 52;
+inline constexpr uint32_t kKnownFlags = 0;  // HEAD flags: none defined in 1.0
 
 struct FileHeader {
   uint32_t version_major = kVersionMajor, version_minor = kVersionMinor;

@@ -2,6 +2,8 @@
 // vertex split and its exact inverse. The writer replays this very code to compute wedge ranks
 // and predictions, so what it writes is what the decoder does (spec/format.md, "Vertex split").
 #pragma once
+
+
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -32,11 +34,14 @@ class ProgressiveMesh {
   // faces, an edge used twice in the same direction or by more than two faces.
   bool build(uint32_t vertex_count, const uint32_t* indices, size_t face_count, std::string& error);
 
-  // Canonical ordered one-ring of v into ring() (history-independent): counter-clockwise;
+  // Canonical ordered one-ring of v (history-independent): counter-clockwise;
   // closed fan: starting at the smallest neighbour index; open fan: from the boundary, so it
   // holds faces + 1 vertices. Returns false when v has no face.
   bool gather_ring(uint32_t v);
+  // The ring in walk order; canonical rank i is ring()[(i + ring_start()) % ring().size()].
   const std::vector<uint32_t>& ring() const { return ring_; }
+  uint32_t ring_start() const { return start_; }
+  uint32_t rank_of(uint32_t w) const;  // canonical rank of neighbour w, or kNoRank
   bool ring_closed() const { return closed_; }
 
   // Vertex split at v with wedge ranks into the canonical ring (kNoRank: that side on the
@@ -60,6 +65,7 @@ class ProgressiveMesh {
  private:
   bool gather_fan(uint32_t v);  // fan_ (corners at v, ccw) and closed_; bounded walk
   std::vector<uint32_t> fan_, back_, ring_, u_ring_, sector_;
+  uint32_t start_ = 0;
   bool closed_ = false;
 };
 
@@ -67,20 +73,23 @@ class ProgressiveMesh {
 
 namespace pmz {
 
-// Position prediction of a new vertex u (spec): per axis, the floor-rounded mean of its
-// ring's coordinates, floor((sum + n/2) / n), in 64-bit integers. coords: 3 per vertex.
-inline void predict_position(const int32_t* coords, const std::vector<uint32_t>& ring,
-                             int32_t out[3]) {
+// floor((sum + floor(n / 2)) / n) for n > 0: the rounded mean both sides compute.
+inline int64_t floor_mean(int64_t sum, int64_t n) {
+  int64_t x = sum + n / 2;
+  int64_t q = x / n;
+  if ((x % n) != 0 && x < 0) --q;  // floor, not truncation
+  return q;
+}
+
+// Position prediction of a new vertex u (spec, section 5), right after split(): per axis the
+// floor-rounded mean of u's ring with v counted twice (u starts next to v), in 64-bit integers.
+// coords: 3 per vertex.
+inline void predict_position(const int32_t* coords, const std::vector<uint32_t>& u_ring, int32_t out[3]) {
   int64_t sum[3] = {0, 0, 0};
-  for (uint32_t w : ring)
+  for (uint32_t w : u_ring)
     for (int a = 0; a < 3; ++a) sum[a] += coords[size_t(w) * 3 + a];
-  const int64_t n = int64_t(ring.size());
-  for (int a = 0; a < 3; ++a) {
-    int64_t x = sum[a] + n / 2;
-    int64_t q = x / n;
-    if ((x % n) != 0 && x < 0) --q;  // floor, not truncation
-    out[a] = int32_t(q);
-  }
+  for (int a = 0; a < 3; ++a) sum[a] += coords[size_t(u_ring[0]) * 3 + a];
+  for (int a = 0; a < 3; ++a) out[a] = int32_t(floor_mean(sum[a], int64_t(u_ring.size()) + 1));
 }
 
 }  // namespace pmz
