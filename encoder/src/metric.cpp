@@ -9,7 +9,7 @@ namespace pmz::detail {
 
 namespace {
 
-inline float length(const float* a, const float* b) {
+inline float distance(const float* a, const float* b) {
   float dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
   return std::sqrt(dx * dx + dy * dy + dz * dz);
 }
@@ -63,6 +63,7 @@ void initial_quadrics(const HalfEdgeMesh& m, double boundary_weight, std::vector
 
 void Features::resize(uint32_t vertex_count, uint32_t face_count) {
   face.assign(size_t(face_count) * 4, 0.f);
+  length.assign(size_t(face_count) * 3, 0.f);
   normal.assign(size_t(vertex_count) * 3, 0.f);
   c_norm.assign(vertex_count, 0.f);
   b.assign(size_t(vertex_count) * 3, 0.f);
@@ -78,6 +79,9 @@ void Features::update_face(const HalfEdgeMesh& m, uint32_t f) {
   const float inv = len > 0 ? 1.f / len : 0.f;
   float* out = &face[size_t(f) * 4];
   out[0] = n[0] * inv, out[1] = n[1] * inv, out[2] = n[2] * inv, out[3] = 0.5f * len;
+  length[size_t(f) * 3] = std::sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
+  length[size_t(f) * 3 + 1] = distance(p1, p2);
+  length[size_t(f) * 3 + 2] = std::sqrt(e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]);
 }
 
 void Features::update_normal_terms(const HalfEdgeMesh& m, uint32_t v) {
@@ -111,9 +115,9 @@ void Features::update_normal_terms(const HalfEdgeMesh& m, uint32_t v) {
 void Features::update_torsion(const HalfEdgeMesh& m, uint32_t v) {
   float num = 0, den = 0;
   const float* bv = &b[size_t(v) * 3];
-  for_each_neighbour(m, v, [&](uint32_t w, uint32_t) {
-    num += length(&b[size_t(w) * 3], bv);
-    den += length(m.p(w), m.p(v));
+  for_each_neighbour(m, v, [&](uint32_t w, uint32_t h) {
+    num += distance(&b[size_t(w) * 3], bv);
+    den += length[h];
   });
   torsion[v] = den > 0 ? num / den : 0.f;
 }
@@ -126,16 +130,11 @@ void Features::compute_all(const HalfEdgeMesh& m) {
   for (uint32_t v = 0; v < m.vertex_count(); ++v) update_torsion(m, v);
 }
 
-float edge_length_ratio(const HalfEdgeMesh& m, uint32_t h) {
-  const float* a = m.p(m.vert[h]);
-  const float* b = m.p(m.dest(h));
-  const float* c = m.p(m.vert[HalfEdgeMesh::prev(h)]);
-  float others = length(b, c) + length(c, a);
-  if (const uint32_t t = m.twin[h]; t != kNone) {
-    const float* d = m.p(m.vert[HalfEdgeMesh::prev(t)]);
-    others += length(a, d) + length(d, b);
-  }
-  return others > 0 ? length(a, b) / others : 0.f;
+float edge_length_ratio(const HalfEdgeMesh& m, const Features& f, uint32_t h) {
+  const float* len = f.length.data();
+  float others = len[HalfEdgeMesh::next(h)] + len[HalfEdgeMesh::prev(h)];
+  if (const uint32_t t = m.twin[h]; t != kNone) others += len[HalfEdgeMesh::next(t)] + len[HalfEdgeMesh::prev(t)];
+  return others > 0 ? len[h] / others : 0.f;
 }
 
 double mean_edge_length(const HalfEdgeMesh& m) {
@@ -143,7 +142,7 @@ double mean_edge_length(const HalfEdgeMesh& m) {
   uint64_t count = 0;
   for (uint32_t h = 0; h < m.vert.size(); ++h) {
     if (m.vert[h] == kNone || (m.twin[h] != kNone && m.twin[h] < h)) continue;
-    sum += length(m.p(m.vert[h]), m.p(m.dest(h)));
+    sum += distance(m.p(m.vert[h]), m.p(m.dest(h)));
     ++count;
   }
   return count ? sum / double(count) : 0.0;

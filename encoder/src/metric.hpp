@@ -24,6 +24,7 @@ void initial_quadrics(const HalfEdgeMesh& m, double boundary_weight, std::vector
 
 struct Features {
   std::vector<float> face;         // per face: unit normal xyz (zero if degenerate), area
+  std::vector<float> length;       // per half-edge: its length (sigma and T read it, no sqrt)
   std::vector<float> normal;       // n(v): area-weighted unit vertex normal
   std::vector<float> c_norm;       // eq. 1
   std::vector<float> b;            // B(v) of eq. 2 (mean over the faces of v)
@@ -45,8 +46,8 @@ struct Features {
 };
 
 // eq. 3: length of the edge of half-edge h over the sum of the other edges of its one or two
-// triangles.
-float edge_length_ratio(const HalfEdgeMesh& m, uint32_t h);
+// triangles, from the cached half-edge lengths of f.
+float edge_length_ratio(const HalfEdgeMesh& m, const Features& f, uint32_t h);
 
 // Mean length of the mesh's edges (each edge once); the metric's unit of length.
 double mean_edge_length(const HalfEdgeMesh& m);

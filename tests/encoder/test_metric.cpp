@@ -106,14 +106,15 @@ TEST(Metric, BoundaryQuadricPenalisesLeavingTheBorder) {
 TEST(Metric, EdgeLengthRatio) {
   const auto mesh = pmz_test::grid(2);
   const auto m = build(mesh);
+  const auto f = features(m, 0.5f);
   // Interior diagonal (0,0)-(1,1): sqrt2 over the four unit legs of its two triangles.
   const uint32_t diagonal = half_edge(m, 0, 4);
   ASSERT_NE(diagonal, pmz::detail::kNone);
-  EXPECT_NEAR(pmz::detail::edge_length_ratio(m, diagonal), std::sqrt(2.0) / 4, 1e-6);
+  EXPECT_NEAR(pmz::detail::edge_length_ratio(m, f, diagonal), std::sqrt(2.0) / 4, 1e-6);
   // Boundary edge (0,0)-(1,0): 1 over the other two edges of its one triangle, 1 and sqrt2.
   const uint32_t border = half_edge(m, 0, 1);
   ASSERT_NE(border, pmz::detail::kNone);
-  EXPECT_NEAR(pmz::detail::edge_length_ratio(m, border), 1 / (1 + std::sqrt(2.0)), 1e-6);
+  EXPECT_NEAR(pmz::detail::edge_length_ratio(m, f, border), 1 / (1 + std::sqrt(2.0)), 1e-6);
   // Equilateral pair: 1/4 inside.
   pmz::IndexedMesh rhombus;
   pmz_test::add_vertex(rhombus, 0, 0, 0);
@@ -122,8 +123,9 @@ TEST(Metric, EdgeLengthRatio) {
   pmz_test::add_vertex(rhombus, 0.5, -std::sqrt(0.75), 0);
   rhombus.indices = {0, 1, 2, 1, 0, 3};
   const auto r = build(rhombus);
-  EXPECT_NEAR(pmz::detail::edge_length_ratio(r, half_edge(r, 0, 1)), 0.25, 1e-6);
-  EXPECT_NEAR(pmz::detail::edge_length_ratio(r, half_edge(r, 1, 2)), 0.5, 1e-6);
+  const auto fr = features(r, 0.5f);
+  EXPECT_NEAR(pmz::detail::edge_length_ratio(r, fr, half_edge(r, 0, 1)), 0.25, 1e-6);
+  EXPECT_NEAR(pmz::detail::edge_length_ratio(r, fr, half_edge(r, 1, 2)), 0.5, 1e-6);
 }
 
 TEST(Metric, SphereTermsAreNearlyConstant) {
