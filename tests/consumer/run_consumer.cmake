@@ -5,8 +5,13 @@ execute_process(COMMAND ${CMAKE_COMMAND} --install ${PMZ_BINARY_DIR} --prefix ${
 if(rc)
   message(FATAL_ERROR "cmake --install failed: ${rc}")
 endif()
+# A sanitizer build installs instrumented libraries: the consumer links the runtime too.
+set(sanitize "")
+if(PMZ_SANITIZE)
+  set(sanitize "-DCMAKE_EXE_LINKER_FLAGS=-fsanitize=${PMZ_SANITIZE}")
+endif()
 execute_process(COMMAND ${CMAKE_COMMAND} -S ${CONSUMER_SOURCE} -B ${WORK_DIR}/build
-                -DCMAKE_PREFIX_PATH=${prefix} RESULT_VARIABLE rc)
+                -DCMAKE_PREFIX_PATH=${prefix} ${sanitize} RESULT_VARIABLE rc)
 if(rc)
   message(FATAL_ERROR "configuring the consumer failed: ${rc}")
 endif()
