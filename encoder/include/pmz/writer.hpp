@@ -16,7 +16,9 @@ struct WriteOptions {
 
 struct WriteStats {
   uint64_t header_bytes = 0, base_bytes = 0, split_bytes = 0;
-  uint64_t connectivity_bits = 0, geometry_bits = 0;  // over all splits, before/after zstd
+  // Coded size of the SPLT streams over all splits: groups, gaps and wedges (connectivity);
+  // position residuals (geometry).
+  uint64_t connectivity_bits = 0, geometry_bits = 0;
 };
 
 bool write_pmz(const CollapseSequence& seq, const WriteOptions& options,
