@@ -23,12 +23,6 @@ void Quadric::add_plane(const double n[3], double d, double w) {
   a[9] += w * d * d;
 }
 
-double Quadric::error(const float pf[3]) const {
-  const double x = pf[0], y = pf[1], z = pf[2];
-  return x * (a[0] * x + 2 * (a[1] * y + a[2] * z + a[6])) + y * (a[3] * y + 2 * (a[4] * z + a[7])) +
-         z * (a[5] * z + 2 * a[8]) + a[9];
-}
-
 void initial_quadrics(const HalfEdgeMesh& m, double boundary_weight, std::vector<Quadric>& q) {
   q.assign(m.vertex_count(), Quadric{});
   for (uint32_t f = 0; f < m.face_count(); ++f) {
@@ -62,12 +56,8 @@ void initial_quadrics(const HalfEdgeMesh& m, double boundary_weight, std::vector
 }
 
 void Features::resize(uint32_t vertex_count, uint32_t face_count) {
-  face.assign(size_t(face_count) * 4, 0.f);
-  length.assign(size_t(face_count) * 3, 0.f);
-  normal.assign(size_t(vertex_count) * 3, 0.f);
-  c_norm.assign(vertex_count, 0.f);
-  b.assign(size_t(vertex_count) * 3, 0.f);
-  torsion.assign(vertex_count, 0.f);
+  face.assign(face_count, FaceTerms{});
+  vertex.assign(vertex_count, VertexTerms{});
 }
 
 void Features::update_face(const HalfEdgeMesh& m, uint32_t f) {
@@ -77,49 +67,50 @@ void Features::update_face(const HalfEdgeMesh& m, uint32_t f) {
   float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
   const float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
   const float inv = len > 0 ? 1.f / len : 0.f;
-  float* out = &face[size_t(f) * 4];
-  out[0] = n[0] * inv, out[1] = n[1] * inv, out[2] = n[2] * inv, out[3] = 0.5f * len;
-  length[size_t(f) * 3] = std::sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
-  length[size_t(f) * 3 + 1] = distance(p1, p2);
-  length[size_t(f) * 3 + 2] = std::sqrt(e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]);
+  FaceTerms& out = face[f];
+  out.normal[0] = n[0] * inv, out.normal[1] = n[1] * inv, out.normal[2] = n[2] * inv, out.area = 0.5f * len;
+  out.length[0] = std::sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
+  out.length[1] = distance(p1, p2);
+  out.length[2] = std::sqrt(e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]);
 }
 
 void Features::update_normal_terms(const HalfEdgeMesh& m, uint32_t v) {
-  // One walk round v collects its faces; the second pass needs n(v) first.
-  scratch_faces.clear();
+  // Two walks round v: the second needs n(v) first. Walking again is cheaper than collecting
+  // the faces into a buffer (the walk's arrays are in cache by then).
   float n[3] = {0, 0, 0};
+  uint32_t k = 0;
   for_each_outgoing(m, v, [&](uint32_t h) {
-    const float* fd = &face[size_t(h / 3) * 4];
-    n[0] += fd[3] * fd[0], n[1] += fd[3] * fd[1], n[2] += fd[3] * fd[2];
-    scratch_faces.push_back(h / 3);
+    const FaceTerms& fd = face[h / 3];
+    n[0] += fd.area * fd.normal[0], n[1] += fd.area * fd.normal[1], n[2] += fd.area * fd.normal[2];
+    ++k;
   });
   const float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
   if (len > 0)
     for (float& c : n) c /= len;
   float c_sum = 0, bv[3] = {0, 0, 0};
-  for (uint32_t f : scratch_faces) {
-    const float* ni = &face[size_t(f) * 4];
+  for_each_outgoing(m, v, [&](uint32_t h) {
+    const float* ni = face[h / 3].normal;
     const float dot = n[0] * ni[0] + n[1] * ni[1] + n[2] * ni[2];
     c_sum += 1.f - dot;
     if (dot > epsilon) {
       const float w = (dot - epsilon) * (dot - epsilon);
       for (int i = 0; i < 3; ++i) bv[i] += w * ni[i];
     }
-  }
-  const size_t k = scratch_faces.size();
+  });
   const float inv_k = k ? 1.f / float(k) : 0.f;
-  for (int i = 0; i < 3; ++i) normal[size_t(v) * 3 + i] = n[i], b[size_t(v) * 3 + i] = bv[i] * inv_k;
-  c_norm[v] = c_sum * inv_k;
+  VertexTerms& t = vertex[v];
+  for (int i = 0; i < 3; ++i) t.normal[i] = n[i], t.b[i] = bv[i] * inv_k;
+  t.c_norm = c_sum * inv_k;
 }
 
 void Features::update_torsion(const HalfEdgeMesh& m, uint32_t v) {
   float num = 0, den = 0;
-  const float* bv = &b[size_t(v) * 3];
+  const float* bv = vertex[v].b;
   for_each_neighbour(m, v, [&](uint32_t w, uint32_t h) {
-    num += distance(&b[size_t(w) * 3], bv);
-    den += length[h];
+    num += distance(vertex[w].b, bv);
+    den += length(h);
   });
-  torsion[v] = den > 0 ? num / den : 0.f;
+  vertex[v].torsion = den > 0 ? num / den : 0.f;
 }
 
 void Features::compute_all(const HalfEdgeMesh& m) {
@@ -128,13 +119,6 @@ void Features::compute_all(const HalfEdgeMesh& m) {
     if (m.face_alive(f)) update_face(m, f);
   for (uint32_t v = 0; v < m.vertex_count(); ++v) update_normal_terms(m, v);
   for (uint32_t v = 0; v < m.vertex_count(); ++v) update_torsion(m, v);
-}
-
-float edge_length_ratio(const HalfEdgeMesh& m, const Features& f, uint32_t h) {
-  const float* len = f.length.data();
-  float others = len[HalfEdgeMesh::next(h)] + len[HalfEdgeMesh::prev(h)];
-  if (const uint32_t t = m.twin[h]; t != kNone) others += len[HalfEdgeMesh::next(t)] + len[HalfEdgeMesh::prev(t)];
-  return others > 0 ? len[h] / others : 0.f;
 }
 
 double mean_edge_length(const HalfEdgeMesh& m) {

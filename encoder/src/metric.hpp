@@ -15,26 +15,46 @@ struct Quadric {
   void add(const Quadric& q) {
     for (int i = 0; i < 10; ++i) a[i] += q.a[i];
   }
-  double error(const float p[3]) const;
+  // Inline: the engine evaluates it tens of millions of times.
+  double error(const float pf[3]) const {
+    const double x = pf[0], y = pf[1], z = pf[2];
+    return x * (a[0] * x + 2 * (a[1] * y + a[2] * z + a[6])) + y * (a[3] * y + 2 * (a[4] * z + a[7])) +
+           z * (a[5] * z + 2 * a[8]) + a[9];
+  }
 };
 
 // Q(v) of every vertex: area-weighted planes of its faces, plus, on each boundary edge, the
 // plane through the edge perpendicular to its face weighted by boundary_weight * length^2.
 void initial_quadrics(const HalfEdgeMesh& m, double boundary_weight, std::vector<Quadric>& q);
 
+// Per vertex and per face, the terms a cost evaluation or a torsion update reads together sit
+// in one 32-byte record: a collapse lands somewhere random on the mesh, so the engine's time
+// is mostly cache misses and each separate array costs one more.
+struct alignas(32) VertexTerms {
+  float b[3];       // B(v) of eq. 2 (mean over the faces of v)
+  float torsion;    // T(v), eq. 2, in 1 / length
+  float c_norm;     // eq. 1
+  float normal[3];  // n(v): area-weighted unit vertex normal
+};
+struct alignas(32) FaceTerms {
+  float normal[3];  // unit normal (zero if degenerate)
+  float area;
+  float length[3];  // per half-edge of the face: its length (sigma and T read it, no sqrt)
+  float unused;
+};
+
 struct Features {
-  std::vector<float> face;         // per face: unit normal xyz (zero if degenerate), area
-  std::vector<float> length;       // per half-edge: its length (sigma and T read it, no sqrt)
-  std::vector<float> normal;       // n(v): area-weighted unit vertex normal
-  std::vector<float> c_norm;       // eq. 1
-  std::vector<float> b;            // B(v) of eq. 2 (mean over the faces of v)
-  std::vector<float> torsion;      // T(v), eq. 2, in 1 / length
+  std::vector<FaceTerms> face;
+  std::vector<VertexTerms> vertex;
   float epsilon = 0;
-  std::vector<uint32_t> scratch_faces;
 
-  const float* face_normal(uint32_t f) const { return &face[size_t(f) * 4]; }
-  float face_area(uint32_t f) const { return face[size_t(f) * 4 + 3]; }
-
+  const float* face_normal(uint32_t f) const { return face[f].normal; }
+  float face_area(uint32_t f) const { return face[f].area; }
+  float length(uint32_t h) const { return face[h / 3].length[h % 3]; }
+  const float* normal(uint32_t v) const { return vertex[v].normal; }
+  const float* b(uint32_t v) const { return vertex[v].b; }
+  float c_norm(uint32_t v) const { return vertex[v].c_norm; }
+  float torsion(uint32_t v) const { return vertex[v].torsion; }
   void resize(uint32_t vertex_count, uint32_t face_count);
   void update_face(const HalfEdgeMesh& m, uint32_t f);
   // n(v), C_norm(v), B(v) from the cached face normals around v.
@@ -47,7 +67,11 @@ struct Features {
 
 // eq. 3: length of the edge of half-edge h over the sum of the other edges of its one or two
 // triangles, from the cached half-edge lengths of f.
-float edge_length_ratio(const HalfEdgeMesh& m, const Features& f, uint32_t h);
+inline float edge_length_ratio(const HalfEdgeMesh& m, const Features& f, uint32_t h) {
+  float others = f.length(HalfEdgeMesh::next(h)) + f.length(HalfEdgeMesh::prev(h));
+  if (const uint32_t t = m.twin[h]; t != kNone) others += f.length(HalfEdgeMesh::next(t)) + f.length(HalfEdgeMesh::prev(t));
+  return others > 0 ? f.length(h) / others : 0.f;
+}
 
 // Mean length of the mesh's edges (each edge once); the metric's unit of length.
 double mean_edge_length(const HalfEdgeMesh& m);

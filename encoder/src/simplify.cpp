@@ -181,8 +181,8 @@ float Engine::cost(uint32_t u, uint32_t x, uint32_t h) const {
   const float* px = m.p(x);
   const double e = std::max(0.0, quad[u].error(px) * inv_unit4 + self_error[x]);
   if (metric == Metric::qem) return float(e);
-  const double ca = (params.quadric_floor + feat.c_norm[u]) * e;
-  const double cb = params.torsion_weight * edge_length_ratio(m, feat, h) * feat.torsion[u] * unit;
+  const double ca = (params.quadric_floor + feat.c_norm(u)) * e;
+  const double cb = params.torsion_weight * edge_length_ratio(m, feat, h) * feat.torsion(u) * unit;
   return float(ca + cb);
 }
 

@@ -50,11 +50,11 @@ TEST(Metric, FlatPatchHasNoNormalVariationNorTorsion) {
   const auto m = build(mesh);
   const auto f = features(m, 0.5f);
   for (uint32_t v = 0; v < m.vertex_count(); ++v) {
-    EXPECT_NEAR(f.c_norm[v], 0.f, 1e-6f) << v;
-    EXPECT_NEAR(f.torsion[v], 0.f, 1e-6f) << v;
-    EXPECT_NEAR(f.normal[v * 3 + 2], 1.f, 1e-6f) << v;
+    EXPECT_NEAR(f.c_norm(v), 0.f, 1e-6f) << v;
+    EXPECT_NEAR(f.torsion(v), 0.f, 1e-6f) << v;
+    EXPECT_NEAR(f.normal(v)[2], 1.f, 1e-6f) << v;
     // B = mean of (1 - eps)^2 n_i = 0.25 * (0, 0, 1) everywhere, whatever the valence.
-    EXPECT_NEAR(f.b[v * 3 + 2], 0.25f, 1e-6f) << v;
+    EXPECT_NEAR(f.b(v)[2], 0.25f, 1e-6f) << v;
   }
 }
 
@@ -64,22 +64,22 @@ TEST(Metric, CubeCorner) {
   const auto f = features(m, eps);
   const double s3 = 1 / std::sqrt(3.0), s2 = 1 / std::sqrt(2.0);
   // Corner: n = -(1,1,1)/sqrt3, every face at n.n_i = 1/sqrt3.
-  for (int k = 0; k < 3; ++k) EXPECT_NEAR(f.normal[k], -s3, 1e-6);
-  EXPECT_NEAR(f.c_norm[0], 1 - s3, 1e-6);
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(f.normal(0)[k], -s3, 1e-6);
+  EXPECT_NEAR(f.c_norm(0), 1 - s3, 1e-6);
   const double h0 = (s3 - eps) * (s3 - eps);
-  for (int k = 0; k < 3; ++k) EXPECT_NEAR(f.b[k], -h0 / 3, 1e-6);
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(f.b(0)[k], -h0 / 3, 1e-6);
   // Vertex 1 lies on the faces -z and -y: n = -(0,1,1)/sqrt2, n.n_i = 1/sqrt2.
-  EXPECT_NEAR(f.c_norm[1], 1 - s2, 1e-6);
+  EXPECT_NEAR(f.c_norm(1), 1 - s2, 1e-6);
   const double h1 = (s2 - eps) * (s2 - eps);
-  EXPECT_NEAR(f.b[3 + 0], 0, 1e-6);
-  EXPECT_NEAR(f.b[3 + 1], -h1 / 2, 1e-6);
-  EXPECT_NEAR(f.b[3 + 2], -h1 / 2, 1e-6);
+  EXPECT_NEAR(f.b(1)[0], 0, 1e-6);
+  EXPECT_NEAR(f.b(1)[1], -h1 / 2, 1e-6);
+  EXPECT_NEAR(f.b(1)[2], -h1 / 2, 1e-6);
   // T(0) = sum |B_i - B_0| / sum |v_i - v_0| = |B_1 - B_0| by symmetry (unit edges).
   const double dx = h0 / 3, dyz = -h1 / 2 + h0 / 3;
-  EXPECT_NEAR(f.torsion[0], std::sqrt(dx * dx + 2 * dyz * dyz), 1e-6);
+  EXPECT_NEAR(f.torsion(0), std::sqrt(dx * dx + 2 * dyz * dyz), 1e-6);
   // With epsilon above 1/sqrt3 the corner's faces drop out of B.
   const auto g = features(m, 0.6f);
-  for (int k = 0; k < 3; ++k) EXPECT_EQ(g.b[k], 0.f);
+  for (int k = 0; k < 3; ++k) EXPECT_EQ(g.b(0)[k], 0.f);
 
   // Area-weighted quadric of the corner: planes x=0, y=0, z=0 with area 1/2 each.
   std::vector<pmz::detail::Quadric> q;
@@ -134,8 +134,8 @@ TEST(Metric, SphereTermsAreNearlyConstant) {
   const double edge = pmz::detail::mean_edge_length(m);
   double c_min = 1e9, c_max = 0, t_min = 1e9, t_max = 0;
   for (uint32_t v = 0; v < m.vertex_count(); ++v) {
-    c_min = std::min<double>(c_min, f.c_norm[v]), c_max = std::max<double>(c_max, f.c_norm[v]);
-    t_min = std::min<double>(t_min, f.torsion[v]), t_max = std::max<double>(t_max, f.torsion[v]);
+    c_min = std::min<double>(c_min, f.c_norm(v)), c_max = std::max<double>(c_max, f.c_norm(v));
+    t_min = std::min<double>(t_min, f.torsion(v)), t_max = std::max<double>(t_max, f.torsion(v));
   }
   // C_norm ~ (angle between face and vertex normals)^2 / 2 ~ (edge / 2)^2 / 2 on the unit sphere.
   EXPECT_GT(c_min, 0);
