@@ -299,7 +299,9 @@ def report(args, rows, out, command):
             if not by:
                 continue
             faces = next(iter(by.values()))["faces"]
-            cells = [fmt(by[m]["mean"] * 1e4 if m in by else None, ".3f") for m in methods]
+            # "*": the method stopped above 1.1x the target (no legal collapse left).
+            cells = [fmt(by[m]["mean"] * 1e4 if m in by else None, ".3f")
+                     + ("*" if m in by and by[m]["faces_out"] > 1.1 * by[m]["target"] else "") for m in methods]
             line = f"| {mesh} | {faces} | " + " | ".join(cells) + " |"
             if "pmz-multifeature" in by and "pmz-qem" in by:
                 q = by["pmz-multifeature"]["mean"] / by["pmz-qem"]["mean"]
@@ -310,6 +312,17 @@ def report(args, rows, out, command):
             L.append(line)
         if ratios_mf:
             L.append(f"\nMedian multifeature / qem mean-error ratio: {statistics.median(ratios_mf):.3f}\n")
+        L.append("\\* stopped above 1.1× the target face count (no legal collapse left).\n")
+
+    big = [r for r in simp if r["mesh"] == BIG]
+    if big:
+        L.append(f"### Speed and memory on {BIG} ({big[0]['faces']} faces)\n")
+        L.append("| method | ratio | faces out | time (s) | process (s) | peak RSS (MB) | bytes / input face |")
+        L.append("|---|---|---|---|---|---|---|")
+        for r in big:
+            L.append(f"| {r['method']} | {r['ratio']:g} | {r['faces_out']} | {fmt(r['algo_s'], '.3f')} | "
+                     f"{r['wall_s']:.3f} | {fmt(r['rss'] / 2**20 if r['rss'] else None, '.1f')} | "
+                     f"{fmt(r['rss'] / r['faces'] if r['rss'] else None, '.0f')} |")
         L.append("")
 
     if simp:
@@ -335,6 +348,14 @@ def report(args, rows, out, command):
             L.append(f"| {r['mesh']} | {r['faces']} | {r['method']} | {r['bytes']} | "
                      f"{8 * r['bytes'] / r['vertices']:.2f} | {r['encode_s']:.3f} | {fmt(r.get('decode_s'), '.3f')} | "
                      f"{rss} | {fmt(r.get('mean'), '.3e')} | {fmt(r.get('max'), '.3e')} |")
+        L.append("")
+        by_mesh = {}
+        for r in codecs:
+            by_mesh.setdefault(r["mesh"], {})[r["method"]] = r["bytes"]
+        for a, b in [("pmz (14 bits)", "draco -qp 14 -cl 10"), ("pmz (14 bits)", "OpenMesh .pm (mkbalancedpm)")]:
+            q = [m[a] / m[b] for m in by_mesh.values() if a in m and b in m]
+            if q:
+                L.append(f"Median size {a} / {b}: {statistics.median(q):.3f} over {len(q)} meshes  ")
         L.append("")
     if fails:
         L.append("### Failures\n")
@@ -395,6 +416,7 @@ def main():
     ap.add_argument("--methods", default=",".join(SIMPLIFIERS))
     ap.add_argument("--codecs", default=",".join(CODECS))
     ap.add_argument("--no-big", action="store_true", help=f"skip {BIG}")
+    ap.add_argument("--report-only", action="store_true", help="re-render out/results.json (no runs)")
     args = ap.parse_args()
     build, out = Path(args.build).resolve(), Path(args.out).resolve()
     args.methods = [m for m in args.methods.split(",") if m]
@@ -431,10 +453,15 @@ def main():
             sys.exit("bench: no corpus meshes; run scripts/fetch_corpus.sh first")
 
     command = " ".join(["python3", "tests/bench/bench.py"] + sys.argv[1:])
-    rows = []
-    run_simplifiers(args, build, meshes, out, rows)
-    run_codecs(args, build, meshes, out, rows)
-    (out / "results.json").write_text(json.dumps(rows, indent=1))
+    if args.report_only:  # re-render the last run's tables and plots
+        rows = json.loads((out / "results.json").read_text())
+        command = (out / "command.txt").read_text().strip() if (out / "command.txt").exists() else command
+    else:
+        rows = []
+        run_simplifiers(args, build, meshes, out, rows)
+        run_codecs(args, build, meshes, out, rows)
+        (out / "results.json").write_text(json.dumps(rows, indent=1))
+        (out / "command.txt").write_text(command + "\n")
     simp = report(args, rows, out, command)
     plots = plot(simp, out) if simp else []
     log(f"bench: wrote {out / 'RESULTS.md'}, {out / 'results.json'}" + "".join(f", {p}" for p in plots))
