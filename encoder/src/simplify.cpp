@@ -351,23 +351,16 @@ void Engine::perform(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb, float c) 
 // nor v only compares its old best with the edge to v.
 void Engine::update_after(uint32_t u, uint32_t v) {
   const auto t0 = stats_enabled ? Clock::now() : Clock::time_point{};
-  if (++mark_id == 0) std::fill(mark.begin(), mark.end(), 0), mark_id = 1;
   ring1.clear();
   ring1.push_back(v);
-  mark[v] = mark_id;
-  for_each_neighbour(m, v, [&](uint32_t w, uint32_t) { ring1.push_back(w), mark[w] = mark_id; });
+  for_each_neighbour(m, v, [&](uint32_t w, uint32_t) { ring1.push_back(w); });
   if (metric == Metric::multifeature) {
     for_each_outgoing(m, v, [&](uint32_t h) { feat.update_face(m, h / 3); });
-    for (uint32_t w : ring1) {
-      feat.update_normal_terms(m, w);
-      stale[w] |= kTorsionStale;
-    }
-    for (size_t i = 0, n = ring1.size(); i < n; ++i)
-      for_each_neighbour(m, ring1[i], [&](uint32_t x, uint32_t) {
-        if (mark[x] == mark_id) return;
-        mark[x] = mark_id;
-        stale[x] |= kTorsionStale | kKeyStale;
-      });
+    for (uint32_t w : ring1) feat.update_normal_terms(m, w);
+    // Flags the 2-ring without a visited set (setting a flag twice is harmless); the 1-ring,
+    // flagged too, gets its key recomputed just below.
+    for (uint32_t w : ring1)
+      for_each_neighbour(m, w, [&](uint32_t x, uint32_t) { stale[x] |= kTorsionStale | kKeyStale; });
   }
   const auto t1 = stats_enabled ? Clock::now() : Clock::time_point{};
   if (metric == Metric::multifeature) {
