@@ -6,6 +6,7 @@
 #include <zstd.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <new>
@@ -373,12 +374,15 @@ uint64_t Decoder::refine(uint64_t max_splits) {
     // Room for every available split up front (bounded by decoded input, not the header).
     uint64_t target = d.applied + std::min(max_splits, d.available - d.applied);
     if (target > d.applied) {
-      uint64_t nv = d.info.base_vertices + target;
-      d.mesh.reserve(nv, d.mesh.face_count() + 2 * (target - d.applied));
+      // Rounded up to a power of two: reserving exactly `target` reallocates (and copies
+      // everything) on every small call, e.g. a viewer refining a few hundred per frame.
+      uint64_t room = std::max(target, std::min(d.available, std::bit_ceil(target)));
+      uint64_t nv = d.info.base_vertices + room;
+      d.mesh.reserve(nv, d.mesh.face_count() + 2 * (room - d.applied));
       d.coords.reserve(nv * 3);
       d.positions.reserve(nv * 3);
       d.parents.reserve(nv);
-      d.sides.reserve(target);
+      d.sides.reserve(room);
     }
     while (n < max_splits && d.applied < d.available) {
       d.prefetch();
