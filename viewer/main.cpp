@@ -136,7 +136,7 @@ int parse(int argc, char** argv, Options& o) {
   app.add_flag("--no-geomorph", o.no_geomorph, "start with geomorphs off");
   app.add_option("--yaw", o.yaw_degrees, "initial view azimuth in degrees")->type_name("DEG");
   app.add_option("--pitch", o.pitch_degrees, "initial view elevation in degrees")->type_name("DEG")->check(CLI::Range(-89.0, 89.0));
-  app.add_option("--budget-ms", o.budget_ms, "refinement time per frame in milliseconds")->type_name("MS")->check(CLI::PositiveNumber);
+  app.add_option("--budget-ms", o.budget_ms, "refinement time per frame in milliseconds (at least 30% of the last frame's)")->type_name("MS")->check(CLI::PositiveNumber);
   app.footer(kKeyHelp);
   try {
     app.parse(argc, argv);
@@ -268,8 +268,11 @@ int main(int argc, char** argv) {
       double next_log = 0, window_start = 0;
       uint64_t window_splits = 0, window_frames = 0;
       double window_update_ms = 0;  // slowest decoder step + mirror + upload in the window
+      double last_frame_seconds = 0, frame_start = 0;
       while (!glfwWindowShouldClose(window)) {
         const double t = seconds_since(t0);
+        last_frame_seconds = t - frame_start;
+        frame_start = t;
         const float now = float(t);
         const float morph_seconds = state.geomorph ? state.morph_seconds : 0;
         const auto update_start = Clock::now();
@@ -283,7 +286,10 @@ int main(int argc, char** argv) {
             ratio_pending = false;
           }
           if (decoder.info().base_done) {
-            window_splits += stepper.step(decoder, state.lod, o.budget_ms / 1000);
+            // The budget, or a share of the last frame when frames are slow anyway (software
+            // GL, huge meshes): refinement then keeps pace instead of crawling a batch a frame.
+            const double budget = std::min(std::max(o.budget_ms / 1000, 0.3 * last_frame_seconds), 1.0);
+            window_splits += stepper.step(decoder, state.lod, budget);
             mirror.sync(decoder, now, morph_seconds);
           }
           read_stats(decoder, stats, info);
