@@ -99,6 +99,9 @@ int main(int argc, char** argv) {
   auto* orr = app.add_option("--ratio", ratio, "fraction of the full face count")->check(CLI::Range(0.0, 1.0));
   auto* ov = app.add_option("--vertices", vertices, "level with N vertices (clamped)");
   app.add_option("--bytes", bytes, "decode only the first N bytes of the file");
+  bool salvage = false;
+  app.add_flag("--salvage", salvage,
+               "on a damaged or truncated stream, still write its last good level (exit 2)");
   of->excludes(orr)->excludes(ov);
   orr->excludes(ov);
   CLI11_PARSE(app, argc, argv);
@@ -118,8 +121,13 @@ int main(int argc, char** argv) {
   pmz::Status s = d.feed(data.data(), n);
   if (s == pmz::Status::ok && !bytes) s = d.finish();
   if (s != pmz::Status::ok) {
-    // A partial or damaged stream still yields its last good level, if there is one.
+    // A damaged stream still has a last good level, but writing it unasked would pass a coarse
+    // mesh off as the file's content: only --salvage writes it (and still exits non-zero).
     std::fprintf(stderr, "pmz-decode: %s\n", d.error_message().c_str());
+    if (!salvage) {
+      std::fprintf(stderr, "pmz-decode: nothing written (--salvage writes the last good level)\n");
+      return 1;
+    }
     if (!d.info().base_done) return 1;
   }
   if (!d.info().base_done) {
