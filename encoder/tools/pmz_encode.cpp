@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <string>
 
+#include <unistd.h>
+
 #include "pmz/mesh.hpp"
 #include "pmz/simplify.hpp"
 #include "pmz/writer.hpp"
@@ -46,23 +48,29 @@ int main(int argc, char** argv) {
   }
   pmz::SimplifyOptions sopt;
   sopt.metric = metric == "qem" ? pmz::Metric::qem : pmz::Metric::multifeature;
+  // A progress line only on a terminal: redirected stderr (logs, CI) gets no carriage returns.
+  const bool tty = isatty(2);
   int last_pct = -1;
-  sopt.progress = [&](double f) {
-    int pct = int(f * 100);
-    if (pct != last_pct) {
-      last_pct = pct;
-      std::fprintf(stderr, "\rpmz-encode: simplifying %3d%%", pct);
-    }
-  };
+  if (tty)
+    sopt.progress = [&](double f) {
+      int pct = int(f * 100);
+      if (pct != last_pct) {
+        last_pct = pct;
+        std::fprintf(stderr, "\rpmz-encode: simplifying %3d%%", pct);
+      }
+    };
   pmz::CollapseSequence seq;
   if (!pmz::simplify(mesh, sopt, seq, error)) {
-    std::fprintf(stderr, "\npmz-encode: %s\n", error.c_str());
+    if (tty) std::fputs("\r\033[K", stderr);
+    std::fprintf(stderr, "pmz-encode: %s\n", error.c_str());
     return 1;
   }
-  std::fprintf(stderr, "\rpmz-encode: simplified, writing          \n");
+  if (tty) std::fputs("\rpmz-encode: simplified, writing\033[K", stderr);
   std::vector<uint8_t> bytes;
   pmz::WriteStats st;
-  if (!pmz::write_pmz(seq, wopt, bytes, error, &st) || !write_file_atomic(output, bytes, error)) {
+  const bool written = pmz::write_pmz(seq, wopt, bytes, error, &st) && write_file_atomic(output, bytes, error);
+  if (tty) std::fputs("\r\033[K", stderr);
+  if (!written) {
     std::fprintf(stderr, "pmz-encode: %s\n", error.c_str());
     return 1;
   }
