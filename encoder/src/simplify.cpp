@@ -23,8 +23,11 @@ double seconds_since(Clock::time_point t) { return std::chrono::duration<double>
 // A collapse may turn a surviving face by at most ~78 degrees (cos 0.2) ...
 constexpr float kFoldCos = 0.2f;
 // ... and may not make a needle (quality 4*sqrt(3)*area / sum of squared edges, 1 for an
-// equilateral triangle) below this unless the face was already that bad.
+// equilateral triangle) below this unless the face was already that bad or stays in its plane
+// (normal turned by less than ~0.26 degrees: the thin strips of CAD surfaces are their own
+// shape, and forbidding them kept exact collapses out of reach, spec/algorithm.md section 3).
 constexpr float kMinQuality = 0.05f;
+constexpr float kPlaneCos = 0.99999f;
 constexpr float kInfinity = std::numeric_limits<float>::infinity();
 
 // Min-heap of vertices keyed by their cheapest collapse: 4-ary with the keys inline, so a sift
@@ -243,13 +246,14 @@ bool Engine::legal(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb) {
       ok = false;
       return;
     }
-    if (n_old[0] * n_new[0] + n_old[1] * n_new[1] + n_old[2] * n_new[2] < kFoldCos * a_old * a_new) {
+    const float turn = n_old[0] * n_new[0] + n_old[1] * n_new[1] + n_old[2] * n_new[2];
+    if (turn < kFoldCos * a_old * a_new) {
       ok = false;
       return;
     }
     const float bc = (pb[0] - pc[0]) * (pb[0] - pc[0]) + (pb[1] - pc[1]) * (pb[1] - pc[1]) + (pb[2] - pc[2]) * (pb[2] - pc[2]);
     const float q_old = 3.4641016f * a_old / (l_old + bc), q_new = 3.4641016f * a_new / (l_new + bc);
-    if (q_new < kMinQuality && q_new < q_old) ok = false;
+    if (q_new < kMinQuality && q_new < q_old && turn < kPlaneCos * a_old * a_new) ok = false;
   });
   return ok;
 }

@@ -136,6 +136,38 @@ TEST(Simplify, HitsExactFaceCountWithBoundary) {
   }
 }
 
+// Two long thin planar strips meeting at a ridge (a CAD-like bent sheet): the exact
+// simplification is 4 long needles, two per plane. Faces that stay in their plane may become
+// needles, so the engine gets there with every vertex left at an end of the sheet.
+TEST(Simplify, BentSheetReachesItsFourExactFaces) {
+  const uint32_t n = 128;
+  pmz::IndexedMesh mesh;
+  for (uint32_t i = 0; i <= n; ++i) {
+    pmz_test::add_vertex(mesh, i, 0, 0);  // 3i: outer edge
+    pmz_test::add_vertex(mesh, i, 1, 1);  // 3i + 1: ridge
+    pmz_test::add_vertex(mesh, i, 2, 0);  // 3i + 2: other outer edge
+  }
+  for (uint32_t i = 0; i < n; ++i)
+    for (uint32_t s = 0; s < 2; ++s) {
+      const uint32_t a = 3 * i + s, b = a + 3, c = b + 1, d = a + 1;
+      pmz_test::add_face(mesh, a, b, c);
+      pmz_test::add_face(mesh, a, c, d);
+    }
+  for (auto metric : {pmz::Metric::qem, pmz::Metric::multifeature}) {
+    pmz::SimplifyOptions options;
+    options.metric = metric;
+    options.target_faces = 4;
+    pmz::CollapseSequence seq;
+    std::string error;
+    ASSERT_TRUE(pmz::simplify(mesh, options, seq, error)) << error;
+    ASSERT_EQ(seq.base_indices.size(), 12u);
+    for (uint32_t v : seq.base_indices) {
+      const float x = mesh.positions[3 * size_t(v)];
+      EXPECT_TRUE(x == 0 || x == float(n)) << "vertex " << v << " at x = " << x;
+    }
+  }
+}
+
 TEST(Simplify, ClosedMeshStopsWithinOneFaceOfTarget) {
   pmz::SimplifyOptions options;
   options.target_faces = 301;  // closed meshes have an even face count
