@@ -184,9 +184,10 @@ float Engine::cost(uint32_t u, uint32_t x, uint32_t h) const {
   const float* px = m.p(x);
   const double e = std::max(0.0, quad[u].error(px) * inv_unit4 + self_error[x]);
   if (metric == Metric::qem) return float(e);
-  const double ca = (params.quadric_floor + feat.c_norm(u)) * e;
-  const double cb = params.torsion_weight * edge_length_ratio(m, feat, h) * feat.torsion(u) * unit;
-  return float(ca + cb);
+  // CA and CB both weight the quadric error (spec/algorithm.md section 2): a collapse that
+  // moves no surface is free whatever the normals and torsion around it.
+  const double torsion = double(params.torsion_weight) * edge_length_ratio(m, feat, h) * feat.torsion(u) * unit;
+  return float(e * (double(params.quadric_floor) + feat.c_norm(u) + torsion));
 }
 
 bool Engine::find_edge(uint32_t u, uint32_t v, uint32_t& ha, uint32_t& hb) const {

@@ -25,8 +25,8 @@ int main(int argc, char** argv) {
   app.add_option("--metric", metric_name, "multifeature (default) or qem")
       ->check(CLI::IsMember({"multifeature", "qem"}));
   app.add_option("--epsilon", options.params.epsilon, "torsion threshold epsilon (eq. 2)");
-  app.add_option("--quadric-floor", options.params.quadric_floor, "c0 in (c0 + C_norm) * Q");
-  app.add_option("--torsion-weight", options.params.torsion_weight, "weight of CB = sigma * T");
+  app.add_option("--quadric-floor", options.params.quadric_floor, "c0 in (c0 + C_norm + w_T * sigma * T) * Q");
+  app.add_option("--torsion-weight", options.params.torsion_weight, "weight w_T of sigma * T in the quadric's factor");
   app.add_option("--boundary-weight", options.params.boundary_weight, "weight of boundary quadrics");
   app.add_flag("-v,--verbose", verbose, "print where the time went");
   try {
