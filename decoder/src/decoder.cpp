@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstring>
 #include <new>
+#include <span>
 
 #include "pmz/format.hpp"
 #include "pmz/progressive_mesh.hpp"
@@ -75,38 +76,19 @@ struct Decoder::Impl {
   Status split_chunk(const uint8_t* p, size_t n);
   bool apply();
   void undo();
-  // Refinement is bound by memory latency (a split's fan is anywhere in the buffers): start
-  // loading the fans of splits a few steps ahead.
+  FanPrefetcher fans;
+  // Before applying split `applied`: the fans of the next splits (see FanPrefetcher), and
+  // further ahead the vertex_corner entries those walks start from.
   void prefetch() {
-    constexpr uint64_t kFar = 24, kMid = 12, kNear = 4;
-    if (applied + kFar < available) __builtin_prefetch(&mesh.vertex_corner[splits[applied + kFar].v]);
-    const size_t corners = mesh.opposite.size();
-    auto corner_of = [&](uint64_t ahead) {
-      uint32_t v = splits[applied + ahead].v;
-      return v < mesh.vertex_corner.size() ? mesh.vertex_corner[v] : kNoCorner;
-    };
-    if (applied + kMid < available) {
-      uint32_t c = corner_of(kMid);
-      if (c < corners) {
-        __builtin_prefetch(&mesh.opposite[c]);
-        __builtin_prefetch(&mesh.corner_vertex[c]);
-      }
+    constexpr uint64_t kFar = 2 * FanPrefetcher::kWalkers;
+    if (applied + kFar < available) {
+      const uint32_t v = splits[applied + kFar].v;
+      if (v < mesh.vertex_corner.size()) __builtin_prefetch(&mesh.vertex_corner[v]);
     }
-    if (applied + kNear < available) {  // the faces on both sides of that corner's face
-      uint32_t c = corner_of(kNear);
-      if (c < corners) {
-        uint32_t f = c - c % 3;
-        for (uint32_t k = 0; k < 3; ++k) {
-          uint32_t o = mesh.opposite[f + k];
-          if (o < corners) {
-            __builtin_prefetch(&mesh.opposite[o]);
-            __builtin_prefetch(&mesh.corner_vertex[o]);
-          }
-        }
-      }
-    }
+    const uint64_t near = applied + FanPrefetcher::kWalkers;
+    fans.step(mesh, coords.data(), coords.size(), near < available ? splits[near].v : kNoCorner);
   }
-  void note_rewritten(const std::vector<uint32_t>& faces) {
+  void note_rewritten(std::span<const uint32_t> faces) {
     if (changes.all) return;
     for (uint32_t f : faces)
       if (f < changes.face_begin) changes.modified_faces.push_back(f);
@@ -384,6 +366,7 @@ uint64_t Decoder::refine(uint64_t max_splits) {
       d.parents.reserve(nv);
       d.sides.reserve(room);
     }
+    d.fans.reset();
     while (n < max_splits && d.applied < d.available) {
       d.prefetch();
       if (!d.apply()) break;

@@ -1,6 +1,6 @@
 // pmz-decode: decode a .pmz stream (or its first N bytes, as a partial download would) to
-// OBJ/PLY/OFF at a chosen level of detail. Writes each format itself into one buffer, then
-// one fwrite, atomically (temporary file + rename). No OpenMesh.
+// OBJ/PLY/OFF at a chosen level of detail. Writes each format itself through a 1 MiB buffer,
+// atomically (temporary file + rename). No OpenMesh.
 #include <CLI/CLI.hpp>
 
 #include <charconv>
@@ -25,12 +25,44 @@ bool read_file(const std::string& path, std::vector<uint8_t>& out) {
   return ok;
 }
 
-void append(std::vector<char>& b, const char* s) { b.insert(b.end(), s, s + std::strlen(s)); }
+// Buffered output: a fixed 1 MiB buffer flushed with fwrite (no whole-file copy in memory);
+// large contiguous blocks (PLY positions) go straight to fwrite.
+class Out {
+ public:
+  explicit Out(FILE* f) : f_(f), buf_(size_t(1) << 20) {}
+  ~Out() { flush(); }
+  bool ok() const { return ok_; }
+  char* room(size_t n) {  // n <= 64 bytes of space at the end of the buffer
+    if (buf_.size() - used_ < n) flush();
+    return buf_.data() + used_;
+  }
+  void commit(char* end) { used_ = size_t(end - buf_.data()); }
+  void put(const char* s, size_t n) {
+    if (n > buf_.size() / 2) {
+      flush();
+      ok_ = ok_ && std::fwrite(s, 1, n, f_) == n;
+      return;
+    }
+    if (buf_.size() - used_ < n) flush();
+    std::memcpy(buf_.data() + used_, s, n);
+    used_ += n;
+  }
+  void put(const std::string& s) { put(s.data(), s.size()); }
+  void flush() {
+    if (used_) ok_ = ok_ && std::fwrite(buf_.data(), 1, used_, f_) == used_;
+    used_ = 0;
+  }
+
+ private:
+  FILE* f_;
+  std::vector<char> buf_;
+  size_t used_ = 0;
+  bool ok_ = true;
+};
+
 template <typename T>
-void append_number(std::vector<char>& b, T x) {
-  char tmp[32];
-  auto r = std::to_chars(tmp, tmp + sizeof tmp, x);
-  b.insert(b.end(), tmp, r.ptr);
+char* put_number(char* o, T x) {
+  return std::to_chars(o, o + 32, x).ptr;
 }
 
 std::string extension(const std::string& path) {
@@ -40,49 +72,43 @@ std::string extension(const std::string& path) {
   return e;
 }
 
-void format_mesh(const std::string& ext, const pmz::Decoder& d, std::vector<char>& b) {
+void write_mesh(const std::string& ext, const pmz::Decoder& d, Out& out) {
   const uint32_t nv = d.vertex_count(), nf = d.face_count();
   const float* p = d.positions();
   const uint32_t* t = d.indices();
   if (ext == "ply") {
-    std::string h = "ply\nformat binary_little_endian 1.0\nelement vertex " + std::to_string(nv) +
-                    "\nproperty float x\nproperty float y\nproperty float z\nelement face " +
-                    std::to_string(nf) + "\nproperty list uchar int vertex_indices\nend_header\n";
-    b.resize(h.size() + size_t(nv) * 12 + size_t(nf) * 13);
-    char* o = b.data();
-    std::memcpy(o, h.data(), h.size());
-    o += h.size();
-    if (nv) std::memcpy(o, p, size_t(nv) * 12);  // little-endian host assumed (x86, ARM)
-    o += size_t(nv) * 12;
+    out.put("ply\nformat binary_little_endian 1.0\nelement vertex " + std::to_string(nv) +
+            "\nproperty float x\nproperty float y\nproperty float z\nelement face " +
+            std::to_string(nf) + "\nproperty list uchar int vertex_indices\nend_header\n");
+    if (nv) out.put(reinterpret_cast<const char*>(p), size_t(nv) * 12);  // little-endian host assumed (x86, ARM)
     for (uint32_t f = 0; f < nf; ++f) {
-      *o++ = 3;
-      std::memcpy(o, t + size_t(f) * 3, 12);
-      o += 12;
+      char* o = out.room(13);
+      *o = 3;
+      std::memcpy(o + 1, t + size_t(f) * 3, 12);
+      out.commit(o + 13);
     }
     return;
   }
-  b.reserve(size_t(nv) * 40 + size_t(nf) * 24);
   const bool obj = ext == "obj";
-  if (!obj) {
-    append(b, "OFF\n");
-    append_number(b, nv);
-    b.push_back(' ');
-    append_number(b, nf);
-    append(b, " 0\n");
-  }
+  if (!obj) out.put("OFF\n" + std::to_string(nv) + " " + std::to_string(nf) + " 0\n");
   for (uint32_t i = 0; i < nv; ++i) {
-    if (obj) append(b, "v ");
+    char* o = out.room(64);  // 3 shortest floats (<= 15 chars each), separators
+    if (obj) *o++ = 'v', *o++ = ' ';
     for (int a = 0; a < 3; ++a) {
-      append_number(b, p[size_t(i) * 3 + a]);
-      b.push_back(a == 2 ? '\n' : ' ');
+      o = put_number(o, p[size_t(i) * 3 + a]);
+      *o++ = a == 2 ? '\n' : ' ';
     }
+    out.commit(o);
   }
   for (uint32_t f = 0; f < nf; ++f) {
-    append(b, obj ? "f " : "3 ");
+    char* o = out.room(64);  // "f " + 3 indices (<= 10 digits each) + separators
+    *o++ = obj ? 'f' : '3';
+    *o++ = ' ';
     for (int a = 0; a < 3; ++a) {
-      append_number(b, t[size_t(f) * 3 + a] + (obj ? 1u : 0u));
-      b.push_back(a == 2 ? '\n' : ' ');
+      o = put_number(o, t[size_t(f) * 3 + a] + (obj ? 1u : 0u));
+      *o++ = a == 2 ? '\n' : ' ';
     }
+    out.commit(o);
   }
 }
 
@@ -141,12 +167,18 @@ int main(int argc, char** argv) {
   if (d.status() != pmz::Status::ok && d.status() != s)
     std::fprintf(stderr, "pmz-decode: %s\n", d.error_message().c_str());
 
-  std::vector<char> buf;
-  format_mesh(ext, d, buf);
   std::string tmp = output + ".tmp";
   FILE* f = std::fopen(tmp.c_str(), "wb");
-  bool ok = f && std::fwrite(buf.data(), 1, buf.size(), f) == buf.size();
-  if (f) ok = std::fclose(f) == 0 && ok;
+  bool ok = f != nullptr;
+  if (f) {
+    {
+      Out out(f);
+      write_mesh(ext, d, out);
+      out.flush();
+      ok = out.ok();
+    }
+    ok = std::fclose(f) == 0 && ok;
+  }
   if (!ok || std::rename(tmp.c_str(), output.c_str()) != 0) {
     std::remove(tmp.c_str());
     std::fprintf(stderr, "pmz-decode: cannot write %s\n", output.c_str());

@@ -128,11 +128,6 @@ int32_t Quantizer::quantize(float x, int axis) const {
   return int32_t(q);
 }
 
-float Quantizer::dequantize(int32_t q, int axis) const {
-  if (!bits) return ordered_to_float(q);
-  return min[axis] + float(q) * scale;
-}
-
 int32_t float_to_ordered(float f) {
   int32_t i;
   std::memcpy(&i, &f, 4);

@@ -1,6 +1,7 @@
 #include "pmz/progressive_mesh.hpp"
 
 #include <algorithm>
+#include <cstring>
 
 namespace pmz {
 
@@ -41,77 +42,106 @@ bool ProgressiveMesh::build(uint32_t n, const uint32_t* indices, size_t faces, s
   return true;
 }
 
+void ProgressiveMesh::grow_scratch(size_t need) {
+  size_t cap = std::max<size_t>(64, scratch_cap_);
+  while (cap < need) cap *= 2;
+  for (auto* b : {&fan_, &ring_, &u_ring_, &sector_}) b->resize(cap);
+  scratch_cap_ = cap;
+}
+
 bool ProgressiveMesh::gather_fan(uint32_t v) {
-  fan_.clear();
-  ring_.clear();
+  fan_n_ = ring_n_ = 0;
   start_ = 0;
   closed_ = false;
   const uint32_t c0 = vertex_corner[v];
   if (c0 == kNoCorner) return false;
+  if (scratch_cap_ < 64) grow_scratch(64);
   const uint32_t* opp = opposite.data();
   const uint32_t* cv = corner_vertex.data();
-  const size_t cap = corner_vertex.size();
-  // Counter-clockwise: the next face shares edge (v, prev vertex), opposite next(c). Collect
-  // the ring on the way and remember where the smallest neighbour is (closed fans start there).
-  uint32_t c = c0, best = 0xFFFFFFFFu;
-  do {
-    const uint32_t n = next_corner(c), w = cv[n];
-    if (w < best) {
-      best = w;
-      start_ = uint32_t(fan_.size());
+  uint32_t* fan = fan_.data();
+  uint32_t* ring = ring_.data();
+  // Counter-clockwise: the next face shares edge (v, prev vertex), opposite next(c). The walk
+  // tracks n = next(c) (then n' = next(next(opp[n])) = prev(opp[n])), collects the ring on the
+  // way and remembers where the smallest neighbour is (closed fans start there).
+  // fan_ stores n per face (the corner at v is prev(n); same face).
+  const uint32_t n0 = next_corner(c0);
+  uint32_t n = n0, best = 0xFFFFFFFFu, i = 0, start = 0;
+  size_t room = scratch_cap_ - 2;
+  for (;;) {
+    const uint32_t w = cv[n], o = opp[n];
+    if (i >= room) [[unlikely]] {
+      if (i > corner_vertex.size()) break;  // a corrupt cycle not through c0: cannot happen on a valid table
+      grow_scratch(scratch_cap_ * 2);
+      room = scratch_cap_ - 2;
+      fan = fan_.data();
+      ring = ring_.data();
     }
-    fan_.push_back(c);
-    ring_.push_back(w);
-    const uint32_t o = opp[n];
+    start = w < best ? i : start;
+    best = w < best ? w : best;
+    fan[i] = n;
+    ring[i] = w;
+    ++i;
     if (o == kNoCorner) break;
-    c = next_corner(o);
-    if (c == c0) {
+    n = prev_corner(o);
+    if (n == n0) {
+      fan_n_ = ring_n_ = i;
+      start_ = start;
       closed_ = true;
       return true;
     }
-  } while (fan_.size() <= cap);
+  }
   // Open fan: walk clockwise from c0 to the boundary and put those faces first.
-  start_ = 0;
-  back_.clear();
-  c = c0;
+  const size_t cap = corner_vertex.size();
+  uint32_t back = 0, c = c0;
   for (;;) {
     const uint32_t o = opp[prev_corner(c)];
-    if (o == kNoCorner || back_.size() > cap) break;
+    if (o == kNoCorner || back > cap) break;
     c = prev_corner(o);
-    back_.push_back(c);
+    ++back;
   }
-  if (!back_.empty()) {
-    fan_.insert(fan_.begin(), back_.rbegin(), back_.rend());
-    ring_.clear();
-    for (uint32_t f : fan_) ring_.push_back(cv[next_corner(f)]);
+  if (back) {
+    if (i + back + 2 >= scratch_cap_) {
+      grow_scratch(i + back + 2);
+      fan = fan_.data();
+      ring = ring_.data();
+    }
+    std::memmove(fan + back, fan, i * sizeof *fan);
+    // c is now the boundary face's corner: walk counter-clockwise again to fill the front.
+    for (uint32_t j = 0; j < back; ++j) {
+      fan[j] = next_corner(c);
+      c = next_corner(opp[fan[j]]);
+    }
+    i += back;
+    for (uint32_t j = 0; j < i; ++j) ring[j] = cv[fan[j]];
   }
-  ring_.push_back(cv[prev_corner(fan_.back())]);
+  ring[i] = cv[next_corner(fan[i - 1])];  // the far side of the last face
+  fan_n_ = i;
+  ring_n_ = i + 1;
   return true;
 }
 
 bool ProgressiveMesh::gather_ring(uint32_t v) {
   if (v >= vertex_count()) {
-    fan_.clear();
-    ring_.clear();
+    fan_n_ = ring_n_ = 0;
     return false;
   }
   return gather_fan(v);
 }
 
 uint32_t ProgressiveMesh::rank_of(uint32_t w) const {
-  const uint32_t k = uint32_t(ring_.size());
+  const uint32_t k = ring_n_;
   for (uint32_t i = 0; i < k; ++i)
     if (ring_[i] == w) return (i + k - start_) % k;
   return kNoRank;
 }
 
 bool ProgressiveMesh::split_gathered(uint32_t v, uint32_t a, uint32_t b) {
-  const uint32_t m = uint32_t(fan_.size()), k = uint32_t(ring_.size());
+  const uint32_t m = fan_n_, k = ring_n_;
   uint32_t s, count;
   if (closed_) {
     if (a >= k || b >= k || a == b) return false;
     s = a;
-    count = (b + m - a) % m;
+    count = b > a ? b - a : b + m - a;
   } else {
     if (a == kNoRank && b == kNoRank) return false;
     if ((a != kNoRank && a >= k) || (b != kNoRank && b >= k)) return false;
@@ -121,60 +151,79 @@ bool ProgressiveMesh::split_gathered(uint32_t v, uint32_t a, uint32_t b) {
   }
   const bool has_l = a != kNoRank, has_r = b != kNoRank;
   const uint32_t u = vertex_count(), F = face_count();
-  if (closed_) s = (s + start_) % m;  // canonical rank -> position in the walk
-  const uint32_t vl = has_l ? ring_[(a + start_) % k] : kNoCorner;
-  const uint32_t vr = has_r ? ring_[(b + start_) % k] : kNoCorner;
+  const uint32_t* fan = fan_.data();
+  const uint32_t* ring = ring_.data();
+  auto walk_pos = [&](uint32_t rank) {  // canonical rank -> position in the walk (< 2k)
+    uint32_t p = rank + start_;
+    return p >= k ? p - k : p;
+  };
+  if (closed_) s = walk_pos(s);
+  const uint32_t vl = has_l ? ring[walk_pos(a)] : kNoCorner;
+  const uint32_t vr = has_r ? ring[walk_pos(b)] : kNoCorner;
 
   // Read every old link before writing any (see spec for the pairing).
+  uint32_t* cv = corner_vertex.data();
+  uint32_t* opp = opposite.data();
   uint32_t pl = kNoCorner, ql = kNoCorner, pr = kNoCorner, qr = kNoCorner;
+  // With c the corner at v of a fan face and n = next(c) (what fan_ holds): prev(c) = next(n).
   if (has_l) {
     if (count) {
-      pl = prev_corner(fan_[s]);
-      ql = opposite[pl];
+      pl = next_corner(fan[s]);
+      ql = opp[pl];
     } else {
-      ql = next_corner(fan_[m - 1]);
+      ql = fan[m - 1];
     }
   }
   if (has_r) {
     if (count) {
-      pr = next_corner(fan_[(s + count - 1) % m]);
-      qr = opposite[pr];
+      uint32_t e = s + count - 1;
+      pr = fan[e >= m ? e - m : e];
+      qr = opp[pr];
     } else {
-      qr = prev_corner(fan_[0]);
+      qr = next_corner(fan[0]);
     }
   }
 
-  u_ring_.clear();
-  u_ring_.push_back(v);
-  sector_.clear();
-  for (uint32_t i = 0, j = s; i <= count; ++i, j = j + 1 == k ? 0 : j + 1) u_ring_.push_back(ring_[j]);
-  for (uint32_t i = 0, j = s % m; i < count; ++i, j = j + 1 == m ? 0 : j + 1) {
-    uint32_t c = fan_[j];
-    corner_vertex[c] = u;
-    sector_.push_back(c / 3);
+  // u's ring: v, then ring[s .. s + count] (walk positions, wrapping for closed fans), and
+  // the sector's corners become u.
+  uint32_t* ur = u_ring_.data();
+  uint32_t* sec = sector_.data();
+  ur[0] = v;
+  for (uint32_t i = 0, j = s; i <= count; ++i) {
+    ur[i + 1] = ring[j];
+    j = j + 1 == k ? 0 : j + 1;
   }
+  for (uint32_t i = 0, j = s; i < count; ++i) {
+    const uint32_t n = fan[j];
+    cv[prev_corner(n)] = u;
+    sec[i] = n / 3;
+    j = j + 1 == m ? 0 : j + 1;
+  }
+  u_ring_n_ = count + 2;
+  sector_n_ = count;
 
   const uint32_t f0 = 3 * F, g0 = 3 * (F + (has_l ? 1 : 0));
-  const size_t end = size_t(g0) + (has_r ? 3 : 0);
-  corner_vertex.resize(end);
-  opposite.resize(end);
-  uint32_t* cv = corner_vertex.data();
-  uint32_t* opp = opposite.data();
+  const uint32_t across = has_l && has_r;  // the two new faces share edge (u, v)
   if (has_l) {
-    cv[f0] = u, cv[f0 + 1] = v, cv[f0 + 2] = vl;
-    opp[f0] = ql, opp[f0 + 1] = pl, opp[f0 + 2] = kNoCorner;
     if (ql != kNoCorner) opp[ql] = f0;
     if (pl != kNoCorner) opp[pl] = f0 + 1;
   }
   if (has_r) {
-    cv[g0] = v, cv[g0 + 1] = u, cv[g0 + 2] = vr;
-    opp[g0] = pr, opp[g0 + 1] = qr, opp[g0 + 2] = kNoCorner;
     if (pr != kNoCorner) opp[pr] = g0;
     if (qr != kNoCorner) opp[qr] = g0 + 1;
   }
-  if (has_l && has_r) {
-    opposite[f0 + 2] = g0 + 2;
-    opposite[g0 + 2] = f0 + 2;
+  auto append = [](std::vector<uint32_t>& b, uint32_t x, uint32_t y, uint32_t z) {
+    b.push_back(x);
+    b.push_back(y);
+    b.push_back(z);
+  };
+  if (has_l) {
+    append(corner_vertex, u, v, vl);
+    append(opposite, ql, pl, across ? g0 + 2 : kNoCorner);
+  }
+  if (has_r) {
+    append(corner_vertex, v, u, vr);
+    append(opposite, pr, qr, across ? f0 + 2 : kNoCorner);
   }
   vertex_corner.push_back(has_l ? f0 : g0 + 1);
   vertex_corner[v] = has_l ? f0 + 1 : g0;
@@ -189,12 +238,13 @@ void ProgressiveMesh::undo_split(uint32_t v, bool has_l, bool has_r) {
   const uint32_t vl = has_l ? corner_vertex[f0 + 2] : kNoCorner;
   const uint32_t vr = has_r ? corner_vertex[g0 + 2] : kNoCorner;
 
-  sector_.clear();
   gather_fan(u);
-  for (uint32_t c : fan_) {
-    if (c >= limit) continue;
-    corner_vertex[c] = v;
-    sector_.push_back(c / 3);
+  sector_n_ = 0;
+  for (uint32_t i = 0; i < fan_n_; ++i) {
+    const uint32_t n = fan_[i];  // next of u's corner: same face
+    if (n >= limit) continue;
+    corner_vertex[prev_corner(n)] = v;
+    sector_[sector_n_++] = n / 3;
   }
   uint32_t links[4] = {kNoCorner, kNoCorner, kNoCorner, kNoCorner};
   if (has_l) {

@@ -71,6 +71,10 @@ bool read_stream(ByteReader& in, void* dctx, size_t max_raw, std::vector<uint8_t
 bool skip_stream(ByteReader& in, uint64_t& stored_bytes);
 
 // Quantization as Draco's -qp: one step for all axes over the largest bounding-box extent.
+// Float bits <-> int32 that orders like the float (lossless mode coordinates).
+int32_t float_to_ordered(float f);
+float ordered_to_float(int32_t i);
+
 struct Quantizer {
   float min[3] = {0, 0, 0};
   float scale = 0;      // dequantization step: range / max_q
@@ -79,11 +83,10 @@ struct Quantizer {
   uint32_t bits = 0;    // 0 = lossless: coordinates are the order-preserving float bit patterns
   void init(uint32_t position_bits, const float bbox_min[3], const float bbox_max[3]);
   int32_t quantize(float x, int axis) const;
-  float dequantize(int32_t q, int axis) const;
+  float dequantize(int32_t q, int axis) const {
+    return bits ? min[axis] + float(q) * scale : ordered_to_float(q);
+  }
 };
 
-// Float bits <-> int32 that orders like the float (lossless mode coordinates).
-int32_t float_to_ordered(float f);
-float ordered_to_float(int32_t i);
 
 }  // namespace pmz

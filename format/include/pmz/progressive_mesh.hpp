@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -39,7 +40,7 @@ class ProgressiveMesh {
   // holds faces + 1 vertices. Returns false when v has no face.
   bool gather_ring(uint32_t v);
   // The ring in walk order; canonical rank i is ring()[(i + ring_start()) % ring().size()].
-  const std::vector<uint32_t>& ring() const { return ring_; }
+  std::span<const uint32_t> ring() const { return {ring_.data(), ring_n_}; }
   uint32_t ring_start() const { return start_; }
   uint32_t rank_of(uint32_t w) const;  // canonical rank of neighbour w, or kNoRank
   bool ring_closed() const { return closed_; }
@@ -54,8 +55,8 @@ class ProgressiveMesh {
   }
   // The same, right after gather_ring(v) succeeded (saves a walk).
   bool split_gathered(uint32_t v, uint32_t rank_l, uint32_t rank_r);
-  const std::vector<uint32_t>& u_ring() const { return u_ring_; }
-  const std::vector<uint32_t>& sector_faces() const { return sector_; }
+  std::span<const uint32_t> u_ring() const { return {u_ring_.data(), u_ring_n_}; }
+  std::span<const uint32_t> sector_faces() const { return {sector_.data(), sector_n_}; }
 
   // Undoes the last split (LIFO), which was at v and created the left/right faces that exist.
   // Buffers return exactly to their state before that split; sector_faces() holds the faces
@@ -63,8 +64,13 @@ class ProgressiveMesh {
   void undo_split(uint32_t v, bool has_left, bool has_right);
 
  private:
-  bool gather_fan(uint32_t v);  // fan_ (corners at v, ccw) and closed_; bounded walk
-  std::vector<uint32_t> fan_, back_, ring_, u_ring_, sector_;
+  bool gather_fan(uint32_t v);  // fan_ (per face ccw: next of the corner at v), ring_, closed_
+  void grow_scratch(size_t need);
+  // Scratch sized to scratch_cap_ (no push_back bookkeeping in the hot loops); the first
+  // *_n_ entries are in use. fan_ holds at most scratch_cap_ - 2 faces.
+  std::vector<uint32_t> fan_, ring_, u_ring_, sector_;
+  size_t scratch_cap_ = 0;
+  uint32_t fan_n_ = 0, ring_n_ = 0, u_ring_n_ = 0, sector_n_ = 0;
   uint32_t start_ = 0;
   bool closed_ = false;
 };
@@ -72,6 +78,59 @@ class ProgressiveMesh {
 }  // namespace pmz
 
 namespace pmz {
+
+// Refinement is bound by memory latency: a split's fan is anywhere in the buffers, and a fan
+// walk is a chain of dependent loads. FanPrefetcher walks the fans of the next few splits
+// ahead, one face per call each, issuing prefetches only (it never writes, and every index it
+// follows is bounds-checked), so the walks of kWalkers upcoming splits overlap with the work
+// of the current one. It may walk a stale fan (a split in between changed it): that only
+// costs a useless prefetch.
+class FanPrefetcher {
+ public:
+  // Walks in flight, each one face per call (measured on the 1.2M-face mesh: 6 is slower,
+  // 12 or 16, or stepping each walk every 2nd or 3rd call, no better).
+  static constexpr uint32_t kWalkers = 8;
+  FanPrefetcher() { reset(); }
+  void reset() {
+    for (uint32_t& n : n_) n = kNoCorner;
+  }
+  // Once per split, before applying it: advances every walker by one face, then
+  // starts one for v_ahead (the split kWalkers further on; kNoCorner for none). coords: 3 per
+  // vertex, coord_count entries (the ring's coordinates are prefetched for the prediction).
+  void step(const ProgressiveMesh& m, const int32_t* coords, size_t coord_count, uint32_t v_ahead) {
+    const uint32_t* opp = m.opposite.data();
+    const uint32_t* cv = m.corner_vertex.data();
+    const size_t corners = m.opposite.size();
+    const uint32_t slot = slot_;
+    slot_ = slot + 1 == kWalkers ? 0 : slot + 1;
+    n_[slot] = kNoCorner;  // its split is the one applied now
+    for (uint32_t k = 0; k < kWalkers; ++k) {
+      const uint32_t n = n_[k];
+      if (n >= corners) continue;
+      const uint32_t w = cv[n], o = opp[n];
+      if (size_t(w) * 3 < coord_count) __builtin_prefetch(coords + size_t(w) * 3);
+      uint32_t next = o == kNoCorner ? kNoCorner : (o % 3 == 0 ? o + 2 : o - 1);
+      if (next == n0_[k]) next = kNoCorner;
+      n_[k] = next;
+      if (next < corners) {
+        __builtin_prefetch(opp + next);
+        __builtin_prefetch(cv + next);
+      }
+    }
+    if (v_ahead >= m.vertex_corner.size()) return;
+    const uint32_t c0 = m.vertex_corner[v_ahead];
+    if (c0 >= corners) return;
+    const uint32_t n0 = c0 % 3 == 2 ? c0 - 2 : c0 + 1;
+    n_[slot] = n0_[slot] = n0;
+    __builtin_prefetch(opp + n0);
+    __builtin_prefetch(cv + n0);
+  }
+
+ private:
+  uint32_t n_[kWalkers] = {};
+  uint32_t n0_[kWalkers] = {};
+  uint32_t slot_ = 0;
+};
 
 // floor((sum + floor(n / 2)) / n) for n > 0: the rounded mean both sides compute.
 inline int64_t floor_mean(int64_t sum, int64_t n) {
@@ -84,7 +143,7 @@ inline int64_t floor_mean(int64_t sum, int64_t n) {
 // Position prediction of a new vertex u (spec, section 5), right after split(): per axis the
 // floor-rounded mean of u's ring with v counted twice (u starts next to v), in 64-bit integers.
 // coords: 3 per vertex.
-inline void predict_position(const int32_t* coords, const std::vector<uint32_t>& u_ring, int32_t out[3]) {
+inline void predict_position(const int32_t* coords, std::span<const uint32_t> u_ring, int32_t out[3]) {
   int64_t sum[3] = {0, 0, 0};
   for (uint32_t w : u_ring)
     for (int a = 0; a < 3; ++a) sum[a] += coords[size_t(w) * 3 + a];
