@@ -291,9 +291,10 @@ bool Decoder::Impl::apply() {
       }
     }
     if (mesh.ring_closed()) {
-      ok = s.code_l < k && s.code_r + 1 < k;
+      ok = s.code_l < k && s.code_r < k - 1;  // k >= 1 here; not code_r + 1 < k (wraps at 2^32 - 1)
       a = s.code_l;
-      b = uint32_t((uint64_t(a) + s.code_r + 1) % k);
+      const uint32_t sum = a + s.code_r + 1;  // < 2k when ok
+      b = sum >= k ? sum - k : sum;           // (a + code_r + 1) mod k
     } else {
       a = s.code_l ? s.code_l - 1 : kNoRank;
       b = s.code_r ? s.code_r - 1 : kNoRank;

@@ -387,6 +387,26 @@ TEST(Hostile, SplitsPilingOnOneVertexStayLinear) {
   EXPECT_LT(tl, 8 * ts + 0.02) << ts << " s for " << small << " splits, " << tl << " s for " << large;
 }
 
+// wedge_r = 2^32 - 1: "wedge_r + 1 < k" (spec section 4) is the integer inequality, so the
+// split is invalid; 32-bit wrap-around must not turn it into a wedge taken modulo k. The first
+// split gives u = 6 a closed fan of 3 faces, where (0 + 2^32) mod 3 = 1 would look valid.
+TEST(Hostile, WedgeCodeAtUint32MaxIsInvalid) {
+  Bytes f = signature();
+  head(f, header(6, 8, 2, 12));
+  pmz::append_chunk(f, pmz::kChunkBase, octa_base_payload());
+  std::vector<pmz::SplitCode> codes = {{0, 0, 0, {0, 0, 0}}, {6, 0, 0xFFFFFFFFu, {0, 0, 0}}};
+  Bytes p;
+  pmz::encode_split_chunk({1, 1}, codes.data(), codes.size(), p);
+  pmz::append_chunk(f, pmz::kChunkSplits, p);
+  pmz::append_chunk(f, pmz::kChunkEnd, {});
+  pmz::Decoder d;
+  ASSERT_EQ(d.feed(f.data(), f.size()), pmz::Status::ok) << d.error_message();
+  EXPECT_EQ(d.refine(), 1u);
+  EXPECT_EQ(d.status(), pmz::Status::corrupt);
+  expect_valid(d);
+  EXPECT_EQ(d.face_count(), 10u);
+}
+
 // ---- every prefix, every byte ----
 
 TEST(Hostile, EveryPrefixIsValidAndFinishSaysTruncated) {
