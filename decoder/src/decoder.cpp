@@ -93,6 +93,10 @@ struct Decoder::Impl {
   Status split_chunk(const uint8_t* p, size_t n);
   bool apply();
   void undo();
+  // Up to max_splits splits, stopping once the mesh has face_target faces / before it would
+  // have fewer than face_floor.
+  uint64_t refine(uint64_t max_splits, uint64_t face_target);
+  uint64_t coarsen(uint64_t max_splits, uint64_t face_floor);
   FanPrefetcher fans;
   // Before applying split `applied`: the fans of the next splits (see FanPrefetcher), and
   // further ahead the vertex_corner entries those walks start from.
@@ -367,66 +371,68 @@ const std::string& Decoder::error_message() const { return impl_->message; }
 const StreamInfo& Decoder::info() const { return impl_->info; }
 uint64_t Decoder::bytes_consumed() const { return impl_->consumed; }
 
-uint64_t Decoder::refine(uint64_t max_splits) {
-  Impl& d = *impl_;
+uint64_t Decoder::Impl::refine(uint64_t max_splits, uint64_t face_target) {
   uint64_t n = 0;
   try {
-    // Room for every available split up front (bounded by decoded input, not the header).
-    uint64_t target = d.applied + std::min(max_splits, d.available - d.applied);
-    if (target > d.applied) {
+    // Room for the splits this call will apply (bounded by decoded input, not the header).
+    // With a face target, at least half the missing faces (a split adds at most two); more
+    // than reserved just grows the buffers.
+    uint64_t want = std::min(max_splits, available - applied);
+    if (face_target > mesh.face_count()) want = std::min(want, (face_target - mesh.face_count() + 1) / 2);
+    uint64_t target = applied + want;
+    if (target > applied) {
       // Rounded up to a power of two: reserving exactly `target` reallocates (and copies
       // everything) on every small call, e.g. a viewer refining a few hundred per frame.
-      uint64_t room = std::max(target, std::min(d.available, std::bit_ceil(target)));
-      uint64_t nv = d.info.base_vertices + room;
-      const uint32_t* before = d.mesh.opposite.data();
-      d.mesh.reserve(nv, d.mesh.face_count() + 2 * (room - d.applied));
-      d.coords.reserve(nv * 3);
-      d.positions.reserve(nv * 3);
-      d.parents.reserve(nv);
-      d.sides.reserve(room);
-      if (d.mesh.opposite.data() != before) {  // reallocated: the new capacity is untouched
-        advise_huge_pages(d.mesh.corner_vertex);
-        advise_huge_pages(d.mesh.opposite);
-        advise_huge_pages(d.mesh.vertex_corner);
-        advise_huge_pages(d.coords);
-        advise_huge_pages(d.positions);
+      uint64_t room = std::max(target, std::min(available, std::bit_ceil(target)));
+      uint64_t nv = info.base_vertices + room;
+      const uint32_t* before = mesh.opposite.data();
+      mesh.reserve(nv, mesh.face_count() + 2 * (room - applied));
+      coords.reserve(nv * 3);
+      positions.reserve(nv * 3);
+      parents.reserve(nv);
+      sides.reserve(room);
+      if (mesh.opposite.data() != before) {  // reallocated: the new capacity is untouched
+        advise_huge_pages(mesh.corner_vertex);
+        advise_huge_pages(mesh.opposite);
+        advise_huge_pages(mesh.vertex_corner);
+        advise_huge_pages(coords);
+        advise_huge_pages(positions);
       }
     }
-    d.fans.reset();
-    while (n < max_splits && d.applied < d.available) {
-      d.prefetch();
-      if (!d.apply()) break;
+    fans.reset();
+    while (n < max_splits && applied < available && mesh.face_count() < face_target) {
+      prefetch();
+      if (!apply()) break;
       ++n;
     }
   } catch (const std::bad_alloc&) {
-    d.fail(Status::out_of_memory, "allocation failed while refining");
+    fail(Status::out_of_memory, "allocation failed while refining");
   }
   return n;
 }
 
-uint64_t Decoder::coarsen(uint64_t max_splits) {
-  Impl& d = *impl_;
+uint64_t Decoder::Impl::coarsen(uint64_t max_splits, uint64_t face_floor) {
   uint64_t n = 0;
-  d.fans.reset();
-  for (; n < max_splits && d.applied > 0; ++n) {
+  fans.reset();
+  for (; n < max_splits && applied > 0; ++n) {
+    const uint8_t side = sides.back();
+    if (mesh.face_count() - (side & kHasLeft ? 1u : 0u) - (side & kHasRight ? 1u : 0u) < face_floor) break;
     // Splits are undone last first: the one kWalkers further on created vertex u - kWalkers.
     constexpr uint32_t kAhead = FanPrefetcher::kWalkers;
-    const uint32_t u = d.mesh.vertex_count() - 1;
-    d.fans.step(d.mesh, nullptr, 0, d.applied > kAhead ? u - kAhead : kNoCorner);
-    d.undo();
+    const uint32_t u = mesh.vertex_count() - 1;
+    fans.step(mesh, nullptr, 0, applied > kAhead ? u - kAhead : kNoCorner);
+    undo();
   }
   return n;
 }
+
+uint64_t Decoder::refine(uint64_t max_splits) { return impl_->refine(max_splits, UINT64_MAX); }
+uint64_t Decoder::coarsen(uint64_t max_splits) { return impl_->coarsen(max_splits, 0); }
 
 void Decoder::set_face_target(uint64_t faces) {
   Impl& d = *impl_;
-  auto faces_of_last = [&] {
-    uint8_t s = d.sides.back();
-    return uint32_t((s & kHasLeft ? 1 : 0) + (s & kHasRight ? 1 : 0));
-  };
-  while (d.applied > 0 && d.mesh.face_count() - faces_of_last() >= faces) d.undo();
-  while (d.mesh.face_count() < faces && d.applied < d.available && refine(1)) {
-  }
+  d.coarsen(UINT64_MAX, faces);  // the coarsest level still holding `faces`
+  d.refine(UINT64_MAX, faces);   // or refine until it does
 }
 
 void Decoder::set_split_target(uint64_t splits) {
