@@ -1,6 +1,7 @@
-// The streaming decoder: frames chunks out of whatever slices arrive, decodes each split chunk
-// into flat arrays once (validated before anything is appended), and moves the mesh between
-// levels with the shared ProgressiveMesh core.
+// The streaming decoder: frames chunks out of whatever slices arrive, decodes which vertices
+// split when a chunk arrives (validated before anything is appended), decodes each split's
+// wedge and position when it is first applied (their contexts come from the mesh), keeps what
+// it decoded, and moves the mesh between levels with the shared ProgressiveMesh core.
 #include "pmz/decoder.hpp"
 
 #include <zstd.h>
@@ -9,6 +10,7 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <deque>
 #include <new>
 #include <span>
 
@@ -69,7 +71,17 @@ struct Decoder::Impl {
   Quantizer quant;
 
   ProgressiveMesh mesh;
-  std::vector<SplitCode> splits;  // available (decoded) splits
+  // Available splits: v from the chunk; the wedge ranks once the split was first applied.
+  struct Split {
+    uint32_t v, rank_l, rank_r;
+  };
+  std::vector<Split> splits;
+  std::vector<uint32_t> new_vs;
+  // Chunks whose wedge and residual symbols are not all decoded yet, oldest first; the front
+  // one starts at split lazy_first. Splits below `decoded` have their symbols decoded.
+  std::deque<SplitChunkReader> lazy;
+  uint64_t lazy_first = 0, decoded = 0;
+  WedgeScratch wedge_scratch;
   std::vector<uint8_t> sides;     // per applied split: kHasLeft | kHasRight
   uint64_t ring_work = 0;         // sum of ring sizes over first applications
   static constexpr uint64_t kRingWorkPerSplit = 64, kRingWorkSlack = 1u << 22;
@@ -92,6 +104,7 @@ struct Decoder::Impl {
   Status base(const uint8_t* p, size_t n);
   Status split_chunk(const uint8_t* p, size_t n);
   bool apply();
+  bool refuse(Status s, const std::string& what);
   void undo();
   // Up to max_splits splits, stopping once the mesh has face_target faces / before it would
   // have fewer than face_floor.
@@ -267,61 +280,70 @@ Status Decoder::Impl::base(const uint8_t* p, size_t n) {
 
 Status Decoder::Impl::split_chunk(const uint8_t* p, size_t n) {
   std::string err;
-  if (!decode_split_chunk(p, n, info.base_vertices + splits.size(), info.total_splits - splits.size(), splits, err))
+  SplitChunkReader r;
+  new_vs.clear();
+  if (!r.open(p, n, info.base_vertices + splits.size(), info.total_splits - splits.size(), new_vs, err))
     return fail(Status::corrupt, err);
+  for (uint32_t v : new_vs) splits.push_back({v, kNoRank, kNoRank});
+  lazy.push_back(std::move(r));
   available = splits.size();
   return Status::ok;
 }
 
+// Refuses split `applied` (and everything after it): the mesh stays at the level before.
+bool Decoder::Impl::refuse(Status s, const std::string& what) {
+  fail(s, what);
+  splits.resize(applied);
+  available = applied;
+  lazy.clear();
+  return false;
+}
+
 bool Decoder::Impl::apply() {
-  const SplitCode& s = splits[applied];
+  Split& s = splits[applied];
   if (mesh.face_count() + 2ull > limits.max_faces) {
     fail(Status::limit_exceeded, "face limit reached while refining");
     return false;
   }
-  uint32_t a = kNoRank, b = kNoRank;
-  bool ok = mesh.gather_ring(s.v);
-  if (ok) {
+  const bool first = applied == decoded;  // symbols still to decode from the chunk
+  auto invalid = [&] { return refuse(Status::corrupt, "split " + std::to_string(applied) + " has an invalid wedge"); };
+  if (!mesh.gather_ring(s.v)) return invalid();
+  if (first) {
     const uint32_t k = uint32_t(mesh.ring().size());
     // Ring walks cost the valence: bound their total (first applications; re-applying after
     // coarsening repeats the same work) so splits piling on one vertex cannot go quadratic.
-    if (mesh.vertex_count() * 3ull >= coords.size()) {
-      ring_work += k;
-      if (ring_work > kRingWorkPerSplit * (applied + 1) + kRingWorkSlack) {
-        fail(Status::limit_exceeded, "vertex valences beyond what a mesh needs");
-        splits.resize(applied);
-        available = applied;
-        return false;
-      }
-    }
-    if (mesh.ring_closed()) {
-      ok = s.code_l < k && s.code_r < k - 1;  // k >= 1 here; not code_r + 1 < k (wraps at 2^32 - 1)
-      a = s.code_l;
-      const uint32_t sum = a + s.code_r + 1;  // < 2k when ok
-      b = sum >= k ? sum - k : sum;           // (a + code_r + 1) mod k
-    } else {
-      a = s.code_l ? s.code_l - 1 : kNoRank;
-      b = s.code_r ? s.code_r - 1 : kNoRank;
-    }
+    ring_work += k;
+    if (ring_work > kRingWorkPerSplit * (applied + 1) + kRingWorkSlack)
+      return refuse(Status::limit_exceeded, "vertex valences beyond what a mesh needs");
+    uint32_t count, rank;
+    if (!lazy.front().wedge(k, mesh.ring_closed(), count, rank))
+      return refuse(Status::corrupt, "split " + std::to_string(applied) + ": wedge streams malformed");
+    if (!wedge_ranks(coords.data(), s.v, mesh, count, rank, s.rank_l, s.rank_r, wedge_scratch))
+      return invalid();
   }
-  if (!ok || !mesh.split_gathered(s.v, a, b)) {
-    fail(Status::corrupt, "split " + std::to_string(applied) + " has an invalid wedge");
-    splits.resize(applied);
-    available = applied;
-    return false;
-  }
-  const uint32_t u = mesh.vertex_count() - 1;
-  if (u * 3ull >= coords.size()) {
-    int32_t pred[3];
+  if (!mesh.split_gathered(s.v, s.rank_l, s.rank_r)) return invalid();
+  const bool has_l = s.rank_l != kNoRank, has_r = s.rank_r != kNoRank;
+  if (first) {
+    int32_t pred[3], residual[3];
+    uint32_t ctx[3];
     predict_position(coords.data(), mesh.u_ring(), pred);
+    residual_contexts(coords.data(), mesh.u_ring(), pred, ctx);
+    if (!lazy.front().residuals(ctx, residual)) {
+      mesh.undo_split(s.v, has_l, has_r);
+      return refuse(Status::corrupt, "split " + std::to_string(applied) + ": residual streams malformed");
+    }
     for (int k = 0; k < 3; ++k) {
-      int32_t c = int32_t(uint32_t(pred[k]) + uint32_t(s.residual[k]));
+      int32_t c = int32_t(uint32_t(pred[k]) + uint32_t(residual[k]));
       coords.push_back(c);
       positions.push_back(quant.dequantize(c, k));
     }
     parents.push_back(s.v);
+    if (++decoded - lazy_first == lazy.front().split_count()) {
+      lazy_first = decoded;
+      lazy.pop_front();  // its bytes are no longer needed
+    }
   }
-  sides.push_back(uint8_t((a != kNoRank ? kHasLeft : 0) | (b != kNoRank ? kHasRight : 0)));
+  sides.push_back(uint8_t((has_l ? kHasLeft : 0) | (has_r ? kHasRight : 0)));
   note_rewritten(mesh.sector_faces());
   ++applied;
   return true;

@@ -68,8 +68,8 @@ int main(int argc, char** argv) {
   const double ns = double(std::max<uint64_t>(1, i.total_splits));
   double conn = 0, geom = 0;
   for (int k = 0; k < pmz::kSplitStreamCount; ++k)
-    (k <= pmz::kStreamWedgeR ? conn : geom) += double(stream_bytes[k]) * 8 / ns;
-  const char* names[] = {"groups", "gaps", "wedge_l", "wedge_r", "residual_x", "residual_y", "residual_z"};
+    (k <= pmz::kStreamWedgeRank ? conn : geom) += double(stream_bytes[k]) * 8 / ns;
+  const char* names[] = {"groups", "gaps", "wedge_count", "wedge_rank", "residual_x", "residual_y", "residual_z"};
   const double splits_per_s = refine_s > 0 ? double(i.total_splits) / refine_s : 0;
   const double warm_per_s = warm_s > 0 ? double(i.total_splits) / warm_s : 0;
   if (json) {

@@ -225,17 +225,18 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
   ProgressiveMesh pm;
   auto encode_splits = [&](std::vector<uint8_t>& bytes, WriteStats& st) {
     if (!pm.build(base_n, plan.base_faces.data(), h.base_faces, error)) return false;
-    std::vector<SplitCode> chunk;
+    std::vector<SplitSymbols> chunk;
     std::vector<uint32_t> chunk_groups;
     std::vector<uint8_t> payload;
+    WedgeScratch scratch;
     uint32_t chunk_limit = kFirstChunkSplits;
     auto flush = [&]() {
       if (chunk.empty()) return;
       payload.clear();
       uint64_t sizes[kSplitStreamCount];
-      encode_split_chunk(chunk_groups, chunk.data(), chunk.size(), payload, sizes);
+      encode_split_chunk(chunk_groups, chunk.data(), chunk.size(), pm.vertex_count() - chunk.size(), payload, sizes);
       for (int s = 0; s < kSplitStreamCount; ++s)
-        (s <= kStreamWedgeR ? st.connectivity_bits : st.geometry_bits) += sizes[s] * 8;
+        (s <= kStreamWedgeRank ? st.connectivity_bits : st.geometry_bits) += sizes[s] * 8;
       size_t before = bytes.size();
       append_chunk(bytes, kChunkSplits, payload);
       st.split_bytes += bytes.size() - before;
@@ -254,20 +255,16 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
         uint32_t rl, rr;
         if (!pm.gather_ring(v) || !find_ranks(pm, vl, vr, rl, rr) || plan.decoded_id[c.u] != pm.vertex_count())
           return error = "internal: reordered split does not replay", false;
-        const bool closed = pm.ring_closed();
-        const uint32_t k = uint32_t(pm.ring().size());
-        if (!pm.split_gathered(v, rl, rr)) return error = "internal: split rejected", false;
-        SplitCode code;
+        SplitSymbols code;
         code.v = v;
-        if (closed) {
-          code.code_l = rl;
-          code.code_r = (rr + k - rl) % k - 1;
-        } else {
-          code.code_l = rl == kNoRank ? 0 : rl + 1;
-          code.code_r = rr == kNoRank ? 0 : rr + 1;
-        }
+        code.wedge_context = wedge_context(uint32_t(pm.ring().size()), pm.ring_closed());
+        code.rank_context = pm.ring_closed() ? 1 : 0;
+        if (!wedge_symbols(coords.data(), v, pm, rl, rr, code.wedge_count, code.wedge_rank, scratch) ||
+            !pm.split_gathered(v, rl, rr))
+          return error = "internal: split rejected", false;
         int32_t pred[3];
         predict_position(coords.data(), pm.u_ring(), pred);
+        residual_contexts(coords.data(), pm.u_ring(), pred, code.residual_context);
         uint32_t u = pm.vertex_count() - 1;
         for (int a = 0; a < 3; ++a) code.residual[a] = int32_t(uint32_t(coords[u * 3 + a]) - uint32_t(pred[a]));
         chunk.push_back(code);

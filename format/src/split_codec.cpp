@@ -1,67 +1,52 @@
 #include "pmz/split_codec.hpp"
 
 #include <algorithm>
-#include <memory>
+#include <cstdlib>
 
 #include "pmz/coding.hpp"
 #include "pmz/format.hpp"
-#include "pmz/range_coder.hpp"
+#include "pmz/progressive_mesh.hpp"
 
 namespace pmz {
 
 namespace {
 
-constexpr uint32_t kGapContexts = 16, kWedgeContexts = 4, kResidualContexts = 21;
-
-// Context models, reset for every chunk so each chunk decodes on its own.
-struct SplitModels {
-  UIntModel groups;
-  UIntModel gaps[kGapContexts];
-  UIntModel wedge_l;
-  UIntModel wedge_r[kWedgeContexts];
-  UIntModel residual[3][kResidualContexts];
-};
-
-// Residual contexts: the magnitude of the previous split's residuals and of this split's
-// axes already coded (residual size follows the local edge length).
-inline uint32_t residual_context(int axis, const uint32_t prev[3], const uint32_t cur[3]) {
-  uint64_t m = axis == 0   ? (uint64_t(prev[0]) + prev[1] + prev[2]) / 3
-               : axis == 1 ? (uint64_t(cur[0]) * 2 + prev[1]) / 3
-                           : (uint64_t(cur[0]) + cur[1]) / 2;
-  return std::min<uint32_t>(bit_length(uint32_t(std::min<uint64_t>(m, 0xFFFFFFFFu))), kResidualContexts - 1);
+// Gap context: bit length of the gap a uniform spread of the group's remaining splits over the
+// remaining vertices would give (limit: vertex count at the group's start; pos: smallest
+// vertex still allowed; left: splits of the group still to come, this one included).
+inline uint32_t gap_context(uint64_t limit, uint64_t pos, uint64_t left) {
+  uint64_t expected = limit > pos ? (limit - pos) / left : 0;
+  uint32_t n = expected ? 64u - uint32_t(__builtin_clzll(expected)) : 0u;
+  return std::min(n, kGapContexts - 1);
 }
 
 }  // namespace
 
-void encode_split_chunk(const std::vector<uint32_t>& group_sizes, const SplitCode* splits, size_t count,
-                        std::vector<uint8_t>& payload, uint64_t* stream_bytes) {
+void encode_split_chunk(const std::vector<uint32_t>& group_sizes, const SplitSymbols* splits, size_t count,
+                        uint64_t vertices_before, std::vector<uint8_t>& payload, uint64_t* stream_bytes) {
   auto m = std::make_unique<SplitModels>();
   std::vector<uint8_t> bytes[kSplitStreamCount];
   {
-    RangeEncoder groups(bytes[kStreamGroups]), gaps(bytes[kStreamGaps]), wl(bytes[kStreamWedgeL]),
-        wr(bytes[kStreamWedgeR]), rx(bytes[kStreamResidualX]), ry(bytes[kStreamResidualY]),
+    RangeEncoder groups(bytes[kStreamGroups]), gaps(bytes[kStreamGaps]), wc(bytes[kStreamWedgeCount]),
+        wr(bytes[kStreamWedgeRank]), rx(bytes[kStreamResidualX]), ry(bytes[kStreamResidualY]),
         rz(bytes[kStreamResidualZ]);
     RangeEncoder* res[3] = {&rx, &ry, &rz};
-    uint32_t prev_gap = 0, prev[3] = {0, 0, 0};
+    uint64_t limit = vertices_before;
     size_t at = 0;
     for (uint32_t g : group_sizes) {
       encode_uint(groups, m->groups, g - 1);
       for (uint32_t i = 0; i < g; ++i, ++at) {
-        const SplitCode& s = splits[at];
-        uint32_t gap = i == 0 ? s.v : s.v - splits[at - 1].v - 1;
-        encode_uint(gaps, m->gaps[std::min(bit_length(prev_gap), kGapContexts - 1)], gap);
-        prev_gap = gap;
-        encode_uint(wl, m->wedge_l, s.code_l);
-        encode_uint(wr, m->wedge_r[std::min(s.code_l, kWedgeContexts - 1)], s.code_r);
-        uint32_t cur[3] = {0, 0, 0};
-        for (int a = 0; a < 3; ++a) {
-          cur[a] = zigzag_encode(s.residual[a]);
-          encode_uint(*res[a], m->residual[a][residual_context(a, prev, cur)], cur[a]);
-        }
-        std::copy(cur, cur + 3, prev);
+        const SplitSymbols& s = splits[at];
+        const uint64_t pos = i == 0 ? 0 : uint64_t(splits[at - 1].v) + 1;
+        encode_uint(gaps, m->gaps[gap_context(limit, pos, g - i)], uint32_t(s.v - pos));
+        encode_uint(wc, m->wedge_count[s.wedge_context], s.wedge_count);
+        encode_uint(wr, m->wedge_rank[s.rank_context], s.wedge_rank);
+        for (int a = 0; a < 3; ++a)
+          encode_uint(*res[a], m->residual[a][s.residual_context[a]], zigzag_encode(s.residual[a]));
       }
+      limit += g;
     }
-    for (RangeEncoder* e : {&groups, &gaps, &wl, &wr, &rx, &ry, &rz}) e->finish();
+    for (RangeEncoder* e : {&groups, &gaps, &wc, &wr, &rx, &ry, &rz}) e->finish();
   }
   put_varint(payload, count);
   put_varint(payload, group_sizes.size());
@@ -83,62 +68,192 @@ bool split_chunk_stream_sizes(const uint8_t* p, size_t size, uint64_t& count, ui
   return r.ok;
 }
 
-bool decode_split_chunk(const uint8_t* p, size_t size, uint64_t vertices_before, uint64_t max_splits,
-                        std::vector<SplitCode>& out, std::string& error) {
+bool SplitChunkReader::open(const uint8_t* p, size_t size, uint64_t vertices_before, uint64_t max_splits,
+                            std::vector<uint32_t>& vs, std::string& error) {
   ByteReader r(p, size);
   const uint64_t count = r.varint(), group_count = r.varint();
   if (!r.ok || count == 0 || count > max_splits || group_count == 0 || group_count > count)
     return error = "SPLT counts", false;
-  const uint8_t* start[kSplitStreamCount];
-  size_t len[kSplitStreamCount];
+  size_t offset[kSplitStreamCount], len[kSplitStreamCount];
   for (int k = 0; k < kSplitStreamCount; ++k) {
     len[k] = r.varint();
-    start[k] = r.bytes(len[k]);
+    const uint8_t* at = r.bytes(len[k]);
+    offset[k] = r.ok ? size_t(at - p) : 0;
   }
   if (!r.ok) return error = "SPLT streams overrun the chunk", false;
   // A coded split costs well over a bit in total; bound the allocation by the input.
   if (count > uint64_t(size) * 64) return error = "SPLT split count beyond its bytes", false;
-  auto m = std::make_unique<SplitModels>();
-  RangeDecoder groups(start[0], len[0]), gaps(start[1], len[1]), wl(start[2], len[2]), wr(start[3], len[3]),
-      rx(start[4], len[4]), ry(start[5], len[5]), rz(start[6], len[6]);
-  RangeDecoder* res[3] = {&rx, &ry, &rz};
-  const size_t first = out.size();
-  out.resize(first + count);
-  uint32_t prev_gap = 0, prev[3] = {0, 0, 0};
+  models_ = std::make_unique<SplitModels>();
+  SplitModels& m = *models_;
+  RangeDecoder groups(p + offset[kStreamGroups], len[kStreamGroups]), gaps(p + offset[kStreamGaps], len[kStreamGaps]);
+  const size_t first = vs.size();
+  vs.resize(first + count);
   uint64_t done = 0;
   bool ok = true;
   for (uint64_t gi = 0; ok && gi < group_count; ++gi) {
     uint32_t g;
-    ok = decode_uint(groups, m->groups, g) && uint64_t(g) + 1 <= count - done;
+    ok = decode_uint(groups, m.groups, g) && uint64_t(g) + 1 <= count - done;
     if (!ok) break;
     ++g;
     const uint64_t limit = vertices_before + done;
     uint64_t v = 0;
     for (uint32_t i = 0; ok && i < g; ++i) {
-      SplitCode& s = out[first + done + i];
-      uint32_t gap = 0, cur[3] = {0, 0, 0};
-      ok = decode_uint(gaps, m->gaps[std::min(bit_length(prev_gap), kGapContexts - 1)], gap) &&
-           decode_uint(wl, m->wedge_l, s.code_l) &&
-           decode_uint(wr, m->wedge_r[std::min(s.code_l, kWedgeContexts - 1)], s.code_r);
-      prev_gap = gap;
-      v = i == 0 ? gap : v + gap + 1;
+      uint32_t gap = 0;
+      const uint64_t pos = i == 0 ? 0 : v + 1;
+      ok = decode_uint(gaps, m.gaps[gap_context(limit, pos, g - i)], gap);
+      v = pos + gap;
       ok = ok && v < limit;
-      s.v = uint32_t(v);
-      for (int a = 0; ok && a < 3; ++a) {
-        ok = decode_uint(*res[a], m->residual[a][residual_context(a, prev, cur)], cur[a]);
-        s.residual[a] = zigzag_decode(cur[a]);
-      }
-      std::copy(cur, cur + 3, prev);
+      vs[first + done + i] = uint32_t(v);
     }
     done += g;
   }
-  ok = ok && done == count;
-  for (RangeDecoder* d : {&groups, &gaps, &wl, &wr, &rx, &ry, &rz}) ok = ok && d->ok;
+  ok = ok && done == count && groups.ok && gaps.ok;
   if (!ok) {
-    out.resize(first);
-    return error = "SPLT streams malformed", false;
+    vs.resize(first);
+    return error = "SPLT groups or gaps malformed", false;
+  }
+  // The mesh-dependent streams are decoded as the splits are applied: keep their bytes.
+  const size_t lo = offset[kStreamWedgeCount];
+  bytes_.assign(p + lo, p + size);
+  auto dec = [&](int k) { return std::make_unique<RangeDecoder>(bytes_.data() + (offset[k] - lo), len[k]); };
+  count_dec_ = dec(kStreamWedgeCount);
+  rank_dec_ = dec(kStreamWedgeRank);
+  for (int a = 0; a < 3; ++a) res_dec_[a] = dec(kStreamResidualX + a);
+  count_ = count;
+  return true;
+}
+
+bool SplitChunkReader::wedge(uint32_t k, bool closed, uint32_t& count, uint32_t& rank) {
+  return decode_uint(*count_dec_, models_->wedge_count[wedge_context(k, closed)], count) &&
+         decode_uint(*rank_dec_, models_->wedge_rank[closed ? 1 : 0], rank) && count_dec_->ok && rank_dec_->ok;
+}
+
+bool SplitChunkReader::residuals(const uint32_t context[3], int32_t residual[3]) {
+  for (int a = 0; a < 3; ++a) {
+    uint32_t z;
+    if (!decode_uint(*res_dec_[a], models_->residual[a][context[a]], z) || !res_dec_[a]->ok) return false;
+    residual[a] = zigzag_decode(z);
   }
   return true;
+}
+
+// ---- Wedge candidates (spec section 4, "Wedge symbols") ----
+
+namespace {
+
+constexpr uint32_t kMaxScoredRing = 1u << 24;  // larger rings: all scores 0 (order by index)
+
+// Scores of the candidates with `count` interior ring vertices into s.score; returns how many.
+// Closed: candidate j has a = j, b = (j + count + 1) mod k. Open: interior starts at j
+// (0 .. k - count), a = j - 1 (none for j = 0), b = j + count (none for k).
+uint32_t wedge_candidates(const int32_t* coords, uint32_t v, const ProgressiveMesh& pm, uint32_t count,
+                          WedgeScratch& s) {
+  const std::span<const uint32_t> ring = pm.ring();
+  const uint32_t k = uint32_t(ring.size()), start = pm.ring_start();
+  const bool closed = pm.ring_closed();
+  const uint32_t n = closed ? k : k - count + 1;
+  s.score.assign(n, 0);
+  if (k > kMaxScoredRing) return n;
+  s.e.resize(size_t(k) * 3);
+  const int32_t* cv = coords + size_t(v) * 3;
+  for (uint32_t i = 0, j = start; i < k; ++i, j = j + 1 == k ? 0 : j + 1) {
+    const int32_t* cw = coords + size_t(ring[j]) * 3;
+    for (int a = 0; a < 3; ++a) s.e[i * 3 + a] = int64_t(cw[a]) - cv[a];
+  }
+  const int64_t* e = s.e.data();
+  // W = sum of e over the interior of candidate j, slid along the ring.
+  int64_t w[3] = {0, 0, 0};
+  const uint32_t first = closed ? 1 : 0;
+  for (uint32_t i = first; i < first + count; ++i)
+    for (int a = 0; a < 3; ++a) w[a] += e[(i % k) * 3 + a];
+  for (uint32_t j = 0; j < n; ++j) {
+    int64_t E[3];
+    uint32_t lo = closed ? (j + 1) % k : j;  // first interior rank
+    for (int a = 0; a < 3; ++a) E[a] = 2 * w[a];
+    const bool has_a = closed || j > 0, has_b = closed || j + count < k;
+    const uint32_t ra = closed ? j : j - 1, rb = (lo + count) % k;
+    for (int a = 0; a < 3; ++a) E[a] += (has_a ? e[ra * 3 + a] : 0) + (has_b ? e[rb * 3 + a] : 0);
+    WedgeScore sc = 0;
+    for (int a = 0; a < 3; ++a) {
+      WedgeScoreSigned x = E[a];
+      sc += WedgeScore(x * x);
+    }
+    s.score[j] = sc;
+    if (count && j + 1 < n)  // slide: drop rank lo, add rank lo + count
+      for (int a = 0; a < 3; ++a) w[a] += e[((lo + count) % k) * 3 + a] - e[lo * 3 + a];
+  }
+  return n;
+}
+
+inline bool better(const WedgeScratch& s, uint32_t x, uint32_t y) {
+  return s.score[x] > s.score[y] || (s.score[x] == s.score[y] && x < y);
+}
+
+inline uint32_t max_count(const ProgressiveMesh& pm) {
+  const uint32_t k = uint32_t(pm.ring().size());
+  return pm.ring_closed() ? k - 2 : k - 1;
+}
+
+}  // namespace
+
+bool wedge_symbols(const int32_t* coords, uint32_t v, const ProgressiveMesh& pm, uint32_t rank_l, uint32_t rank_r,
+                   uint32_t& count, uint32_t& rank, WedgeScratch& s) {
+  const uint32_t k = uint32_t(pm.ring().size());
+  uint32_t j;
+  if (pm.ring_closed()) {
+    if (rank_l >= k || rank_r >= k || rank_l == rank_r) return false;
+    count = (rank_r + k - rank_l) % k - 1;
+    j = rank_l;
+  } else {
+    if ((rank_l == kNoRank && rank_r == kNoRank) || (rank_l != kNoRank && rank_l >= k) ||
+        (rank_r != kNoRank && rank_r >= k) || (rank_l != kNoRank && rank_r != kNoRank && rank_l >= rank_r))
+      return false;
+    j = rank_l == kNoRank ? 0 : rank_l + 1;
+    count = (rank_r == kNoRank ? k : rank_r) - j;
+  }
+  const uint32_t n = wedge_candidates(coords, v, pm, count, s);
+  rank = 0;
+  for (uint32_t i = 0; i < n; ++i) rank += better(s, i, j);
+  return true;
+}
+
+bool wedge_ranks(const int32_t* coords, uint32_t v, const ProgressiveMesh& pm, uint32_t count, uint32_t rank,
+                 uint32_t& rank_l, uint32_t& rank_r, WedgeScratch& s) {
+  const uint32_t k = uint32_t(pm.ring().size());
+  if (k < 2 || count > max_count(pm)) return false;
+  const uint32_t n = wedge_candidates(coords, v, pm, count, s);
+  if (rank >= n) return false;
+  uint32_t j = 0;
+  if (rank == 0) {
+    for (uint32_t i = 1; i < n; ++i)
+      if (better(s, i, j)) j = i;
+  } else {
+    s.order.resize(n);
+    for (uint32_t i = 0; i < n; ++i) s.order[i] = i;
+    std::nth_element(s.order.begin(), s.order.begin() + rank, s.order.end(),
+                     [&](uint32_t x, uint32_t y) { return better(s, x, y); });
+    j = s.order[rank];
+  }
+  if (pm.ring_closed()) {
+    rank_l = j;
+    rank_r = (j + count + 1) % k;
+  } else {
+    rank_l = j == 0 ? kNoRank : j - 1;
+    rank_r = j + count == k ? kNoRank : j + count;
+  }
+  return true;
+}
+
+void residual_contexts(const int32_t* coords, std::span<const uint32_t> u_ring, const int32_t pred[3],
+                       uint32_t ctx[3]) {
+  uint64_t spread[3] = {0, 0, 0};
+  for (uint32_t w : u_ring)
+    for (int a = 0; a < 3; ++a) spread[a] += uint64_t(std::llabs(int64_t(coords[size_t(w) * 3 + a]) - pred[a]));
+  for (int a = 0; a < 3; ++a) {
+    uint64_t mean = spread[a] / u_ring.size();
+    uint32_t n = mean ? 64u - uint32_t(__builtin_clzll(mean)) : 0u;
+    ctx[a] = std::min(n, kResidualContexts - 1);
+  }
 }
 
 }  // namespace pmz

@@ -13,6 +13,7 @@
 
 #include "pmz/decoder.hpp"
 #include "pmz/format.hpp"
+#include "pmz/progressive_mesh.hpp"
 #include "pmz/split_codec.hpp"
 
 // ---- peak heap use of this test binary, through a replaced global operator new ----
@@ -125,14 +126,50 @@ Bytes octa_base_payload() {
   return p;
 }
 
-// SPLT payload (the shared codec): splits at the given vertices, one group each, wedge codes
-// (0, 0) (a closed fan split into two), residuals r.
-Bytes split_payload(const std::vector<uint32_t>& at, int32_t r = 0) {
-  std::vector<pmz::SplitCode> codes;
-  for (uint32_t v : at) codes.push_back({v, 0, 0, {r, r, r}});
+// Replays the decoder's mesh so crafted SPLT payloads carry the contexts the decoder computes
+// (wedge and residual models depend on the mesh). Stops replaying once the ring work exceeds
+// the decoder's budget: splits past it are never decoded, their contexts stay 0.
+struct Replay {
+  pmz::ProgressiveMesh pm;
+  std::vector<int32_t> coords;
+  pmz::WedgeScratch scratch;
+  uint64_t work = 0, vertices = 6;  // vertices: as the decoder counts them (all splits)
+  Replay() {
+    std::string error;
+    pm.build(6, kOctaFaces, 8, error);
+    coords.assign(kOctaCoords, kOctaCoords + 18);
+  }
+};
+
+// SPLT payload (the shared codec): splits at the given vertices, one group each, wedge
+// symbols (0, 0) (valid on any ring: the best-scored candidate without interior vertices),
+// residuals r.
+Bytes split_payload(Replay& rp, const std::vector<uint32_t>& at, int32_t r = 0) {
+  std::vector<pmz::SplitSymbols> codes;
+  for (uint32_t v : at) {
+    pmz::SplitSymbols c{v, 0, 0, 0, 0, {0, 0, 0}, {r, r, r}};
+    uint32_t a, b;
+    if (rp.work < (8u << 20) && rp.pm.gather_ring(v)) {
+      rp.work += rp.pm.ring().size();
+      c.wedge_context = pmz::wedge_context(uint32_t(rp.pm.ring().size()), rp.pm.ring_closed());
+      c.rank_context = rp.pm.ring_closed() ? 1 : 0;
+      if (pmz::wedge_ranks(rp.coords.data(), v, rp.pm, 0, 0, a, b, rp.scratch) && rp.pm.split_gathered(v, a, b)) {
+        int32_t pred[3];
+        pmz::predict_position(rp.coords.data(), rp.pm.u_ring(), pred);
+        pmz::residual_contexts(rp.coords.data(), rp.pm.u_ring(), pred, c.residual_context);
+        for (int k = 0; k < 3; ++k) rp.coords.push_back(int32_t(uint32_t(pred[k]) + uint32_t(r)));
+      }
+    }
+    codes.push_back(c);
+  }
   Bytes p;
-  pmz::encode_split_chunk(std::vector<uint32_t>(at.size(), 1), codes.data(), codes.size(), p);
+  pmz::encode_split_chunk(std::vector<uint32_t>(at.size(), 1), codes.data(), codes.size(), rp.vertices, p);
+  rp.vertices += at.size();
   return p;
+}
+Bytes split_payload(const std::vector<uint32_t>& at, int32_t r = 0) {
+  Replay rp;
+  return split_payload(rp, at, r);
 }
 
 // A small valid stream: octahedron, then `splits` splits in chunks of `per_chunk`, then END.
@@ -140,10 +177,11 @@ Bytes small_file(uint32_t splits = 12, uint32_t per_chunk = 4) {
   Bytes f = signature();
   head(f, header(6, 8, splits, 8 + 2 * splits));
   pmz::append_chunk(f, pmz::kChunkBase, octa_base_payload());
+  Replay rp;
   for (uint32_t done = 0; done < splits;) {
     std::vector<uint32_t> at;
     for (uint32_t i = 0; i < per_chunk && done < splits; ++i, ++done) at.push_back((done * 7) % (6 + done));
-    pmz::append_chunk(f, pmz::kChunkSplits, split_payload(at, int32_t(done % 5) - 2));
+    pmz::append_chunk(f, pmz::kChunkSplits, split_payload(rp, at, int32_t(done % 5) - 2));
   }
   pmz::append_chunk(f, pmz::kChunkEnd, {});
   return f;
@@ -387,24 +425,46 @@ TEST(Hostile, SplitsPilingOnOneVertexStayLinear) {
   EXPECT_LT(tl, 8 * ts + 0.02) << ts << " s for " << small << " splits, " << tl << " s for " << large;
 }
 
-// wedge_r = 2^32 - 1: "wedge_r + 1 < k" (spec section 4) is the integer inequality, so the
-// split is invalid; 32-bit wrap-around must not turn it into a wedge taken modulo k. The first
-// split gives u = 6 a closed fan of 3 faces, where (0 + 2^32) mod 3 = 1 would look valid.
-TEST(Hostile, WedgeCodeAtUint32MaxIsInvalid) {
-  Bytes f = signature();
-  head(f, header(6, 8, 2, 12));
-  pmz::append_chunk(f, pmz::kChunkBase, octa_base_payload());
-  std::vector<pmz::SplitCode> codes = {{0, 0, 0, {0, 0, 0}}, {6, 0, 0xFFFFFFFFu, {0, 0, 0}}};
-  Bytes p;
-  pmz::encode_split_chunk({1, 1}, codes.data(), codes.size(), p);
-  pmz::append_chunk(f, pmz::kChunkSplits, p);
-  pmz::append_chunk(f, pmz::kChunkEnd, {});
-  pmz::Decoder d;
-  ASSERT_EQ(d.feed(f.data(), f.size()), pmz::Status::ok) << d.error_message();
-  EXPECT_EQ(d.refine(), 1u);
-  EXPECT_EQ(d.status(), pmz::Status::corrupt);
-  expect_valid(d);
-  EXPECT_EQ(d.face_count(), 10u);
+// Wedge symbols at 2^32 - 1 (count or rank): out of range for every ring, so the split is
+// refused and the mesh stays at the split before; no 32-bit wrap-around may turn them into a
+// wedge taken modulo k. The first split gives u = 6 a closed fan of 3 faces.
+TEST(Hostile, WedgeSymbolsAtUint32MaxAreInvalid) {
+  for (int which = 0; which < 2; ++which) {
+    // Split 0 as the decoder sees it (contexts from a replay), then split 6 with the bad symbol.
+    Replay rp;
+    std::vector<pmz::SplitSymbols> codes(2);
+    ASSERT_TRUE(rp.pm.gather_ring(0));
+    codes[0] = {0, pmz::wedge_context(uint32_t(rp.pm.ring().size()), rp.pm.ring_closed()), 0, 0,
+                rp.pm.ring_closed() ? 1u : 0u, {0, 0, 0}, {0, 0, 0}};
+    uint32_t a, b;
+    ASSERT_TRUE(pmz::wedge_ranks(rp.coords.data(), 0, rp.pm, 0, 0, a, b, rp.scratch));
+    ASSERT_TRUE(rp.pm.split_gathered(0, a, b));
+    int32_t pred[3];
+    pmz::predict_position(rp.coords.data(), rp.pm.u_ring(), pred);
+    pmz::residual_contexts(rp.coords.data(), rp.pm.u_ring(), pred, codes[0].residual_context);
+    rp.coords.insert(rp.coords.end(), pred, pred + 3);
+    ASSERT_TRUE(rp.pm.gather_ring(6));
+    ASSERT_TRUE(rp.pm.ring_closed());
+    ASSERT_EQ(rp.pm.ring().size(), 3u);
+    codes[1] = {6, pmz::wedge_context(3, true), which == 0 ? 0xFFFFFFFFu : 0u, which == 1 ? 0xFFFFFFFFu : 0u, 1,
+                {0, 0, 0}, {0, 0, 0}};
+    Bytes f = signature();
+    head(f, header(6, 8, 2, 12));
+    pmz::append_chunk(f, pmz::kChunkBase, octa_base_payload());
+    Bytes p;
+    pmz::encode_split_chunk({1, 1}, codes.data(), codes.size(), 6, p);
+    pmz::append_chunk(f, pmz::kChunkSplits, p);
+    pmz::append_chunk(f, pmz::kChunkEnd, {});
+    pmz::Decoder d;
+    ASSERT_EQ(d.feed(f.data(), f.size()), pmz::Status::ok) << d.error_message();
+    EXPECT_EQ(d.refine(), 1u) << which;
+    EXPECT_EQ(d.status(), pmz::Status::corrupt) << which;
+    expect_valid(d);
+    EXPECT_EQ(d.face_count(), 10u);
+    EXPECT_EQ(d.coarsen(), 1u);
+    EXPECT_EQ(d.refine(), 1u);  // the split before the bad one stays usable
+    EXPECT_EQ(d.face_count(), 10u);
+  }
 }
 
 // ---- every prefix, every byte ----
@@ -448,12 +508,14 @@ void corrupt_every_byte(const Bytes& file, bool repair_crc) {
       pmz::Decoder d;
       pmz::Status s = d.feed(b.data(), b.size());
       if (s == pmz::Status::ok) s = d.finish();
+      // Wedge and residual symbols are decoded as splits are first applied.
+      d.refine();
+      if (s == pmz::Status::ok) s = d.status();
       ++trials;
       if (s != pmz::Status::ok) {
         ++errors;
         ASSERT_FALSE(d.error_message().empty()) << "byte " << i;
       }
-      d.refine();
       expect_valid(d);
       d.coarsen(3);
       expect_valid(d);

@@ -4,6 +4,8 @@
 #include <random>
 
 #include "pmz/coding.hpp"
+#include "pmz/progressive_mesh.hpp"
+#include "pmz/split_codec.hpp"
 
 using namespace pmz;
 
@@ -51,4 +53,50 @@ TEST(ByteReader, FailsPastEnd) {
   ByteReader r(b, 3);
   EXPECT_EQ(r.u32le(), 0u);
   EXPECT_FALSE(r.ok);
+}
+
+// Wedge symbols (spec section 4): every valid wedge of a fan maps to (count, rank) and back,
+// on closed and open fans, random and degenerate (all scores tied) geometry, and lossless-range
+// coordinates (the scores need 128 bits there).
+TEST(WedgeSymbols, EveryWedgeRoundTrips) {
+  std::mt19937 rng(11);
+  WedgeScratch scratch;
+  for (uint32_t k = 2; k <= 12; ++k)
+    for (int closed = 0; closed < 2; ++closed) {
+      if (closed && k < 3) continue;
+      // Centre 0, ring 1..k counter-clockwise.
+      std::vector<uint32_t> faces;
+      const uint32_t m = closed ? k : k - 1;
+      for (uint32_t i = 0; i < m; ++i) faces.insert(faces.end(), {0, 1 + i, 1 + (i + 1) % k});
+      ProgressiveMesh pm;
+      std::string error;
+      ASSERT_TRUE(pm.build(k + 1, faces.data(), m, error)) << error;
+      for (int geometry = 0; geometry < 3; ++geometry) {
+        std::vector<int32_t> coords(size_t(k + 1) * 3, 0);
+        for (auto& c : coords)
+          c = geometry == 0 ? 0 : geometry == 1 ? int32_t(rng() % 16384) : int32_t(rng());
+        ASSERT_TRUE(pm.gather_ring(0));
+        ASSERT_EQ(pm.ring().size(), k);
+        ASSERT_EQ(pm.ring_closed(), closed == 1);
+        uint32_t pairs = 0;
+        for (uint32_t a = 0; a <= k; ++a)
+          for (uint32_t b = 0; b <= k; ++b) {
+            const uint32_t ra = a == k ? kNoRank : a, rb = b == k ? kNoRank : b;
+            uint32_t count = 0, rank = 0, ga = 0, gb = 0;
+            const bool valid = closed ? (a < k && b < k && a != b)
+                                      : !(ra == kNoRank && rb == kNoRank) && (ra == kNoRank || rb == kNoRank || ra < rb);
+            ASSERT_EQ(wedge_symbols(coords.data(), 0, pm, ra, rb, count, rank, scratch), valid);
+            if (!valid) continue;
+            ++pairs;
+            ASSERT_TRUE(wedge_ranks(coords.data(), 0, pm, count, rank, ga, gb, scratch))
+                << "k " << k << " closed " << closed << " count " << count << " rank " << rank;
+            EXPECT_EQ(ga, ra);
+            EXPECT_EQ(gb, rb);
+            // Out of range symbols are refused.
+            EXPECT_FALSE(wedge_ranks(coords.data(), 0, pm, closed ? k - 1 : k, 0, ga, gb, scratch));
+            EXPECT_FALSE(wedge_ranks(coords.data(), 0, pm, count, k + 1, ga, gb, scratch));
+          }
+        EXPECT_EQ(pairs, closed ? k * (k - 1) : (k + 1) * k / 2 + k);
+      }
+    }
 }

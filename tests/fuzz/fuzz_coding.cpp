@@ -222,31 +222,61 @@ void fuzz_range_round_trip(const uint8_t* data, size_t size) {
   }
 }
 
-// SPLT payload decoding on arbitrary bytes: all or nothing, vertices in range, and a decoded
-// chunk re-encodes to a payload that decodes to the same splits.
+// SPLT payload decoding on arbitrary bytes: groups and gaps all or nothing with vertices in
+// range; then wedge and residual symbols with contexts taken from the input, until a stream
+// ends. The decoded symbols re-encode (same contexts) to a payload that decodes to the same.
 void fuzz_split_chunk(const uint8_t* data, size_t size) {
-  if (size < 2) return;
+  if (size < 3) return;
   const uint64_t vertices_before = 1 + data[0];
   const uint64_t max_splits = uint64_t(data[1]) << (data[1] % 12);
-  std::vector<pmz::SplitCode> out(3, pmz::SplitCode{0, 0, 0, {0, 0, 0}});
+  const uint8_t ctx_seed = data[2];
+  data += 3;
+  size -= 3;
+  std::vector<uint32_t> vs(3, 0);
   std::string error;
-  if (!pmz::decode_split_chunk(data + 2, size - 2, vertices_before, max_splits, out, error)) {
-    PMZ_FUZZ_CHECK(out.size() == 3 && !error.empty());
+  pmz::SplitChunkReader reader;
+  if (!reader.open(data, size, vertices_before, max_splits, vs, error)) {
+    PMZ_FUZZ_CHECK(vs.size() == 3 && !error.empty());
     return;
   }
-  const size_t count = out.size() - 3;
-  PMZ_FUZZ_CHECK(count >= 1 && count <= max_splits);
-  for (size_t i = 0; i < count; ++i) PMZ_FUZZ_CHECK(out[3 + i].v < vertices_before + i);
+  const size_t count = vs.size() - 3;
+  PMZ_FUZZ_CHECK(count >= 1 && count <= max_splits && reader.split_count() == count);
+  for (size_t i = 0; i < count; ++i) PMZ_FUZZ_CHECK(vs[3 + i] < vertices_before + i);
   uint64_t n = 0, stream_bytes[pmz::kSplitStreamCount];
-  PMZ_FUZZ_CHECK(pmz::split_chunk_stream_sizes(data + 2, size - 2, n, stream_bytes) && n == count);
-  // One split per group always satisfies the group rule; re-encode and decode.
+  PMZ_FUZZ_CHECK(pmz::split_chunk_stream_sizes(data, size, n, stream_bytes) && n == count);
+  auto contexts = [&](size_t i, pmz::SplitSymbols& s) {
+    const uint32_t h = uint32_t(i * 2654435761u) ^ ctx_seed;
+    const uint32_t k = 2 + h % 12;
+    const bool closed = (h >> 4) & 1;
+    s.wedge_context = pmz::wedge_context(k, closed);
+    s.rank_context = closed ? 1 : 0;
+    for (int a = 0; a < 3; ++a) s.residual_context[a] = (h >> (8 + 3 * a)) % pmz::kResidualContexts;
+    return std::pair<uint32_t, bool>(k, closed);
+  };
+  std::vector<pmz::SplitSymbols> got;
+  for (size_t i = 0; i < count; ++i) {
+    pmz::SplitSymbols s{vs[3 + i], 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}};
+    auto [k, closed] = contexts(i, s);
+    if (!reader.wedge(k, closed, s.wedge_count, s.wedge_rank) || !reader.residuals(s.residual_context, s.residual))
+      break;
+    got.push_back(s);
+  }
+  if (got.empty()) return;
+  // Re-encode the decoded prefix (one split per group satisfies the group rule) and decode.
   std::vector<uint8_t> payload;
-  pmz::encode_split_chunk(std::vector<uint32_t>(count, 1), out.data() + 3, count, payload);
-  std::vector<pmz::SplitCode> again;
-  PMZ_FUZZ_CHECK(pmz::decode_split_chunk(payload.data(), payload.size(), vertices_before, count, again, error));
-  PMZ_FUZZ_CHECK(again.size() == count);
-  for (size_t i = 0; i < count; ++i)
-    PMZ_FUZZ_CHECK(std::memcmp(&again[i], &out[3 + i], sizeof(pmz::SplitCode)) == 0);
+  pmz::encode_split_chunk(std::vector<uint32_t>(got.size(), 1), got.data(), got.size(), vertices_before, payload);
+  std::vector<uint32_t> again;
+  pmz::SplitChunkReader r2;
+  PMZ_FUZZ_CHECK(r2.open(payload.data(), payload.size(), vertices_before, got.size(), again, error));
+  PMZ_FUZZ_CHECK(again.size() == got.size());
+  for (size_t i = 0; i < got.size(); ++i) {
+    pmz::SplitSymbols s{again[i], 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}};
+    auto [k, closed] = contexts(i, s);
+    PMZ_FUZZ_CHECK(s.v == got[i].v && r2.wedge(k, closed, s.wedge_count, s.wedge_rank) &&
+                   r2.residuals(s.residual_context, s.residual));
+    PMZ_FUZZ_CHECK(s.wedge_count == got[i].wedge_count && s.wedge_rank == got[i].wedge_rank);
+    PMZ_FUZZ_CHECK(std::memcmp(s.residual, got[i].residual, sizeof s.residual) == 0);
+  }
 }
 
 }  // namespace

@@ -122,7 +122,7 @@ def main():
         put('decoder', name + '-bytes', bytes([1, 0, 1 << 2]) + data)
         put('decoder', name + '-mixed', bytes([4, 7, 5 << 2 | 1, 200, 9 << 2 | 2, 31, 3 << 2 | 3, 130, 2 << 2]) + data)
         # fuzz_coding: BASE streams (part 2, after the two counts) and whole SPLT payloads
-        # (part 6, with 256 vertices before and a generous split budget).
+        # (part 6, with 256 vertices before, a generous split budget and a context seed).
         at = 8
         while at + 12 <= len(data):
             kind, size = data[at:at + 4], struct.unpack('<I', data[at + 4:at + 8])[0]
@@ -135,7 +135,7 @@ def main():
                     p += 1
                 put('coding', '%s-BASE-%d' % (name, at), b'\x02' + payload[p:])
             elif kind == b'SPLT':
-                put('coding', '%s-SPLT-%d' % (name, at), b'\x06\xff\xfb' + payload)
+                put('coding', '%s-SPLT-%d' % (name, at), b'\x06\xff\xfb\x00' + payload)
             at += 12 + size
     # fuzz_coding, other parts: a few hand-made inputs.
     put('coding', 'reader', b'\x00\x10' + bytes(range(16)) + b'\x81\x80\x01\xff\xff\xff\xff\x0f' * 4)

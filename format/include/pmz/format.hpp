@@ -11,7 +11,7 @@
 namespace pmz {
 
 inline constexpr uint8_t kSignature[8] = {0x89, 'P', 'M', 'Z', 0x0D, 0x0A, 0x1A, 0x0A};
-inline constexpr uint32_t kVersionMajor = 1;
+inline constexpr uint32_t kVersionMajor = 2;
 inline constexpr uint32_t kVersionMinor = 0;
 
 // Chunk = fourcc[4] | u32le payload_size | u32le crc32(fourcc, size, payload) | payload.
@@ -29,8 +29,8 @@ inline constexpr uint32_t kChunkEnd = fourcc('E', 'N', 'D', ' ');
 enum SplitStream : int {
   kStreamGroups = 0,  // splits per group (varint)
   kStreamGaps,        // v - previous v - 1 within a group; first: v (varint)
-  kStreamWedgeL,      // wedge codes, see spec (varint)
-  kStreamWedgeR,
+  kStreamWedgeCount,  // wedge: interior count (spec, section 4)
+  kStreamWedgeRank,   // wedge: rank among the candidates of that count
   kStreamResidualX,  // zigzag(actual - prediction mod 2^32) (varint)
   kStreamResidualY,
   kStreamResidualZ,
