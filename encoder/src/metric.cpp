@@ -55,6 +55,31 @@ void initial_quadrics(const HalfEdgeMesh& m, double boundary_weight, std::vector
   }
 }
 
+void current_quadric(const HalfEdgeMesh& m, const Features& f, uint32_t v, double boundary_weight, Quadric& q) {
+  q = Quadric{};
+  const float* pv = m.p(v);
+  // The plane through p_v perpendicular to n, weighted.
+  auto add = [&](const double n[3], double weight) { q.add_plane(n, -(n[0] * pv[0] + n[1] * pv[1] + n[2] * pv[2]), weight); };
+  // The boundary plane of edge a -> b of a face with normal fn, as in initial_quadrics.
+  auto add_boundary = [&](const float* a, const float* b, const float* fn) {
+    const double e[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
+    double bn[3] = {e[1] * fn[2] - e[2] * fn[1], e[2] * fn[0] - e[0] * fn[2], e[0] * fn[1] - e[1] * fn[0]};
+    const double bl = std::sqrt(bn[0] * bn[0] + bn[1] * bn[1] + bn[2] * bn[2]);
+    if (bl == 0) return;
+    for (double& c : bn) c /= bl;
+    add(bn, boundary_weight * (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]));
+  };
+  for_each_outgoing(m, v, [&](uint32_t h) {
+    const FaceTerms& face = f.face[h / 3];
+    const double n[3] = {face.normal[0], face.normal[1], face.normal[2]};
+    add(n, face.area);
+    if (boundary_weight <= 0) return;
+    if (m.twin[h] == kNone) add_boundary(pv, m.p(m.dest(h)), face.normal);
+    const uint32_t in = HalfEdgeMesh::prev(h);
+    if (m.twin[in] == kNone) add_boundary(m.p(m.vert[in]), pv, face.normal);
+  });
+}
+
 void Features::resize(uint32_t vertex_count, uint32_t face_count) {
   face.assign(face_count, FaceTerms{});
   vertex.assign(vertex_count, VertexTerms{});

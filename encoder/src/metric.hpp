@@ -27,6 +27,12 @@ struct Quadric {
 // plane through the edge perpendicular to its face weighted by boundary_weight * length^2.
 void initial_quadrics(const HalfEdgeMesh& m, double boundary_weight, std::vector<Quadric>& q);
 
+// Q(v) of the current mesh (the multifeature metric's reading, spec/algorithm.md section 2): the
+// area-weighted planes of v's faces as they are now, each through p_v, plus the plane of each
+// boundary edge at v as in initial_quadrics. Reads the cached face normals and areas.
+struct Features;
+void current_quadric(const HalfEdgeMesh& m, const Features& f, uint32_t v, double boundary_weight, Quadric& q);
+
 // Per vertex and per face, the terms a cost evaluation or a torsion update reads together sit
 // in one 32-byte record: a collapse lands somewhere random on the mesh, so the engine's time
 // is mostly cache misses and each separate array costs one more.

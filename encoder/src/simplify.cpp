@@ -128,7 +128,10 @@ class Engine {
  public:
   HalfEdgeMesh m;
   Features feat;
+  // The quadric a cost evaluates: QSlim's accumulated one (qem), or the current mesh's plus
+  // quadric_memory times the accumulated one, kept in `accumulated` (multifeature).
   std::vector<Quadric> quad;
+  std::vector<Quadric> accumulated;
   std::vector<double> self_error;  // Q_v(p_v) / L^4, cached: half of every cost evaluation
   Metric metric = Metric::multifeature;
   MetricParams params;
@@ -312,8 +315,12 @@ void Engine::perform(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb, float c) 
   const uint32_t vl = ha != kNone ? m.vert[HalfEdgeMesh::prev(ha)] : kNone;
   const uint32_t vr = hb != kNone ? m.vert[HalfEdgeMesh::prev(hb)] : kNone;
   record->push_back({u, v, vl, vr, c});
-  quad[v].add(quad[u]);
-  self_error[v] = quad[v].error(m.p(v)) * inv_unit4;
+  if (metric == Metric::qem) {
+    quad[v].add(quad[u]);
+    self_error[v] = quad[v].error(m.p(v)) * inv_unit4;
+  } else if (!accumulated.empty()) {
+    accumulated[v].add(accumulated[u]);  // quad[v] is recomputed in update_after
+  }
   const uint32_t fa = ha != kNone ? ha / 3 : kNone, fb = hb != kNone ? hb / 3 : kNone;
   corners.clear();
   for_each_outgoing(m, u, [&](uint32_t h) {
@@ -361,7 +368,14 @@ void Engine::update_after(uint32_t u, uint32_t v) {
   for_each_neighbour(m, v, [&](uint32_t w, uint32_t) { ring1.push_back(w); });
   if (metric == Metric::multifeature) {
     for_each_outgoing(m, v, [&](uint32_t h) { feat.update_face(m, h / 3); });
-    for (uint32_t w : ring1) feat.update_normal_terms(m, w);
+    for (uint32_t w : ring1) {
+      feat.update_normal_terms(m, w);
+      // Q of the current mesh (not accumulated): only the 1-ring's faces changed.
+      current_quadric(m, feat, w, params.boundary_weight, quad[w]);
+      if (!accumulated.empty())
+        for (int i = 0; i < 10; ++i) quad[w].a[i] += double(params.quadric_memory) * accumulated[w].a[i];
+      self_error[w] = quad[w].error(m.p(w)) * inv_unit4;
+    }
     // Flags the 2-ring without a visited set (setting a flag twice is harmless); the 1-ring,
     // flagged too, gets its key recomputed just below.
     for (uint32_t w : ring1)
@@ -425,6 +439,12 @@ bool Engine::init(const IndexedMesh& input, const SimplifyOptions& options, std:
   feat.epsilon = params.epsilon;
   if (metric == Metric::multifeature) feat.compute_all(m);
   self_error.resize(n);
+  if (metric == Metric::multifeature && params.quadric_memory > 0) {
+    // At the start the current mesh's quadric is the accumulated one.
+    accumulated = quad;
+    for (Quadric& q : quad)
+      for (double& a : q.a) a *= 1.0 + double(params.quadric_memory);
+  }
   for (uint32_t v = 0; v < n; ++v) self_error[v] = quad[v].error(m.p(v)) * inv_unit4;
   stale.assign(n, 0);
   faces = m.face_count();

@@ -28,6 +28,8 @@ int main(int argc, char** argv) {
   app.add_option("--quadric-floor", options.params.quadric_floor, "c0 in (c0 + C_norm + w_T * sigma * T) * Q");
   app.add_option("--torsion-weight", options.params.torsion_weight, "weight w_T of sigma * T in the quadric's factor");
   app.add_option("--boundary-weight", options.params.boundary_weight, "weight of boundary quadrics");
+  app.add_option("--quadric-memory", options.params.quadric_memory,
+                 "multifeature: weight of the accumulated (QSlim) quadric added to the current mesh's");
   app.add_flag("-v,--verbose", verbose, "print where the time went");
   try {
     app.parse(argc, argv);

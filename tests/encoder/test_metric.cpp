@@ -103,6 +103,26 @@ TEST(Metric, BoundaryQuadricPenalisesLeavingTheBorder) {
   EXPECT_NEAR(with[0].error(inward), 0.25 + 0.25, 1e-9);
 }
 
+TEST(Metric, CurrentQuadricEqualsTheInitialOneOnTheInput) {
+  // Before any collapse, Q of the current mesh is QSlim's initial quadric (faces and boundary
+  // planes), up to the float face normals it reads.
+  for (const auto& mesh : {pmz_test::grid(3), pmz_test::icosphere(2), cube_corner()}) {
+    const auto m = build(mesh);
+    const auto f = features(m, 0.3f);
+    std::vector<pmz::detail::Quadric> initial;
+    pmz::detail::initial_quadrics(m, 1.0, initial);
+    for (uint32_t v = 0; v < m.vertex_count(); ++v) {
+      pmz::detail::Quadric q;
+      pmz::detail::current_quadric(m, f, v, 1.0, q);
+      const float* p = m.p(v);
+      for (const float d : {0.f, 0.1f, -0.3f}) {
+        const float probe[3] = {p[0] + d, p[1] - 0.5f * d, p[2] + 2 * d};
+        EXPECT_NEAR(q.error(probe), initial[v].error(probe), 1e-5 * (1 + initial[v].error(probe))) << "vertex " << v;
+      }
+    }
+  }
+}
+
 TEST(Metric, EdgeLengthRatio) {
   const auto mesh = pmz_test::grid(2);
   const auto m = build(mesh);

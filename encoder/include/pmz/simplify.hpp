@@ -26,11 +26,13 @@ struct HalfEdgeCollapse {
 // The multi-feature metric's free parameters (spec/algorithm.md says how the defaults were
 // chosen). Cost of collapsing u -> v, with L the mean initial edge length:
 //   (quadric_floor + C_norm(u) + torsion_weight * sigma(uv) * T(u) * L) * (Q_u + Q_v)(p_v) / L^4
+// where Q is the quadric of the current mesh plus quadric_memory times the accumulated one.
 struct MetricParams {
   float epsilon = 0.3f;          // eq. 2: faces with n.n_i <= epsilon add nothing to B
-  float quadric_floor = 1.0f;    // c0: keeps flat-but-displaced regions' accumulated error
-  float torsion_weight = 1.0f;   // w_T: weight of the torsion term in the quadric's factor
+  float quadric_floor = 1.0f;    // c0: the quadric error is the floor, normal variation raises it
+  float torsion_weight = 10.0f;  // w_T: weight of the torsion term in the quadric's factor
   float boundary_weight = 1.0f;  // boundary-plane quadrics (both metrics)
+  float quadric_memory = 0.1f;   // weight of the accumulated (QSlim) quadric in Q
 };
 
 // Where the time went (seconds), filled when SimplifyOptions::stats is set.
