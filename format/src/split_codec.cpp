@@ -152,35 +152,56 @@ uint32_t wedge_candidates(const int32_t* coords, uint32_t v, const ProgressiveMe
   const uint32_t k = uint32_t(ring.size()), start = pm.ring_start();
   const bool closed = pm.ring_closed();
   const uint32_t n = closed ? k : k - count + 1;
-  s.score.assign(n, 0);
-  if (k > kMaxScoredRing) return n;
-  s.e.resize(size_t(k) * 3);
+  s.score.resize(n);
+  if (k > kMaxScoredRing) {
+    std::fill(s.score.begin(), s.score.end(), WedgeScore(0));
+    return n;
+  }
+  // e in canonical order; a closed ring is stored twice so windows need no modulo.
+  const uint32_t len = closed ? 2 * k : k;
+  s.e.resize(size_t(len) * 3);
+  int64_t* e = s.e.data();
   const int32_t* cv = coords + size_t(v) * 3;
+  uint64_t spread = 0;  // OR of |e|: bounds every |e| component
   for (uint32_t i = 0, j = start; i < k; ++i, j = j + 1 == k ? 0 : j + 1) {
     const int32_t* cw = coords + size_t(ring[j]) * 3;
-    for (int a = 0; a < 3; ++a) s.e[i * 3 + a] = int64_t(cw[a]) - cv[a];
+    for (int a = 0; a < 3; ++a) {
+      const int64_t d = int64_t(cw[a]) - cv[a];
+      e[i * 3 + a] = d;
+      spread |= uint64_t(d < 0 ? -d : d);
+    }
   }
-  const int64_t* e = s.e.data();
-  // W = sum of e over the interior of candidate j, slid along the ring.
+  if (closed) std::copy(e, e + size_t(k) * 3, e + size_t(k) * 3);
+  // |E| <= 2 k max|e| <= 2 k spread: below 2^31 the squares and their sum fit in 64 bits
+  // (the same values as in 128 bits, only cheaper).
+  const bool narrow = spread < (uint64_t(1) << 30) && spread * k < (uint64_t(1) << 30);  // k < 2^24: no overflow
+  // W = sum of e over the interior of candidate j, slid along the ring. Interior of j:
+  // closed ranks j+1 .. j+count, open ranks j .. j+count-1.
   int64_t w[3] = {0, 0, 0};
   const uint32_t first = closed ? 1 : 0;
   for (uint32_t i = first; i < first + count; ++i)
-    for (int a = 0; a < 3; ++a) w[a] += e[(i % k) * 3 + a];
+    for (int a = 0; a < 3; ++a) w[a] += e[i * 3 + a];
   for (uint32_t j = 0; j < n; ++j) {
-    int64_t E[3];
-    uint32_t lo = closed ? (j + 1) % k : j;  // first interior rank
-    for (int a = 0; a < 3; ++a) E[a] = 2 * w[a];
+    const uint32_t lo = j + first;  // first interior position (closed: < 2k)
     const bool has_a = closed || j > 0, has_b = closed || j + count < k;
-    const uint32_t ra = closed ? j : j - 1, rb = (lo + count) % k;
-    for (int a = 0; a < 3; ++a) E[a] += (has_a ? e[ra * 3 + a] : 0) + (has_b ? e[rb * 3 + a] : 0);
-    WedgeScore sc = 0;
-    for (int a = 0; a < 3; ++a) {
-      WedgeScoreSigned x = E[a];
-      sc += WedgeScore(x * x);
+    const int64_t* ea = has_a ? e + size_t(closed ? j : j - 1) * 3 : e;
+    const int64_t* eb = e + size_t(lo + count) * 3;
+    int64_t E[3];
+    for (int a = 0; a < 3; ++a) E[a] = 2 * w[a] + (has_a ? ea[a] : 0) + (has_b ? eb[a] : 0);
+    if (narrow) {
+      uint64_t sc = 0;
+      for (int a = 0; a < 3; ++a) sc += uint64_t(E[a] * E[a]);
+      s.score[j] = sc;
+    } else {
+      WedgeScore sc = 0;
+      for (int a = 0; a < 3; ++a) {
+        WedgeScoreSigned x = E[a];
+        sc += WedgeScore(x * x);
+      }
+      s.score[j] = sc;
     }
-    s.score[j] = sc;
-    if (count && j + 1 < n)  // slide: drop rank lo, add rank lo + count
-      for (int a = 0; a < 3; ++a) w[a] += e[((lo + count) % k) * 3 + a] - e[lo * 3 + a];
+    if (count && j + 1 < n)  // slide: drop position lo, add lo + count
+      for (int a = 0; a < 3; ++a) w[a] += eb[a] - e[size_t(lo) * 3 + a];
   }
   return n;
 }
