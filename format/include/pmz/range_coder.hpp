@@ -1,4 +1,4 @@
-// Adaptive binary range coder (LZMA's: 11-bit probabilities, adaptation shift 5) and the
+// Adaptive binary range coder (LZMA's, 11-bit probabilities, but adaptation shift 4) and the
 // binarization of unsigned integers used by SPLT streams (spec/format.md, "Range coding").
 // Header-only so the per-bit work inlines into the stream loops.
 #pragma once
@@ -8,7 +8,7 @@
 
 namespace pmz {
 
-inline constexpr uint32_t kProbBits = 11, kProbInit = 1u << (kProbBits - 1), kMoveBits = 5;
+inline constexpr uint32_t kProbBits = 11, kProbInit = 1u << (kProbBits - 1), kMoveBits = 4;
 inline constexpr uint32_t kTop = 1u << 24;
 
 inline uint32_t bit_length(uint32_t x) { return x ? 32u - uint32_t(__builtin_clz(x)) : 0u; }
