@@ -80,6 +80,7 @@ struct Decoder::Impl {
   // Chunks whose wedge and residual symbols are not all decoded yet, oldest first; the front
   // one starts at split lazy_first. Splits below `decoded` have their symbols decoded.
   std::deque<SplitChunkReader> lazy;
+  std::unique_ptr<SplitModels> models;  // the file's context models (spec: carried across chunks)
   uint64_t lazy_first = 0, decoded = 0;
   WedgeScratch wedge_scratch;
   std::vector<uint8_t> sides;     // per applied split: kHasLeft | kHasRight
@@ -285,7 +286,8 @@ Status Decoder::Impl::split_chunk(const uint8_t* p, size_t n) {
   std::string err;
   SplitChunkReader r;
   new_vs.clear();
-  if (!r.open(p, n, info.base_vertices + splits.size(), info.total_splits - splits.size(), new_vs, err))
+  if (!models) models = std::make_unique<SplitModels>();
+  if (!r.open(p, n, info.base_vertices + splits.size(), info.total_splits - splits.size(), *models, new_vs, err))
     return fail(Status::corrupt, err);
   for (uint32_t v : new_vs) splits.push_back({v, kNoRank, kNoRank});
   lazy.push_back(std::move(r));

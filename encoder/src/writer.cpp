@@ -229,12 +229,14 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
     std::vector<uint32_t> chunk_groups;
     std::vector<uint8_t> payload;
     WedgeScratch scratch;
+    auto models = std::make_unique<SplitModels>();
     uint32_t chunk_limit = kFirstChunkSplits;
     auto flush = [&]() {
       if (chunk.empty()) return;
       payload.clear();
       uint64_t sizes[kSplitStreamCount];
-      encode_split_chunk(chunk_groups, chunk.data(), chunk.size(), pm.vertex_count() - chunk.size(), payload, sizes);
+      encode_split_chunk(chunk_groups, chunk.data(), chunk.size(), pm.vertex_count() - chunk.size(), *models, payload,
+                         sizes);
       for (int s = 0; s < kSplitStreamCount; ++s)
         (s <= kStreamWedgeRank ? st.connectivity_bits : st.geometry_bits) += sizes[s] * 8;
       size_t before = bytes.size();

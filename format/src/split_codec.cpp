@@ -23,8 +23,9 @@ inline uint32_t gap_context(uint64_t limit, uint64_t pos, uint64_t left) {
 }  // namespace
 
 void encode_split_chunk(const std::vector<uint32_t>& group_sizes, const SplitSymbols* splits, size_t count,
-                        uint64_t vertices_before, std::vector<uint8_t>& payload, uint64_t* stream_bytes) {
-  auto m = std::make_unique<SplitModels>();
+                        uint64_t vertices_before, SplitModels& models, std::vector<uint8_t>& payload,
+                        uint64_t* stream_bytes) {
+  SplitModels* m = &models;
   std::vector<uint8_t> bytes[kSplitStreamCount];
   {
     RangeEncoder groups(bytes[kStreamGroups]), gaps(bytes[kStreamGaps]), wc(bytes[kStreamWedgeCount]),
@@ -69,7 +70,7 @@ bool split_chunk_stream_sizes(const uint8_t* p, size_t size, uint64_t& count, ui
 }
 
 bool SplitChunkReader::open(const uint8_t* p, size_t size, uint64_t vertices_before, uint64_t max_splits,
-                            std::vector<uint32_t>& vs, std::string& error) {
+                            SplitModels& models, std::vector<uint32_t>& vs, std::string& error) {
   ByteReader r(p, size);
   const uint64_t count = r.varint(), group_count = r.varint();
   if (!r.ok || count == 0 || count > max_splits || group_count == 0 || group_count > count)
@@ -83,8 +84,8 @@ bool SplitChunkReader::open(const uint8_t* p, size_t size, uint64_t vertices_bef
   if (!r.ok) return error = "SPLT streams overrun the chunk", false;
   // A coded split costs well over a bit in total; bound the allocation by the input.
   if (count > uint64_t(size) * 64) return error = "SPLT split count beyond its bytes", false;
-  models_ = std::make_unique<SplitModels>();
-  SplitModels& m = *models_;
+  models_ = &models;
+  SplitModels& m = models;
   RangeDecoder groups(p + offset[kStreamGroups], len[kStreamGroups]), gaps(p + offset[kStreamGaps], len[kStreamGaps]);
   const size_t first = vs.size();
   vs.resize(first + count);

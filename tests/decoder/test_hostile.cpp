@@ -133,6 +133,7 @@ struct Replay {
   pmz::ProgressiveMesh pm;
   std::vector<int32_t> coords;
   pmz::WedgeScratch scratch;
+  std::unique_ptr<pmz::SplitModels> models = std::make_unique<pmz::SplitModels>();  // carried across chunks
   uint64_t work = 0, vertices = 6;  // vertices: as the decoder counts them (all splits)
   Replay() {
     std::string error;
@@ -163,7 +164,7 @@ Bytes split_payload(Replay& rp, const std::vector<uint32_t>& at, int32_t r = 0) 
     codes.push_back(c);
   }
   Bytes p;
-  pmz::encode_split_chunk(std::vector<uint32_t>(at.size(), 1), codes.data(), codes.size(), rp.vertices, p);
+  pmz::encode_split_chunk(std::vector<uint32_t>(at.size(), 1), codes.data(), codes.size(), rp.vertices, *rp.models, p);
   rp.vertices += at.size();
   return p;
 }
@@ -452,7 +453,7 @@ TEST(Hostile, WedgeSymbolsAtUint32MaxAreInvalid) {
     head(f, header(6, 8, 2, 12));
     pmz::append_chunk(f, pmz::kChunkBase, octa_base_payload());
     Bytes p;
-    pmz::encode_split_chunk({1, 1}, codes.data(), codes.size(), 6, p);
+    pmz::encode_split_chunk({1, 1}, codes.data(), codes.size(), 6, *rp.models, p);
     pmz::append_chunk(f, pmz::kChunkSplits, p);
     pmz::append_chunk(f, pmz::kChunkEnd, {});
     pmz::Decoder d;

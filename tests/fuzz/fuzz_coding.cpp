@@ -235,7 +235,8 @@ void fuzz_split_chunk(const uint8_t* data, size_t size) {
   std::vector<uint32_t> vs(3, 0);
   std::string error;
   pmz::SplitChunkReader reader;
-  if (!reader.open(data, size, vertices_before, max_splits, vs, error)) {
+  auto models = std::make_unique<pmz::SplitModels>();
+  if (!reader.open(data, size, vertices_before, max_splits, *models, vs, error)) {
     PMZ_FUZZ_CHECK(vs.size() == 3 && !error.empty());
     return;
   }
@@ -264,10 +265,12 @@ void fuzz_split_chunk(const uint8_t* data, size_t size) {
   if (got.empty()) return;
   // Re-encode the decoded prefix (one split per group satisfies the group rule) and decode.
   std::vector<uint8_t> payload;
-  pmz::encode_split_chunk(std::vector<uint32_t>(got.size(), 1), got.data(), got.size(), vertices_before, payload);
+  auto enc_models = std::make_unique<pmz::SplitModels>(), dec_models = std::make_unique<pmz::SplitModels>();
+  pmz::encode_split_chunk(std::vector<uint32_t>(got.size(), 1), got.data(), got.size(), vertices_before, *enc_models,
+                          payload);
   std::vector<uint32_t> again;
   pmz::SplitChunkReader r2;
-  PMZ_FUZZ_CHECK(r2.open(payload.data(), payload.size(), vertices_before, got.size(), again, error));
+  PMZ_FUZZ_CHECK(r2.open(payload.data(), payload.size(), vertices_before, got.size(), *dec_models, again, error));
   PMZ_FUZZ_CHECK(again.size() == got.size());
   for (size_t i = 0; i < got.size(); ++i) {
     pmz::SplitSymbols s{again[i], 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}};

@@ -31,7 +31,9 @@ struct SplitSymbols {
   int32_t residual[3];           // position residual per axis
 };
 
-// Context models, reset for every chunk so each chunk decodes on its own.
+// Context models, created once per file and carried from SPLT chunk to chunk (a chunk needs
+// the mesh of the chunks before it anyway). Groups and gaps models advance as chunks arrive,
+// the others as splits are first applied: both in stream order.
 struct SplitModels {
   UIntModel groups;
   UIntModel gaps[kGapContexts];
@@ -41,19 +43,21 @@ struct SplitModels {
 };
 
 // Appends the SPLT payload for the given groups (sizes sum to count); vertices_before: the
-// vertex count before the chunk. stream_bytes[k] receives the coded size of stream k (optional).
+// vertex count before the chunk; models: the file's models (updated). stream_bytes[k] receives
+// the coded size of stream k (optional).
 void encode_split_chunk(const std::vector<uint32_t>& group_sizes, const SplitSymbols* splits, size_t count,
-                        uint64_t vertices_before, std::vector<uint8_t>& payload,
+                        uint64_t vertices_before, SplitModels& models, std::vector<uint8_t>& payload,
                         uint64_t* stream_bytes = nullptr);
 
 // Decoder side of one SPLT chunk. open() copies the payload, decodes groups and gaps (every v
 // must be below the vertex count at the start of its group: vertices_before + splits of
 // earlier groups; at most max_splits) and validates them before appending anything to vs.
+// models (the file's, see SplitModels) must outlive the reader.
 // Then wedge() and residuals() return the symbols of the splits in order, with the contexts
 // the caller computes from its mesh; false when a stream is malformed or exhausted.
 class SplitChunkReader {
  public:
-  bool open(const uint8_t* p, size_t size, uint64_t vertices_before, uint64_t max_splits,
+  bool open(const uint8_t* p, size_t size, uint64_t vertices_before, uint64_t max_splits, SplitModels& models,
             std::vector<uint32_t>& vs, std::string& error);
   bool wedge(uint32_t k, bool closed, uint32_t& count, uint32_t& rank);
   bool residuals(const uint32_t context[3], int32_t residual[3]);
@@ -61,7 +65,7 @@ class SplitChunkReader {
 
  private:
   std::vector<uint8_t> bytes_;
-  std::unique_ptr<SplitModels> models_;
+  SplitModels* models_ = nullptr;
   std::unique_ptr<RangeDecoder> count_dec_, rank_dec_, res_dec_[3];
   uint64_t count_ = 0;
 };
