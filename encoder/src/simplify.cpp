@@ -420,7 +420,10 @@ void Engine::update_after(uint32_t u, uint32_t v) {
     for (uint32_t w : ring1)
       for_each_neighbour(m, w, [&](uint32_t x, uint32_t) {
         stale[x] |= kTorsionStale | kKeyStale;
-        __builtin_prefetch(&feat.vertex[x]);  // the 1-ring's torsion reads B of its neighbours
+        // The 1-ring's keys read B (torsion), p and Q(p) of its neighbours.
+        __builtin_prefetch(&feat.vertex[x]);
+        __builtin_prefetch(m.p(x));
+        __builtin_prefetch(&self_error[x]);
       });
   }
   const auto t1 = stats_enabled ? Clock::now() : Clock::time_point{};
