@@ -415,8 +415,8 @@ void Engine::update_after(uint32_t u, uint32_t v) {
     }
     // Flags the 2-ring without a visited set (setting a flag twice is harmless); the 1-ring,
     // flagged too, gets its key recomputed just below. (Flagging only next to a changed B or Q
-    // is not the same: a stale key is re-read without legality, so a vertex keyed by its best
-    // legal collapse gets a different key back.)
+    // is not exact: a stale key is re-read without legality, so a vertex keyed by its best legal
+    // collapse goes back to its cheapest key, and the heap operations would differ.)
     for (uint32_t w : ring1)
       for_each_neighbour(m, w, [&](uint32_t x, uint32_t) {
         stale[x] |= kTorsionStale | kKeyStale;
