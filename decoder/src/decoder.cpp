@@ -126,11 +126,17 @@ struct Decoder::Impl {
     const bool predicting = coords.size() <= (size_t(mesh.vertex_count()) + FanPrefetcher::kWalkers) * 3;
     fans.step(mesh, coords.data(), predicting ? coords.size() : 0, near < available ? splits[near].v : kNoCorner);
   }
-  void note_rewritten(std::span<const uint32_t> faces) {
+  // Never throws: called after the mesh changed, it must not leave a split half counted. Out of
+  // memory for the list, it reports everything as changed.
+  void note_rewritten(std::span<const uint32_t> faces) noexcept {
     if (changes.all) return;
-    for (uint32_t f : faces)
-      if (f < changes.face_begin) changes.modified_faces.push_back(f);
-    if (changes.modified_faces.size() > mesh.face_count() + 64u) {
+    try {
+      for (uint32_t f : faces)
+        if (f < changes.face_begin) changes.modified_faces.push_back(f);
+    } catch (const std::bad_alloc&) {
+      changes.all = true;
+    }
+    if (changes.all || changes.modified_faces.size() > mesh.face_count() + 64u) {
       changes.all = true;
       changes.modified_faces.clear();
     }
@@ -320,6 +326,11 @@ bool Decoder::Impl::apply() {
     ring_work += k;
     if (ring_work > kRingWorkPerSplit * (applied + 1) + kRingWorkSlack)
       return refuse(Status::limit_exceeded, "vertex valences beyond what a mesh needs");
+    // Decoded symbols cannot be put back: allocate what wedge_ranks needs before decoding them
+    // (an allocation failure then leaves this split to retry, not a symbol lost).
+    wedge_scratch.e.reserve(size_t(k) * 6);
+    wedge_scratch.score.reserve(size_t(k) + 1);
+    wedge_scratch.order.reserve(size_t(k) + 1);
     uint32_t count, rank;
     if (!lazy.front().wedge(k, mesh.ring_closed(), count, rank))
       return refuse(Status::corrupt, "split " + std::to_string(applied) + ": wedge streams malformed");
@@ -401,11 +412,12 @@ uint64_t Decoder::bytes_consumed() const { return impl_->consumed; }
 uint64_t Decoder::Impl::refine(uint64_t max_splits, uint64_t face_target) {
   uint64_t n = 0;
   try {
-    // Room for the splits this call will apply (bounded by decoded input, not the header).
-    // With a face target, at least half the missing faces (a split adds at most two); more
-    // than reserved just grows the buffers.
+    // Room for every split this call may apply (bounded by decoded input, not the header):
+    // apply() must not grow a buffer once it changed the mesh (an allocation failure there would
+    // leave a split half applied). With a face target, at most the missing faces (a split adds
+    // at least one).
     uint64_t want = std::min(max_splits, available - applied);
-    if (face_target > mesh.face_count()) want = std::min(want, (face_target - mesh.face_count() + 1) / 2);
+    want = std::min(want, face_target - std::min<uint64_t>(face_target, mesh.face_count()));
     uint64_t target = applied + want;
     if (target > applied) {
       // Rounded up to a power of two: reserving exactly `target` reallocates (and copies

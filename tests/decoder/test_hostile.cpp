@@ -19,8 +19,16 @@
 // ---- peak heap use of this test binary, through a replaced global operator new ----
 namespace {
 size_t g_live = 0, g_peak = 0;
+// Allocations still allowed before one fails with bad_alloc; the ones after it succeed again
+// (negative: no injected failure; -2 once the failure happened).
+long g_allocations_before_failure = -1;
 constexpr size_t kHeader = 16;  // keeps the returned pointer 16-byte aligned
 void* counted_alloc(size_t n) {
+  if (g_allocations_before_failure == 0) {
+    g_allocations_before_failure = -2;
+    throw std::bad_alloc();
+  }
+  if (g_allocations_before_failure > 0) --g_allocations_before_failure;
   auto* p = static_cast<unsigned char*>(std::malloc(n + kHeader));
   if (!p) throw std::bad_alloc();
   std::memcpy(p, &n, sizeof n);
@@ -466,6 +474,43 @@ TEST(Hostile, WedgeSymbolsAtUint32MaxAreInvalid) {
     EXPECT_EQ(d.refine(), 1u);  // the split before the bad one stays usable
     EXPECT_EQ(d.face_count(), 10u);
   }
+}
+
+// An allocation failing anywhere while refining (out_of_memory) leaves the mesh valid at the
+// level reached, with every count consistent; once memory is back, the decoder still reaches
+// the same full mesh as without the failure (no split applied twice, no symbol lost). With
+// clear_changes() first, the change list grows while refining too.
+TEST(Hostile, AllocationFailureWhileRefiningKeepsALevel) {
+  const Bytes f = small_file(24, 8);
+  pmz::Decoder ref;
+  ASSERT_EQ(ref.feed(f.data(), f.size()), pmz::Status::ok) << ref.error_message();
+  ASSERT_EQ(ref.refine(), 24u);
+  const std::vector<uint32_t> faces(ref.indices(), ref.indices() + size_t(ref.face_count()) * 3);
+  const std::vector<float> positions(ref.positions(), ref.positions() + size_t(ref.vertex_count()) * 3);
+  uint32_t failures = 0;
+  for (long n = 0; n < 400; ++n) {
+    pmz::Decoder d;
+    ASSERT_EQ(d.feed(f.data(), f.size()), pmz::Status::ok);
+    d.clear_changes();
+    g_allocations_before_failure = n;
+    d.set_face_target(8 + 2 * 24);
+    const bool failed = g_allocations_before_failure == -2;
+    g_allocations_before_failure = -1;
+    if (!failed) break;
+    ++failures;
+    // Either reported, or absorbed (the change list then says everything changed).
+    if (d.status() != pmz::Status::ok) EXPECT_EQ(d.status(), pmz::Status::out_of_memory) << n;
+    else EXPECT_TRUE(d.changes().all) << n;
+    expect_valid(d);
+    ASSERT_EQ(size_t(d.face_count()), 8 + 2 * d.splits_applied()) << n;
+    // Memory is back: the same full mesh as without the failure.
+    d.coarsen();
+    d.refine();
+    ASSERT_EQ(d.splits_applied(), 24u) << n;
+    ASSERT_EQ(std::vector<uint32_t>(d.indices(), d.indices() + size_t(d.face_count()) * 3), faces) << n;
+    ASSERT_EQ(std::vector<float>(d.positions(), d.positions() + size_t(d.vertex_count()) * 3), positions) << n;
+  }
+  EXPECT_GT(failures, 3u);
 }
 
 // ---- every prefix, every byte ----
