@@ -366,10 +366,12 @@ bool Decoder::Impl::apply() {
 }
 
 void Decoder::Impl::undo() {
+  // undo_split may throw bad_alloc only from its fan walk, before it changes anything: count
+  // the split as undone only after it.
+  const uint8_t side = sides.back();
+  mesh.undo_split(splits[applied - 1].v, side & kHasLeft, side & kHasRight);
   --applied;
-  uint8_t side = sides.back();
   sides.pop_back();
-  mesh.undo_split(splits[applied].v, side & kHasLeft, side & kHasRight);
   changes.face_begin = std::min(changes.face_begin, mesh.face_count());
   changes.vertex_begin = std::min(changes.vertex_begin, mesh.vertex_count());
   note_rewritten(mesh.sector_faces());
@@ -453,14 +455,18 @@ uint64_t Decoder::Impl::refine(uint64_t max_splits, uint64_t face_target) {
 uint64_t Decoder::Impl::coarsen(uint64_t max_splits, uint64_t face_floor) {
   uint64_t n = 0;
   fans.reset();
-  for (; n < max_splits && applied > 0; ++n) {
-    const uint8_t side = sides.back();
-    if (mesh.face_count() - (side & kHasLeft ? 1u : 0u) - (side & kHasRight ? 1u : 0u) < face_floor) break;
-    // Splits are undone last first: the one kWalkers further on created vertex u - kWalkers.
-    constexpr uint32_t kAhead = FanPrefetcher::kWalkers;
-    const uint32_t u = mesh.vertex_count() - 1;
-    fans.step(mesh, nullptr, 0, applied > kAhead ? u - kAhead : kNoCorner);
-    undo();
+  try {
+    for (; n < max_splits && applied > 0; ++n) {
+      const uint8_t side = sides.back();
+      if (mesh.face_count() - (side & kHasLeft ? 1u : 0u) - (side & kHasRight ? 1u : 0u) < face_floor) break;
+      // Splits are undone last first: the one kWalkers further on created vertex u - kWalkers.
+      constexpr uint32_t kAhead = FanPrefetcher::kWalkers;
+      const uint32_t u = mesh.vertex_count() - 1;
+      fans.step(mesh, nullptr, 0, applied > kAhead ? u - kAhead : kNoCorner);
+      undo();
+    }
+  } catch (const std::bad_alloc&) {  // the fan walk's scratch (u's fan can exceed any walked before)
+    fail(Status::out_of_memory, "allocation failed while coarsening");
   }
   return n;
 }

@@ -4,6 +4,7 @@
 // time linear in the input.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <ctime>
 #include <cstdio>
 #include <cstdlib>
@@ -511,6 +512,74 @@ TEST(Hostile, AllocationFailureWhileRefiningKeepsALevel) {
     ASSERT_EQ(std::vector<float>(d.positions(), d.positions() + size_t(d.vertex_count()) * 3), positions) << n;
   }
   EXPECT_GT(failures, 3u);
+}
+
+// Coarsening walks u's fan, which can be larger than any fan walked before: a bipyramid apex of
+// valence 62 split with 60 interior ring vertices gives u a fan of 63 faces, so undoing that
+// split grows the walk's scratch. That allocation failing must not escape coarsen() (the C
+// API lets no exception cross it) nor leave the split counted as undone.
+TEST(Hostile, AllocationFailureWhileCoarseningKeepsTheLevel) {
+  constexpr uint32_t n = 62, nv = n + 2, nf = 2 * n;
+  std::vector<uint32_t> faces;
+  std::vector<int32_t> coords = {8192, 8192, 16383, 8192, 8192, 0};
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t a = 2 + i, b = 2 + (i + 1) % n;
+    faces.insert(faces.end(), {0, a, b, 1, b, a});
+    const double t = 2 * 3.14159265358979 * i / n;
+    coords.insert(coords.end(), {int32_t(8192 + 8000 * std::cos(t)), int32_t(8192 + 8000 * std::sin(t)), 8192});
+  }
+  Bytes pos, idx, base;
+  for (size_t i = 0; i < coords.size(); ++i)
+    varint(pos, pmz::zigzag_encode(int32_t(uint32_t(coords[i]) - uint32_t(i < 3 ? 0 : coords[i - 3]))));
+  for (size_t i = 0; i < faces.size(); ++i)
+    varint(idx, pmz::zigzag_encode(int32_t(faces[i] - (i ? faces[i - 1] : 0))));
+  varint(base, nv);
+  varint(base, nf);
+  raw_stream(base, pos);
+  raw_stream(base, idx);
+  // The split at the apex, with the contexts the decoder computes.
+  pmz::ProgressiveMesh pm;
+  std::string error;
+  ASSERT_TRUE(pm.build(nv, faces.data(), nf, error)) << error;
+  ASSERT_TRUE(pm.gather_ring(0));
+  ASSERT_TRUE(pm.ring_closed());
+  ASSERT_EQ(pm.ring().size(), n);
+  pmz::SplitSymbols code{0, pmz::wedge_context(n, true), n - 2, 0, 1, {0, 0, 0}, {0, 0, 0}};
+  pmz::WedgeScratch scratch;
+  uint32_t ra, rb;
+  ASSERT_TRUE(pmz::wedge_ranks(coords.data(), 0, pm, n - 2, 0, ra, rb, scratch));
+  ASSERT_TRUE(pm.split_gathered(0, ra, rb));
+  int32_t pred[3];
+  pmz::predict_position(coords.data(), pm.u_ring(), pred);
+  pmz::residual_contexts(coords.data(), pm.u_ring(), pred, code.residual_context);
+  Bytes splt;
+  auto models = std::make_unique<pmz::SplitModels>();
+  pmz::encode_split_chunk({1}, &code, 1, nv, *models, splt);
+  Bytes f = signature();
+  head(f, header(nv, nf, 1, nf + 2));
+  pmz::append_chunk(f, pmz::kChunkBase, base);
+  pmz::append_chunk(f, pmz::kChunkSplits, splt);
+  pmz::append_chunk(f, pmz::kChunkEnd, {});
+
+  pmz::Decoder d;
+  ASSERT_EQ(d.feed(f.data(), f.size()), pmz::Status::ok) << d.error_message();
+  ASSERT_EQ(d.refine(), 1u) << d.error_message();
+  ASSERT_EQ(d.face_count(), nf + 2);
+  g_allocations_before_failure = 0;
+  uint64_t undone = 0;
+  EXPECT_NO_THROW(undone = d.coarsen());
+  const bool failed = g_allocations_before_failure == -2;
+  g_allocations_before_failure = -1;
+  ASSERT_TRUE(failed);  // the walk did allocate
+  EXPECT_EQ(undone, 0u);
+  EXPECT_EQ(d.status(), pmz::Status::out_of_memory);
+  expect_valid(d);
+  EXPECT_EQ(d.face_count(), nf + 2);
+  EXPECT_EQ(d.coarsen(), 1u);  // memory is back
+  expect_valid(d);
+  EXPECT_EQ(d.face_count(), nf);
+  EXPECT_EQ(d.refine(), 1u);
+  EXPECT_EQ(d.face_count(), nf + 2);
 }
 
 // ---- every prefix, every byte ----
