@@ -164,8 +164,18 @@ int main(int argc, char** argv) {
   else if (orr->count()) d.set_face_target(uint64_t(ratio * double(d.info().full_faces) + 0.5));
   else if (ov->count()) d.set_split_target(vertices > d.info().base_vertices ? vertices - d.info().base_vertices : 0);
   else d.refine();
+  // Wedge and residual symbols are decoded as splits are first applied: damage there shows
+  // only now, and is treated like damage found while reading.
+  const bool refine_failed = s == pmz::Status::ok && d.status() != pmz::Status::ok;
   if (d.status() != pmz::Status::ok && d.status() != s)
     std::fprintf(stderr, "pmz-decode: %s\n", d.error_message().c_str());
+  if (refine_failed) {
+    s = d.status();
+    if (!salvage) {
+      std::fprintf(stderr, "pmz-decode: nothing written (--salvage writes the last good level)\n");
+      return 1;
+    }
+  }
 
   std::string tmp = output + ".tmp";
   FILE* f = std::fopen(tmp.c_str(), "wb");
@@ -187,5 +197,5 @@ int main(int argc, char** argv) {
   std::fprintf(stderr, "pmz-decode: %u faces, %u vertices (%llu of %llu splits)\n", d.face_count(),
                d.vertex_count(), (unsigned long long)d.splits_applied(),
                (unsigned long long)d.info().total_splits);
-  return s == pmz::Status::ok || bytes ? 0 : 2;
+  return s == pmz::Status::ok || (bytes && !refine_failed) ? 0 : 2;
 }

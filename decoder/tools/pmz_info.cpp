@@ -45,6 +45,11 @@ int main(int argc, char** argv) {
   d.refine();
   double refine_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const double refine_cpu = double(std::clock() - c0) / CLOCKS_PER_SEC;
+  // Wedge and residual symbols are decoded as splits are first applied: damage there shows now.
+  if (d.status() != pmz::Status::ok) {
+    std::fprintf(stderr, "pmz-info: %s\n", d.error_message().c_str());
+    return 1;
+  }
   // Again with memory already touched and positions computed: the per-frame refinement cost.
   d.coarsen();
   t0 = std::chrono::steady_clock::now();

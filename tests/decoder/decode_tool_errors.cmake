@@ -1,4 +1,4 @@
-# pmz-decode on bad input: one-line error, non-zero exit, no output file; --salvage writes the
+# pmz-decode (and pmz-info) on bad input: one-line error, non-zero exit, no output file; --salvage writes the
 # last good level of a truncated stream and still exits non-zero.
 set(out ${WORK}/out.obj)
 file(REMOVE_RECURSE ${WORK})
@@ -30,4 +30,53 @@ file(REMOVE ${out})
 execute_process(COMMAND ${DECODE} ${SAMPLE} -o ${out} RESULT_VARIABLE rc)
 if(NOT rc EQUAL 0 OR NOT EXISTS ${out})
   message(FATAL_ERROR "whole sample: expected success, got rc=${rc}")
+endif()
+
+# A damaged wedge stream with a valid CRC: framing, groups and gaps are fine, so feed() and
+# finish() succeed and the damage shows only when the splits are first applied (the first
+# byte of the first SPLT chunk's wedge_count stream must be 0). Still an error: nothing
+# written, non-zero exit; --salvage writes the last good level and exits 2.
+set(script [=[
+import sys, zlib, struct
+b = bytearray(open(sys.argv[1], 'rb').read())
+def varint(p):
+    v = s = 0
+    while True:
+        v |= (b[p] & 0x7F) << s; s += 7; p += 1
+        if b[p - 1] < 0x80: return v, p
+at = 8
+while b[at:at + 4] != b'SPLT':
+    at += 12 + struct.unpack('<I', b[at + 4:at + 8])[0]
+size = struct.unpack('<I', b[at + 4:at + 8])[0]
+p = at + 12
+_, p = varint(p)
+_, p = varint(p)
+for k in range(2):
+    n, p = varint(p)
+    p += n
+_, p = varint(p)
+b[p] = 1
+crc = zlib.crc32(bytes(b[at:at + 8]) + bytes(b[at + 12:at + 12 + size]))
+b[at + 8:at + 12] = struct.pack('<I', crc)
+open(sys.argv[2], 'wb').write(b)
+]=])
+file(REMOVE ${out})
+execute_process(COMMAND ${PYTHON} -c "${script}" ${SAMPLE} ${WORK}/wedge.pmz RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "could not make the damaged-wedge stream (rc=${rc})")
+endif()
+execute_process(COMMAND ${DECODE} ${WORK}/wedge.pmz -o ${out} RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(rc EQUAL 0 OR EXISTS ${out})
+  message(FATAL_ERROR "damaged wedge stream: expected failure and no output, got rc=${rc}: ${err}")
+endif()
+if(NOT err MATCHES "wedge")
+  message(FATAL_ERROR "damaged wedge stream: message does not say so: ${err}")
+endif()
+execute_process(COMMAND ${DECODE} ${WORK}/wedge.pmz -o ${out} --faces 100000 --salvage RESULT_VARIABLE rc)
+if(NOT rc EQUAL 2 OR NOT EXISTS ${out})
+  message(FATAL_ERROR "damaged wedge stream, --salvage: expected exit 2 and an output file, got rc=${rc}")
+endif()
+execute_process(COMMAND ${INFO} ${WORK}/wedge.pmz RESULT_VARIABLE rc OUTPUT_QUIET ERROR_VARIABLE err)
+if(rc EQUAL 0 OR NOT err MATCHES "wedge")
+  message(FATAL_ERROR "pmz-info on a damaged wedge stream: expected failure naming it, got rc=${rc}: ${err}")
 endif()
