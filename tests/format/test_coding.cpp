@@ -1,5 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <climits>
+#include <cstdlib>
 #include <cstring>
 #include <random>
 
@@ -99,4 +102,92 @@ TEST(WedgeSymbols, EveryWedgeRoundTrips) {
         EXPECT_EQ(pairs, closed ? k * (k - 1) : (k + 1) * k / 2 + k);
       }
     }
+}
+
+// The wedge order against spec/format.md section 4 written out directly (a second reading of
+// the formula, not the codec's sliding window): E = 2 * sum of e over the interior + e_a + e_b,
+// score = |E|^2 in 128 bits, highest first, ties by smaller j. Coordinates up to the int32
+// extremes (lossless mode codes float bit patterns) so both of the codec's paths are covered.
+TEST(WedgeSymbols, OrderIsTheSpecFormula) {
+  std::mt19937 rng(5);
+  WedgeScratch scratch;
+  for (uint32_t k = 2; k <= 10; ++k)
+    for (int closed = 0; closed < 2; ++closed) {
+      if (closed && k < 3) continue;
+      std::vector<uint32_t> faces;
+      const uint32_t m = closed ? k : k - 1;
+      for (uint32_t i = 0; i < m; ++i) faces.insert(faces.end(), {0, 1 + i, 1 + (i + 1) % k});
+      ProgressiveMesh pm;
+      std::string error;
+      ASSERT_TRUE(pm.build(k + 1, faces.data(), m, error)) << error;
+      ASSERT_TRUE(pm.gather_ring(0));
+      for (int geometry = 0; geometry < 4; ++geometry) {
+        std::vector<int32_t> coords(size_t(k + 1) * 3);
+        for (auto& c : coords)
+          c = geometry == 0   ? int32_t(rng() % 5)  // many ties
+              : geometry == 1 ? int32_t(rng() % 16384)
+              : geometry == 2 ? int32_t(rng())
+                              : (rng() & 1 ? INT32_MAX : INT32_MIN);
+        // e by canonical rank.
+        std::vector<WedgeScoreSigned> e(size_t(k) * 3);
+        for (uint32_t r = 0; r < k; ++r) {
+          const uint32_t w = pm.ring()[(r + pm.ring_start()) % k];
+          for (int a = 0; a < 3; ++a) e[r * 3 + a] = WedgeScoreSigned(coords[w * 3 + a]) - coords[a];
+        }
+        const uint32_t max_count = closed ? k - 2 : k - 1;
+        for (uint32_t count = 0; count <= max_count; ++count) {
+          const uint32_t n = closed ? k : k - count + 1;
+          std::vector<WedgeScore> score(n);
+          for (uint32_t j = 0; j < n; ++j) {
+            WedgeScoreSigned E[3] = {0, 0, 0};
+            for (uint32_t i = 0; i < count; ++i) {
+              const uint32_t r = closed ? (j + 1 + i) % k : j + i;
+              for (int a = 0; a < 3; ++a) E[a] += 2 * e[r * 3 + a];
+            }
+            const bool has_a = closed || j > 0, has_b = closed || j + count < k;
+            const uint32_t ra = closed ? j : j - 1, rb = closed ? (j + count + 1) % k : j + count;
+            for (int a = 0; a < 3; ++a) E[a] += (has_a ? e[ra * 3 + a] : 0) + (has_b ? e[rb * 3 + a] : 0);
+            for (int a = 0; a < 3; ++a) score[j] += (WedgeScore)(E[a] * E[a]);
+          }
+          std::vector<uint32_t> order(n);
+          for (uint32_t j = 0; j < n; ++j) order[j] = j;
+          std::stable_sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) { return score[x] > score[y]; });
+          for (uint32_t rank = 0; rank < n; ++rank) {
+            const uint32_t j = order[rank];
+            uint32_t ga, gb;
+            ASSERT_TRUE(wedge_ranks(coords.data(), 0, pm, count, rank, ga, gb, scratch));
+            const uint32_t ra = closed ? j : (j == 0 ? kNoRank : j - 1);
+            const uint32_t rb = closed ? (j + count + 1) % k : (j + count == k ? kNoRank : j + count);
+            EXPECT_EQ(ga, ra) << "k " << k << " closed " << closed << " count " << count << " rank " << rank;
+            EXPECT_EQ(gb, rb) << "k " << k << " closed " << closed << " count " << count << " rank " << rank;
+          }
+        }
+      }
+    }
+}
+
+// Residual contexts (spec section 5): min(bitlen(floor(D_a / |R|)), 20), D_a = sum over R of
+// |c[w][a] - p[a]| in 64 bits.
+TEST(ResidualContexts, AreTheSpecFormula) {
+  std::mt19937 rng(9);
+  for (int trial = 0; trial < 2000; ++trial) {
+    const uint32_t n = 2 + rng() % 9;
+    std::vector<int32_t> coords(size_t(n) * 3);
+    const int shift = int(rng() % 32);
+    for (auto& c : coords) c = trial % 7 == 0 ? (rng() & 1 ? INT32_MAX : INT32_MIN) : int32_t(rng()) >> shift;
+    std::vector<uint32_t> ring(n);
+    for (uint32_t i = 0; i < n; ++i) ring[i] = i;
+    int32_t pred[3];
+    predict_position(coords.data(), ring, pred);
+    uint32_t ctx[3];
+    residual_contexts(coords.data(), ring, pred, ctx);
+    for (int a = 0; a < 3; ++a) {
+      uint64_t d = 0;
+      for (uint32_t w : ring) d += uint64_t(std::llabs(int64_t(coords[w * 3 + a]) - pred[a]));
+      const uint64_t mean = d / n;
+      uint32_t bits = 0;
+      while (bits < 64 && (mean >> bits) != 0) ++bits;
+      EXPECT_EQ(ctx[a], std::min(bits, 20u)) << trial;
+    }
+  }
 }
