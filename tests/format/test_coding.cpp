@@ -58,6 +58,15 @@ TEST(ByteReader, FailsPastEnd) {
   EXPECT_FALSE(r.ok);
 }
 
+// A fan around vertex 0 with ring 1..k counter-clockwise, closed or open.
+bool build_fan(ProgressiveMesh& pm, uint32_t k, bool closed) {
+  std::vector<uint32_t> faces;
+  const uint32_t m = closed ? k : k - 1;
+  for (uint32_t i = 0; i < m; ++i) faces.insert(faces.end(), {0, 1 + i, 1 + (i + 1) % k});
+  std::string error;
+  return pm.build(k + 1, faces.data(), m, error);
+}
+
 // Wedge symbols (spec section 4): every valid wedge of a fan maps to (count, rank) and back,
 // on closed and open fans, random and degenerate (all scores tied) geometry, and lossless-range
 // coordinates (the scores need 128 bits there).
@@ -67,13 +76,8 @@ TEST(WedgeSymbols, EveryWedgeRoundTrips) {
   for (uint32_t k = 2; k <= 12; ++k)
     for (int closed = 0; closed < 2; ++closed) {
       if (closed && k < 3) continue;
-      // Centre 0, ring 1..k counter-clockwise.
-      std::vector<uint32_t> faces;
-      const uint32_t m = closed ? k : k - 1;
-      for (uint32_t i = 0; i < m; ++i) faces.insert(faces.end(), {0, 1 + i, 1 + (i + 1) % k});
       ProgressiveMesh pm;
-      std::string error;
-      ASSERT_TRUE(pm.build(k + 1, faces.data(), m, error)) << error;
+      ASSERT_TRUE(build_fan(pm, k, closed));
       for (int geometry = 0; geometry < 3; ++geometry) {
         std::vector<int32_t> coords(size_t(k + 1) * 3, 0);
         for (auto& c : coords)
@@ -114,12 +118,8 @@ TEST(WedgeSymbols, OrderIsTheSpecFormula) {
   for (uint32_t k = 2; k <= 10; ++k)
     for (int closed = 0; closed < 2; ++closed) {
       if (closed && k < 3) continue;
-      std::vector<uint32_t> faces;
-      const uint32_t m = closed ? k : k - 1;
-      for (uint32_t i = 0; i < m; ++i) faces.insert(faces.end(), {0, 1 + i, 1 + (i + 1) % k});
       ProgressiveMesh pm;
-      std::string error;
-      ASSERT_TRUE(pm.build(k + 1, faces.data(), m, error)) << error;
+      ASSERT_TRUE(build_fan(pm, k, closed));
       ASSERT_TRUE(pm.gather_ring(0));
       for (int geometry = 0; geometry < 4; ++geometry) {
         std::vector<int32_t> coords(size_t(k + 1) * 3);
