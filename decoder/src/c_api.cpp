@@ -27,6 +27,7 @@ PMZ_API int pmz_decoder_feed(pmz_decoder* d, const void* data, size_t size) {
   }
 }
 PMZ_API int pmz_decoder_finish(pmz_decoder* d) { return int(d->dec.finish()); }
+PMZ_API int pmz_decoder_status(const pmz_decoder* d) { return int(d->dec.status()); }
 PMZ_API const char* pmz_decoder_error(const pmz_decoder* d) { return d->dec.error_message().c_str(); }
 PMZ_API uint64_t pmz_decoder_refine(pmz_decoder* d, uint64_t n) { return d->dec.refine(n); }
 PMZ_API uint64_t pmz_decoder_coarsen(pmz_decoder* d, uint64_t n) { return d->dec.coarsen(n); }

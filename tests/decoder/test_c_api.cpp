@@ -1,8 +1,11 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <cstring>
 #include <vector>
 
+#include "pmz/coding.hpp"
+#include "pmz/format.hpp"
 #include "pmz/pmz.h"
 
 TEST(CApi, RejectsNonPmzBytes) {
@@ -15,12 +18,19 @@ TEST(CApi, RejectsNonPmzBytes) {
   pmz_decoder_destroy(d);
 }
 
+std::vector<unsigned char> read_sample() {
+  std::vector<unsigned char> bytes;
+  if (FILE* f = std::fopen(PMZ_SOURCE_DIR "/tests/data/sample.pmz", "rb")) {
+    bytes.resize(1 << 16);
+    bytes.resize(std::fread(bytes.data(), 1, bytes.size(), f));
+    std::fclose(f);
+  }
+  return bytes;
+}
+
 TEST(CApi, DecodesSampleFile) {
-  FILE* f = std::fopen(PMZ_SOURCE_DIR "/tests/data/sample.pmz", "rb");
-  ASSERT_NE(f, nullptr);
-  std::vector<unsigned char> bytes(1 << 16);
-  bytes.resize(std::fread(bytes.data(), 1, bytes.size(), f));
-  std::fclose(f);
+  std::vector<unsigned char> bytes = read_sample();
+  ASSERT_FALSE(bytes.empty());
   pmz_decoder* d = pmz_decoder_create(0, 0);
   ASSERT_EQ(pmz_decoder_feed(d, bytes.data(), bytes.size()), PMZ_OK);
   ASSERT_EQ(pmz_decoder_finish(d), PMZ_OK);
@@ -35,5 +45,38 @@ TEST(CApi, DecodesSampleFile) {
   uint64_t applied = pmz_decoder_splits_applied(d);
   EXPECT_EQ(pmz_decoder_coarsen(d, UINT64_MAX), applied);
   EXPECT_EQ(pmz_decoder_splits_applied(d), 0u);
+  pmz_decoder_destroy(d);
+}
+
+// Damage in a wedge stream (CRC repaired) passes feed() and finish(): it shows when the split is
+// first applied, and pmz_decoder_status() reports it.
+TEST(CApi, StatusReportsDamageFoundWhileRefining) {
+  std::vector<unsigned char> b = read_sample();
+  ASSERT_FALSE(b.empty());
+  // First SPLT chunk: make its wedge_count stream's first byte (must be 0) nonzero.
+  size_t at = 8;
+  auto size_at = [&](size_t p) { return uint32_t(b[p + 4] | b[p + 5] << 8 | b[p + 6] << 16 | uint32_t(b[p + 7]) << 24); };
+  while (at + 12 <= b.size() && std::memcmp(&b[at], "SPLT", 4) != 0) at += 12 + size_at(at);
+  ASSERT_LE(at + 12, b.size());
+  const uint32_t size = size_at(at);
+  pmz::ByteReader r(&b[at + 12], size);
+  r.varint();
+  r.varint();
+  for (int k = 0; k < 2; ++k) r.bytes(size_t(r.varint()));
+  r.varint();
+  ASSERT_TRUE(r.ok);
+  b[at + 12 + (size - r.remaining())] = 1;
+  const uint32_t crc = pmz::chunk_crc(&b[at], &b[at + 12], size);
+  for (int i = 0; i < 4; ++i) b[at + 8 + i] = uint8_t(crc >> (8 * i));
+
+  pmz_decoder* d = pmz_decoder_create(0, 0);
+  ASSERT_EQ(pmz_decoder_feed(d, b.data(), b.size()), PMZ_OK);
+  ASSERT_EQ(pmz_decoder_finish(d), PMZ_OK);
+  EXPECT_EQ(pmz_decoder_status(d), PMZ_OK);
+  const uint64_t applied = pmz_decoder_refine(d, UINT64_MAX);
+  EXPECT_LT(applied, pmz_decoder_total_splits(d));
+  EXPECT_EQ(pmz_decoder_status(d), PMZ_ERR_CORRUPT);
+  EXPECT_STRNE(pmz_decoder_error(d), "");
+  EXPECT_EQ(pmz_decoder_splits_applied(d), applied);
   pmz_decoder_destroy(d);
 }

@@ -4,7 +4,9 @@
 // (one byte or the whole file give the same result); decoded vertex splits become
 // *available*; refine()/coarsen()/set_face_target() move the current mesh between the base
 // mesh and the finest level available without re-reading bytes. The mesh is valid (a
-// consistent indexed triangle mesh) after every call.
+// consistent indexed triangle mesh) after every call. Each split's wedge and position are
+// decoded when it is first applied, so refine()/set_face_target() can also find damage
+// (status() becomes corrupt; the mesh stays at the split before): check status() after them.
 //
 // Depends on the standard library and zstd only. Not thread-safe: one thread per Decoder.
 #pragma once

@@ -28,6 +28,11 @@ void pmz_decoder_destroy(pmz_decoder* d);
 int pmz_decoder_feed(pmz_decoder* d, const void* data, size_t size);
 int pmz_decoder_finish(pmz_decoder* d);
 const char* pmz_decoder_error(const pmz_decoder* d); /* one line; "" when ok */
+/* The sticky status (PMZ_OK or the error). refine, coarsen and set_face_target can set it
+   too: each split's wedge and position are decoded when it is first applied, so damage there
+   (PMZ_ERR_CORRUPT) or an allocation failure (PMZ_ERR_MEMORY) shows only then; the mesh stays
+   at the level reached. */
+int pmz_decoder_status(const pmz_decoder* d);
 
 uint64_t pmz_decoder_refine(pmz_decoder* d, uint64_t max_splits);
 uint64_t pmz_decoder_coarsen(pmz_decoder* d, uint64_t max_splits);
