@@ -328,7 +328,8 @@ bool Decoder::Impl::apply() {
       return refuse(Status::limit_exceeded, "vertex valences beyond what a mesh needs");
     // Decoded symbols cannot be put back: allocate what wedge_ranks needs before decoding them
     // (an allocation failure then leaves this split to retry, not a symbol lost).
-    wedge_scratch.e.reserve(size_t(k) * 6);
+    wedge_scratch.q.reserve((size_t(k) * 2 + 3) * 3);
+    wedge_scratch.score64.reserve(size_t(k) + 1);
     wedge_scratch.score.reserve(size_t(k) + 1);
     wedge_scratch.order.reserve(size_t(k) + 1);
     uint32_t count, rank;

@@ -143,72 +143,124 @@ bool SplitChunkReader::residuals(const uint32_t context[3], int32_t residual[3])
 namespace {
 
 constexpr uint32_t kMaxScoredRing = 1u << 24;  // larger rings: all scores 0 (order by index)
+constexpr uint32_t kTopSelect = 16;            // ranks below: insertion into the best rank + 1
 
-// Scores of the candidates with `count` interior ring vertices into s.score; returns how many.
+// Scores of the candidates with `count` interior ring vertices; returns how many (n).
 // Closed: candidate j has a = j, b = (j + count + 1) mod k. Open: interior starts at j
 // (0 .. k - count), a = j - 1 (none for j = 0), b = j + count (none for k).
+// E = 2 W + e_a + e_b = (sum over the interior) + (sum over the interior widened by a and b),
+// both differences of prefix sums q of e in canonical order, q[i + 1] = e_0 + .. + e_{i-1}:
+// closed, the ring is summed twice around so windows need no modulo; open, q is padded by
+// one on each side (q[0] = q[1] = 0, q[k + 2] = q[k + 1]) so a missing a or b adds nothing.
+// With pointer t = q + j + (closed ? 1 : 0): E = t[count + 1] - t[1] + t[count + 2] - t[0].
+// Every |E| <= 2 k max|e|: when that is surely below 2^31 the squares and their sum fit in 64 bits
+// (score64, exactly the values of the spec's 128-bit ones); otherwise 128-bit scores.
 uint32_t wedge_candidates(const int32_t* coords, uint32_t v, const ProgressiveMesh& pm, uint32_t count,
                           WedgeScratch& s) {
   const std::span<const uint32_t> ring = pm.ring();
   const uint32_t k = uint32_t(ring.size()), start = pm.ring_start();
   const bool closed = pm.ring_closed();
   const uint32_t n = closed ? k : k - count + 1;
-  s.score.resize(n);
   if (k > kMaxScoredRing) {
-    std::fill(s.score.begin(), s.score.end(), WedgeScore(0));
+    s.narrow = true;
+    s.score64.assign(n, 0);
     return n;
   }
-  // e in canonical order; a closed ring is stored twice so windows need no modulo.
-  const uint32_t len = closed ? 2 * k : k;
-  s.e.resize(size_t(len) * 3);
-  int64_t* e = s.e.data();
+  const uint32_t len = closed ? 2 * k + 1 : k + 3;  // entries of q per axis
+  if (s.q.size() < size_t(len) * 3) s.q.resize(size_t(len) * 3);
+  int64_t* q = s.q.data();
   const int32_t* cv = coords + size_t(v) * 3;
-  uint64_t spread = 0;  // OR of |e|: bounds every |e| component
-  for (uint32_t i = 0, j = start; i < k; ++i, j = j + 1 == k ? 0 : j + 1) {
-    const int32_t* cw = coords + size_t(ring[j]) * 3;
-    for (int a = 0; a < 3; ++a) {
-      const int64_t d = int64_t(cw[a]) - cv[a];
-      e[i * 3 + a] = d;
-      spread |= uint64_t(d < 0 ? -d : d);
+  const int64_t cx = cv[0], cy = cv[1], cz = cv[2];
+  // spread: OR of |e| - (e < 0) per component, so every |e| <= spread + 1.
+  uint64_t spread = 0;
+  int64_t x = 0, y = 0, z = 0;
+  q[0] = q[1] = q[2] = 0;
+  q[3] = q[4] = q[5] = 0;
+  int64_t* o = q + 6;
+  auto add = [&](uint32_t w) {
+    const int32_t* cw = coords + size_t(w) * 3;
+    const int64_t dx = cw[0] - cx, dy = cw[1] - cy, dz = cw[2] - cz;
+    spread |= uint64_t(dx ^ (dx >> 63)) | uint64_t(dy ^ (dy >> 63)) | uint64_t(dz ^ (dz >> 63));
+    o[0] = x += dx;
+    o[1] = y += dy;
+    o[2] = z += dz;
+    o += 3;
+  };
+  for (uint32_t j = start; j < k; ++j) add(ring[j]);
+  for (uint32_t j = 0; j < start; ++j) add(ring[j]);
+  if (closed) {  // second turn, as far as the windows reach: q[k + 1 + i] = total + q[i + 1], i <= count + 1
+    const int64_t* p = q + 6;
+    for (uint32_t i = 1; i <= count + 1; ++i, o += 3, p += 3) {
+      o[0] = p[0] + x;
+      o[1] = p[1] + y;
+      o[2] = p[2] + z;
     }
+  } else {  // pad: q[k + 2] = q[k + 1]
+    for (int a = 0; a < 3; ++a) o[a] = o[a - 3];
   }
-  if (closed) std::copy(e, e + size_t(k) * 3, e + size_t(k) * 3);
-  // |E| <= 2 k max|e| <= 2 k spread: below 2^31 the squares and their sum fit in 64 bits
-  // (the same values as in 128 bits, only cheaper).
-  const bool narrow = spread < (uint64_t(1) << 30) && spread * k < (uint64_t(1) << 30);  // k < 2^24: no overflow
-  // W = sum of e over the interior of candidate j, slid along the ring. Interior of j:
-  // closed ranks j+1 .. j+count, open ranks j .. j+count-1.
-  int64_t w[3] = {0, 0, 0};
-  const uint32_t first = closed ? 1 : 0;
-  for (uint32_t i = first; i < first + count; ++i)
-    for (int a = 0; a < 3; ++a) w[a] += e[i * 3 + a];
-  for (uint32_t j = 0; j < n; ++j) {
-    const uint32_t lo = j + first;  // first interior position (closed: < 2k)
-    const bool has_a = closed || j > 0, has_b = closed || j + count < k;
-    const int64_t* ea = has_a ? e + size_t(closed ? j : j - 1) * 3 : e;
-    const int64_t* eb = e + size_t(lo + count) * 3;
-    int64_t E[3];
-    for (int a = 0; a < 3; ++a) E[a] = 2 * w[a] + (has_a ? ea[a] : 0) + (has_b ? eb[a] : 0);
-    if (narrow) {
-      uint64_t sc = 0;
-      for (int a = 0; a < 3; ++a) sc += uint64_t(E[a] * E[a]);
-      s.score[j] = sc;
-    } else {
+  const int64_t* t = q + (closed ? 3 : 0);
+  const size_t c1 = size_t(count + 1) * 3, c2 = c1 + 3;
+  s.narrow = spread < (uint64_t(1) << 30) && (spread + 1) * k < (uint64_t(1) << 30);  // k < 2^24: no overflow
+  if (s.narrow) {
+    if (s.score64.size() < n) s.score64.resize(n);
+    uint64_t* sc = s.score64.data();
+    for (uint32_t j = 0; j < n; ++j, t += 3) {
+      const int64_t ex = t[c1] - t[3] + t[c2] - t[0], ey = t[c1 + 1] - t[4] + t[c2 + 1] - t[1],
+                    ez = t[c1 + 2] - t[5] + t[c2 + 2] - t[2];
+      sc[j] = uint64_t(ex * ex) + uint64_t(ey * ey) + uint64_t(ez * ez);
+    }
+  } else {
+    if (s.score.size() < n) s.score.resize(n);
+    for (uint32_t j = 0; j < n; ++j, t += 3) {
       WedgeScore sc = 0;
       for (int a = 0; a < 3; ++a) {
-        WedgeScoreSigned x = E[a];
-        sc += WedgeScore(x * x);
+        const WedgeScoreSigned e = t[c1 + a] - t[3 + a] + t[c2 + a] - t[a];
+        sc += WedgeScore(e * e);
       }
       s.score[j] = sc;
     }
-    if (count && j + 1 < n)  // slide: drop position lo, add lo + count
-      for (int a = 0; a < 3; ++a) w[a] += eb[a] - e[size_t(lo) * 3 + a];
   }
   return n;
 }
 
-inline bool better(const WedgeScratch& s, uint32_t x, uint32_t y) {
-  return s.score[x] > s.score[y] || (s.score[x] == s.score[y] && x < y);
+// Candidate order: higher score first, ties by smaller j.
+template <class Score>
+inline bool better(const Score* score, uint32_t x, uint32_t y) {
+  return score[x] > score[y] || (score[x] == score[y] && x < y);
+}
+
+// Number of candidates ordered before j.
+template <class Score>
+uint32_t rank_of(const Score* score, uint32_t n, uint32_t j) {
+  uint32_t rank = 0;
+  for (uint32_t i = 0; i < n; ++i) rank += better(score, i, j);
+  return rank;
+}
+
+// The candidate at position rank (< n) of the order.
+template <class Score>
+uint32_t select(const Score* score, uint32_t n, uint32_t rank, std::vector<uint32_t>& order) {
+  if (rank < kTopSelect) {
+    // Keep the best rank + 1 candidates sorted while scanning j upwards; a later candidate
+    // goes after equal scores, which is the tie-break by smaller j.
+    uint32_t top[kTopSelect];
+    uint32_t m = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+      if (m <= rank)
+        ++m;
+      else if (!(score[i] > score[top[rank]]))
+        continue;
+      uint32_t p = m - 1;
+      for (; p > 0 && score[i] > score[top[p - 1]]; --p) top[p] = top[p - 1];
+      top[p] = i;
+    }
+    return top[rank];
+  }
+  order.resize(n);
+  for (uint32_t i = 0; i < n; ++i) order[i] = i;
+  std::nth_element(order.begin(), order.begin() + rank, order.end(),
+                   [&](uint32_t x, uint32_t y) { return better(score, x, y); });
+  return order[rank];
 }
 
 inline uint32_t max_count(const ProgressiveMesh& pm) {
@@ -234,8 +286,7 @@ bool wedge_symbols(const int32_t* coords, uint32_t v, const ProgressiveMesh& pm,
     count = (rank_r == kNoRank ? k : rank_r) - j;
   }
   const uint32_t n = wedge_candidates(coords, v, pm, count, s);
-  rank = 0;
-  for (uint32_t i = 0; i < n; ++i) rank += better(s, i, j);
+  rank = s.narrow ? rank_of(s.score64.data(), n, j) : rank_of(s.score.data(), n, j);
   return true;
 }
 
@@ -245,17 +296,8 @@ bool wedge_ranks(const int32_t* coords, uint32_t v, const ProgressiveMesh& pm, u
   if (k < 2 || count > max_count(pm)) return false;
   const uint32_t n = wedge_candidates(coords, v, pm, count, s);
   if (rank >= n) return false;
-  uint32_t j = 0;
-  if (rank == 0) {
-    for (uint32_t i = 1; i < n; ++i)
-      if (better(s, i, j)) j = i;
-  } else {
-    s.order.resize(n);
-    for (uint32_t i = 0; i < n; ++i) s.order[i] = i;
-    std::nth_element(s.order.begin(), s.order.begin() + rank, s.order.end(),
-                     [&](uint32_t x, uint32_t y) { return better(s, x, y); });
-    j = s.order[rank];
-  }
+  const uint32_t j =
+      s.narrow ? select(s.score64.data(), n, rank, s.order) : select(s.score.data(), n, rank, s.order);
   if (pm.ring_closed()) {
     rank_l = j;
     rank_r = (j + count + 1) % k;

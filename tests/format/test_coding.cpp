@@ -109,7 +109,7 @@ TEST(WedgeSymbols, EveryWedgeRoundTrips) {
 }
 
 // The wedge order against spec/format.md section 4 written out directly (a second reading of
-// the formula, not the codec's sliding window): E = 2 * sum of e over the interior + e_a + e_b,
+// the formula, not the codec's prefix sums): E = 2 * sum of e over the interior + e_a + e_b,
 // score = |E|^2 in 128 bits, highest first, ties by smaller j. Coordinates up to the int32
 // extremes (lossless mode codes float bit patterns) so both of the codec's paths are covered.
 TEST(WedgeSymbols, OrderIsTheSpecFormula) {
@@ -190,4 +190,63 @@ TEST(ResidualContexts, AreTheSpecFormula) {
       EXPECT_EQ(ctx[a], std::min(bits, 20u)) << trial;
     }
   }
+}
+
+// Larger rings than above, up to 40 (the selection switches to nth_element from rank 16): the
+// codec gives exactly the spec order (section 4): scores as
+// written there (128-bit, E = 2 * interior sum + e_a + e_b) and a full sort, highest first, ties
+// by smaller j. Rings up to 40 cover both selection paths (ranks below 16 and nth_element), coordinates
+// small (64-bit scores), tied (all zero) and full-range (128-bit scores).
+TEST(WedgeSymbols, OrderMatchesSpecReference) {
+  std::mt19937 rng(23);
+  WedgeScratch scratch;
+  for (uint32_t k : {2u, 3u, 5u, 8u, 13u, 16u, 17u, 18u, 31u, 40u})
+    for (int closed = 0; closed < 2; ++closed) {
+      if (closed && k < 3) continue;
+      ProgressiveMesh pm;
+      ASSERT_TRUE(build_fan(pm, k, closed == 1));
+      for (int geometry = 0; geometry < 4; ++geometry) {
+        std::vector<int32_t> coords(size_t(k + 1) * 3, 0);
+        for (auto& c : coords)
+          c = geometry == 0 ? 0 : geometry == 1 ? int32_t(rng() % 16384) : geometry == 2 ? int32_t(rng() % 5) : int32_t(rng());
+        ASSERT_TRUE(pm.gather_ring(0));
+        const uint32_t start = pm.ring_start();
+        std::vector<int64_t> e(k * 3);
+        for (uint32_t i = 0; i < k; ++i)
+          for (int a = 0; a < 3; ++a)
+            e[i * 3 + a] = int64_t(coords[size_t(pm.ring()[(start + i) % k]) * 3 + a]) - coords[a];
+        const uint32_t max_count = closed ? k - 2 : k - 1;
+        for (uint32_t count = 0; count <= max_count; ++count) {
+          const uint32_t n = closed ? k : k - count + 1;
+          std::vector<WedgeScore> score(n);
+          for (uint32_t j = 0; j < n; ++j) {
+            const uint32_t first = closed ? j + 1 : j;
+            for (int a = 0; a < 3; ++a) {
+              WedgeScoreSigned E = 0;
+              for (uint32_t i = first; i < first + count; ++i) E += 2 * e[(i % k) * 3 + a];
+              if (closed || j > 0) E += e[((closed ? j : j - 1) % k) * 3 + a];
+              if (closed || j + count < k) E += e[((first + count) % k) * 3 + a];
+              score[j] += WedgeScore(E * E);
+            }
+          }
+          std::vector<uint32_t> order(n);
+          for (uint32_t j = 0; j < n; ++j) order[j] = j;
+          std::sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) {
+            return score[x] > score[y] || (score[x] == score[y] && x < y);
+          });
+          for (uint32_t rank = 0; rank < n; ++rank) {
+            const uint32_t j = order[rank];
+            const uint32_t ra = closed ? j : (j == 0 ? kNoRank : j - 1);
+            const uint32_t rb = closed ? (j + count + 1) % k : (j + count == k ? kNoRank : j + count);
+            uint32_t ga = 0, gb = 0, gc = 0, gr = 0;
+            ASSERT_TRUE(wedge_ranks(coords.data(), 0, pm, count, rank, ga, gb, scratch));
+            ASSERT_EQ(ga, ra) << "k " << k << " closed " << closed << " count " << count << " rank " << rank;
+            ASSERT_EQ(gb, rb);
+            ASSERT_TRUE(wedge_symbols(coords.data(), 0, pm, ra, rb, gc, gr, scratch));
+            ASSERT_EQ(gc, count);
+            ASSERT_EQ(gr, rank);
+          }
+        }
+      }
+    }
 }

@@ -80,9 +80,11 @@ __extension__ typedef __int128 WedgeScoreSigned;
 
 // Reusable buffers for the wedge scores (no allocation per split once grown).
 struct WedgeScratch {
-  std::vector<int64_t> e;                  // ring offsets from v, 3 per canonical rank
-  std::vector<WedgeScore> score;         // per candidate
+  std::vector<int64_t> q;           // prefix sums of the ring offsets from v, 3 per entry
+  std::vector<uint64_t> score64;    // per candidate, when narrow (the same values, in 64 bits)
+  std::vector<WedgeScore> score;    // per candidate, otherwise
   std::vector<uint32_t> order;
+  bool narrow = true;
 };
 
 // wedge_count context: ring size (clamped to 8) and whether the fan is closed; wedge_rank
