@@ -65,56 +65,74 @@ class RangeEncoder {
   uint64_t cache_size_ = 1;
 };
 
-class RangeDecoder {
- public:
-  // Reading past the end yields zeros and clears ok (a valid stream never does).
-  RangeDecoder(const uint8_t* p, size_t size) : p_(p), end_(p + size) {
-    if (size < 5 || *p_++ != 0) ok = false;
-    for (int i = 0; i < 4; ++i) code_ = (code_ << 8) | next();
+// Decoder state as plain values: decode_uint works on a local copy, so a whole symbol's bits
+// run with range, code and the input pointer in registers, written back once per symbol.
+struct RangeState {
+  uint32_t range, code;
+  const uint8_t* p;
+  const uint8_t* end;
+  bool ok;
+  uint8_t next() {
+    if (p < end) return *p++;
+    ok = false;
+    return 0;
   }
-  uint32_t bit(uint16_t& p) {
-    uint32_t bound = (range_ >> kProbBits) * p, b;
-    if (code_ < bound) {
-      range_ = bound;
-      p = uint16_t(p + (((1u << kProbBits) - p) >> kMoveBits));
+  void normalize() {
+    while (range < kTop) {
+      range <<= 8;
+      code = (code << 8) | next();
+    }
+  }
+  uint32_t bit(uint16_t& prob) {
+    const uint32_t pr = prob, bound = (range >> kProbBits) * pr;
+    uint32_t b;
+    if (code < bound) {
+      range = bound;
+      prob = uint16_t(pr + (((1u << kProbBits) - pr) >> kMoveBits));
       b = 0;
     } else {
-      code_ -= bound;
-      range_ -= bound;
-      p = uint16_t(p - (p >> kMoveBits));
+      code -= bound;
+      range -= bound;
+      prob = uint16_t(pr - (pr >> kMoveBits));
       b = 1;
     }
-    while (range_ < kTop) {
-      range_ <<= 8;
-      code_ = (code_ << 8) | next();
-    }
+    normalize();
     return b;
   }
+  // One direct bit at a time, as the encoder writes them: a single range >>= n for n bits would
+  // round differently from n shifts by one, so the bits are not batched.
   uint32_t direct(uint32_t bits) {
     uint32_t r = 0;
     while (bits--) {
-      range_ >>= 1;
-      uint32_t b = code_ >= range_ ? 1u : 0u;
-      if (b) code_ -= range_;
+      range >>= 1;
+      const uint32_t b = code >= range ? 1u : 0u;
+      if (b) code -= range;
       r = (r << 1) | b;
-      while (range_ < kTop) {
-        range_ <<= 8;
-        code_ = (code_ << 8) | next();
-      }
+      normalize();
     }
     return r;
+  }
+};
+
+class RangeDecoder {
+ public:
+  // Reading past the end yields zeros and clears ok (a valid stream never does).
+  RangeDecoder(const uint8_t* p, size_t size) : s_{0xFFFFFFFFu, 0, p, p + size, true} {
+    if (size < 5 || s_.next() != 0) s_.ok = false;
+    for (int i = 0; i < 4; ++i) s_.code = (s_.code << 8) | s_.next();
+    ok = s_.ok;
+  }
+  RangeState state() const { return s_; }
+  void set_state(const RangeState& s) {
+    s_.range = s.range;
+    s_.code = s.code;
+    s_.p = s.p;
+    ok = ok && s.ok;
   }
   bool ok = true;
 
  private:
-  uint8_t next() {
-    if (p_ < end_) return *p_++;
-    ok = false;
-    return 0;
-  }
-  const uint8_t* p_;
-  const uint8_t* end_;
-  uint32_t range_ = 0xFFFFFFFFu, code_ = 0;
+  RangeState s_;
 };
 
 // An adaptive model for uint32 values: the bit length n (0..32) through a 6-level binary
@@ -147,9 +165,9 @@ inline void encode_uint(RangeEncoder& rc, UIntModel& m, uint32_t x) {
 }
 
 // Returns false for a bit length above 32 (corrupt input).
-inline bool decode_uint(RangeDecoder& rc, UIntModel& m, uint32_t& x) {
+[[gnu::always_inline]] inline bool decode_uint(RangeState& s, UIntModel& m, uint32_t& x) {
   uint32_t node = 1;
-  for (int i = 0; i < 6; ++i) node = node * 2 + rc.bit(m.length[node]);
+  for (int i = 0; i < 6; ++i) node = node * 2 + s.bit(m.length[node]);
   uint32_t n = node - 64;
   if (n > 32) return false;
   if (n < 2) {
@@ -158,12 +176,19 @@ inline bool decode_uint(RangeDecoder& rc, UIntModel& m, uint32_t& x) {
   }
   uint32_t rest = n - 1, hnode = 1, v = 1;
   for (uint32_t i = 0; i < 2 && rest; ++i, --rest) {
-    uint32_t b = rc.bit(m.high[n][hnode]);
+    uint32_t b = s.bit(m.high[n][hnode]);
     hnode = hnode * 2 + b;
     v = v * 2 + b;
   }
-  x = (v << rest) | rc.direct(rest);
+  x = (v << rest) | s.direct(rest);
   return true;
+}
+
+[[gnu::always_inline]] inline bool decode_uint(RangeDecoder& rc, UIntModel& m, uint32_t& x) {
+  RangeState s = rc.state();
+  const bool ok = decode_uint(s, m, x);
+  rc.set_state(s);
+  return ok;
 }
 
 }  // namespace pmz
