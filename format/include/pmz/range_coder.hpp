@@ -77,8 +77,11 @@ struct RangeState {
     ok = false;
     return 0;
   }
+  // One shift always suffices: normalized range >= 2^24, and a coded bit keeps at least
+  // (2^24 >> 11) * 15 (probabilities stay within [15, 2033], whatever the input) and a direct
+  // bit 2^23, both >= 2^16.
   void normalize() {
-    while (range < kTop) {
+    if (range < kTop) {
       range <<= 8;
       code = (code << 8) | next();
     }
