@@ -67,17 +67,26 @@ bool build_fan(ProgressiveMesh& pm, uint32_t k, bool closed) {
   return pm.build(k + 1, faces.data(), m, error);
 }
 
+// Calls body(pm, k, closed) for the fans around vertex 0 of ring size 2..max_k, open and closed
+// (a closed fan needs k >= 3).
+template <class Body>
+void for_each_fan(uint32_t max_k, Body body) {
+  for (uint32_t k = 2; k <= max_k; ++k)
+    for (int closed = 0; closed < 2; ++closed) {
+      if (closed && k < 3) continue;
+      ProgressiveMesh pm;
+      ASSERT_TRUE(build_fan(pm, k, closed)) << "k " << k << " closed " << closed;
+      body(pm, k, closed);
+    }
+}
+
 // Wedge symbols (spec section 4): every valid wedge of a fan maps to (count, rank) and back,
 // on closed and open fans, random and degenerate (all scores tied) geometry, and lossless-range
 // coordinates (the scores need 128 bits there).
 TEST(WedgeSymbols, EveryWedgeRoundTrips) {
   std::mt19937 rng(11);
   WedgeScratch scratch;
-  for (uint32_t k = 2; k <= 12; ++k)
-    for (int closed = 0; closed < 2; ++closed) {
-      if (closed && k < 3) continue;
-      ProgressiveMesh pm;
-      ASSERT_TRUE(build_fan(pm, k, closed));
+  for_each_fan(12, [&](ProgressiveMesh& pm, uint32_t k, int closed) {
       for (int geometry = 0; geometry < 3; ++geometry) {
         std::vector<int32_t> coords(size_t(k + 1) * 3, 0);
         for (auto& c : coords)
@@ -105,7 +114,7 @@ TEST(WedgeSymbols, EveryWedgeRoundTrips) {
           }
         EXPECT_EQ(pairs, closed ? k * (k - 1) : (k + 1) * k / 2 + k);
       }
-    }
+  });
 }
 
 // The wedge order against spec/format.md section 4 written out directly (a second reading of
@@ -115,11 +124,7 @@ TEST(WedgeSymbols, EveryWedgeRoundTrips) {
 TEST(WedgeSymbols, OrderIsTheSpecFormula) {
   std::mt19937 rng(5);
   WedgeScratch scratch;
-  for (uint32_t k = 2; k <= 10; ++k)
-    for (int closed = 0; closed < 2; ++closed) {
-      if (closed && k < 3) continue;
-      ProgressiveMesh pm;
-      ASSERT_TRUE(build_fan(pm, k, closed));
+  for_each_fan(10, [&](ProgressiveMesh& pm, uint32_t k, int closed) {
       ASSERT_TRUE(pm.gather_ring(0));
       for (int geometry = 0; geometry < 4; ++geometry) {
         std::vector<int32_t> coords(size_t(k + 1) * 3);
@@ -163,7 +168,7 @@ TEST(WedgeSymbols, OrderIsTheSpecFormula) {
           }
         }
       }
-    }
+  });
 }
 
 // Residual contexts (spec section 5): min(bitlen(floor(D_a / |R|)), 20), D_a = sum over R of
