@@ -150,7 +150,7 @@ bool ProgressiveMesh::split_gathered(uint32_t v, uint32_t a, uint32_t b) {
     count = (b == kNoRank ? m : b) - s;
   }
   const bool has_l = a != kNoRank, has_r = b != kNoRank;
-  const uint32_t u = vertex_count(), F = face_count();
+  const uint32_t u = vertex_count();
   const uint32_t* fan = fan_.data();
   const uint32_t* ring = ring_.data();
   auto walk_pos = [&](uint32_t rank) {  // canonical rank -> position in the walk (< 2k)
@@ -201,7 +201,53 @@ bool ProgressiveMesh::split_gathered(uint32_t v, uint32_t a, uint32_t b) {
   }
   u_ring_n_ = count + 2;
   sector_n_ = count;
+  hint_ = count ? fan[s] : has_r ? fan[0] : fan[m - 1];
+  link_new_faces(v, vl, vr, pl, ql, pr, qr, has_l, has_r);
+  return true;
+}
 
+void ProgressiveMesh::resplit(uint32_t v, uint32_t h, uint32_t count, bool has_l, bool has_r) {
+  if (count > scratch_cap_) grow_scratch(count);
+  const uint32_t u = vertex_count();
+  uint32_t* cv = corner_vertex.data();
+  const uint32_t* opp = opposite.data();
+  uint32_t* sec = sector_.data();
+  uint32_t vl = kNoCorner, vr = kNoCorner, pl = kNoCorner, ql = kNoCorner, pr = kNoCorner, qr = kNoCorner;
+  if (count) {  // h = fan[s]: the same reads as split_gathered(), along the fan from there
+    if (has_l) {
+      pl = next_corner(h);
+      ql = opp[pl];
+      vl = cv[h];
+    }
+    uint32_t n = h;
+    for (uint32_t i = 0;;) {
+      cv[prev_corner(n)] = u;
+      sec[i] = n / 3;
+      if (++i == count) break;
+      n = prev_corner(opp[n]);
+    }
+    if (has_r) {
+      pr = n;
+      qr = opp[n];
+      vr = cv[next_corner(n)];  // ring[s + count], the far side of the last sector face
+    }
+  } else if (has_r) {  // h = fan[0]
+    qr = next_corner(h);
+    vr = cv[h];
+  } else {  // h = fan[m - 1]
+    ql = h;
+    vl = cv[next_corner(h)];
+  }
+  u_ring_n_ = 0;
+  sector_n_ = count;
+  hint_ = h;
+  link_new_faces(v, vl, vr, pl, ql, pr, qr, has_l, has_r);
+}
+
+void ProgressiveMesh::link_new_faces(uint32_t v, uint32_t vl, uint32_t vr, uint32_t pl, uint32_t ql, uint32_t pr,
+                                     uint32_t qr, bool has_l, bool has_r) {
+  const uint32_t u = vertex_count(), F = face_count();
+  uint32_t* opp = opposite.data();
   const uint32_t f0 = 3 * F, g0 = 3 * (F + (has_l ? 1 : 0));
   const uint32_t across = has_l && has_r;  // the two new faces share edge (u, v)
   if (has_l) {
@@ -227,17 +273,11 @@ bool ProgressiveMesh::split_gathered(uint32_t v, uint32_t a, uint32_t b) {
   }
   vertex_corner.push_back(has_l ? f0 : g0 + 1);
   vertex_corner[v] = has_l ? f0 + 1 : g0;
-  return true;
 }
 
 void ProgressiveMesh::undo_split(uint32_t v, bool has_l, bool has_r) {
   const uint32_t u = vertex_count() - 1;
-  const uint32_t nf = (has_l ? 1 : 0) + (has_r ? 1 : 0);
-  const uint32_t limit = 3 * (face_count() - nf);
-  const uint32_t f0 = limit, g0 = limit + (has_l ? 3 : 0);
-  const uint32_t vl = has_l ? corner_vertex[f0 + 2] : kNoCorner;
-  const uint32_t vr = has_r ? corner_vertex[g0 + 2] : kNoCorner;
-
+  const uint32_t limit = 3 * (face_count() - (has_l ? 1 : 0) - (has_r ? 1 : 0));
   gather_fan(u);
   sector_n_ = 0;
   for (uint32_t i = 0; i < fan_n_; ++i) {
@@ -246,6 +286,30 @@ void ProgressiveMesh::undo_split(uint32_t v, bool has_l, bool has_r) {
     corner_vertex[prev_corner(n)] = v;
     sector_[sector_n_++] = n / 3;
   }
+  unlink_new_faces(v, has_l, has_r);
+}
+
+void ProgressiveMesh::undo_resplit(uint32_t v, uint32_t h, uint32_t count, bool has_l, bool has_r) {
+  if (count > scratch_cap_) grow_scratch(count);
+  // u's fan is [left face], the sector from h in order, [right face]: the order undo_split()
+  // finds the sector in. The links inside the sector are those of before the split.
+  uint32_t* cv = corner_vertex.data();
+  const uint32_t* opp = opposite.data();
+  uint32_t* sec = sector_.data();
+  for (uint32_t i = 0, n = h; i < count; ++i, n = prev_corner(opp[n])) {
+    cv[prev_corner(n)] = v;
+    sec[i] = n / 3;
+  }
+  sector_n_ = count;
+  unlink_new_faces(v, has_l, has_r);
+}
+
+void ProgressiveMesh::unlink_new_faces(uint32_t v, bool has_l, bool has_r) {
+  const uint32_t nf = (has_l ? 1 : 0) + (has_r ? 1 : 0);
+  const uint32_t limit = 3 * (face_count() - nf);
+  const uint32_t f0 = limit, g0 = limit + (has_l ? 3 : 0);
+  const uint32_t vl = has_l ? corner_vertex[f0 + 2] : kNoCorner;
+  const uint32_t vr = has_r ? corner_vertex[g0 + 2] : kNoCorner;
   uint32_t links[4] = {kNoCorner, kNoCorner, kNoCorner, kNoCorner};
   if (has_l) {
     uint32_t p = opposite[f0 + 1], q = opposite[f0];

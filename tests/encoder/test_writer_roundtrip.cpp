@@ -70,6 +70,20 @@ void round_trip(const pmz::IndexedMesh& input, uint32_t bits, uint64_t base_face
   std::sort(want.begin(), want.end());
   std::sort(got.begin(), got.end());
   EXPECT_TRUE(want == got);
+
+  // Coarsening and refining again (splits re-applied from what their first application
+  // recorded, without ring walks) gives back the very same buffers, from any level.
+  const std::vector<uint32_t> indices(d.indices(), d.indices() + size_t(d.face_count()) * 3);
+  const std::vector<float> positions(d.positions(), d.positions() + size_t(d.vertex_count()) * 3);
+  const uint64_t all = d.splits_applied();
+  for (uint64_t level : {all / 2, all / 7, uint64_t(0), all - 1}) {
+    d.set_split_target(level);
+    ASSERT_EQ(d.splits_applied(), level);
+    d.refine();
+    ASSERT_EQ(d.splits_applied(), all);
+    ASSERT_TRUE(std::equal(indices.begin(), indices.end(), d.indices())) << "from level " << level;
+    ASSERT_TRUE(std::equal(positions.begin(), positions.end(), d.positions())) << "from level " << level;
+  }
 }
 
 TEST(WriterRoundTrip, SampleMeshQuantized) { round_trip(pmz::make_sample_mesh(3000), 14); }

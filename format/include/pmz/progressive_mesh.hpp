@@ -58,20 +58,40 @@ class ProgressiveMesh {
   std::span<const uint32_t> u_ring() const { return {u_ring_.data(), u_ring_n_}; }
   std::span<const uint32_t> sector_faces() const { return {sector_.data(), sector_n_}; }
 
+  // After split_gathered(): a corner from which resplit() redoes this split without v's ring
+  // (the fan entry of the first rewritten face; for an empty sector the fan's first face
+  // (right side only) or last face (left side only)), and the number of rewritten faces.
+  uint32_t sector_hint() const { return hint_; }
+  // Applies again a split that split_gathered() applied to this very state of corner_vertex
+  // and opposite (what undo_split() restores), from its sector_hint() and sector count: walks
+  // only the rewritten faces, no ring and no canonical order. The buffers end exactly as
+  // split_gathered() left them, sector_faces() too; u_ring() is left empty. The caller
+  // guarantees the state (nothing is validated); may throw bad_alloc before changing anything.
+  void resplit(uint32_t v, uint32_t hint, uint32_t count, bool has_l, bool has_r);
+
   // Undoes the last split (LIFO), which was at v and created the left/right faces that exist.
   // Buffers return exactly to their state before that split; sector_faces() holds the faces
   // rewritten back.
   void undo_split(uint32_t v, bool has_left, bool has_right);
+  // The same for a split applied with the given sector_hint() and sector count: walks only
+  // the sector (the same faces, in the same order). May throw bad_alloc before changing anything.
+  void undo_resplit(uint32_t v, uint32_t hint, uint32_t count, bool has_left, bool has_right);
 
  private:
   bool gather_fan(uint32_t v);  // fan_ (per face ccw: next of the corner at v), ring_, closed_
+  // The part split_gathered() and resplit() share once the old links are read: the new faces,
+  // their links and vertex_corner.
+  void link_new_faces(uint32_t v, uint32_t vl, uint32_t vr, uint32_t pl, uint32_t ql, uint32_t pr, uint32_t qr,
+                      bool has_l, bool has_r);
+  // The rest of an undo once the sector's corners are back to v: links, buffers, vertex_corner.
+  void unlink_new_faces(uint32_t v, bool has_l, bool has_r);
   void grow_scratch(size_t need);
   // Scratch sized to scratch_cap_ (no push_back bookkeeping in the hot loops); the first
   // *_n_ entries are in use. fan_ holds at most scratch_cap_ - 2 faces.
   std::vector<uint32_t> fan_, ring_, u_ring_, sector_;
   size_t scratch_cap_ = 0;
   uint32_t fan_n_ = 0, ring_n_ = 0, u_ring_n_ = 0, sector_n_ = 0;
-  uint32_t start_ = 0;
+  uint32_t start_ = 0, hint_ = kNoCorner;
   bool closed_ = false;
 };
 
@@ -98,6 +118,24 @@ class FanPrefetcher {
   // starts one for v_ahead (the split kWalkers further on; kNoCorner for none). coords: 3 per
   // vertex, coord_count entries (the ring's coordinates are prefetched for the prediction).
   void step(const ProgressiveMesh& m, const int32_t* coords, size_t coord_count, uint32_t v_ahead) {
+    const uint32_t slot = advance(m, coords, coord_count);
+    if (v_ahead >= m.vertex_corner.size()) return;
+    // v's own coordinates: the wedge scores and the prediction read them (about 3% on the
+    // first refinement of bunny00-loop2, median of 7 alternating runs).
+    if (size_t(v_ahead) * 3 < coord_count) __builtin_prefetch(coords + size_t(v_ahead) * 3);
+    const uint32_t c0 = m.vertex_corner[v_ahead];
+    if (c0 < m.opposite.size()) start(m, slot, c0 % 3 == 2 ? c0 - 2 : c0 + 1, kNoCorner);
+  }
+  // The same for a split re-applied from its sector hint (ProgressiveMesh::resplit): the walk
+  // follows the `count` rewritten faces and the one across the last (whose link changes).
+  void step_sector(const ProgressiveMesh& m, uint32_t hint_ahead, uint32_t count) {
+    const uint32_t slot = advance(m, nullptr, 0);
+    if (hint_ahead < m.opposite.size()) start(m, slot, hint_ahead, count);
+  }
+
+ private:
+  // Advances every walker by one face; returns the slot of the split applied now (free).
+  uint32_t advance(const ProgressiveMesh& m, const int32_t* coords, size_t coord_count) {
     const uint32_t* opp = m.opposite.data();
     const uint32_t* cv = m.corner_vertex.data();
     const size_t corners = m.opposite.size();
@@ -110,28 +148,26 @@ class FanPrefetcher {
       const uint32_t w = cv[n], o = opp[n];
       if (size_t(w) * 3 < coord_count) __builtin_prefetch(coords + size_t(w) * 3);
       uint32_t next = o == kNoCorner ? kNoCorner : (o % 3 == 0 ? o + 2 : o - 1);
-      if (next == n0_[k]) next = kNoCorner;
+      if (next == n0_[k] || left_[k]-- == 0) next = kNoCorner;
       n_[k] = next;
       if (next < corners) {
         __builtin_prefetch(opp + next);
         __builtin_prefetch(cv + next);
       }
     }
-    if (v_ahead >= m.vertex_corner.size()) return;
-    // v's own coordinates: the wedge scores and the prediction read them (about 3% on the
-    // first refinement of bunny00-loop2, median of 7 alternating runs).
-    if (size_t(v_ahead) * 3 < coord_count) __builtin_prefetch(coords + size_t(v_ahead) * 3);
-    const uint32_t c0 = m.vertex_corner[v_ahead];
-    if (c0 >= corners) return;
-    const uint32_t n0 = c0 % 3 == 2 ? c0 - 2 : c0 + 1;
+    return slot;
+  }
+  // A walk from fan entry n0 over at most `faces` more faces (kNoCorner: the whole fan).
+  void start(const ProgressiveMesh& m, uint32_t slot, uint32_t n0, uint32_t faces) {
     n_[slot] = n0_[slot] = n0;
-    __builtin_prefetch(opp + n0);
-    __builtin_prefetch(cv + n0);
+    left_[slot] = faces;
+    __builtin_prefetch(m.opposite.data() + n0);
+    __builtin_prefetch(m.corner_vertex.data() + n0);
   }
 
- private:
   uint32_t n_[kWalkers] = {};
   uint32_t n0_[kWalkers] = {};
+  uint32_t left_[kWalkers] = {};
   uint32_t slot_ = 0;
 };
 
