@@ -85,6 +85,7 @@ struct Decoder::Impl {
   std::unique_ptr<SplitModels> models;  // the file's context models (spec: carried across chunks)
   uint64_t lazy_first = 0, decoded = 0;
   WedgeScratch wedge_scratch;
+  uint32_t wedge_scratch_ring = 0;  // wedge_scratch has room for rings up to this size
   std::vector<uint8_t> sides;     // per split below `decoded`: kHasLeft | kHasRight
   uint64_t ring_work = 0;         // sum of ring sizes over first applications
   static constexpr uint64_t kRingWorkPerSplit = 64, kRingWorkSlack = 1u << 22;
@@ -350,10 +351,13 @@ bool Decoder::Impl::apply() {
       return refuse(Status::limit_exceeded, "vertex valences beyond what a mesh needs");
     // Decoded symbols cannot be put back: allocate what wedge_ranks needs before decoding them
     // (an allocation failure then leaves this split to retry, not a symbol lost).
-    wedge_scratch.q.reserve((size_t(k) * 2 + 3) * 3);
-    wedge_scratch.score64.reserve(size_t(k) + 1);
-    wedge_scratch.score.reserve(size_t(k) + 1);
-    wedge_scratch.order.reserve(size_t(k) + 1);
+    if (k > wedge_scratch_ring) {
+      wedge_scratch.q.reserve((size_t(k) * 2 + 3) * 3);
+      wedge_scratch.score64.reserve(size_t(k) + 1);
+      wedge_scratch.score.reserve(size_t(k) + 1);
+      wedge_scratch.order.reserve(size_t(k) + 1);
+      wedge_scratch_ring = k;
+    }
     uint32_t count, rank;
     if (!lazy.front().wedge(k, mesh.ring_closed(), count, rank))
       return refuse(Status::corrupt, "split " + std::to_string(applied) + ": wedge streams malformed");
