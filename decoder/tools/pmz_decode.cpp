@@ -3,6 +3,7 @@
 // atomically (temporary file + rename). No OpenMesh.
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <charconv>
 #include <cstdio>
 #include <cstring>
@@ -36,6 +37,7 @@ class Out {
     if (buf_.size() - used_ < n) flush();
     return buf_.data() + used_;
   }
+  size_t room_left() const { return buf_.size() - used_; }
   void commit(char* end) { used_ = size_t(end - buf_.data()); }
   void put(const char* s, size_t n) {
     if (n > buf_.size() / 2) {
@@ -81,11 +83,15 @@ void write_mesh(const std::string& ext, const pmz::Decoder& d, Out& out) {
             "\nproperty float x\nproperty float y\nproperty float z\nelement face " +
             std::to_string(nf) + "\nproperty list uchar int vertex_indices\nend_header\n");
     if (nv) out.put(reinterpret_cast<const char*>(p), size_t(nv) * 12);  // little-endian host assumed (x86, ARM)
-    for (uint32_t f = 0; f < nf; ++f) {
+    // 13 bytes per face, written a buffer's worth at a time (no per-face room check).
+    for (uint32_t f = 0; f < nf;) {
       char* o = out.room(13);
-      *o = 3;
-      std::memcpy(o + 1, t + size_t(f) * 3, 12);
-      out.commit(o + 13);
+      const uint32_t n = uint32_t(std::min<size_t>(nf - f, out.room_left() / 13));
+      for (const uint32_t e = f + n; f < e; ++f, o += 13) {
+        *o = 3;
+        std::memcpy(o + 1, t + size_t(f) * 3, 12);
+      }
+      out.commit(o);
     }
     return;
   }
