@@ -69,4 +69,36 @@ void for_each_neighbour(const HalfEdgeMesh& m, uint32_t v, F&& f) {
   }
 }
 
+// f(w) for each neighbour w of each vertex in `centres` (a vertex once per centre it neighbours),
+// the walks round the centres interleaved: each step of one walk loads the next face of its fan
+// (a cache miss on a large mesh), so one step of every walk is taken in turn and the next face
+// prefetched, and the misses of the different fans overlap instead of coming one after another.
+// `walk` is scratch (pairs of current and start half-edge); prefetch_face(f) may start the loads
+// of what the caller keeps per face.
+template <class F, class P>
+void for_each_neighbour_interleaved(const HalfEdgeMesh& m, const std::vector<uint32_t>& centres,
+                                    std::vector<uint32_t>& walk, F&& f, P&& prefetch_face) {
+  walk.clear();
+  for (uint32_t c : centres)
+    if (const uint32_t start = m.out[c]; start != kNone) walk.push_back(start), walk.push_back(start);
+  while (!walk.empty()) {
+    for (size_t i = 0; i < walk.size();) {
+      const uint32_t h = walk[i];
+      f(m.dest(h));
+      const uint32_t p = HalfEdgeMesh::prev(h), n = m.twin[p];
+      if (n == kNone || n == walk[i + 1]) {
+        if (n == kNone) f(m.vert[p]);
+        walk[i] = walk[walk.size() - 2], walk[i + 1] = walk.back();
+        walk.resize(walk.size() - 2);
+        continue;
+      }
+      walk[i] = n;
+      __builtin_prefetch(&m.vert[n - n % 3]);
+      __builtin_prefetch(&m.twin[n - n % 3]);
+      prefetch_face(n / 3);
+      i += 2;
+    }
+  }
+}
+
 }  // namespace pmz::detail

@@ -16,13 +16,6 @@ inline float distance(const float* a, const float* b) {
 
 }  // namespace
 
-void Quadric::add_plane(const double n[3], double d, double w) {
-  a[0] += w * n[0] * n[0], a[1] += w * n[0] * n[1], a[2] += w * n[0] * n[2];
-  a[3] += w * n[1] * n[1], a[4] += w * n[1] * n[2], a[5] += w * n[2] * n[2];
-  a[6] += w * n[0] * d, a[7] += w * n[1] * d, a[8] += w * n[2] * d;
-  a[9] += w * d * d;
-}
-
 void initial_quadrics(const HalfEdgeMesh& m, double boundary_weight, std::vector<Quadric>& q) {
   q.assign(m.vertex_count(), Quadric{});
   for (uint32_t f = 0; f < m.face_count(); ++f) {

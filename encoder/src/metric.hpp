@@ -11,7 +11,13 @@ namespace pmz::detail {
 // Garland-Heckbert quadric: symmetric 3x3 A (xx xy xz yy yz zz), b, c; error(p) = pAp + 2bp + c.
 struct Quadric {
   double a[10] = {};
-  void add_plane(const double n[3], double d, double weight);
+  // Inline: every current-mesh quadric adds one plane per face of the fan.
+  void add_plane(const double n[3], double d, double w) {
+    a[0] += w * n[0] * n[0], a[1] += w * n[0] * n[1], a[2] += w * n[0] * n[2];
+    a[3] += w * n[1] * n[1], a[4] += w * n[1] * n[2], a[5] += w * n[2] * n[2];
+    a[6] += w * n[0] * d, a[7] += w * n[1] * d, a[8] += w * n[2] * d;
+    a[9] += w * d * d;
+  }
   void add(const Quadric& q) {
     for (int i = 0; i < 10; ++i) a[i] += q.a[i];
   }
@@ -74,9 +80,16 @@ struct Features {
 // eq. 3: length of the edge of half-edge h over the sum of the other edges of its one or two
 // triangles, from the cached half-edge lengths of f.
 inline float edge_length_ratio(const HalfEdgeMesh& m, const Features& f, uint32_t h) {
-  float others = f.length(HalfEdgeMesh::next(h)) + f.length(HalfEdgeMesh::prev(h));
-  if (const uint32_t t = m.twin[h]; t != kNone) others += f.length(HalfEdgeMesh::next(t)) + f.length(HalfEdgeMesh::prev(t));
-  return others > 0 ? f.length(h) / others : 0.f;
+  // The next and previous corner of h's face: one table lookup each.
+  static constexpr uint8_t kNext[3] = {1, 2, 0}, kPrev[3] = {2, 0, 1};
+  const float* l = f.face[h / 3].length;
+  const uint32_t c = h % 3;
+  float others = l[kNext[c]] + l[kPrev[c]];
+  if (const uint32_t t = m.twin[h]; t != kNone) {
+    const float* lt = f.face[t / 3].length;
+    others += lt[kNext[t % 3]] + lt[kPrev[t % 3]];
+  }
+  return others > 0 ? l[c] / others : 0.f;
 }
 
 // Mean length of the mesh's edges (each edge once); the metric's unit of length.

@@ -173,10 +173,22 @@ class Engine {
     __builtin_prefetch(&q[v]);  // 80 bytes at a multiple of 16: two cache lines
     __builtin_prefetch(reinterpret_cast<const char*>(&q[v]) + sizeof(Quadric) - 1);
   }
-  std::vector<uint32_t> ring1, ring2, corners;
+  std::vector<uint32_t> ring1, corners, walk;
   std::vector<Candidate> candidates;
 
-  float cost(uint32_t u, uint32_t x, uint32_t h) const;
+  // What every collapse out of u shares, read once per vertex: evaluating its costs from it
+  // does the same arithmetic as evaluating each from scratch.
+  struct Origin {
+    Quadric q;
+    double factor;   // c0 + C_norm(u)
+    double torsion;  // T(u)
+  };
+  Origin origin(uint32_t u) const {
+    if (metric == Metric::qem) return {quad[u], 0, 0};
+    return {quad[u], double(params.quadric_floor) + feat.c_norm(u), double(feat.torsion(u))};
+  }
+  float cost(const Origin& o, uint32_t x, uint32_t h) const;
+  float cost(uint32_t u, uint32_t x, uint32_t h) const { return cost(origin(u), x, h); }
   bool find_edge(uint32_t u, uint32_t v, uint32_t& ha, uint32_t& hb) const;
   bool legal(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb);
   Candidate best_candidate(uint32_t u);
@@ -201,15 +213,15 @@ void Engine::set_key(uint32_t v, Candidate c) {
   heap.set(v, c.cost);
 }
 
-// Cost of u -> x, h a half-edge of the edge (u, x).
-float Engine::cost(uint32_t u, uint32_t x, uint32_t h) const {
+// Cost of u -> x (o = origin(u)), h a half-edge of the edge (u, x).
+inline float Engine::cost(const Origin& o, uint32_t x, uint32_t h) const {
   const float* px = m.p(x);
-  const double e = std::max(0.0, quad[u].error(px) * inv_unit4 + self_error[x]);
+  const double e = std::max(0.0, o.q.error(px) * inv_unit4 + self_error[x]);
   if (metric == Metric::qem) return float(e);
   // CA and CB both weight the quadric error (spec/algorithm.md section 2): a collapse that
   // moves no surface is free whatever the normals and torsion around it.
-  const double torsion = double(params.torsion_weight) * edge_length_ratio(m, feat, h) * feat.torsion(u) * unit;
-  return float(e * (double(params.quadric_floor) + feat.c_norm(u) + torsion));
+  const double torsion = double(params.torsion_weight) * edge_length_ratio(m, feat, h) * o.torsion * unit;
+  return float(e * (o.factor + torsion));
 }
 
 bool Engine::find_edge(uint32_t u, uint32_t v, uint32_t& ha, uint32_t& hb) const {
@@ -287,10 +299,11 @@ Candidate Engine::best_candidate(uint32_t u) {
   if (m.out[u] == kNone) return best;
   refresh_torsion(u);
   const bool boundary = m.is_boundary(u);
+  const Origin o = origin(u);
   for_each_neighbour(m, u, [&](uint32_t x, uint32_t h) {
     if (boundary && m.twin[h] != kNone) return;  // interior directions are never legal for u
     ++stats.cost_evaluations;
-    const float c = cost(u, x, h);
+    const float c = cost(o, x, h);
     if (c < best.cost || best.target == kNone) best = {c, x};
   });
   return best;
@@ -301,10 +314,11 @@ Candidate Engine::best_legal_candidate(uint32_t u) {
   if (m.out[u] == kNone) return {kInfinity, kNone};
   refresh_torsion(u);
   const bool boundary = m.is_boundary(u);
+  const Origin o = origin(u);
   for_each_neighbour(m, u, [&](uint32_t x, uint32_t h) {
     if (boundary && m.twin[h] != kNone) return;
     ++stats.cost_evaluations;
-    candidates.push_back({cost(u, x, h), x});
+    candidates.push_back({cost(o, x, h), x});
   });
   std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) { return a.cost < b.cost; });
   for (const Candidate& c : candidates) {
@@ -401,6 +415,18 @@ void Engine::update_after(uint32_t u, uint32_t v) {
   if (metric == Metric::multifeature) {
     for (uint32_t w : ring1)
       if (m.out[w] != kNone) __builtin_prefetch(&feat.face[m.out[w] / 3]);
+    // Flags the 2-ring without a visited set (setting a flag twice is harmless); the 1-ring,
+    // flagged too, gets its key recomputed below. (Flagging only next to a changed B or Q is
+    // not exact: a stale key is re-read without legality, so a vertex keyed by its best legal
+    // collapse goes back to its cheapest key, and the heap operations would differ.) The walks
+    // go first and interleaved: they load every face the steps below read, overlapping the misses.
+    for_each_neighbour_interleaved(m, ring1, walk, [&](uint32_t x) {
+      stale[x] |= kTorsionStale | kKeyStale;
+      // The 1-ring's keys read B (torsion), p and Q(p) of its neighbours.
+      __builtin_prefetch(&feat.vertex[x]);
+      __builtin_prefetch(m.p(x));
+      __builtin_prefetch(&self_error[x]);
+    }, [&](uint32_t f) { __builtin_prefetch(&feat.face[f]); });
     for_each_outgoing(m, v, [&](uint32_t h) { feat.update_face(m, h / 3); });
     for (uint32_t w : ring1) {
       // A vertex whose fan did not change reads bit for bit the same faces: same terms.
@@ -413,18 +439,6 @@ void Engine::update_after(uint32_t u, uint32_t v) {
         for (int i = 0; i < 10; ++i) quad[w].a[i] += double(params.quadric_memory) * accumulated[w].a[i];
       self_error[w] = quad[w].error(m.p(w)) * inv_unit4;
     }
-    // Flags the 2-ring without a visited set (setting a flag twice is harmless); the 1-ring,
-    // flagged too, gets its key recomputed just below. (Flagging only next to a changed B or Q
-    // is not exact: a stale key is re-read without legality, so a vertex keyed by its best legal
-    // collapse goes back to its cheapest key, and the heap operations would differ.)
-    for (uint32_t w : ring1)
-      for_each_neighbour(m, w, [&](uint32_t x, uint32_t) {
-        stale[x] |= kTorsionStale | kKeyStale;
-        // The 1-ring's keys read B (torsion), p and Q(p) of its neighbours.
-        __builtin_prefetch(&feat.vertex[x]);
-        __builtin_prefetch(m.p(x));
-        __builtin_prefetch(&self_error[x]);
-      });
   }
   const auto t1 = stats_enabled ? Clock::now() : Clock::time_point{};
   for (uint32_t w : ring1) heap.prefetch_entry(w);
