@@ -4,6 +4,7 @@
 // data[0] picks the part; the rest is its input.
 #include <zstd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -128,10 +129,13 @@ void fuzz_quantizer(const uint8_t* data, size_t size) {
 
 // Corner table: build from arbitrary faces, then splits and undos; every undo restores the
 // exact index and adjacency buffers (a vertex may keep a different, still valid, corner).
+// Each split is also redone from its sector hint (resplit) and undone that way (undo_resplit):
+// the same buffers and the same rewritten faces, in the same order, as split / undo_split.
 struct Applied {
   uint32_t v;
   bool l, r;
   std::vector<uint32_t> cv, op, vc;
+  uint32_t hint = 0, count = 0;
 };
 
 void restored(const pmz::ProgressiveMesh& m, const Applied& a) {
@@ -161,7 +165,8 @@ void fuzz_mesh(const uint8_t* data, size_t size) {
     const uint8_t* s = data + i;
     if (s[0] == 0xFF && !stack.empty()) {
       Applied& a = stack.back();
-      m.undo_split(a.v, a.l, a.r);
+      if (s[1] & 1) m.undo_resplit(a.v, a.hint, a.count, a.l, a.r);
+      else m.undo_split(a.v, a.l, a.r);
       restored(m, a);
       stack.pop_back();
       continue;
@@ -178,6 +183,26 @@ void fuzz_mesh(const uint8_t* data, size_t size) {
     for (uint32_t c : m.corner_vertex) PMZ_FUZZ_CHECK(c < m.vertex_count());
     for (size_t c = 0; c < m.opposite.size(); ++c)
       if (m.opposite[c] != pmz::kNoCorner) PMZ_FUZZ_CHECK(m.opposite[m.opposite[c]] == c);
+    a.hint = m.sector_hint();
+    a.count = uint32_t(m.sector_faces().size());
+    const std::vector<uint32_t> cv = m.corner_vertex, op = m.opposite;
+    const std::vector<uint32_t> sector(m.sector_faces().begin(), m.sector_faces().end());
+    const uint32_t u = m.vertex_count() - 1, cu = m.vertex_corner[u], cvv = m.vertex_corner[v];
+    auto redone = [&] {
+      PMZ_FUZZ_CHECK(m.corner_vertex == cv && m.opposite == op && m.vertex_count() == u + 1);
+      PMZ_FUZZ_CHECK(m.vertex_corner[u] == cu && m.vertex_corner[v] == cvv);
+      PMZ_FUZZ_CHECK(std::equal(sector.begin(), sector.end(), m.sector_faces().begin(), m.sector_faces().end()));
+    };
+    m.undo_split(v, a.l, a.r);
+    restored(m, a);
+    const std::vector<uint32_t> undone(m.sector_faces().begin(), m.sector_faces().end());
+    m.resplit(v, a.hint, a.count, a.l, a.r);
+    redone();
+    m.undo_resplit(v, a.hint, a.count, a.l, a.r);
+    restored(m, a);
+    PMZ_FUZZ_CHECK(std::equal(undone.begin(), undone.end(), m.sector_faces().begin(), m.sector_faces().end()));
+    m.resplit(v, a.hint, a.count, a.l, a.r);
+    redone();
     stack.push_back(std::move(a));
   }
   while (!stack.empty()) {
