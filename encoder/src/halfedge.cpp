@@ -21,19 +21,24 @@ bool build_halfedge(const IndexedMesh& in, HalfEdgeMesh& m, std::string& error) 
     }
   }
   m.pos = in.positions;
-  m.vert = in.indices;
-  const uint32_t half_count = face_count * 3;
+  m.vert.assign(size_t(face_count) * 4, kNone);
+  for (uint32_t f = 0; f < face_count; ++f)
+    for (uint32_t k = 0; k < 3; ++k) m.vert[HalfEdgeMesh::half_edge(f, k)] = in.indices[size_t(f) * 3 + k];
+  const uint32_t slots = m.slot_count();
 
   // Outgoing half-edges grouped by origin (counting sort): twins are found in O(valence).
-  std::vector<uint32_t> first(size_t(vertex_count) + 1, 0), by_origin(half_count);
-  for (uint32_t h = 0; h < half_count; ++h) ++first[m.vert[h] + 1];
+  std::vector<uint32_t> first(size_t(vertex_count) + 1, 0), by_origin(size_t(face_count) * 3);
+  for (uint32_t h = 0; h < slots; ++h)
+    if (m.vert[h] != kNone) ++first[m.vert[h] + 1];
   for (uint32_t v = 0; v < vertex_count; ++v) first[v + 1] += first[v];
   {
     std::vector<uint32_t> fill(first.begin(), first.end() - 1);
-    for (uint32_t h = 0; h < half_count; ++h) by_origin[fill[m.vert[h]]++] = h;
+    for (uint32_t h = 0; h < slots; ++h)
+      if (m.vert[h] != kNone) by_origin[fill[m.vert[h]]++] = h;
   }
-  m.twin.assign(half_count, kNone);
-  for (uint32_t h = 0; h < half_count; ++h) {
+  m.twin.assign(slots, kNone);
+  for (uint32_t h = 0; h < slots; ++h) {
+    if (m.vert[h] == kNone) continue;  // padding slot
     const uint32_t a = m.vert[h], b = m.dest(h);
     uint32_t same = 0, opposite = 0, found = kNone;
     for (uint32_t i = first[a]; i < first[a + 1]; ++i) same += m.dest(by_origin[i]) == b;

@@ -19,7 +19,8 @@ inline float distance(const float* a, const float* b) {
 void initial_quadrics(const HalfEdgeMesh& m, double boundary_weight, std::vector<Quadric>& q) {
   q.assign(m.vertex_count(), Quadric{});
   for (uint32_t f = 0; f < m.face_count(); ++f) {
-    const float *p0 = m.p(m.vert[3 * f]), *p1 = m.p(m.vert[3 * f + 1]), *p2 = m.p(m.vert[3 * f + 2]);
+    const uint32_t* c = &m.vert[HalfEdgeMesh::half_edge(f, 0)];
+    const float *p0 = m.p(c[0]), *p1 = m.p(c[1]), *p2 = m.p(c[2]);
     const double e1[3] = {double(p1[0]) - p0[0], double(p1[1]) - p0[1], double(p1[2]) - p0[2]};
     const double e2[3] = {double(p2[0]) - p0[0], double(p2[1]) - p0[1], double(p2[2]) - p0[2]};
     double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
@@ -29,9 +30,9 @@ void initial_quadrics(const HalfEdgeMesh& m, double boundary_weight, std::vector
     const double d = -(n[0] * p0[0] + n[1] * p0[1] + n[2] * p0[2]);
     Quadric face;
     face.add_plane(n, d, 0.5 * len);  // weight = area
-    for (int k = 0; k < 3; ++k) q[m.vert[3 * f + k]].add(face);
+    for (int k = 0; k < 3; ++k) q[c[k]].add(face);
     if (boundary_weight <= 0) continue;
-    for (uint32_t h = 3 * f; h < 3 * f + 3; ++h) {
+    for (uint32_t h = HalfEdgeMesh::half_edge(f, 0); h < HalfEdgeMesh::half_edge(f, 3); ++h) {
       if (m.twin[h] != kNone) continue;
       const float *a = m.p(m.vert[h]), *b = m.p(m.dest(h));
       const double e[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
@@ -63,7 +64,7 @@ void current_quadric(const HalfEdgeMesh& m, const Features& f, uint32_t v, doubl
     add(bn, boundary_weight * (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]));
   };
   for_each_outgoing(m, v, [&](uint32_t h) {
-    const FaceTerms& face = f.face[h / 3];
+    const FaceTerms& face = f.face[HalfEdgeMesh::face(h)];
     const double n[3] = {face.normal[0], face.normal[1], face.normal[2]};
     add(n, face.area);
     if (boundary_weight <= 0) return;
@@ -79,7 +80,8 @@ void Features::resize(uint32_t vertex_count, uint32_t face_count) {
 }
 
 void Features::update_face(const HalfEdgeMesh& m, uint32_t f) {
-  const float *p0 = m.p(m.vert[3 * f]), *p1 = m.p(m.vert[3 * f + 1]), *p2 = m.p(m.vert[3 * f + 2]);
+  const uint32_t* c = &m.vert[HalfEdgeMesh::half_edge(f, 0)];
+  const float *p0 = m.p(c[0]), *p1 = m.p(c[1]), *p2 = m.p(c[2]);
   const float e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
   const float e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
   float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
@@ -98,7 +100,7 @@ void Features::update_normal_terms(const HalfEdgeMesh& m, uint32_t v) {
   float n[3] = {0, 0, 0};
   uint32_t k = 0;
   for_each_outgoing(m, v, [&](uint32_t h) {
-    const FaceTerms& fd = face[h / 3];
+    const FaceTerms& fd = face[HalfEdgeMesh::face(h)];
     n[0] += fd.area * fd.normal[0], n[1] += fd.area * fd.normal[1], n[2] += fd.area * fd.normal[2];
     ++k;
   });
@@ -107,7 +109,7 @@ void Features::update_normal_terms(const HalfEdgeMesh& m, uint32_t v) {
     for (float& c : n) c /= len;
   float c_sum = 0, bv[3] = {0, 0, 0};
   for_each_outgoing(m, v, [&](uint32_t h) {
-    const float* ni = face[h / 3].normal;
+    const float* ni = face[HalfEdgeMesh::face(h)].normal;
     const float dot = n[0] * ni[0] + n[1] * ni[1] + n[2] * ni[2];
     c_sum += 1.f - dot;
     if (dot > epsilon) {

@@ -62,7 +62,7 @@ struct Features {
 
   const float* face_normal(uint32_t f) const { return face[f].normal; }
   float face_area(uint32_t f) const { return face[f].area; }
-  float length(uint32_t h) const { return face[h / 3].length[h % 3]; }
+  float length(uint32_t h) const { return face[HalfEdgeMesh::face(h)].length[HalfEdgeMesh::corner(h)]; }
   const float* normal(uint32_t v) const { return vertex[v].normal; }
   const float* b(uint32_t v) const { return vertex[v].b; }
   float c_norm(uint32_t v) const { return vertex[v].c_norm; }
@@ -82,12 +82,12 @@ struct Features {
 inline float edge_length_ratio(const HalfEdgeMesh& m, const Features& f, uint32_t h) {
   // The next and previous corner of h's face: one table lookup each.
   static constexpr uint8_t kNext[3] = {1, 2, 0}, kPrev[3] = {2, 0, 1};
-  const float* l = f.face[h / 3].length;
-  const uint32_t c = h % 3;
+  const float* l = f.face[HalfEdgeMesh::face(h)].length;
+  const uint32_t c = HalfEdgeMesh::corner(h);
   float others = l[kNext[c]] + l[kPrev[c]];
   if (const uint32_t t = m.twin[h]; t != kNone) {
-    const float* lt = f.face[t / 3].length;
-    others += lt[kNext[t % 3]] + lt[kPrev[t % 3]];
+    const float* lt = f.face[HalfEdgeMesh::face(t)].length;
+    others += lt[kNext[HalfEdgeMesh::corner(t)]] + lt[kPrev[HalfEdgeMesh::corner(t)]];
   }
   return others > 0 ? l[c] / others : 0.f;
 }

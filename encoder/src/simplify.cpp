@@ -259,12 +259,12 @@ bool Engine::legal(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb) {
   if (shared) return false;
   if (!boundary_edge && valence_u == 3 && valence_v == 3) return false;  // a tetrahedron stays
   // Geometry of the faces that survive around u, with u moved onto v.
-  const uint32_t fa = ha != kNone ? ha / 3 : kNone, fb = hb != kNone ? hb / 3 : kNone;
+  const uint32_t fa = ha != kNone ? HalfEdgeMesh::face(ha) : kNone, fb = hb != kNone ? HalfEdgeMesh::face(hb) : kNone;
   const float* pu = m.p(u);
   const float* pv = m.p(v);
   bool ok = true;
   for_each_outgoing(m, u, [&](uint32_t h) {
-    if (!ok || h / 3 == fa || h / 3 == fb) return;
+    if (!ok || HalfEdgeMesh::face(h) == fa || HalfEdgeMesh::face(h) == fb) return;
     const float* pb = m.p(m.dest(h));
     const float* pc = m.p(m.vert[HalfEdgeMesh::prev(h)]);
     auto normal = [&](const float* a, float n[3]) {
@@ -331,7 +331,7 @@ Candidate Engine::best_legal_candidate(uint32_t u) {
 // Makes out[w] a live outgoing half-edge, the boundary one if w is on the boundary.
 void Engine::fix_out(uint32_t w, uint32_t candidate) {
   uint32_t h = m.out[w];
-  if (h == kNone || !m.face_alive(h / 3)) h = candidate;
+  if (h == kNone || !m.face_alive(HalfEdgeMesh::face(h))) h = candidate;
   if (h == kNone) {
     m.out[w] = kNone;
     return;
@@ -354,10 +354,10 @@ void Engine::perform(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb, float c) 
   } else if (!accumulated.empty()) {
     accumulated[v].add(accumulated[u]);  // quad[v] is recomputed in update_after
   }
-  const uint32_t fa = ha != kNone ? ha / 3 : kNone, fb = hb != kNone ? hb / 3 : kNone;
+  const uint32_t fa = ha != kNone ? HalfEdgeMesh::face(ha) : kNone, fb = hb != kNone ? HalfEdgeMesh::face(hb) : kNone;
   corners.clear();
   for_each_outgoing(m, u, [&](uint32_t h) {
-    if (h / 3 != fa && h / 3 != fb) corners.push_back(h);
+    if (HalfEdgeMesh::face(h) != fa && HalfEdgeMesh::face(h) != fb) corners.push_back(h);
   });
   // The faces that change are u's surviving ones (u becomes v) and fa, fb (deleted): their
   // other corners are the vertices whose fan changed, besides v.
@@ -383,7 +383,7 @@ void Engine::perform(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb, float c) 
   }
   for (uint32_t f : {fa, fb}) {
     if (f == kNone) continue;
-    for (uint32_t h = 3 * f; h < 3 * f + 3; ++h) m.vert[h] = kNone, m.twin[h] = kNone;
+    for (uint32_t k = 0; k < 3; ++k) m.vert[HalfEdgeMesh::half_edge(f, k)] = kNone, m.twin[HalfEdgeMesh::half_edge(f, k)] = kNone;
     --faces;
   }
   m.out[u] = kNone;
@@ -414,7 +414,7 @@ void Engine::update_after(uint32_t u, uint32_t v) {
   }
   if (metric == Metric::multifeature) {
     for (uint32_t w : ring1)
-      if (m.out[w] != kNone) __builtin_prefetch(&feat.face[m.out[w] / 3]);
+      if (m.out[w] != kNone) __builtin_prefetch(&feat.face[HalfEdgeMesh::face(m.out[w])]);
     // Flags the 2-ring without a visited set (setting a flag twice is harmless); the 1-ring,
     // flagged too, gets its key recomputed below. (Flagging only next to a changed B or Q is
     // not exact: a stale key is re-read without legality, so a vertex keyed by its best legal
@@ -427,7 +427,7 @@ void Engine::update_after(uint32_t u, uint32_t v) {
       __builtin_prefetch(m.p(x));
       __builtin_prefetch(&self_error[x]);
     }, [&](uint32_t f) { __builtin_prefetch(&feat.face[f]); });
-    for_each_outgoing(m, v, [&](uint32_t h) { feat.update_face(m, h / 3); });
+    for_each_outgoing(m, v, [&](uint32_t h) { feat.update_face(m, HalfEdgeMesh::face(h)); });
     for (uint32_t w : ring1) {
       // A vertex whose fan did not change reads bit for bit the same faces: same terms.
       if (w != v && mark[w] != fan_changed && !(stale[w] & kInputQuadric)) continue;
@@ -661,7 +661,7 @@ bool simplify(const IndexedMesh& input, const SimplifyOptions& options, Collapse
   out.base_indices.reserve(engine.faces * 3);
   for (uint32_t f = 0; f < engine.m.face_count(); ++f)
     if (engine.m.face_alive(f))
-      for (int k = 0; k < 3; ++k) out.base_indices.push_back(order[engine.m.vert[3 * f + k]]);
+      for (int k = 0; k < 3; ++k) out.base_indices.push_back(order[engine.m.vert[HalfEdgeMesh::half_edge(f, k)]]);
   engine.stats.total = seconds_since(t0);
   if (options.stats) *options.stats = engine.stats;
   return true;

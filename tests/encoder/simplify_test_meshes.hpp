@@ -102,6 +102,7 @@ inline Topology topology(const pmz::IndexedMesh& mesh) {
   for (uint32_t i = 0; i < m.vertex_count(); ++i) v += m.out[i] != pmz::detail::kNone;
   std::vector<char> seen(m.vert.size(), 0);
   for (uint32_t h = 0; h < m.vert.size(); ++h) {
+    if (m.vert[h] == pmz::detail::kNone) continue;  // the padding slot of each face
     e += m.twin[h] == pmz::detail::kNone || m.twin[h] > h;
     if (m.twin[h] != pmz::detail::kNone || seen[h]) continue;
     // Walk the boundary loop: from boundary half-edge a->b, the next boundary half-edge leaves b.
