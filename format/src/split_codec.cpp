@@ -124,15 +124,21 @@ bool SplitChunkReader::open(const uint8_t* p, size_t size, uint64_t vertices_bef
   return true;
 }
 
+namespace {
+// One symbol per call: inlined into the three-axis loop, GCC recomputes each bit's model
+// address from the axis and context (register pressure); here the model is one pointer.
+[[gnu::noinline]] bool decode_symbol(RangeDecoder& rc, UIntModel& m, uint32_t& x) { return decode_uint(rc, m, x); }
+}  // namespace
+
 bool SplitChunkReader::wedge(uint32_t k, bool closed, uint32_t& count, uint32_t& rank) {
-  return decode_uint(*count_dec_, models_->wedge_count[wedge_context(k, closed)], count) &&
-         decode_uint(*rank_dec_, models_->wedge_rank[closed ? 1 : 0], rank) && count_dec_->ok && rank_dec_->ok;
+  return decode_symbol(*count_dec_, models_->wedge_count[wedge_context(k, closed)], count) &&
+         decode_symbol(*rank_dec_, models_->wedge_rank[closed ? 1 : 0], rank) && count_dec_->ok && rank_dec_->ok;
 }
 
 bool SplitChunkReader::residuals(const uint32_t context[3], int32_t residual[3]) {
   for (int a = 0; a < 3; ++a) {
     uint32_t z;
-    if (!decode_uint(*res_dec_[a], models_->residual[a][context[a]], z) || !res_dec_[a]->ok) return false;
+    if (!decode_symbol(*res_dec_[a], models_->residual[a][context[a]], z) || !res_dec_[a]->ok) return false;
     residual[a] = zigzag_decode(z);
   }
   return true;
