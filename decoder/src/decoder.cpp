@@ -342,7 +342,7 @@ bool Decoder::Impl::apply() {
   }
   auto invalid = [&] { return refuse(Status::corrupt, "split " + std::to_string(applied) + " has an invalid wedge"); };
   if (!mesh.gather_ring(s.v)) return invalid();
-  {
+  {  // first application: the wedge symbols, with contexts from v's ring
     const uint32_t k = uint32_t(mesh.ring().size());
     // Ring walks cost the valence: bound their total (first applications; re-applying after
     // coarsening repeats the same work) so splits piling on one vertex cannot go quadratic.
@@ -365,7 +365,7 @@ bool Decoder::Impl::apply() {
   }
   if (!mesh.split_gathered(s.v, s.a, s.b)) return invalid();
   const bool has_l = s.a != kNoRank, has_r = s.b != kNoRank;
-  {
+  {  // the position, then what re-applying the split needs
     int32_t pred[3], residual[3];
     uint32_t ctx[3];
     predict_position(coords.data(), mesh.u_ring(), pred);
