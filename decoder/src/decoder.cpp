@@ -143,6 +143,47 @@ struct Decoder::Impl {
     const bool predicting = coords.size() <= (size_t(mesh.vertex_count()) + FanPrefetcher::kWalkers) * 3;
     fans.step(mesh, coords.data(), predicting ? coords.size() : 0, near < available ? splits[near].v : kNoCorner);
   }
+  // Coarsening: undoing a split rewires the faces across its new faces and repoints
+  // vertex_corner of v, vl and vr, all anywhere in the buffers. For the split kUnlinkAhead
+  // before the next one undone, whose new faces start at face_count() minus the faces of the
+  // splits from it on (`faces`, kept as the window slides), prefetch those entries.
+  static constexpr uint64_t kUnlinkAhead = 2 * FanPrefetcher::kWalkers;
+  struct UnlinkWindow {
+    uint64_t top = 0;    // applied when `faces` was last updated (0: not started)
+    uint64_t faces = 0;  // new faces of splits top - 1 - kUnlinkAhead .. top - 1
+  };
+  static uint32_t new_faces(uint8_t side) { return (side & kHasLeft ? 1u : 0u) + (side & kHasRight ? 1u : 0u); }
+  void prefetch_unlink(UnlinkWindow& w) {
+    if (applied <= kUnlinkAhead) return;
+    const uint64_t j = applied - 1 - kUnlinkAhead;
+    if (w.top != applied + 1) {  // (re)start: sum over the window
+      w.faces = 0;
+      for (uint64_t t = j; t < applied; ++t) w.faces += new_faces(sides[t]);
+    } else {  // slid by one: split `applied` (just undone) left the window, split j entered it
+      w.faces = w.faces - new_faces(sides[applied]) + new_faces(sides[j]);
+    }
+    w.top = applied;
+    const uint8_t side = sides[j];
+    const size_t f0 = 3 * (size_t(mesh.face_count()) - w.faces), corners = mesh.opposite.size();
+    const uint32_t* opp = mesh.opposite.data();
+    const uint32_t* cv = mesh.corner_vertex.data();
+    auto near = [&](uint32_t c) {  // a corner across a new face: its link and its face
+      if (c < corners) {
+        __builtin_prefetch(opp + c);
+        __builtin_prefetch(cv + c);
+      }
+    };
+    auto vertex = [&](uint32_t x) {
+      if (x < mesh.vertex_corner.size()) __builtin_prefetch(&mesh.vertex_corner[x]);
+    };
+    vertex(splits[j].v);
+    if (f0 + 3 * new_faces(side) > corners) return;
+    for (size_t g = f0, e = f0 + 3 * new_faces(side); g < e; g += 3) {
+      near(opp[g]);
+      near(opp[g + 1]);
+      vertex(cv[g + 2]);
+    }
+  }
   // Never throws: called after the mesh changed, it must not leave a split half counted. Out of
   // memory for the list, it reports everything as changed.
   void note_rewritten(std::span<const uint32_t> faces) noexcept {
@@ -483,14 +524,17 @@ uint64_t Decoder::Impl::refine(uint64_t max_splits, uint64_t face_target) {
 uint64_t Decoder::Impl::coarsen(uint64_t max_splits, uint64_t face_floor) {
   uint64_t n = 0;
   fans.reset();
+  UnlinkWindow window;
   try {
     for (; n < max_splits && applied > 0; ++n) {
       const uint8_t side = sides[applied - 1];
       if (mesh.face_count() - (side & kHasLeft ? 1u : 0u) - (side & kHasRight ? 1u : 0u) < face_floor) break;
-      // Splits are undone last first: the sector of the one kWalkers further on.
+      // Splits are undone last first: the sector of the one kWalkers further on, and further
+      // still what unlinking its new faces touches (see prefetch_unlink).
       constexpr uint32_t kAhead = FanPrefetcher::kWalkers;
       if (applied > kAhead) fans.step_sector(mesh, splits[applied - 1 - kAhead].a, splits[applied - 1 - kAhead].b);
       else fans.step_sector(mesh, kNoCorner, 0);
+      prefetch_unlink(window);
       undo();
     }
   } catch (const std::bad_alloc&) {  // undo_resplit grows no scratch in practice (see its test); kept as a guard
