@@ -131,7 +131,15 @@ struct Decoder::Impl {
           __builtin_prefetch(&mesh.corner_vertex[f.a]);
         }
       }
-      fans.step_sector(mesh, splits[near].a, splits[near].b);
+      const Split& s = splits[near];
+      fans.step_sector(mesh, s.a, s.b);
+      // The face across the first sector face's v-side edge gets relinked too (its corner ql
+      // = opposite[next(hint)], a line prefetched kFar splits ahead).
+      const size_t pl = s.a % 3 == 2 ? size_t(s.a) - 2 : size_t(s.a) + 1;
+      if (pl < mesh.opposite.size()) {
+        const uint32_t ql = mesh.opposite[pl];
+        if (ql < mesh.opposite.size()) __builtin_prefetch(&mesh.opposite[ql]);
+      }
       return;
     }
     if (applied + kFar < available) {
