@@ -5,6 +5,8 @@
 
 #include <cmath>
 
+#include "parallel.hpp"
+
 namespace pmz::detail {
 
 namespace {
@@ -135,10 +137,17 @@ void Features::update_torsion(const HalfEdgeMesh& m, uint32_t v) {
 
 void Features::compute_all(const HalfEdgeMesh& m) {
   resize(m.vertex_count(), m.face_count());
-  for (uint32_t f = 0; f < m.face_count(); ++f)
-    if (m.face_alive(f)) update_face(m, f);
-  for (uint32_t v = 0; v < m.vertex_count(); ++v) update_normal_terms(m, v);
-  for (uint32_t v = 0; v < m.vertex_count(); ++v) update_torsion(m, v);
+  // Each loop writes only the record of its index (torsion reads the B of the loop before).
+  parallel_halves(m.face_count(), [&](uint32_t begin, uint32_t end) {
+    for (uint32_t f = begin; f < end; ++f)
+      if (m.face_alive(f)) update_face(m, f);
+  });
+  parallel_halves(m.vertex_count(), [&](uint32_t begin, uint32_t end) {
+    for (uint32_t v = begin; v < end; ++v) update_normal_terms(m, v);
+  });
+  parallel_halves(m.vertex_count(), [&](uint32_t begin, uint32_t end) {
+    for (uint32_t v = begin; v < end; ++v) update_torsion(m, v);
+  });
 }
 
 double mean_edge_length(const HalfEdgeMesh& m) {

@@ -10,6 +10,7 @@
 
 #include "halfedge.hpp"
 #include "metric.hpp"
+#include "parallel.hpp"
 
 namespace pmz {
 
@@ -173,7 +174,7 @@ class Engine {
     __builtin_prefetch(&q[v]);  // 80 bytes at a multiple of 16: two cache lines
     __builtin_prefetch(reinterpret_cast<const char*>(&q[v]) + sizeof(Quadric) - 1);
   }
-  std::vector<uint32_t> ring1, corners, walk;
+  std::vector<uint32_t> ring1, ring2, corners, walk, pair = {0, 0};
   std::vector<Candidate> candidates;
 
   // What every collapse out of u shares, read once per vertex: evaluating its costs from it
@@ -191,7 +192,13 @@ class Engine {
   float cost(uint32_t u, uint32_t x, uint32_t h) const { return cost(origin(u), x, h); }
   bool find_edge(uint32_t u, uint32_t v, uint32_t& ha, uint32_t& hb) const;
   bool legal(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb);
-  Candidate best_candidate(uint32_t u);
+  Candidate best_candidate(uint32_t u) {
+    if (m.out[u] == kNone) return {kInfinity, kNone};
+    refresh_torsion(u);
+    return scan(u, stats.cost_evaluations);
+  }
+  // The cheapest direction out of u by cost alone (T(u) up to date); counts its evaluations.
+  Candidate scan(uint32_t u, uint64_t& evaluations) const;
   void refresh_torsion(uint32_t u) {
     if (stale[u] & kTorsionStale) feat.update_torsion(m, u), stale[u] &= uint8_t(~kTorsionStale);
   }
@@ -294,15 +301,13 @@ bool Engine::legal(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb) {
 }
 
 // The cheapest direction by cost alone; legality is checked when it reaches the top of the heap.
-Candidate Engine::best_candidate(uint32_t u) {
+Candidate Engine::scan(uint32_t u, uint64_t& evaluations) const {
   Candidate best{kInfinity, kNone};
-  if (m.out[u] == kNone) return best;
-  refresh_torsion(u);
   const bool boundary = m.is_boundary(u);
   const Origin o = origin(u);
   for_each_neighbour(m, u, [&](uint32_t x, uint32_t h) {
     if (boundary && m.twin[h] != kNone) return;  // interior directions are never legal for u
-    ++stats.cost_evaluations;
+    ++evaluations;
     const float c = cost(o, x, h);
     if (c < best.cost || best.target == kNone) best = {c, x};
   });
@@ -406,6 +411,7 @@ void Engine::update_after(uint32_t u, uint32_t v) {
   for_each_neighbour(m, v, [&](uint32_t w, uint32_t) { ring1.push_back(w); });
   for (uint32_t w : ring1) {
     prefetch_quadric(quad, w);
+    prefetch_quadric(accumulated, w);  // the recomputed vertices' current Q reads it
     __builtin_prefetch(&self_error[w]);
     __builtin_prefetch(&m.out[w]);
     __builtin_prefetch(&target[w]);
@@ -414,20 +420,28 @@ void Engine::update_after(uint32_t u, uint32_t v) {
   }
   if (metric == Metric::multifeature) {
     for (uint32_t w : ring1)
-      if (m.out[w] != kNone) __builtin_prefetch(&feat.face[HalfEdgeMesh::face(m.out[w])]);
+      if (const uint32_t h = m.out[w]; h != kNone) {
+        __builtin_prefetch(&feat.face[HalfEdgeMesh::face(h)]);
+        __builtin_prefetch(&m.vert[h & ~3u]);
+        __builtin_prefetch(&m.twin[h & ~3u]);
+      }
     // Flags the 2-ring without a visited set (setting a flag twice is harmless); the 1-ring,
     // flagged too, gets its key recomputed below. (Flagging only next to a changed B or Q is
     // not exact: a stale key is re-read without legality, so a vertex keyed by its best legal
     // collapse goes back to its cheapest key, and the heap operations would differ.) The walks
     // go first and interleaved: they load every face the steps below read, overlapping the misses.
+    // The flags are set after the walks, their loads started with the others'.
+    ring2.clear();
     for_each_neighbour_interleaved(m, ring1, walk, [&](uint32_t x) {
-      stale[x] |= kTorsionStale | kKeyStale;
+      ring2.push_back(x);
+      __builtin_prefetch(&stale[x]);
       // The 1-ring's keys read B (torsion), p and Q(p) of its neighbours.
       __builtin_prefetch(&feat.vertex[x]);
       __builtin_prefetch(m.p(x));
       __builtin_prefetch(&self_error[x]);
     }, [&](uint32_t f) { __builtin_prefetch(&feat.face[f]); });
     for_each_outgoing(m, v, [&](uint32_t h) { feat.update_face(m, HalfEdgeMesh::face(h)); });
+    for (uint32_t x : ring2) stale[x] |= kTorsionStale | kKeyStale;
     for (uint32_t w : ring1) {
       // A vertex whose fan did not change reads bit for bit the same faces: same terms.
       if (w != v && mark[w] != fan_changed && !(stale[w] & kInputQuadric)) continue;
@@ -505,7 +519,9 @@ bool Engine::init(const IndexedMesh& input, const SimplifyOptions& options, std:
     for (Quadric& q : quad)
       for (double& a : q.a) a *= 1.0 + double(params.quadric_memory);
   }
-  for (uint32_t v = 0; v < n; ++v) self_error[v] = quad[v].error(m.p(v)) * inv_unit4;
+  parallel_halves(n, [&](uint32_t begin, uint32_t end) {
+    for (uint32_t v = begin; v < end; ++v) self_error[v] = quad[v].error(m.p(v)) * inv_unit4;
+  });
   stale.assign(n, metric == Metric::multifeature ? kInputQuadric : 0);
   faces = m.face_count();
   mark.assign(n, 0);
@@ -517,11 +533,21 @@ bool Engine::init(const IndexedMesh& input, const SimplifyOptions& options, std:
 void Engine::run(const SimplifyOptions& options) {
   auto t0 = Clock::now();
   const uint32_t n = m.vertex_count();
-  for (uint32_t v = 0; v < n; ++v) {
-    const Candidate c = best_candidate(v);
-    if (c.target == kNone) continue;
-    target[v] = c.target;
-    heap.push_unordered(v, c.cost);
+  {
+    // The initial keys on two threads (T is not stale at the start, nothing else is written),
+    // pushed in vertex order.
+    std::vector<Candidate> initial(n);
+    uint64_t evaluations[2] = {0, 0};
+    parallel_halves(n, [&](uint32_t begin, uint32_t end) {
+      for (uint32_t v = begin; v < end; ++v)
+        initial[v] = m.out[v] == kNone ? Candidate{kInfinity, kNone} : scan(v, evaluations[begin != 0]);
+    });
+    stats.cost_evaluations += evaluations[0] + evaluations[1];
+    for (uint32_t v = 0; v < n; ++v) {
+      if (initial[v].target == kNone) continue;
+      target[v] = initial[v].target;
+      heap.push_unordered(v, initial[v].cost);
+    }
   }
   heap.build();
   stats.initial_costs = seconds_since(t0);
@@ -541,13 +567,16 @@ void Engine::run(const SimplifyOptions& options) {
     }
     const float c = heap.key(u);
     if (options.max_cost >= 0 && c > options.max_cost) break;
-    // The legality check walks u's fan first; v's side and the quadrics are needed after.
-    __builtin_prefetch(&m.out[v]);
+    // The legality check walks the fans of u and v; v's position and the quadrics are needed
+    // after. One interleaved walk over both fans first loads their faces (and the positions
+    // the geometry checks read) two misses at a time instead of one.
     __builtin_prefetch(m.p(v));
     prefetch_quadric(quad, u);
     prefetch_quadric(quad, v);
     prefetch_quadric(accumulated, u);
     prefetch_quadric(accumulated, v);
+    pair[0] = u, pair[1] = v;
+    for_each_neighbour_interleaved(m, pair, walk, [&](uint32_t x) { __builtin_prefetch(m.p(x)); }, [](uint32_t) {});
     uint32_t ha, hb;
     if (!find_edge(u, v, ha, hb) || !legal(u, v, ha, hb)) {
       set_key(u, best_legal_candidate(u));
