@@ -1,39 +1,41 @@
 #include "pmz/coding.hpp"
 
-#include <array>
 #include <cstring>
 
 namespace pmz {
 
 namespace {
-// Slicing by 8: kCrc[0] is the byte-wise table; kCrc[k][b] is the CRC of byte b followed by k
-// zero bytes, so eight table lookups advance the CRC by eight bytes at once.
-constexpr std::array<std::array<uint32_t, 256>, 8> make_crc_tables() {
-  std::array<std::array<uint32_t, 256>, 8> t{};
-  for (uint32_t i = 0; i < 256; ++i) {
-    uint32_t c = i;
-    for (int k = 0; k < 8; ++k) c = (c & 1) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-    t[0][i] = c;
+// Slicing by 8: t[0] is the byte-wise table; t[k][b] is the CRC of byte b followed by k zero
+// bytes, so eight table lookups advance the CRC by eight bytes at once. Built on first use
+// (8 KB of bss, not of the library file: the decoder library has a size budget).
+struct CrcTables {
+  uint32_t t[8][256];
+  CrcTables() {
+    for (uint32_t i = 0; i < 256; ++i) {
+      uint32_t c = i;
+      for (int k = 0; k < 8; ++k) c = (c & 1) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+      t[0][i] = c;
+    }
+    for (int k = 1; k < 8; ++k)
+      for (uint32_t i = 0; i < 256; ++i) t[k][i] = (t[k - 1][i] >> 8) ^ t[0][t[k - 1][i] & 0xFF];
   }
-  for (int k = 1; k < 8; ++k)
-    for (uint32_t i = 0; i < 256; ++i) t[k][i] = (t[k - 1][i] >> 8) ^ t[0][t[k - 1][i] & 0xFF];
-  return t;
-}
-constexpr auto kCrc = make_crc_tables();
+};
 inline uint32_t load_u32le(const uint8_t* p) {
   return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
 }
 }  // namespace
 
 uint32_t crc32(const void* data, size_t size, uint32_t crc) {
+  static const CrcTables tables;
+  const auto& t = tables.t;
   const auto* p = static_cast<const uint8_t*>(data);
   crc = ~crc;
   for (; size >= 8; size -= 8, p += 8) {
     const uint32_t a = crc ^ load_u32le(p), b = load_u32le(p + 4);
-    crc = kCrc[7][a & 0xFF] ^ kCrc[6][(a >> 8) & 0xFF] ^ kCrc[5][(a >> 16) & 0xFF] ^ kCrc[4][a >> 24] ^
-          kCrc[3][b & 0xFF] ^ kCrc[2][(b >> 8) & 0xFF] ^ kCrc[1][(b >> 16) & 0xFF] ^ kCrc[0][b >> 24];
+    crc = t[7][a & 0xFF] ^ t[6][(a >> 8) & 0xFF] ^ t[5][(a >> 16) & 0xFF] ^ t[4][a >> 24] ^
+          t[3][b & 0xFF] ^ t[2][(b >> 8) & 0xFF] ^ t[1][(b >> 16) & 0xFF] ^ t[0][b >> 24];
   }
-  for (; size; --size) crc = kCrc[0][(crc ^ *p++) & 0xFF] ^ (crc >> 8);
+  for (; size; --size) crc = t[0][(crc ^ *p++) & 0xFF] ^ (crc >> 8);
   return ~crc;
 }
 
