@@ -282,6 +282,7 @@ Status Decoder::Impl::head(const uint8_t* p, size_t n) {
     return fail(Status::bad_version, "format version " + std::to_string(h.version_major) + "." +
                                          std::to_string(h.version_minor));
   if (h.position_bits > 30) return fail(Status::corrupt, "position bits above 30");
+  if (h.curvature > kMaxCurvature) return fail(Status::corrupt, "curvature above 8");
   if (h.flags & ~kKnownFlags) return fail(Status::corrupt, "unknown HEAD flags");
   for (int a = 0; a < 3; ++a)
     if (!std::isfinite(h.bbox_min[a]) || !std::isfinite(h.bbox_max[a]) || h.bbox_min[a] > h.bbox_max[a])
@@ -297,6 +298,7 @@ Status Decoder::Impl::head(const uint8_t* p, size_t n) {
   info.version_minor = h.version_minor;
   info.flags = h.flags;
   info.position_bits = h.position_bits;
+  info.curvature = h.curvature;
   info.base_vertices = h.base_vertices;
   info.base_faces = h.base_faces;
   info.full_vertices = h.full_vertices;
@@ -415,18 +417,17 @@ bool Decoder::Impl::apply() {
   if (!mesh.split_gathered(s.v, s.a, s.b)) return invalid();
   const bool has_l = s.a != kNoRank, has_r = s.b != kNoRank;
   {  // the position, then what re-applying the split needs
-    int32_t pred[3], residual[3];
-    uint32_t ctx[3];
-    predict_position(coords.data(), mesh.u_ring(), pred);
-    residual_contexts(coords.data(), mesh.u_ring(), pred, ctx);
-    if (!lazy.front().residuals(ctx, residual)) {
+    PositionPrediction pred;
+    int32_t residual[3], c[3];
+    predict_position(coords.data(), mesh.u_ring(), mesh.ring(), info.curvature, pred);
+    if (!lazy.front().residuals(pred.context, residual)) {
       mesh.undo_split(s.v, has_l, has_r);
       return refuse(Status::corrupt, "split " + std::to_string(applied) + ": residual streams malformed");
     }
+    position_from_residuals(pred, residual, c);
     for (int k = 0; k < 3; ++k) {
-      int32_t c = int32_t(uint32_t(pred[k]) + uint32_t(residual[k]));
-      coords.push_back(c);
-      positions.push_back(quant.dequantize(c, k));
+      coords.push_back(c[k]);
+      positions.push_back(quant.dequantize(c[k], k));
     }
     parents.push_back(s.v);
     sides.push_back(uint8_t((has_l ? kHasLeft : 0) | (has_r ? kHasRight : 0)));

@@ -19,6 +19,9 @@ namespace {
 
 constexpr double kWindowGrowth = 1.25;  // a window grows the vertex count by at most 25%
 constexpr uint32_t kFirstChunkSplits = 256, kMaxChunkSplits = 16384;
+// HEAD curvature values the writer tries (eighths): the best over the corpus were 0 (CAD:
+// fandisk), 3, 4 and 5 (smooth and scanned meshes).
+constexpr uint32_t kCurvatureCandidates[] = {0, 3, 4, 5};
 
 struct Plan {
   uint32_t base_vertices = 0;
@@ -264,11 +267,11 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
         if (!wedge_symbols(coords.data(), v, pm, rl, rr, code.wedge_count, code.wedge_rank, scratch) ||
             !pm.split_gathered(v, rl, rr))
           return error = "internal: split rejected", false;
-        int32_t pred[3];
-        predict_position(coords.data(), pm.u_ring(), pred);
-        residual_contexts(coords.data(), pm.u_ring(), pred, code.residual_context);
-        uint32_t u = pm.vertex_count() - 1;
-        for (int a = 0; a < 3; ++a) code.residual[a] = int32_t(uint32_t(coords[u * 3 + a]) - uint32_t(pred[a]));
+        PositionPrediction pred;
+        predict_position(coords.data(), pm.u_ring(), pm.ring(), h.curvature, pred);
+        const uint32_t u = pm.vertex_count() - 1;
+        position_residuals(pred, &coords[size_t(u) * 3], code.residual);
+        for (int s = 0; s < 3; ++s) code.residual_context[s] = pred.context[s];
         chunk.push_back(code);
         ++chunk_groups.back();
         if (chunk.size() == chunk_limit) flush();
@@ -277,9 +280,23 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
     flush();
     return true;
   };
-  std::vector<uint8_t> split_bytes;
+  // The curvature weight (HEAD) is the file's: code the splits with each candidate and keep
+  // the smallest (spec section 6).
+  std::vector<uint8_t> split_bytes, trial;
   WriteStats st;
-  if (!encode_splits(split_bytes, st)) return false;
+  uint32_t best = 0;
+  for (uint32_t curvature : kCurvatureCandidates) {
+    h.curvature = curvature;
+    WriteStats trial_st;
+    trial.clear();
+    if (!encode_splits(trial, trial_st)) return false;
+    if (curvature == kCurvatureCandidates[0] || trial.size() < split_bytes.size()) {
+      split_bytes.swap(trial);
+      st = trial_st;
+      best = curvature;
+    }
+  }
+  h.curvature = best;
 
   out.assign(kSignature, kSignature + 8);
   std::vector<uint8_t> head;

@@ -314,16 +314,4 @@ bool wedge_ranks(const int32_t* coords, uint32_t v, const ProgressiveMesh& pm, u
   return true;
 }
 
-void residual_contexts(const int32_t* coords, std::span<const uint32_t> u_ring, const int32_t pred[3],
-                       uint32_t ctx[3]) {
-  uint64_t spread[3] = {0, 0, 0};
-  for (uint32_t w : u_ring)
-    for (int a = 0; a < 3; ++a) spread[a] += uint64_t(std::llabs(int64_t(coords[size_t(w) * 3 + a]) - pred[a]));
-  for (int a = 0; a < 3; ++a) {
-    uint64_t mean = spread[a] / u_ring.size();
-    uint32_t n = mean ? 64u - uint32_t(__builtin_clzll(mean)) : 0u;
-    ctx[a] = std::min(n, kResidualContexts - 1);
-  }
-}
-
 }  // namespace pmz

@@ -164,10 +164,12 @@ Bytes split_payload(Replay& rp, const std::vector<uint32_t>& at, int32_t r = 0) 
       c.wedge_context = pmz::wedge_context(uint32_t(rp.pm.ring().size()), rp.pm.ring_closed());
       c.rank_context = rp.pm.ring_closed() ? 1 : 0;
       if (pmz::wedge_ranks(rp.coords.data(), v, rp.pm, 0, 0, a, b, rp.scratch) && rp.pm.split_gathered(v, a, b)) {
-        int32_t pred[3];
-        pmz::predict_position(rp.coords.data(), rp.pm.u_ring(), pred);
-        pmz::residual_contexts(rp.coords.data(), rp.pm.u_ring(), pred, c.residual_context);
-        for (int k = 0; k < 3; ++k) rp.coords.push_back(int32_t(uint32_t(pred[k]) + uint32_t(r)));
+        pmz::PositionPrediction pred;  // HEAD curvature 0, as header() writes
+        pmz::predict_position(rp.coords.data(), rp.pm.u_ring(), rp.pm.ring(), 0, pred);
+        std::copy(pred.context, pred.context + 3, c.residual_context);
+        int32_t cu[3];
+        pmz::position_from_residuals(pred, c.residual, cu);
+        rp.coords.insert(rp.coords.end(), cu, cu + 3);
       }
     }
     codes.push_back(c);
@@ -242,6 +244,28 @@ TEST(Hostile, SmallFileDecodes) {
   EXPECT_EQ(d.face_count(), 8u + 24u);
   EXPECT_EQ(d.status(), pmz::Status::ok) << d.error_message();
   expect_valid(d);
+}
+
+// HEAD curvature (spec section 5): 0..8; 9 and above are refused, 8 decodes.
+TEST(Hostile, CurvatureAboveEightIsRefused) {
+  for (uint32_t curvature : {8u, 9u, 255u}) {
+    Bytes f = signature();
+    pmz::FileHeader h = header(6, 8, 0, 8);
+    h.curvature = curvature;
+    head(f, h);
+    pmz::append_chunk(f, pmz::kChunkBase, octa_base_payload());
+    pmz::append_chunk(f, pmz::kChunkEnd, {});
+    pmz::Decoder d;
+    const pmz::Status s = d.feed(f.data(), f.size());
+    if (curvature <= pmz::kMaxCurvature) {
+      EXPECT_EQ(s, pmz::Status::ok) << d.error_message();
+      EXPECT_EQ(d.info().curvature, curvature);
+      EXPECT_EQ(d.face_count(), 8u);
+    } else {
+      EXPECT_EQ(s, pmz::Status::corrupt) << curvature;
+      EXPECT_NE(d.error_message().find("curvature"), std::string::npos) << d.error_message();
+    }
+  }
 }
 
 // ---- counts beyond the limits ----
@@ -449,10 +473,12 @@ TEST(Hostile, WedgeSymbolsAtUint32MaxAreInvalid) {
     uint32_t a, b;
     ASSERT_TRUE(pmz::wedge_ranks(rp.coords.data(), 0, rp.pm, 0, 0, a, b, rp.scratch));
     ASSERT_TRUE(rp.pm.split_gathered(0, a, b));
-    int32_t pred[3];
-    pmz::predict_position(rp.coords.data(), rp.pm.u_ring(), pred);
-    pmz::residual_contexts(rp.coords.data(), rp.pm.u_ring(), pred, codes[0].residual_context);
-    rp.coords.insert(rp.coords.end(), pred, pred + 3);
+    pmz::PositionPrediction pred;
+    pmz::predict_position(rp.coords.data(), rp.pm.u_ring(), rp.pm.ring(), 0, pred);
+    std::copy(pred.context, pred.context + 3, codes[0].residual_context);
+    int32_t cu[3];
+    pmz::position_from_residuals(pred, codes[0].residual, cu);
+    rp.coords.insert(rp.coords.end(), cu, cu + 3);
     ASSERT_TRUE(rp.pm.gather_ring(6));
     ASSERT_TRUE(rp.pm.ring_closed());
     ASSERT_EQ(rp.pm.ring().size(), 3u);
@@ -550,9 +576,9 @@ TEST(Hostile, CoarseningNeedsNoAllocation) {
   uint32_t ra, rb;
   ASSERT_TRUE(pmz::wedge_ranks(coords.data(), 0, pm, n - 2, 0, ra, rb, scratch));
   ASSERT_TRUE(pm.split_gathered(0, ra, rb));
-  int32_t pred[3];
-  pmz::predict_position(coords.data(), pm.u_ring(), pred);
-  pmz::residual_contexts(coords.data(), pm.u_ring(), pred, code.residual_context);
+  pmz::PositionPrediction pred;
+  pmz::predict_position(coords.data(), pm.u_ring(), pm.ring(), 0, pred);
+  std::copy(pred.context, pred.context + 3, code.residual_context);
   Bytes splt;
   auto models = std::make_unique<pmz::SplitModels>();
   pmz::encode_split_chunk({1}, &code, 1, nv, *models, splt);

@@ -194,30 +194,203 @@ TEST(WedgeSymbols, OrderIsTheSpecFormula) {
   });
 }
 
-// Residual contexts (spec section 5): min(bitlen(floor(D_a / |R|)), 20), D_a = sum over R of
-// |c[w][a] - p[a]| in 64 bits.
-TEST(ResidualContexts, AreTheSpecFormula) {
-  std::mt19937 rng(9);
-  for (int trial = 0; trial < 2000; ++trial) {
-    const uint32_t n = 2 + rng() % 9;
-    std::vector<int32_t> coords(size_t(n) * 3);
-    const int shift = int(rng() % 32);
-    for (auto& c : coords) c = trial % 7 == 0 ? (rng() & 1 ? INT32_MAX : INT32_MIN) : int32_t(rng()) >> shift;
-    std::vector<uint32_t> ring(n);
-    for (uint32_t i = 0; i < n; ++i) ring[i] = i;
-    int32_t pred[3];
-    predict_position(coords.data(), ring, pred);
-    uint32_t ctx[3];
-    residual_contexts(coords.data(), ring, pred, ctx);
-    for (int a = 0; a < 3; ++a) {
-      uint64_t d = 0;
-      for (uint32_t w : ring) d += uint64_t(std::llabs(int64_t(coords[w * 3 + a]) - pred[a]));
-      const uint64_t mean = d / n;
-      uint32_t bits = 0;
-      while (bits < 64 && (mean >> bits) != 0) ++bits;
-      EXPECT_EQ(ctx[a], std::min(bits, 20u)) << trial;
-    }
+// Position prediction (spec section 5), recomputed here from the spec's words with different
+// arithmetic: the Newell normal over every edge of the closed polygon (the codec skips the
+// terms that are 0), floor division as quotient-and-remainder, rounding half up as
+// "remainder at least half the divisor", the axis order by a full sort.
+namespace spec {
+
+using I128 = Int128;
+I128 floor_div(I128 a, I128 b) {  // b > 0
+  I128 q = a / b;
+  if (q * b > a) --q;
+  return q;
+}
+int64_t round_half_up(I128 num, I128 den) {
+  if (den < 0) num = -num, den = -den;
+  const I128 q = floor_div(num, den), r = num - q * den;
+  return int64_t(2 * r >= den ? q + 1 : q);
+}
+uint32_t ctx(UInt128 mean) {
+  uint32_t b = 0;
+  while (b < 128 && (mean >> b) != 0) ++b;
+  return std::min(b, 20u);
+}
+UInt128 mag(I128 x) { return x < 0 ? UInt128(-x) : UInt128(x); }
+
+struct Expected {
+  int64_t p[3], n[3];
+  int axis[3];
+  uint32_t context[3];
+};
+
+Expected predict(const std::vector<int32_t>& c, const std::vector<uint32_t>& R, const std::vector<uint32_t>& K,
+                 uint32_t curvature) {
+  Expected e;
+  const size_t m = R.size();
+  const uint32_t v = R[0];
+  auto C = [&](uint32_t w, int a) { return int64_t(c[size_t(w) * 3 + a]); };
+  for (int a = 0; a < 3; ++a) {
+    I128 S = C(v, a);
+    for (uint32_t w : R) S += C(w, a);
+    e.p[a] = int64_t(floor_div(2 * S + I128(m + 1), 2 * I128(m + 1)));  // floor((S + floor(n/2)) / n)
   }
+  I128 N[3] = {0, 0, 0};
+  for (size_t i = 0; i < m; ++i) {
+    const uint32_t x = R[i], y = R[(i + 1) % m];
+    const I128 dx[3] = {C(x, 0) - C(v, 0), C(x, 1) - C(v, 1), C(x, 2) - C(v, 2)};
+    const I128 dy[3] = {C(y, 0) - C(v, 0), C(y, 1) - C(v, 1), C(y, 2) - C(v, 2)};
+    for (int a = 0; a < 3; ++a) N[a] += dx[(a + 1) % 3] * dy[(a + 2) % 3] - dx[(a + 2) % 3] * dy[(a + 1) % 3];
+  }
+  uint32_t bits = 0;
+  while (bits < 128 && ((mag(N[0]) | mag(N[1]) | mag(N[2])) >> bits) != 0) ++bits;
+  const uint32_t shift = bits > 16 ? bits - 16 : 0;
+  for (int a = 0; a < 3; ++a) e.n[a] = int64_t(floor_div(N[a], I128(1) << shift));
+  std::vector<int> order = {0, 1, 2};
+  std::sort(order.begin(), order.end(), [&](int x, int y) {
+    return std::make_pair(mag(e.n[x]), x) < std::make_pair(mag(e.n[y]), y);
+  });
+  for (int s = 0; s < 3; ++s) e.axis[s] = order[s];
+  const I128 q = I128(e.n[0]) * e.n[0] + I128(e.n[1]) * e.n[1] + I128(e.n[2]) * e.n[2];
+  const int64_t k = int64_t(K.size());
+  if (q != 0 && k != 0) {
+    I128 t = 0;
+    for (int a = 0; a < 3; ++a) {
+      I128 L = I128(k) * C(v, a);
+      for (uint32_t w : K) L -= C(w, a);
+      t += L * e.n[a];
+    }
+    for (int a = 0; a < 3; ++a) e.p[a] += round_half_up(t * curvature * e.n[a], I128(8) * k * q);
+  }
+  for (int s = 0; s < 2; ++s) {
+    UInt128 D = 0;
+    for (uint32_t w : R) D += mag(C(w, e.axis[s]) - e.p[e.axis[s]]);
+    e.context[s] = ctx(D / m);
+  }
+  const int z = e.axis[2];
+  UInt128 D = 0;
+  for (uint32_t w : R) {
+    I128 d = 0;
+    for (int a = 0; a < 3; ++a) d += I128(C(w, a) - e.p[a]) * (e.n[z] ? e.n[a] : a == z ? 1 : 0);
+    D += mag(d);
+  }
+  e.context[2] = ctx(D / (mag(e.n[z] ? e.n[z] : 1) * m));
+  return e;
+}
+
+}  // namespace spec
+
+TEST(PositionPrediction, IsTheSpecFormula) {
+  std::mt19937 rng(9);
+  for (int trial = 0; trial < 20000; ++trial) {
+    const uint32_t m = 2 + rng() % 9, extra = rng() % 6, nv = m + extra;
+    std::vector<int32_t> coords(size_t(nv) * 3);
+    const int shift = int(rng() % 32);
+    const int kind = trial % 7;
+    for (auto& c : coords)
+      c = kind == 0 ? (rng() & 1 ? INT32_MAX : INT32_MIN)
+          : kind == 1 ? int32_t(rng() % 16384)
+          : kind == 2 ? int32_t(rng() % 3)  // ties in |n|, zero normals
+                      : int32_t(rng()) >> shift;
+    if (kind == 3) {  // on a plane z = x + 2y
+      for (uint32_t w = 0; w < nv; ++w)
+        coords[w * 3 + 2] = int32_t(uint32_t(coords[w * 3]) + 2u * uint32_t(coords[w * 3 + 1]));  // modulo 2^32
+    }
+    std::vector<uint32_t> R(m), K;
+    for (uint32_t i = 0; i < m; ++i) R[i] = i;
+    for (uint32_t w = 1; w < nv; ++w)
+      if (w >= m || rng() % 4) K.push_back(w);  // v's ring: most of u's ring and the rest
+    if (K.empty()) K.push_back(1);
+    const uint32_t curvature = rng() % 9;
+    PositionPrediction pp;
+    predict_position(coords.data(), R, K, curvature, pp);
+    const spec::Expected e = spec::predict(coords, R, K, curvature);
+    for (int a = 0; a < 3; ++a) {
+      ASSERT_EQ(pp.p[a], e.p[a]) << trial << " axis " << a;
+      ASSERT_EQ(pp.n[a], e.n[a]) << trial << " axis " << a;
+      ASSERT_EQ(pp.axis[a], e.axis[a]) << trial << " slot " << a;
+      ASSERT_EQ(pp.context[a], e.context[a]) << trial << " slot " << a;
+    }
+    // Residuals of a vertex near the prediction, then back: the normal axis from the tangent
+    // plane through p (rounded half up), everything modulo 2^32.
+    int32_t cu[3], r[3], back[3];
+    for (int a = 0; a < 3; ++a) cu[a] = int32_t(uint32_t(e.p[a]) + uint32_t(int32_t(rng()) >> (rng() % 32)));
+    position_residuals(pp, cu, r);
+    const int A = e.axis[0], B = e.axis[1], Z = e.axis[2];
+    EXPECT_EQ(r[0], int32_t(uint32_t(cu[A]) - uint32_t(e.p[A])));
+    EXPECT_EQ(r[1], int32_t(uint32_t(cu[B]) - uint32_t(e.p[B])));
+    const int64_t pz = e.n[Z] == 0 ? e.p[Z]
+                                   : e.p[Z] - spec::round_half_up(spec::I128(e.n[A]) * r[0] + spec::I128(e.n[B]) * r[1], e.n[Z]);
+    EXPECT_EQ(r[2], int32_t(uint32_t(cu[Z]) - uint32_t(pz))) << trial;
+    position_from_residuals(pp, r, back);
+    for (int a = 0; a < 3; ++a) EXPECT_EQ(back[a], cu[a]) << trial;
+  }
+}
+
+// Exact rounding of the plane step, by hand: n = (1, 2, 4) (normal axis z), tangent residuals
+// r_x = 1, r_y = 1: z = p_z - round((1 + 2) / 4) = p_z - 1 (0.75 rounds up); r_x = 1, r_y = 0:
+// 1/4 rounds to 0; r_x = 2, r_y = 0: 2/4 = 0.5 rounds up to 1; r_x = -2: -0.5 rounds up to 0.
+TEST(PositionPrediction, PlaneStepRoundsHalfUp) {
+  PositionPrediction pp{};
+  pp.p[0] = 10, pp.p[1] = 20, pp.p[2] = 30;
+  pp.n[0] = 1, pp.n[1] = 2, pp.n[2] = 4;
+  pp.axis[0] = 0, pp.axis[1] = 1, pp.axis[2] = 2;
+  EXPECT_EQ(normal_axis_prediction(pp, 1, 1), 29);
+  EXPECT_EQ(normal_axis_prediction(pp, 1, 0), 30);
+  EXPECT_EQ(normal_axis_prediction(pp, 2, 0), 29);
+  EXPECT_EQ(normal_axis_prediction(pp, -2, 0), 30);
+  EXPECT_EQ(normal_axis_prediction(pp, -3, 0), 31);  // -0.75 -> -1
+  pp.n[2] = -4;  // a negative normal component flips the step
+  EXPECT_EQ(normal_axis_prediction(pp, 1, 1), 31);
+  EXPECT_EQ(normal_axis_prediction(pp, 2, 0), 30);   // 2 / -4 = -0.5 rounds up to 0
+  EXPECT_EQ(normal_axis_prediction(pp, -2, 0), 29);  // -2 / -4 = 0.5 rounds up to 1
+  EXPECT_EQ(round_div(-1, 2), 0);
+  EXPECT_EQ(round_div(1, 2), 1);
+  EXPECT_EQ(round_div(-3, 2), -1);
+  EXPECT_EQ(round_div(3, -2), -1);
+  EXPECT_EQ(round_div(-5, 4), -1);
+  EXPECT_EQ(round_div(-7, 4), -2);
+}
+
+// A flat ring: the normal axis is predicted exactly for a vertex on the plane (residual 0),
+// whatever the tangent residuals; with curvature 0 the prediction is the v-twice centroid.
+TEST(PositionPrediction, FlatRingPredictsTheNormalAxisExactly) {
+  // Plane z = 3 (normal along z); v = 0 at the origin of the fan, ring around it.
+  std::vector<int32_t> coords = {0, 0, 3, 10, 0, 3, 7, 7, 3, 0, 10, 3, -7, 7, 3, -10, 0, 3, 0, -10, 3};
+  std::vector<uint32_t> R = {0, 1, 2, 3, 4}, K = {1, 2, 3, 4, 5, 6};
+  PositionPrediction pp;
+  predict_position(coords.data(), R, K, 8, pp);
+  EXPECT_EQ(pp.axis[2], 2);
+  EXPECT_EQ(pp.n[0], 0);
+  EXPECT_EQ(pp.n[1], 0);
+  EXPECT_GT(pp.n[2], 0);
+  EXPECT_EQ(pp.p[2], 3);  // the umbrella vector of v lies in the plane: no offset
+  EXPECT_EQ(pp.p[0], floor_mean(0 + 0 + 10 + 7 + 0 - 7, 6));
+  EXPECT_EQ(pp.p[1], floor_mean(0 + 0 + 0 + 7 + 10 + 7, 6));
+  const int32_t cu[3] = {5, 4, 3};
+  int32_t r[3];
+  position_residuals(pp, cu, r);
+  EXPECT_EQ(r[2], 0);
+  EXPECT_EQ(pp.context[2], 0u);  // the ring lies in the plane
+}
+
+// Curvature offset on a cap: v above its ring, u's ring below v. The offset is curvature / 8 of
+// the umbrella vector's projection on n, rounded half up per axis.
+TEST(PositionPrediction, CurvatureOffsetMovesAlongTheNormal) {
+  // v = (0, 0, 8); ring of v: four points at z = 0; u's ring: v and two of them.
+  std::vector<int32_t> coords = {0, 0, 8, 16, 0, 0, 0, 16, 0, -16, 0, 0, 0, -16, 0};
+  std::vector<uint32_t> R = {0, 1, 2}, K = {1, 2, 3, 4};
+  PositionPrediction p0, p4, p8;
+  predict_position(coords.data(), R, K, 0, p0);
+  predict_position(coords.data(), R, K, 4, p4);
+  predict_position(coords.data(), R, K, 8, p8);
+  // Umbrella vector (0, 0, 8); n = (16*8, 16*8, 256) up to scale: projection 8 * n_z^2 / |n|^2
+  // = 8 * 4/6 on z and 8 * 2/6 on x and y (shared scale cancels).
+  EXPECT_EQ(p0.p[2], floor_mean(8 + 8 + 0 + 0, 4));
+  EXPECT_EQ(p8.p[2] - p0.p[2], 5);  // round(16/3) = 5
+  EXPECT_EQ(p8.p[0] - p0.p[0], 3);  // round(8/3) = 3
+  EXPECT_EQ(p4.p[2] - p0.p[2], 3);  // round(8/3) = 3
+  EXPECT_EQ(p4.p[0] - p0.p[0], 1);  // round(4/3) = 1
 }
 
 // Larger rings than above, up to 40 (the selection switches to nth_element from rank 16): the

@@ -11,7 +11,7 @@
 namespace pmz {
 
 inline constexpr uint8_t kSignature[8] = {0x89, 'P', 'M', 'Z', 0x0D, 0x0A, 0x1A, 0x0A};
-inline constexpr uint32_t kVersionMajor = 4;
+inline constexpr uint32_t kVersionMajor = 5;
 inline constexpr uint32_t kVersionMinor = 0;
 
 // Chunk = fourcc[4] | u32le payload_size | u32le crc32(fourcc, size, payload) | payload.
@@ -31,9 +31,9 @@ enum SplitStream : int {
   kStreamGaps,        // v - previous v - 1 within a group; first: v (varint)
   kStreamWedgeCount,  // wedge: interior count (spec, section 4)
   kStreamWedgeRank,   // wedge: rank among the candidates of that count
-  kStreamResidualX,  // zigzag(actual - prediction mod 2^32) (varint)
-  kStreamResidualY,
-  kStreamResidualZ,
+  kStreamResidualX,  // position residual slot 0 (first tangent axis; spec section 5)
+  kStreamResidualY,  // slot 1 (second tangent axis)
+  kStreamResidualZ,  // slot 2 (normal axis, predicted from the tangent plane)
   kSplitStreamCount
 };
 
@@ -44,6 +44,7 @@ struct FileHeader {
   uint32_t version_major = kVersionMajor, version_minor = kVersionMinor;
   uint32_t flags = 0;
   uint32_t position_bits = 14;  // 0 = lossless float32
+  uint32_t curvature = 0;       // prediction offset weight, 0..kMaxCurvature (eighths; spec section 5)
   uint32_t base_vertices = 0, base_faces = 0, full_vertices = 0, full_faces = 0;
   uint32_t total_splits = 0;
   float bbox_min[3] = {0, 0, 0}, bbox_max[3] = {0, 0, 0};

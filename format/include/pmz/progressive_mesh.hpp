@@ -179,15 +179,4 @@ inline int64_t floor_mean(int64_t sum, int64_t n) {
   return q;
 }
 
-// Position prediction of a new vertex u (spec, section 5), right after split(): per axis the
-// floor-rounded mean of u's ring with v counted twice (u starts next to v), in 64-bit integers.
-// coords: 3 per vertex.
-inline void predict_position(const int32_t* coords, std::span<const uint32_t> u_ring, int32_t out[3]) {
-  int64_t sum[3] = {0, 0, 0};
-  for (uint32_t w : u_ring)
-    for (int a = 0; a < 3; ++a) sum[a] += coords[size_t(w) * 3 + a];
-  for (int a = 0; a < 3; ++a) sum[a] += coords[size_t(u_ring[0]) * 3 + a];
-  for (int a = 0; a < 3; ++a) out[a] = int32_t(floor_mean(sum[a], int64_t(u_ring.size()) + 1));
-}
-
 }  // namespace pmz

@@ -12,13 +12,14 @@
 #include <string>
 #include <vector>
 
+#include "pmz/geometry.hpp"
 #include "pmz/range_coder.hpp"
 
 namespace pmz {
 
 class ProgressiveMesh;
 
-inline constexpr uint32_t kGapContexts = 33, kWedgeContexts = 18, kResidualContexts = 21;
+inline constexpr uint32_t kGapContexts = 33, kWedgeContexts = 18;
 
 // One split's symbols and the contexts they are coded with (the writer computes the contexts
 // by replaying the decoder's mesh).
@@ -27,8 +28,8 @@ struct SplitSymbols {
   uint32_t wedge_context;        // wedge_context(k, closed) of v's ring
   uint32_t wedge_count, wedge_rank;
   uint32_t rank_context;         // 1 closed, 0 open
-  uint32_t residual_context[3];  // residual_contexts() after the split
-  int32_t residual[3];           // position residual per axis
+  uint32_t residual_context[3];  // PositionPrediction::context, per slot
+  int32_t residual[3];           // position residual per slot (two tangent axes, the normal axis)
 };
 
 // Context models, created once per file and carried from SPLT chunk to chunk (a chunk needs
@@ -99,9 +100,5 @@ bool wedge_symbols(const int32_t* coords, uint32_t v, const ProgressiveMesh& pm,
 // Decoder: symbols back to ranks; false if count or rank is out of range for the ring.
 bool wedge_ranks(const int32_t* coords, uint32_t v, const ProgressiveMesh& pm, uint32_t count, uint32_t rank,
                  uint32_t& rank_l, uint32_t& rank_r, WedgeScratch& s);
-
-// Residual contexts from the spread of u's ring around the prediction.
-void residual_contexts(const int32_t* coords, std::span<const uint32_t> u_ring, const int32_t pred[3],
-                       uint32_t ctx[3]);
 
 }  // namespace pmz

@@ -1,0 +1,126 @@
+#include "pmz/geometry.hpp"
+
+#include "pmz/progressive_mesh.hpp"
+
+#include <utility>
+
+namespace pmz {
+
+namespace {
+
+inline uint32_t bitlen128(UInt128 x) {
+  const uint64_t hi = uint64_t(x >> 64), lo = uint64_t(x);
+  return hi ? 128u - uint32_t(__builtin_clzll(hi)) : lo ? 64u - uint32_t(__builtin_clzll(lo)) : 0u;
+}
+inline UInt128 abs128(Int128 x) { return x < 0 ? (UInt128)(-x) : (UInt128)x; }
+inline uint32_t context_of(UInt128 mean) {
+  const uint32_t b = bitlen128(mean);
+  return b < kResidualContexts - 1 ? b : kResidualContexts - 1;
+}
+
+}  // namespace
+
+int64_t round_div_wide(Int128 num, Int128 den) {
+  if (den < 0) num = -num, den = -den;
+  const Int128 x = 2 * num + den, d = 2 * den;
+  Int128 q = x / d;
+  if (x % d != 0 && x < 0) --q;  // floor, not truncation
+  return int64_t(q);
+}
+
+void predict_position(const int32_t* coords, std::span<const uint32_t> u_ring, std::span<const uint32_t> v_ring,
+                      uint32_t curvature, PositionPrediction& out) {
+  const uint32_t m = uint32_t(u_ring.size());
+  const int32_t* cv = coords + size_t(u_ring[0]) * 3;
+  const int64_t vx = cv[0], vy = cv[1], vz = cv[2];
+  // Centroid of u's ring with v counted twice; the largest offset from v decides whether the
+  // normal fits 64-bit arithmetic (then the same values as the 128-bit sums).
+  int64_t sum[3] = {2 * vx, 2 * vy, 2 * vz};
+  // Newell normal of u's ring around v (the first offset, v's own, is 0: N = sum over
+  // i = 1 .. m-2 of d_i x d_{i+1}), in 64 bits while every offset is below 2^24 and m < 2^14
+  // (|terms| < 2^49: the same values as 128-bit sums), else again in 128 bits; then scaled to
+  // at most kNormalBits bits (arithmetic shift: floor).
+  // Unsigned (modulo 2^64) so that wide offsets wrap harmlessly before the 128-bit redo.
+  uint64_t U[3] = {0, 0, 0}, px = 0, py = 0, pz = 0;
+  uint64_t spread_v = 0;
+  for (uint32_t i = 1; i < m; ++i) {
+    const int32_t* cw = coords + size_t(u_ring[i]) * 3;
+    sum[0] += cw[0], sum[1] += cw[1], sum[2] += cw[2];
+    const int64_t dx = cw[0] - vx, dy = cw[1] - vy, dz = cw[2] - vz;
+    spread_v |= uint64_t(dx ^ (dx >> 63)) | uint64_t(dy ^ (dy >> 63)) | uint64_t(dz ^ (dz >> 63));
+    const uint64_t ux = uint64_t(dx), uy = uint64_t(dy), uz = uint64_t(dz);
+    U[0] += py * uz - pz * uy;
+    U[1] += pz * ux - px * uz;
+    U[2] += px * uy - py * ux;
+    px = ux, py = uy, pz = uz;
+  }
+  for (int a = 0; a < 3; ++a) out.p[a] = floor_mean(sum[a], int64_t(m) + 1);
+  if (spread_v < (uint64_t(1) << 24) && m < (1u << 14)) {
+    const int64_t N[3] = {int64_t(U[0]), int64_t(U[1]), int64_t(U[2])};
+    const uint64_t big = uint64_t(N[0] < 0 ? -N[0] : N[0]) | uint64_t(N[1] < 0 ? -N[1] : N[1]) |
+                         uint64_t(N[2] < 0 ? -N[2] : N[2]);
+    const uint32_t bits = big ? 64u - uint32_t(__builtin_clzll(big)) : 0u;
+    const uint32_t shift = bits > kNormalBits ? bits - kNormalBits : 0;
+    for (int a = 0; a < 3; ++a) out.n[a] = N[a] >> shift;
+  } else {
+    Int128 W[3] = {0, 0, 0};
+    int64_t prev[3] = {0, 0, 0};
+    for (uint32_t i = 1; i < m; ++i) {
+      const int32_t* cw = coords + size_t(u_ring[i]) * 3;
+      const int64_t d[3] = {cw[0] - vx, cw[1] - vy, cw[2] - vz};
+      W[0] += Int128(prev[1]) * d[2] - Int128(prev[2]) * d[1];
+      W[1] += Int128(prev[2]) * d[0] - Int128(prev[0]) * d[2];
+      W[2] += Int128(prev[0]) * d[1] - Int128(prev[1]) * d[0];
+      for (int a = 0; a < 3; ++a) prev[a] = d[a];
+    }
+    const uint32_t bits = bitlen128(abs128(W[0]) | abs128(W[1]) | abs128(W[2]));
+    const uint32_t shift = bits > kNormalBits ? bits - kNormalBits : 0;
+    for (int a = 0; a < 3; ++a) out.n[a] = int64_t(W[a] >> shift);
+  }
+  const int64_t n0 = out.n[0], n1 = out.n[1], n2 = out.n[2];
+  // Axis order by |n|, smallest first, ties by smaller axis.
+  uint8_t* ax = out.axis;
+  ax[0] = 0, ax[1] = 1, ax[2] = 2;
+  const int64_t mag[3] = {n0 < 0 ? -n0 : n0, n1 < 0 ? -n1 : n1, n2 < 0 ? -n2 : n2};
+  auto before = [&](int x, int y) { return mag[x] < mag[y] || (mag[x] == mag[y] && x < y); };
+  if (before(ax[1], ax[0])) std::swap(ax[0], ax[1]);
+  if (before(ax[2], ax[1])) std::swap(ax[1], ax[2]);
+  if (before(ax[1], ax[0])) std::swap(ax[0], ax[1]);
+  // Curvature offset along n: curvature/8 of the projection of v's umbrella vector
+  // L / k = c[v] - mean(v's ring). |L| < 2^56 for k <= 2^24.
+  const int64_t q = n0 * n0 + n1 * n1 + n2 * n2;
+  const uint32_t k = uint32_t(v_ring.size());
+  if (curvature && q && k && k <= (1u << 24)) {
+    int64_t L[3] = {int64_t(k) * vx, int64_t(k) * vy, int64_t(k) * vz};
+    for (uint32_t w : v_ring) {
+      const int32_t* cw = coords + size_t(w) * 3;
+      L[0] -= cw[0], L[1] -= cw[1], L[2] -= cw[2];
+    }
+    const Int128 t = (Int128(L[0]) * n0 + Int128(L[1]) * n1 + Int128(L[2]) * n2) * int64_t(curvature);
+    const Int128 den = Int128(8 * int64_t(k)) * q;
+    for (int a = 0; a < 3; ++a) out.p[a] += round_div(t * out.n[a], den);
+  }
+  // Contexts: tangent slots from the ring's spread along their axis; the normal slot from the
+  // ring's spread off the plane through p, in units of the normal axis. Every |c[w] - p| is
+  // below 2^34 (p is within the ring's box plus at most |L / k|), so each dot product with n
+  // fits 64 bits.
+  uint64_t spread[3] = {0, 0, 0};
+  UInt128 off = 0;
+  const int64_t p0 = out.p[0], p1 = out.p[1], p2 = out.p[2];
+  for (uint32_t w : u_ring) {
+    const int32_t* cw = coords + size_t(w) * 3;
+    const int64_t dx = cw[0] - p0, dy = cw[1] - p1, dz = cw[2] - p2;
+    spread[0] += uint64_t(dx < 0 ? -dx : dx);
+    spread[1] += uint64_t(dy < 0 ? -dy : dy);
+    spread[2] += uint64_t(dz < 0 ? -dz : dz);
+    const int64_t dot = dx * n0 + dy * n1 + dz * n2;
+    off += uint64_t(dot < 0 ? -dot : dot);
+  }
+  const int c = ax[2];
+  for (int s = 0; s < 2; ++s) out.context[s] = context_of(spread[ax[s]] / m);
+  if (mag[c] == 0) off = spread[c];  // n = 0: the normal axis' own spread
+  const uint64_t div = uint64_t(mag[c] ? mag[c] : 1) * m;  // < 2^17 * 2^32
+  out.context[2] = context_of(off >> 64 ? off / div : uint64_t(off) / div);
+}
+
+}  // namespace pmz
