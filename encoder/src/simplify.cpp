@@ -156,7 +156,10 @@ class Engine {
   // Per vertex: T(v) is stale (recomputed when next needed); the key is stale (recomputed when
   // it reaches the top of the heap); Q(v) is still the input's (multifeature: the first
   // recomputation from the current mesh changes its bits even where the faces did not change).
-  enum : uint8_t { kTorsionStale = 1, kKeyStale = 2, kInputQuadric = 4 };
+  // kBoundary: the vertex is on the boundary. Collapses never change that for the vertices
+  // they keep (an edge becomes a boundary edge only between two boundary vertices, and the
+  // link condition keeps holes open), so it is set once.
+  enum : uint8_t { kTorsionStale = 1, kKeyStale = 2, kInputQuadric = 4, kBoundary = 8 };
   std::vector<uint8_t> stale;
   // Scratch: a stamp per vertex for set membership, and buffers reused across collapses.
   std::vector<uint32_t> mark;
@@ -341,10 +344,14 @@ void Engine::fix_out(uint32_t w, uint32_t candidate) {
     m.out[w] = kNone;
     return;
   }
+  // An interior vertex may keep any live out-edge (the walk below would go round its whole fan
+  // back to h); a boundary vertex needs the one without a twin.
   const uint32_t start = h;
-  for (uint32_t t = m.twin[h]; t != kNone; t = m.twin[h]) {
-    h = HalfEdgeMesh::next(t);
-    if (h == start) break;
+  if (stale[w] & kBoundary) {
+    for (uint32_t t = m.twin[h]; t != kNone; t = m.twin[h]) {
+      h = HalfEdgeMesh::next(t);
+      if (h == start) break;
+    }
   }
   m.out[w] = h;
 }
@@ -523,6 +530,8 @@ bool Engine::init(const IndexedMesh& input, const SimplifyOptions& options, std:
     for (uint32_t v = begin; v < end; ++v) self_error[v] = quad[v].error(m.p(v)) * inv_unit4;
   });
   stale.assign(n, metric == Metric::multifeature ? kInputQuadric : 0);
+  for (uint32_t v = 0; v < n; ++v)
+    if (m.out[v] != kNone && m.is_boundary(v)) stale[v] |= kBoundary;
   faces = m.face_count();
   mark.assign(n, 0);
   target.assign(n, kNone);
