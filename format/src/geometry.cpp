@@ -17,6 +17,14 @@ inline uint32_t context_of(UInt128 mean) {
   const uint32_t b = bitlen128(mean);
   return b < kResidualContexts - 1 ? b : kResidualContexts - 1;
 }
+// context_of(floor(sum / div)) without dividing (div > 0): floor(sum / div) >= 2^j exactly when
+// sum >= div * 2^j, so its bit length is the largest such j plus one (0 when sum < div).
+inline uint32_t context_of_mean(uint64_t sum, uint64_t div) {
+  if (sum < div) return 0;
+  uint32_t j = uint32_t(__builtin_clzll(div)) - uint32_t(__builtin_clzll(sum));  // bitlen(sum) - bitlen(div)
+  if (sum < (div << j)) --j;  // div << j < 2^bitlen(sum): no overflow
+  return j + 1 < kResidualContexts - 1 ? j + 1 : kResidualContexts - 1;
+}
 
 }  // namespace
 
@@ -117,10 +125,10 @@ void predict_position(const int32_t* coords, std::span<const uint32_t> u_ring, s
     off += uint64_t(dot < 0 ? -dot : dot);
   }
   const int c = ax[2];
-  for (int s = 0; s < 2; ++s) out.context[s] = context_of(spread[ax[s]] / m);
+  for (int s = 0; s < 2; ++s) out.context[s] = context_of_mean(spread[ax[s]], m);
   if (mag[c] == 0) off = spread[c];  // n = 0: the normal axis' own spread
   const uint64_t div = uint64_t(mag[c] ? mag[c] : 1) * m;  // < 2^17 * 2^32
-  out.context[2] = context_of(off >> 64 ? off / div : uint64_t(off) / div);
+  out.context[2] = off >> 64 ? context_of(off / div) : context_of_mean(uint64_t(off), div);
 }
 
 }  // namespace pmz
