@@ -7,6 +7,8 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <iterator>
+#include <memory>
 
 #include "pmz/decoder.hpp"
 #include "pmz/format.hpp"
@@ -307,28 +309,36 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
 
   const std::vector<uint8_t> base = base_payload(coords, base_n, plan.base_faces, opt.zstd_level);
 
-  // Splits: replay in final order with the decoder's core to get ranks and predictions.
+  // Splits: replay in final order with the decoder's core to get ranks and predictions. The
+  // curvature weight (HEAD) is the file's: one replay codes the splits once per candidate
+  // (only the residuals differ) and the smallest is kept (spec section 6).
+  constexpr size_t kCandidates = std::size(kCurvatureCandidates);
   ProgressiveMesh pm;
-  auto encode_splits = [&](std::vector<uint8_t>& bytes, WriteStats& st) {
+  std::vector<uint8_t> trial[kCandidates];
+  WriteStats trial_st[kCandidates];
+  {
     if (!pm.build(base_n, plan.base_faces.data(), h.base_faces, error)) return false;
-    std::vector<SplitSymbols> chunk;
+    std::vector<SplitSymbols> chunk[kCandidates];
     std::vector<uint32_t> chunk_groups;
     std::vector<uint8_t> payload;
     WedgeScratch scratch;
-    auto models = std::make_unique<SplitModels>();
+    std::unique_ptr<SplitModels> models[kCandidates];
+    for (auto& m : models) m = std::make_unique<SplitModels>();
     uint32_t chunk_limit = kFirstChunkSplits;
     auto flush = [&]() {
-      if (chunk.empty()) return;
-      payload.clear();
-      uint64_t sizes[kSplitStreamCount];
-      encode_split_chunk(chunk_groups, chunk.data(), chunk.size(), pm.vertex_count() - chunk.size(), *models, payload,
-                         sizes);
-      for (int s = 0; s < kSplitStreamCount; ++s)
-        (s <= kStreamWedgeRank ? st.connectivity_bits : st.geometry_bits) += sizes[s] * 8;
-      size_t before = bytes.size();
-      append_chunk(bytes, kChunkSplits, payload);
-      st.split_bytes += bytes.size() - before;
-      chunk.clear();
+      if (chunk_groups.empty()) return;
+      for (size_t k = 0; k < kCandidates; ++k) {
+        payload.clear();
+        uint64_t sizes[kSplitStreamCount];
+        const size_t n = chunk[k].size();
+        encode_split_chunk(chunk_groups, chunk[k].data(), n, pm.vertex_count() - n, *models[k], payload, sizes);
+        for (int s = 0; s < kSplitStreamCount; ++s)
+          (s <= kStreamWedgeRank ? trial_st[k].connectivity_bits : trial_st[k].geometry_bits) += sizes[s] * 8;
+        const size_t before = trial[k].size();
+        append_chunk(trial[k], kChunkSplits, payload);
+        trial_st[k].split_bytes += trial[k].size() - before;
+        chunk[k].clear();
+      }
       chunk_groups.clear();
       chunk_limit = std::min(chunk_limit * 2, kMaxChunkSplits);
     };
@@ -350,36 +360,26 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
         if (!wedge_symbols(coords.data(), v, pm, rl, rr, code.wedge_count, code.wedge_rank, scratch) ||
             !pm.split_gathered(v, rl, rr))
           return error = "internal: split rejected", false;
-        PositionPrediction pred;
-        predict_position(coords.data(), pm.u_ring(), pm.ring(), h.curvature, pred);
         const uint32_t u = pm.vertex_count() - 1;
-        position_residuals(pred, &coords[size_t(u) * 3], code.residual);
-        for (int s = 0; s < 3; ++s) code.residual_context[s] = pred.context[s];
-        chunk.push_back(code);
+        for (size_t k = 0; k < kCandidates; ++k) {
+          PositionPrediction pred;
+          predict_position(coords.data(), pm.u_ring(), pm.ring(), kCurvatureCandidates[k], pred);
+          position_residuals(pred, &coords[size_t(u) * 3], code.residual);
+          for (int s = 0; s < 3; ++s) code.residual_context[s] = pred.context[s];
+          chunk[k].push_back(code);
+        }
         ++chunk_groups.back();
-        if (chunk.size() == chunk_limit) flush();
+        if (chunk[0].size() == chunk_limit) flush();
       }
     }
     flush();
-    return true;
-  };
-  // The curvature weight (HEAD) is the file's: code the splits with each candidate and keep
-  // the smallest (spec section 6).
-  std::vector<uint8_t> split_bytes, trial;
-  WriteStats st;
-  uint32_t best = 0;
-  for (uint32_t curvature : kCurvatureCandidates) {
-    h.curvature = curvature;
-    WriteStats trial_st;
-    trial.clear();
-    if (!encode_splits(trial, trial_st)) return false;
-    if (curvature == kCurvatureCandidates[0] || trial.size() < split_bytes.size()) {
-      split_bytes.swap(trial);
-      st = trial_st;
-      best = curvature;
-    }
   }
-  h.curvature = best;
+  size_t best = 0;
+  for (size_t k = 1; k < kCandidates; ++k)
+    if (trial[k].size() < trial[best].size()) best = k;
+  h.curvature = kCurvatureCandidates[best];
+  std::vector<uint8_t>& split_bytes = trial[best];
+  WriteStats st = trial_st[best];
 
   out.assign(kSignature, kSignature + 8);
   std::vector<uint8_t> head;
