@@ -22,8 +22,8 @@ namespace {
 constexpr double kWindowGrowth = 1.25;  // a window grows the vertex count by at most 25%
 constexpr uint32_t kFirstChunkSplits = 256, kMaxChunkSplits = 16384;
 // HEAD curvature values the writer tries (eighths): the best over the corpus were 0 (CAD:
-// fandisk), 3, 4 and 5 (smooth and scanned meshes).
-constexpr uint32_t kCurvatureCandidates[] = {0, 3, 4, 5};
+// fandisk), 3, 4 and 5 (smooth and scanned meshes) and 8 (blade); 1, 2, 6 and 7 never were.
+constexpr uint32_t kCurvatureCandidates[] = {0, 3, 4, 5, 8};
 
 struct Plan {
   uint32_t base_vertices = 0;
