@@ -126,13 +126,9 @@ void Features::update_normal_terms(const HalfEdgeMesh& m, uint32_t v) {
 }
 
 void Features::update_torsion(const HalfEdgeMesh& m, uint32_t v) {
-  float num = 0, den = 0;
-  const float* bv = vertex[v].b;
-  for_each_neighbour(m, v, [&](uint32_t w, uint32_t h) {
-    num += distance(vertex[w].b, bv);
-    den += length(h);
-  });
-  vertex[v].torsion = den > 0 ? num / den : 0.f;
+  TorsionSum t;
+  for_each_neighbour(m, v, [&](uint32_t w, uint32_t h) { t.add(*this, v, w, h); });
+  vertex[v].torsion = t.value();
 }
 
 void Features::compute_all(const HalfEdgeMesh& m) {

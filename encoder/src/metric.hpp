@@ -1,6 +1,7 @@
 // Internal: the terms of the paper's multi-feature metric (spec/algorithm.md) on the half-edge
 // mesh, cached per face and per vertex so that a collapse recomputes only its neighbourhood.
 #pragma once
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -73,6 +74,17 @@ struct Features {
   void update_normal_terms(const HalfEdgeMesh& m, uint32_t v);
   // T(v) from B of v and of its neighbours.
   void update_torsion(const HalfEdgeMesh& m, uint32_t v);
+  // T(v) summed over a walk of v's neighbours w (h a half-edge of the edge (v, w)), in that order.
+  struct TorsionSum {
+    float num = 0, den = 0;
+    void add(const Features& f, uint32_t v, uint32_t w, uint32_t h) {
+      const float *a = f.vertex[w].b, *b = f.vertex[v].b;
+      const float dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
+      num += std::sqrt(dx * dx + dy * dy + dz * dz);
+      den += f.length(h);
+    }
+    float value() const { return den > 0 ? num / den : 0.f; }
+  };
   // All terms for the whole mesh.
   void compute_all(const HalfEdgeMesh& m);
 };

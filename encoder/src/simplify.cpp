@@ -191,15 +191,30 @@ class Engine {
     if (metric == Metric::qem) return {quad[u], 0, 0};
     return {quad[u], double(params.quadric_floor) + feat.c_norm(u), double(feat.torsion(u))};
   }
-  float cost(const Origin& o, uint32_t x, uint32_t h) const;
+  // Cost of u -> x in two parts: the quadric error, then the factor that weights it.
+  double quadric_error(const Origin& o, uint32_t x) const {
+    return std::max(0.0, o.q.error(m.p(x)) * inv_unit4 + self_error[x]);
+  }
+  float weighted(const Origin& o, double e, float length_ratio) const;
+  float cost(const Origin& o, uint32_t x, uint32_t h) const {
+    return weighted(o, quadric_error(o, x), metric == Metric::qem ? 0.f : edge_length_ratio(m, feat, h));
+  }
   float cost(uint32_t u, uint32_t x, uint32_t h) const { return cost(origin(u), x, h); }
   bool find_edge(uint32_t u, uint32_t v, uint32_t& ha, uint32_t& hb) const;
   bool legal(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb);
   Candidate best_candidate(uint32_t u) {
     if (m.out[u] == kNone) return {kInfinity, kNone};
-    refresh_torsion(u);
+    if (stale[u] & kTorsionStale) return scan_with_torsion(u);
     return scan(u, stats.cost_evaluations);
   }
+  // scan() for a vertex whose T is stale: T and the costs in one walk round u.
+  Candidate scan_with_torsion(uint32_t u);
+  struct Pending {
+    uint32_t x;
+    float length_ratio;
+    double error;
+  };
+  std::vector<Pending> pending;
   // The cheapest direction out of u by cost alone (T(u) up to date); counts its evaluations.
   Candidate scan(uint32_t u, uint64_t& evaluations) const;
   void refresh_torsion(uint32_t u) {
@@ -223,15 +238,35 @@ void Engine::set_key(uint32_t v, Candidate c) {
   heap.set(v, c.cost);
 }
 
-// Cost of u -> x (o = origin(u)), h a half-edge of the edge (u, x).
-inline float Engine::cost(const Origin& o, uint32_t x, uint32_t h) const {
-  const float* px = m.p(x);
-  const double e = std::max(0.0, o.q.error(px) * inv_unit4 + self_error[x]);
+// Cost of u -> x (o = origin(u)) from its quadric error e and the length ratio of the edge.
+inline float Engine::weighted(const Origin& o, double e, float length_ratio) const {
   if (metric == Metric::qem) return float(e);
   // CA and CB both weight the quadric error (spec/algorithm.md section 2): a collapse that
   // moves no surface is free whatever the normals and torsion around it.
-  const double torsion = double(params.torsion_weight) * edge_length_ratio(m, feat, h) * o.torsion * unit;
+  const double torsion = double(params.torsion_weight) * length_ratio * o.torsion * unit;
   return float(e * (o.factor + torsion));
+}
+
+Candidate Engine::scan_with_torsion(uint32_t u) {
+  const bool boundary = m.is_boundary(u);
+  Origin o = origin(u);
+  Features::TorsionSum t;
+  pending.clear();
+  for_each_neighbour(m, u, [&](uint32_t x, uint32_t h) {
+    t.add(feat, u, x, h);
+    if (boundary && m.twin[h] != kNone) return;  // interior directions are never legal for u
+    pending.push_back({x, edge_length_ratio(m, feat, h), quadric_error(o, x)});
+  });
+  feat.vertex[u].torsion = t.value();
+  stale[u] &= uint8_t(~kTorsionStale);
+  o.torsion = double(feat.torsion(u));
+  Candidate best{kInfinity, kNone};
+  for (const Pending& p : pending) {
+    ++stats.cost_evaluations;
+    const float c = weighted(o, p.error, p.length_ratio);
+    if (c < best.cost || best.target == kNone) best = {c, p.x};
+  }
+  return best;
 }
 
 bool Engine::find_edge(uint32_t u, uint32_t v, uint32_t& ha, uint32_t& hb) const {
