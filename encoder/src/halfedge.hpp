@@ -109,4 +109,32 @@ void for_each_neighbour_interleaved(const HalfEdgeMesh& m, const std::vector<uin
   }
 }
 
+// Starts the loads of v's fan: walks it from its start forwards and backwards at once (two
+// misses in flight instead of one), prefetching each face and calling prefetch_neighbour(w) for
+// the neighbours met; the walks stop where they meet.
+template <class P>
+void prefetch_fan(const HalfEdgeMesh& m, uint32_t v, P&& prefetch_neighbour) {
+  const uint32_t start = m.out[v];
+  if (start == kNone) return;
+  auto prefetch = [&](uint32_t h) {
+    __builtin_prefetch(&m.vert[h & ~3u]);
+    __builtin_prefetch(&m.twin[h & ~3u]);
+  };
+  uint32_t fwd = start, back = start;
+  for (uint32_t steps = 0; steps < 64; ++steps) {
+    prefetch_neighbour(m.dest(fwd));
+    const uint32_t n = m.twin[HalfEdgeMesh::prev(fwd)];
+    if (n == kNone || n == back) return;
+    fwd = n;
+    prefetch(fwd);
+    const uint32_t t = m.twin[back];
+    if (t == kNone) continue;
+    const uint32_t p = HalfEdgeMesh::next(t);
+    if (p == fwd) return;
+    back = p;
+    prefetch(back);
+    prefetch_neighbour(m.dest(back));
+  }
+}
+
 }  // namespace pmz::detail

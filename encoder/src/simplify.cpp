@@ -606,6 +606,12 @@ void Engine::run(const SimplifyOptions& options) {
     const uint32_t u = heap.top(), v = target[u];
     if (stale[u] & kKeyStale) {
       stale[u] &= uint8_t(~kKeyStale);
+      // Its neighbourhood is cold: start the loads of the fan and of what the scan reads.
+      prefetch_fan(m, u, [&](uint32_t x) {
+        __builtin_prefetch(&feat.vertex[x]);
+        __builtin_prefetch(m.p(x));
+        __builtin_prefetch(&self_error[x]);
+      });
       set_key(u, best_candidate(u));
       continue;
     }
