@@ -282,7 +282,8 @@ Status Decoder::Impl::head(const uint8_t* p, size_t n) {
     return fail(Status::bad_version, "format version " + std::to_string(h.version_major) + "." +
                                          std::to_string(h.version_minor));
   if (h.position_bits > 30) return fail(Status::corrupt, "position bits above 30");
-  if (h.curvature > kMaxCurvature) return fail(Status::corrupt, "curvature above 8");
+  if (h.curvature > kMaxCurvature || h.fine_curvature > kMaxCurvature)
+    return fail(Status::corrupt, "curvature above 8");
   if (h.flags & ~kKnownFlags) return fail(Status::corrupt, "unknown HEAD flags");
   for (int a = 0; a < 3; ++a)
     if (!std::isfinite(h.bbox_min[a]) || !std::isfinite(h.bbox_max[a]) || h.bbox_min[a] > h.bbox_max[a])
@@ -299,6 +300,7 @@ Status Decoder::Impl::head(const uint8_t* p, size_t n) {
   info.flags = h.flags;
   info.position_bits = h.position_bits;
   info.curvature = h.curvature;
+  info.fine_curvature = h.fine_curvature;
   info.base_vertices = h.base_vertices;
   info.base_faces = h.base_faces;
   info.full_vertices = h.full_vertices;
@@ -419,7 +421,7 @@ bool Decoder::Impl::apply() {
   {  // the position, then what re-applying the split needs
     PositionPrediction pred;
     int32_t residual[3], c[3];
-    predict_position(coords.data(), mesh.u_ring(), mesh.ring(), info.curvature, pred);
+    predict_position(coords.data(), mesh.u_ring(), mesh.ring(), info.curvature, info.fine_curvature, pred);
     if (!lazy.front().residuals(pred.context, residual)) {
       mesh.undo_split(s.v, has_l, has_r);
       return refuse(Status::corrupt, "split " + std::to_string(applied) + ": residual streams malformed");

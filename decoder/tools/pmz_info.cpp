@@ -85,14 +85,14 @@ int main(int argc, char** argv) {
   const double splits_per_s = refine_s > 0 ? double(i.total_splits) / refine_s : 0;
   const double warm_per_s = warm_s > 0 ? double(i.total_splits) / warm_s : 0;
   if (json) {
-    std::printf("{\"file\":\"%s\",\"bytes\":%zu,\"version\":\"%u.%u\",\"position_bits\":%u,\"curvature\":%u,"
+    std::printf("{\"file\":\"%s\",\"bytes\":%zu,\"version\":\"%u.%u\",\"position_bits\":%u,\"curvature\":%u,\"fine_curvature\":%u,"
                 "\"base_vertices\":%llu,\"base_faces\":%llu,\"full_vertices\":%llu,\"full_faces\":%llu,"
                 "\"splits\":%llu,\"split_chunks\":%llu,\"header_bytes\":%llu,\"base_bytes\":%llu,"
                 "\"split_bytes\":%llu,\"other_bytes\":%llu,\"bits_per_vertex\":%.4f,"
                 "\"connectivity_bits_per_split\":%.4f,\"geometry_bits_per_split\":%.4f,"
                 "\"refine_splits_per_second\":%.0f,\"rerefine_splits_per_second\":%.0f,"
                 "\"refine_cpu_ms\":%.3f,\"rerefine_cpu_ms\":%.3f,\"stream_bytes\":{",
-                input.c_str(), data.size(), i.version_major, i.version_minor, i.position_bits, i.curvature,
+                input.c_str(), data.size(), i.version_major, i.version_minor, i.position_bits, i.curvature, i.fine_curvature,
                 (unsigned long long)i.base_vertices, (unsigned long long)i.base_faces,
                 (unsigned long long)i.full_vertices, (unsigned long long)i.full_faces,
                 (unsigned long long)i.total_splits, (unsigned long long)chunks, (unsigned long long)head,
@@ -104,10 +104,10 @@ int main(int argc, char** argv) {
     std::printf("}}\n");
     return 0;
   }
-  std::printf("%s: %zu bytes, format %u.%u, %s, curvature %u/8\n", input.c_str(), data.size(), i.version_major,
+  std::printf("%s: %zu bytes, format %u.%u, %s, curvature %u/8 + %u/8\n", input.c_str(), data.size(), i.version_major,
               i.version_minor,
               i.position_bits ? (std::to_string(i.position_bits) + "-bit positions").c_str() : "lossless float32 positions",
-              i.curvature);
+              i.curvature, i.fine_curvature);
   std::printf("  bbox      (%g %g %g) - (%g %g %g)\n", i.bbox_min[0], i.bbox_min[1], i.bbox_min[2],
               i.bbox_max[0], i.bbox_max[1], i.bbox_max[2]);
   std::printf("  base      %llu vertices, %llu faces\n", (unsigned long long)i.base_vertices,

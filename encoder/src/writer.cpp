@@ -21,9 +21,12 @@ namespace {
 
 constexpr double kWindowGrowth = 1.25;  // a window grows the vertex count by at most 25%
 constexpr uint32_t kFirstChunkSplits = 256, kMaxChunkSplits = 16384;
-// HEAD curvature values the writer tries (eighths): the best over the corpus were 0 (CAD:
-// fandisk), 3, 4 and 5 (smooth and scanned meshes) and 8 (blade); 1, 2, 6 and 7 never were.
-constexpr uint32_t kCurvatureCandidates[] = {0, 3, 4, 5, 8};
+// HEAD (curvature, fine_curvature) pairs the writer tries (eighths; spec section 6): those
+// best on some corpus mesh out of a wider set (plus no offset at all).
+struct Curvatures {
+  uint32_t curvature, fine;
+};
+constexpr Curvatures kCurvatureCandidates[] = {{0, 0}, {0, 4}, {0, 6}, {2, 4}, {2, 6}, {4, 2}};
 
 struct Plan {
   uint32_t base_vertices = 0;
@@ -363,7 +366,8 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
         const uint32_t u = pm.vertex_count() - 1;
         for (size_t k = 0; k < kCandidates; ++k) {
           PositionPrediction pred;
-          predict_position(coords.data(), pm.u_ring(), pm.ring(), kCurvatureCandidates[k], pred);
+          predict_position(coords.data(), pm.u_ring(), pm.ring(), kCurvatureCandidates[k].curvature,
+                           kCurvatureCandidates[k].fine, pred);
           position_residuals(pred, &coords[size_t(u) * 3], code.residual);
           for (int s = 0; s < 3; ++s) code.residual_context[s] = pred.context[s];
           chunk[k].push_back(code);
@@ -377,7 +381,8 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
   size_t best = 0;
   for (size_t k = 1; k < kCandidates; ++k)
     if (trial[k].size() < trial[best].size()) best = k;
-  h.curvature = kCurvatureCandidates[best];
+  h.curvature = kCurvatureCandidates[best].curvature;
+  h.fine_curvature = kCurvatureCandidates[best].fine;
   std::vector<uint8_t>& split_bytes = trial[best];
   WriteStats st = trial_st[best];
 

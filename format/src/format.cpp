@@ -25,7 +25,7 @@ void write_head_payload(std::vector<uint8_t>& out, const FileHeader& h) {
   out.push_back(uint8_t(h.flags >> 8));
   out.push_back(uint8_t(h.position_bits));
   out.push_back(uint8_t(h.curvature));
-  out.push_back(0);
+  out.push_back(uint8_t(h.fine_curvature));
   out.push_back(0);
   put_u32le(out, h.base_vertices);
   put_u32le(out, h.base_faces);
@@ -45,7 +45,8 @@ bool read_head_payload(const uint8_t* p, size_t size, FileHeader& h) {
   h.flags |= uint32_t(r.u8()) << 8;
   h.position_bits = r.u8();
   h.curvature = r.u8();
-  r.bytes(2);
+  h.fine_curvature = r.u8();
+  r.bytes(1);
   h.base_vertices = r.u32le();
   h.base_faces = r.u32le();
   h.full_vertices = r.u32le();

@@ -37,7 +37,7 @@ int64_t round_div_wide(Int128 num, Int128 den) {
 }
 
 void predict_position(const int32_t* coords, std::span<const uint32_t> u_ring, std::span<const uint32_t> v_ring,
-                      uint32_t curvature, PositionPrediction& out) {
+                      uint32_t curvature, uint32_t fine, PositionPrediction& out) {
   const uint32_t m = uint32_t(u_ring.size());
   const int32_t* cv = coords + size_t(u_ring[0]) * 3;
   const int64_t vx = cv[0], vy = cv[1], vz = cv[2];
@@ -94,18 +94,29 @@ void predict_position(const int32_t* coords, std::span<const uint32_t> u_ring, s
   if (before(ax[1], ax[0])) std::swap(ax[0], ax[1]);
   if (before(ax[2], ax[1])) std::swap(ax[1], ax[2]);
   if (before(ax[1], ax[0])) std::swap(ax[0], ax[1]);
-  // Curvature offset along n: curvature/8 of the projection of v's umbrella vector
-  // L / k = c[v] - mean(v's ring). |L| < 2^56 for k <= 2^24.
+  // Curvature offsets along n (spec section 5, step 4), one rounding for both: curvature/8 of
+  // the projection of v's umbrella vector over its ring before the split, L / k = c[v] -
+  // mean(v's ring), plus fine/8 of v's umbrella vector over u's other neighbours, E / (m - 1)
+  // = c[v] - mean(u's ring without v). |L|, |E| < 2^56 (k, m <= 2^24); numerator < 2^118.
   const int64_t q = n0 * n0 + n1 * n1 + n2 * n2;
   const uint32_t k = uint32_t(v_ring.size());
-  if (curvature && q && k && k <= (1u << 24)) {
-    int64_t L[3] = {int64_t(k) * vx, int64_t(k) * vy, int64_t(k) * vz};
-    for (uint32_t w : v_ring) {
-      const int32_t* cw = coords + size_t(w) * 3;
-      L[0] -= cw[0], L[1] -= cw[1], L[2] -= cw[2];
+  const bool use_l = curvature && k && k <= (1u << 24), use_e = fine && m >= 2 && m <= (1u << 24);
+  if (q && (use_l || use_e)) {
+    const int64_t kk = use_l ? int64_t(k) : 1, mm = int64_t(m) - 1;
+    Int128 t = 0;
+    if (use_l) {
+      int64_t L[3] = {kk * vx, kk * vy, kk * vz};
+      for (uint32_t w : v_ring) {
+        const int32_t* cw = coords + size_t(w) * 3;
+        L[0] -= cw[0], L[1] -= cw[1], L[2] -= cw[2];
+      }
+      t = (Int128(L[0]) * n0 + Int128(L[1]) * n1 + Int128(L[2]) * n2) * (int64_t(curvature) * mm);
     }
-    const Int128 t = (Int128(L[0]) * n0 + Int128(L[1]) * n1 + Int128(L[2]) * n2) * int64_t(curvature);
-    const Int128 den = Int128(8 * int64_t(k)) * q;
+    if (use_e) {  // E = (m - 1) c[v] - sum over u's other neighbours = (m + 1) c[v] - sum
+      const int64_t E[3] = {(mm + 2) * vx - sum[0], (mm + 2) * vy - sum[1], (mm + 2) * vz - sum[2]};
+      t += (Int128(E[0]) * n0 + Int128(E[1]) * n1 + Int128(E[2]) * n2) * (int64_t(fine) * kk);
+    }
+    const Int128 den = Int128(8 * kk * mm) * q;
     for (int a = 0; a < 3; ++a) out.p[a] += round_div(t * out.n[a], den);
   }
   // Contexts: tangent slots from the ring's spread along their axis; the normal slot from the

@@ -165,7 +165,7 @@ Bytes split_payload(Replay& rp, const std::vector<uint32_t>& at, int32_t r = 0) 
       c.rank_context = rp.pm.ring_closed() ? 1 : 0;
       if (pmz::wedge_ranks(rp.coords.data(), v, rp.pm, 0, 0, a, b, rp.scratch) && rp.pm.split_gathered(v, a, b)) {
         pmz::PositionPrediction pred;  // HEAD curvature 0, as header() writes
-        pmz::predict_position(rp.coords.data(), rp.pm.u_ring(), rp.pm.ring(), 0, pred);
+        pmz::predict_position(rp.coords.data(), rp.pm.u_ring(), rp.pm.ring(), 0, 0, pred);
         std::copy(pred.context, pred.context + 3, c.residual_context);
         int32_t cu[3];
         pmz::position_from_residuals(pred, c.residual, cu);
@@ -246,12 +246,14 @@ TEST(Hostile, SmallFileDecodes) {
   expect_valid(d);
 }
 
-// HEAD curvature (spec section 5): 0..8; 9 and above are refused, 8 decodes.
+// HEAD curvature and fine_curvature (spec section 5): 0..8; 9 and above are refused, 8 decodes.
 TEST(Hostile, CurvatureAboveEightIsRefused) {
-  for (uint32_t curvature : {8u, 9u, 255u}) {
+  for (uint32_t value : {8u, 9u, 255u, 8u | 0x100u, 9u | 0x100u, 255u | 0x100u}) {
+    const uint32_t curvature = value & 0xFF;
+    const bool fine = value & 0x100;
     Bytes f = signature();
     pmz::FileHeader h = header(6, 8, 0, 8);
-    h.curvature = curvature;
+    (fine ? h.fine_curvature : h.curvature) = curvature;
     head(f, h);
     pmz::append_chunk(f, pmz::kChunkBase, octa_base_payload());
     pmz::append_chunk(f, pmz::kChunkEnd, {});
@@ -259,7 +261,7 @@ TEST(Hostile, CurvatureAboveEightIsRefused) {
     const pmz::Status s = d.feed(f.data(), f.size());
     if (curvature <= pmz::kMaxCurvature) {
       EXPECT_EQ(s, pmz::Status::ok) << d.error_message();
-      EXPECT_EQ(d.info().curvature, curvature);
+      EXPECT_EQ(fine ? d.info().fine_curvature : d.info().curvature, curvature);
       EXPECT_EQ(d.face_count(), 8u);
     } else {
       EXPECT_EQ(s, pmz::Status::corrupt) << curvature;
@@ -474,7 +476,7 @@ TEST(Hostile, WedgeSymbolsAtUint32MaxAreInvalid) {
     ASSERT_TRUE(pmz::wedge_ranks(rp.coords.data(), 0, rp.pm, 0, 0, a, b, rp.scratch));
     ASSERT_TRUE(rp.pm.split_gathered(0, a, b));
     pmz::PositionPrediction pred;
-    pmz::predict_position(rp.coords.data(), rp.pm.u_ring(), rp.pm.ring(), 0, pred);
+    pmz::predict_position(rp.coords.data(), rp.pm.u_ring(), rp.pm.ring(), 0, 0, pred);
     std::copy(pred.context, pred.context + 3, codes[0].residual_context);
     int32_t cu[3];
     pmz::position_from_residuals(pred, codes[0].residual, cu);
@@ -577,7 +579,7 @@ TEST(Hostile, CoarseningNeedsNoAllocation) {
   ASSERT_TRUE(pmz::wedge_ranks(coords.data(), 0, pm, n - 2, 0, ra, rb, scratch));
   ASSERT_TRUE(pm.split_gathered(0, ra, rb));
   pmz::PositionPrediction pred;
-  pmz::predict_position(coords.data(), pm.u_ring(), pm.ring(), 0, pred);
+  pmz::predict_position(coords.data(), pm.u_ring(), pm.ring(), 0, 0, pred);
   std::copy(pred.context, pred.context + 3, code.residual_context);
   Bytes splt;
   auto models = std::make_unique<pmz::SplitModels>();

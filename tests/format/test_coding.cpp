@@ -225,7 +225,7 @@ struct Expected {
 };
 
 Expected predict(const std::vector<int32_t>& c, const std::vector<uint32_t>& R, const std::vector<uint32_t>& K,
-                 uint32_t curvature) {
+                 uint32_t curvature, uint32_t fine) {
   Expected e;
   const size_t m = R.size();
   const uint32_t v = R[0];
@@ -252,15 +252,23 @@ Expected predict(const std::vector<int32_t>& c, const std::vector<uint32_t>& R, 
   });
   for (int s = 0; s < 3; ++s) e.axis[s] = order[s];
   const I128 q = I128(e.n[0]) * e.n[0] + I128(e.n[1]) * e.n[1] + I128(e.n[2]) * e.n[2];
+  // Offset = round((C (L . n) / k + B (E . n) / (M - 1)) n_a / (8 q)): one rational value, here
+  // over the common denominator 8 k (M - 1) q (k taken as 1 when the C term is absent).
   const int64_t k = int64_t(K.size());
-  if (q != 0 && k != 0) {
-    I128 t = 0;
+  const bool c_term = curvature != 0 && k != 0, b_term = fine != 0 && m >= 2;
+  if (q != 0 && (c_term || b_term)) {
+    const I128 kk = c_term ? k : 1, mm = I128(m) - 1;
+    I128 Ln = 0, En = 0;
     for (int a = 0; a < 3; ++a) {
       I128 L = I128(k) * C(v, a);
       for (uint32_t w : K) L -= C(w, a);
-      t += L * e.n[a];
+      Ln += L * e.n[a];
+      I128 E = 0;
+      for (size_t i = 1; i < m; ++i) E += C(v, a) - C(R[i], a);
+      En += E * e.n[a];
     }
-    for (int a = 0; a < 3; ++a) e.p[a] += round_half_up(t * curvature * e.n[a], I128(8) * k * q);
+    const I128 X = (c_term ? I128(curvature) * Ln * mm : 0) + (b_term ? I128(fine) * En * kk : 0);
+    for (int a = 0; a < 3; ++a) e.p[a] += round_half_up(X * e.n[a], I128(8) * kk * mm * q);
   }
   for (int s = 0; s < 2; ++s) {
     UInt128 D = 0;
@@ -301,10 +309,10 @@ TEST(PositionPrediction, IsTheSpecFormula) {
     for (uint32_t w = 1; w < nv; ++w)
       if (w >= m || rng() % 4) K.push_back(w);  // v's ring: most of u's ring and the rest
     if (K.empty()) K.push_back(1);
-    const uint32_t curvature = rng() % 9;
+    const uint32_t curvature = rng() % 9, fine = trial % 3 == 0 ? 0 : rng() % 9;
     PositionPrediction pp;
-    predict_position(coords.data(), R, K, curvature, pp);
-    const spec::Expected e = spec::predict(coords, R, K, curvature);
+    predict_position(coords.data(), R, K, curvature, fine, pp);
+    const spec::Expected e = spec::predict(coords, R, K, curvature, fine);
     for (int a = 0; a < 3; ++a) {
       ASSERT_EQ(pp.p[a], e.p[a]) << trial << " axis " << a;
       ASSERT_EQ(pp.n[a], e.n[a]) << trial << " axis " << a;
@@ -359,7 +367,7 @@ TEST(PositionPrediction, FlatRingPredictsTheNormalAxisExactly) {
   std::vector<int32_t> coords = {0, 0, 3, 10, 0, 3, 7, 7, 3, 0, 10, 3, -7, 7, 3, -10, 0, 3, 0, -10, 3};
   std::vector<uint32_t> R = {0, 1, 2, 3, 4}, K = {1, 2, 3, 4, 5, 6};
   PositionPrediction pp;
-  predict_position(coords.data(), R, K, 8, pp);
+  predict_position(coords.data(), R, K, 8, 8, pp);
   EXPECT_EQ(pp.axis[2], 2);
   EXPECT_EQ(pp.n[0], 0);
   EXPECT_EQ(pp.n[1], 0);
@@ -381,9 +389,9 @@ TEST(PositionPrediction, CurvatureOffsetMovesAlongTheNormal) {
   std::vector<int32_t> coords = {0, 0, 8, 16, 0, 0, 0, 16, 0, -16, 0, 0, 0, -16, 0};
   std::vector<uint32_t> R = {0, 1, 2}, K = {1, 2, 3, 4};
   PositionPrediction p0, p4, p8;
-  predict_position(coords.data(), R, K, 0, p0);
-  predict_position(coords.data(), R, K, 4, p4);
-  predict_position(coords.data(), R, K, 8, p8);
+  predict_position(coords.data(), R, K, 0, 0, p0);
+  predict_position(coords.data(), R, K, 4, 0, p4);
+  predict_position(coords.data(), R, K, 8, 0, p8);
   // Umbrella vector (0, 0, 8); n = (16*8, 16*8, 256) up to scale: projection 8 * n_z^2 / |n|^2
   // = 8 * 4/6 on z and 8 * 2/6 on x and y (shared scale cancels).
   EXPECT_EQ(p0.p[2], floor_mean(8 + 8 + 0 + 0, 4));
@@ -391,6 +399,33 @@ TEST(PositionPrediction, CurvatureOffsetMovesAlongTheNormal) {
   EXPECT_EQ(p8.p[0] - p0.p[0], 3);  // round(8/3) = 3
   EXPECT_EQ(p4.p[2] - p0.p[2], 3);  // round(8/3) = 3
   EXPECT_EQ(p4.p[0] - p0.p[0], 1);  // round(4/3) = 1
+}
+
+// The fine offset (HEAD fine_curvature B): B / 8 of v's umbrella vector over u's other
+// neighbours, projected on n, rounded once together with the C term. v = (0, 0, 8); u's ring
+// v, (16, 0, 0), (0, 16, 0), (-16, 0, 0): E / 3 = (0, -16/3, 8), n ~ (0, 1, 2), projection
+// (32/3) / 5 (0, 1, 2) = (0, 32/15, 64/15). v's ring adds (0, -16, 0): L / 4 = (0, 0, 8),
+// projection 16/5 (0, 1, 2).
+TEST(PositionPrediction, FineOffsetAndOneRounding) {
+  std::vector<int32_t> coords = {0, 0, 8, 16, 0, 0, 0, 16, 0, -16, 0, 0, 0, -16, 0};
+  std::vector<uint32_t> R = {0, 1, 2, 3}, K = {1, 2, 3, 4};
+  PositionPrediction p0, b4, b8, both;
+  predict_position(coords.data(), R, K, 0, 0, p0);
+  predict_position(coords.data(), R, K, 0, 4, b4);
+  predict_position(coords.data(), R, K, 0, 8, b8);
+  predict_position(coords.data(), R, K, 8, 8, both);
+  EXPECT_EQ(p0.n[0], 0);
+  EXPECT_EQ(p0.n[2], 2 * p0.n[1]);
+  EXPECT_EQ(p0.p[1], 3);  // floor((16 + 2) / 5)
+  EXPECT_EQ(p0.p[2], 3);
+  for (int a = 0; a < 3; ++a) {
+    const int64_t want8[3] = {0, 2, 4}, want4[3] = {0, 1, 2}, want_both[3] = {0, 5, 11};
+    EXPECT_EQ(b8.p[a] - p0.p[a], want8[a]) << a;  // round(32/15), round(64/15)
+    EXPECT_EQ(b4.p[a] - p0.p[a], want4[a]) << a;  // round(16/15), round(32/15)
+    // One rounding of 16/5 + 32/15 = 16/3 and 32/5 + 64/15 = 32/3 (rounding each term apart
+    // would give 3 + 2 = 5 and 6 + 4 = 10).
+    EXPECT_EQ(both.p[a] - p0.p[a], want_both[a]) << a;
+  }
 }
 
 // Larger rings than above, up to 40 (the selection switches to nth_element from rank 16): the

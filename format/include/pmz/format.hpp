@@ -44,7 +44,8 @@ struct FileHeader {
   uint32_t version_major = kVersionMajor, version_minor = kVersionMinor;
   uint32_t flags = 0;
   uint32_t position_bits = 14;  // 0 = lossless float32
-  uint32_t curvature = 0;       // prediction offset weight, 0..kMaxCurvature (eighths; spec section 5)
+  uint32_t curvature = 0;       // prediction offset weights, 0..kMaxCurvature (eighths; spec section 5)
+  uint32_t fine_curvature = 0;
   uint32_t base_vertices = 0, base_faces = 0, full_vertices = 0, full_faces = 0;
   uint32_t total_splits = 0;
   float bbox_min[3] = {0, 0, 0}, bbox_max[3] = {0, 0, 0};

@@ -9,7 +9,7 @@
 namespace pmz {
 
 inline constexpr uint32_t kResidualContexts = 21;  // per residual slot
-inline constexpr uint32_t kMaxCurvature = 8;       // HEAD curvature: offset weight curvature / 8
+inline constexpr uint32_t kMaxCurvature = 8;       // HEAD curvature and fine_curvature: weights in eighths
 inline constexpr uint32_t kNormalBits = 16;        // |n[a]| <= 2^16 after scaling
 
 __extension__ typedef __int128 Int128;
@@ -39,9 +39,9 @@ struct PositionPrediction {
 };
 
 // u_ring: v, then u's other neighbours in order (ProgressiveMesh::u_ring()); v_ring: v's ring
-// before the split (ProgressiveMesh::ring(), any order); curvature: HEAD field, 0..8.
+// before the split (ProgressiveMesh::ring(), any order); curvature and fine: HEAD fields, 0..8.
 void predict_position(const int32_t* coords, std::span<const uint32_t> u_ring, std::span<const uint32_t> v_ring,
-                      uint32_t curvature, PositionPrediction& out);
+                      uint32_t curvature, uint32_t fine, PositionPrediction& out);
 
 // Prediction of the normal axis (slot 2) once the tangent residuals r0, r1 (slots 0, 1) are
 // known: the plane through p with normal n.
