@@ -109,31 +109,48 @@ void for_each_neighbour_interleaved(const HalfEdgeMesh& m, const std::vector<uin
   }
 }
 
-// Starts the loads of v's fan: walks it from its start forwards and backwards at once (two
-// misses in flight instead of one), prefetching each face and calling prefetch_neighbour(w) for
-// the neighbours met; the walks stop where they meet.
+// Starts the loads of the fans of `centres`: walks each from its start forwards and backwards
+// at once, all walks interleaved (a step of each in turn, so their misses overlap), prefetching
+// each face and calling prefetch_neighbour(w) for the neighbours met; a fan's two walks stop
+// where they meet. `walk` is scratch (per centre: forward and backward half-edge).
 template <class P>
-void prefetch_fan(const HalfEdgeMesh& m, uint32_t v, P&& prefetch_neighbour) {
-  const uint32_t start = m.out[v];
-  if (start == kNone) return;
+void prefetch_fans(const HalfEdgeMesh& m, const std::vector<uint32_t>& centres, std::vector<uint32_t>& walk,
+                   P&& prefetch_neighbour) {
   auto prefetch = [&](uint32_t h) {
     __builtin_prefetch(&m.vert[h & ~3u]);
     __builtin_prefetch(&m.twin[h & ~3u]);
   };
-  uint32_t fwd = start, back = start;
-  for (uint32_t steps = 0; steps < 64; ++steps) {
-    prefetch_neighbour(m.dest(fwd));
-    const uint32_t n = m.twin[HalfEdgeMesh::prev(fwd)];
-    if (n == kNone || n == back) return;
-    fwd = n;
-    prefetch(fwd);
-    const uint32_t t = m.twin[back];
-    if (t == kNone) continue;
-    const uint32_t p = HalfEdgeMesh::next(t);
-    if (p == fwd) return;
-    back = p;
-    prefetch(back);
-    prefetch_neighbour(m.dest(back));
+  walk.clear();
+  for (uint32_t c : centres)
+    if (const uint32_t start = m.out[c]; start != kNone) walk.push_back(start), walk.push_back(start);
+  for (uint32_t round = 0; round < 64 && !walk.empty(); ++round) {
+    for (size_t i = 0; i < walk.size();) {
+      uint32_t &fwd = walk[i], &back = walk[i + 1];
+      prefetch_neighbour(m.dest(fwd));
+      bool done = false;
+      if (const uint32_t n = m.twin[HalfEdgeMesh::prev(fwd)]; n == kNone || n == back) {
+        done = true;
+      } else {
+        fwd = n;
+        prefetch(fwd);
+        if (const uint32_t t = m.twin[back]; t != kNone) {
+          const uint32_t p = HalfEdgeMesh::next(t);
+          if (p == fwd) {
+            done = true;
+          } else {
+            back = p;
+            prefetch(back);
+            prefetch_neighbour(m.dest(back));
+          }
+        }
+      }
+      if (done) {
+        walk[i] = walk[walk.size() - 2], walk[i + 1] = walk.back();
+        walk.resize(walk.size() - 2);
+        continue;
+      }
+      i += 2;
+    }
   }
 }
 
