@@ -26,7 +26,8 @@ constexpr uint32_t kFirstChunkSplits = 256, kMaxChunkSplits = 16384;
 struct Curvatures {
   uint32_t curvature, fine;
 };
-constexpr Curvatures kCurvatureCandidates[] = {{0, 0}, {0, 4}, {0, 6}, {2, 4}, {2, 6}, {4, 2}};
+constexpr Curvatures kCurvatureCandidates[] = {{0, 0}, {0, 4}, {0, 5}, {0, 6}, {1, 4},
+                                               {2, 4}, {2, 6}, {3, 2}, {4, 2}};
 
 struct Plan {
   uint32_t base_vertices = 0;
