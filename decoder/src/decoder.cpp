@@ -71,14 +71,13 @@ struct Decoder::Impl {
   Quantizer quant;
 
   ProgressiveMesh mesh;
-  // Available splits: v from the chunk. From the first application on (below `decoded`), a
+  // Available splits: v once its group was decoded (kNoCorner before). From the first application on (below `decoded`), a
   // and b are what re-applying needs (ProgressiveMesh::resplit): the sector hint and the
   // sector count (and sides[i] its sides); before, only transiently, the decoded wedge ranks.
   struct Split {
     uint32_t v, a, b;
   };
   std::vector<Split> splits;
-  std::vector<uint32_t> new_vs;
   // Chunks whose wedge and residual symbols are not all decoded yet, oldest first; the front
   // one starts at split lazy_first. Splits below `decoded` have their symbols decoded.
   std::deque<SplitChunkReader> lazy;
@@ -86,6 +85,8 @@ struct Decoder::Impl {
   uint64_t lazy_first = 0, decoded = 0;
   WedgeScratch wedge_scratch;
   uint32_t wedge_scratch_ring = 0;  // wedge_scratch has room for rings up to this size
+  VertexChoice choice;              // degrees and neighbourhoods at the first-application frontier
+  std::vector<uint32_t> group_vs;
   std::vector<uint8_t> sides;     // per split below `decoded`: kHasLeft | kHasRight
   uint64_t ring_work = 0;         // sum of ring sizes over first applications
   static constexpr uint64_t kRingWorkPerSplit = 64, kRingWorkSlack = 1u << 22;
@@ -348,6 +349,7 @@ Status Decoder::Impl::base(const uint8_t* p, size_t n) {
   ProgressiveMesh m;
   if (!m.build(uint32_t(vn), faces.data(), fn, err)) return fail(Status::corrupt, "BASE: " + err);
   mesh = std::move(m);
+  choice.reset(mesh);
   coords = std::move(c);
   positions.resize(vn * 3);
   for (size_t i = 0; i < vn * 3; ++i) positions[i] = quant.dequantize(coords[i], int(i % 3));
@@ -361,11 +363,9 @@ Status Decoder::Impl::base(const uint8_t* p, size_t n) {
 Status Decoder::Impl::split_chunk(const uint8_t* p, size_t n) {
   std::string err;
   SplitChunkReader r;
-  new_vs.clear();
   if (!models) models = std::make_unique<SplitModels>();
-  if (!r.open(p, n, info.base_vertices + splits.size(), info.total_splits - splits.size(), *models, new_vs, err))
-    return fail(Status::corrupt, err);
-  for (uint32_t v : new_vs) splits.push_back({v, kNoRank, kNoRank});
+  if (!r.open(p, n, info.total_splits - splits.size(), *models, err)) return fail(Status::corrupt, err);
+  splits.resize(splits.size() + r.split_count(), {kNoCorner, kNoRank, kNoRank});
   lazy.push_back(std::move(r));
   available = splits.size();
   return Status::ok;
@@ -394,6 +394,11 @@ bool Decoder::Impl::apply() {
     return true;
   }
   auto invalid = [&] { return refuse(Status::corrupt, "split " + std::to_string(applied) + " has an invalid wedge"); };
+  if (applied - lazy_first == lazy.front().chosen()) {  // a group's first split: choose its vertices
+    if (!lazy.front().group(choice, mesh.vertex_count(), group_vs))
+      return refuse(Status::corrupt, "split " + std::to_string(applied) + ": vertex choice malformed");
+    for (size_t i = 0; i < group_vs.size(); ++i) splits[applied + i].v = group_vs[i];
+  }
   if (!mesh.gather_ring(s.v)) return invalid();
   {  // first application: the wedge symbols, with contexts from v's ring
     const uint32_t k = uint32_t(mesh.ring().size());
@@ -411,6 +416,7 @@ bool Decoder::Impl::apply() {
       wedge_scratch.order.reserve(size_t(k) + 1);
       wedge_scratch_ring = k;
     }
+    choice.reserve(k);
     uint32_t count, rank;
     if (!lazy.front().wedge(k, mesh.ring_closed(), count, rank))
       return refuse(Status::corrupt, "split " + std::to_string(applied) + ": wedge streams malformed");
@@ -418,6 +424,7 @@ bool Decoder::Impl::apply() {
   }
   if (!mesh.split_gathered(s.v, s.a, s.b)) return invalid();
   const bool has_l = s.a != kNoRank, has_r = s.b != kNoRank;
+  choice.applied(mesh, has_l, has_r);  // a residual failure below ends the stream anyway
   {  // the position, then what re-applying the split needs
     PositionPrediction pred;
     int32_t residual[3], c[3];

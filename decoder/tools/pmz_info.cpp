@@ -1,5 +1,5 @@
 // pmz-info: a .pmz file's header, counts, bytes per section and per stream, and bits per
-// vertex split divided into connectivity (groups, gaps, wedges) and geometry (residuals).
+// vertex split divided into connectivity (groups, vertex choice, wedges) and geometry (residuals).
 // Reads the container directly (chunk framing + stream sizes); validates by a full decode.
 #include <CLI/CLI.hpp>
 
@@ -81,7 +81,7 @@ int main(int argc, char** argv) {
   double conn = 0, geom = 0;
   for (int k = 0; k < pmz::kSplitStreamCount; ++k)
     (k <= pmz::kStreamWedgeRank ? conn : geom) += double(stream_bytes[k]) * 8 / ns;
-  const char* names[] = {"groups", "gaps", "wedge_count", "wedge_rank", "residual_t0", "residual_t1", "residual_n"};
+  const char* names[] = {"groups", "choice", "wedge_count", "wedge_rank", "residual_t0", "residual_t1", "residual_n"};
   const double splits_per_s = refine_s > 0 ? double(i.total_splits) / refine_s : 0;
   const double warm_per_s = warm_s > 0 ? double(i.total_splits) / warm_s : 0;
   if (json) {

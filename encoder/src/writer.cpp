@@ -323,9 +323,12 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
   {
     if (!pm.build(base_n, plan.base_faces.data(), h.base_faces, error)) return false;
     std::vector<SplitSymbols> chunk[kCandidates];
-    std::vector<uint32_t> chunk_groups;
+    std::vector<GroupCode> chunk_groups;
+    std::vector<uint32_t> chunk_choice, vs;  // connectivity: the same for every candidate
     std::vector<uint8_t> payload;
     WedgeScratch scratch;
+    VertexChoice choice;
+    choice.reset(pm);
     std::unique_ptr<SplitModels> models[kCandidates];
     for (auto& m : models) m = std::make_unique<SplitModels>();
     uint32_t chunk_limit = kFirstChunkSplits;
@@ -334,8 +337,7 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
       for (size_t k = 0; k < kCandidates; ++k) {
         payload.clear();
         uint64_t sizes[kSplitStreamCount];
-        const size_t n = chunk[k].size();
-        encode_split_chunk(chunk_groups, chunk[k].data(), n, pm.vertex_count() - n, *models[k], payload, sizes);
+        encode_split_chunk(chunk_groups, chunk_choice, chunk[k].data(), chunk[k].size(), *models[k], payload, sizes);
         for (int s = 0; s < kSplitStreamCount; ++s)
           (s <= kStreamWedgeRank ? trial_st[k].connectivity_bits : trial_st[k].geometry_bits) += sizes[s] * 8;
         const size_t before = trial[k].size();
@@ -344,36 +346,45 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
         chunk[k].clear();
       }
       chunk_groups.clear();
+      chunk_choice.clear();
       chunk_limit = std::min(chunk_limit * 2, kMaxChunkSplits);
     };
     uint32_t at = 0;
     for (uint32_t group : plan.group_sizes) {
-      for (uint32_t left = group; left; --left) {
-        if (chunk_groups.empty() || left == group) chunk_groups.push_back(0);  // a group, or its rest after a chunk cut
-        const HalfEdgeCollapse& c = seq.collapses[plan.order[at++]];
-        uint32_t v = plan.decoded_id[c.v];
-        uint32_t vl = c.vl == kNoVertex ? kNoVertex : plan.decoded_id[c.vl];
-        uint32_t vr = c.vr == kNoVertex ? kNoVertex : plan.decoded_id[c.vr];
-        uint32_t rl, rr;
-        if (!pm.gather_ring(v) || !find_ranks(pm, vl, vr, rl, rr) || plan.decoded_id[c.u] != pm.vertex_count())
-          return error = "internal: reordered split does not replay", false;
-        SplitSymbols code;
-        code.v = v;
-        code.wedge_context = wedge_context(uint32_t(pm.ring().size()), pm.ring_closed());
-        code.rank_context = pm.ring_closed() ? 1 : 0;
-        if (!wedge_symbols(coords.data(), v, pm, rl, rr, code.wedge_count, code.wedge_rank, scratch) ||
-            !pm.split_gathered(v, rl, rr))
-          return error = "internal: split rejected", false;
-        const uint32_t u = pm.vertex_count() - 1;
-        for (size_t k = 0; k < kCandidates; ++k) {
-          PositionPrediction pred;
-          predict_position(coords.data(), pm.u_ring(), pm.ring(), kCurvatureCandidates[k].curvature,
-                           kCurvatureCandidates[k].fine, pred);
-          position_residuals(pred, &coords[size_t(u) * 3], code.residual);
-          for (int s = 0; s < 3; ++s) code.residual_context[s] = pred.context[s];
-          chunk[k].push_back(code);
+      for (uint32_t left = group; left;) {
+        // A stream group: the group, or the part of it that fits the chunk.
+        const uint32_t n = std::min<uint32_t>(left, chunk_limit - uint32_t(chunk[0].size()));
+        vs.clear();
+        for (uint32_t i = at; i < at + n; ++i) vs.push_back(plan.decoded_id[seq.collapses[plan.order[i]].v]);
+        choice.start_group();
+        chunk_groups.push_back({n, choice_bits(choice, pm.vertex_count(), vs, chunk_choice)});
+        left -= n;
+        for (uint32_t i = 0; i < n; ++i) {
+          const HalfEdgeCollapse& c = seq.collapses[plan.order[at++]];
+          uint32_t v = plan.decoded_id[c.v];
+          uint32_t vl = c.vl == kNoVertex ? kNoVertex : plan.decoded_id[c.vl];
+          uint32_t vr = c.vr == kNoVertex ? kNoVertex : plan.decoded_id[c.vr];
+          uint32_t rl, rr;
+          if (!pm.gather_ring(v) || !find_ranks(pm, vl, vr, rl, rr) || plan.decoded_id[c.u] != pm.vertex_count())
+            return error = "internal: reordered split does not replay", false;
+          SplitSymbols code;
+          code.v = v;
+          code.wedge_context = wedge_context(uint32_t(pm.ring().size()), pm.ring_closed());
+          code.rank_context = pm.ring_closed() ? 1 : 0;
+          if (!wedge_symbols(coords.data(), v, pm, rl, rr, code.wedge_count, code.wedge_rank, scratch) ||
+              !pm.split_gathered(v, rl, rr))
+            return error = "internal: split rejected", false;
+          choice.applied(pm, rl != kNoRank, rr != kNoRank);
+          const uint32_t u = pm.vertex_count() - 1;
+          for (size_t k = 0; k < kCandidates; ++k) {
+            PositionPrediction pred;
+            predict_position(coords.data(), pm.u_ring(), pm.ring(), kCurvatureCandidates[k].curvature,
+                             kCurvatureCandidates[k].fine, pred);
+            position_residuals(pred, &coords[size_t(u) * 3], code.residual);
+            for (int s = 0; s < 3; ++s) code.residual_context[s] = pred.context[s];
+            chunk[k].push_back(code);
+          }
         }
-        ++chunk_groups.back();
         if (chunk[0].size() == chunk_limit) flush();
       }
     }

@@ -9,48 +9,93 @@
 
 namespace pmz {
 
-namespace {
-
-// Gap context: bit length of the gap a uniform spread of the group's remaining splits over the
-// remaining vertices would give (limit: vertex count at the group's start; pos: smallest
-// vertex still allowed; left: splits of the group still to come, this one included).
-inline uint32_t gap_context(uint64_t limit, uint64_t pos, uint64_t left) {
-  uint64_t expected = limit > pos ? (limit - pos) / left : 0;
-  uint32_t n = expected ? 64u - uint32_t(__builtin_clzll(expected)) : 0u;
-  return std::min(n, kGapContexts - 1);
+void VertexChoice::reset(ProgressiveMesh& base) {
+  degree_.assign(base.vertex_count(), 0);
+  for (uint32_t w = 0; w < base.vertex_count(); ++w)
+    if (base.gather_ring(w)) degree_[w] = uint32_t(base.ring().size());
+  near_.clear();
+  noted_.clear();
 }
 
+void VertexChoice::start_group() {
+  near_.swap(noted_);
+  noted_.clear();
+  std::sort(near_.begin(), near_.end());
+  near_.erase(std::unique(near_.begin(), near_.end()), near_.end());
+}
+
+bool VertexChoice::covers(std::span<const uint32_t> vs) const {
+  auto it = near_.begin();
+  for (uint32_t v : vs) {
+    it = std::lower_bound(it, near_.end(), v);
+    if (it == near_.end() || *it != v) return false;
+  }
+  return true;
+}
+
+namespace {
+template <class T>
+void make_room(std::vector<T>& b, size_t extra) {
+  if (b.capacity() - b.size() < extra) b.reserve(std::max(b.size() + extra, 2 * b.capacity()));
+}
 }  // namespace
 
-void encode_split_chunk(const std::vector<uint32_t>& group_sizes, const SplitSymbols* splits, size_t count,
-                        uint64_t vertices_before, SplitModels& models, std::vector<uint8_t>& payload,
+void VertexChoice::reserve(size_t k) {
+  make_room(noted_, k + 2);
+  make_room(degree_, 1);
+}
+
+void VertexChoice::applied(const ProgressiveMesh& pm, bool has_left, bool has_right) {
+  const std::span<const uint32_t> ring = pm.ring(), ur = pm.u_ring();
+  const uint32_t v = ur[0], u = pm.vertex_count() - 1, r = uint32_t(ur.size());
+  degree_[v] = uint32_t(ring.size()) + 2 + (has_left ? 1 : 0) + (has_right ? 1 : 0) - r;
+  degree_.push_back(r);
+  if (has_left) ++degree_[ur[1]];
+  if (has_right) ++degree_[ur[r - 1]];
+  noted_.insert(noted_.end(), ring.begin(), ring.end());
+  noted_.push_back(v);
+  noted_.push_back(u);
+}
+
+bool choice_bits(const VertexChoice& choice, uint32_t limit, std::span<const uint32_t> vs,
+                 std::vector<uint32_t>& bits) {
+  const bool near = choice.covers(vs);
+  size_t at = 0;
+  choice.scan(near, limit, uint32_t(vs.size()), [&](uint32_t w, uint32_t ctx) {
+    const bool hit = at < vs.size() && vs[at] == w;
+    at += hit;
+    bits.push_back(ctx << 1 | (hit ? 1u : 0u));
+    return hit ? 1 : 0;
+  });
+  return near;
+}
+
+void encode_split_chunk(const std::vector<GroupCode>& groups, const std::vector<uint32_t>& choice,
+                        const SplitSymbols* splits, size_t count, SplitModels& models, std::vector<uint8_t>& payload,
                         uint64_t* stream_bytes) {
   SplitModels* m = &models;
   std::vector<uint8_t> bytes[kSplitStreamCount];
   {
-    RangeEncoder groups(bytes[kStreamGroups]), gaps(bytes[kStreamGaps]), wc(bytes[kStreamWedgeCount]),
+    RangeEncoder gr(bytes[kStreamGroups]), ch(bytes[kStreamChoice]), wc(bytes[kStreamWedgeCount]),
         wr(bytes[kStreamWedgeRank]), rx(bytes[kStreamResidualX]), ry(bytes[kStreamResidualY]),
         rz(bytes[kStreamResidualZ]);
     RangeEncoder* res[3] = {&rx, &ry, &rz};
-    uint64_t limit = vertices_before;
-    size_t at = 0;
-    for (uint32_t g : group_sizes) {
-      encode_uint(groups, m->groups, g - 1);
-      for (uint32_t i = 0; i < g; ++i, ++at) {
-        const SplitSymbols& s = splits[at];
-        const uint64_t pos = i == 0 ? 0 : uint64_t(splits[at - 1].v) + 1;
-        encode_uint(gaps, m->gaps[gap_context(limit, pos, g - i)], uint32_t(s.v - pos));
-        encode_uint(wc, m->wedge_count[s.wedge_context], s.wedge_count);
-        encode_uint(wr, m->wedge_rank[s.rank_context], s.wedge_rank);
-        for (int a = 0; a < 3; ++a)
-          encode_uint(*res[a], m->residual[a][s.residual_context[a]], zigzag_encode(s.residual[a]));
-      }
-      limit += g;
+    for (const GroupCode& g : groups) {
+      encode_uint(gr, m->groups, g.size - 1);
+      gr.bit(m->near, g.near ? 1 : 0);
     }
-    for (RangeEncoder* e : {&groups, &gaps, &wc, &wr, &rx, &ry, &rz}) e->finish();
+    for (uint32_t b : choice) ch.bit(m->choice[b >> 1], b & 1);
+    for (size_t at = 0; at < count; ++at) {
+      const SplitSymbols& s = splits[at];
+      encode_uint(wc, m->wedge_count[s.wedge_context], s.wedge_count);
+      encode_uint(wr, m->wedge_rank[s.rank_context], s.wedge_rank);
+      for (int a = 0; a < 3; ++a)
+        encode_uint(*res[a], m->residual[a][s.residual_context[a]], zigzag_encode(s.residual[a]));
+    }
+    for (RangeEncoder* e : {&gr, &ch, &wc, &wr, &rx, &ry, &rz}) e->finish();
   }
   put_varint(payload, count);
-  put_varint(payload, group_sizes.size());
+  put_varint(payload, groups.size());
   for (int k = 0; k < kSplitStreamCount; ++k) {
     put_varint(payload, bytes[k].size());
     payload.insert(payload.end(), bytes[k].begin(), bytes[k].end());
@@ -69,8 +114,8 @@ bool split_chunk_stream_sizes(const uint8_t* p, size_t size, uint64_t& count, ui
   return r.ok;
 }
 
-bool SplitChunkReader::open(const uint8_t* p, size_t size, uint64_t vertices_before, uint64_t max_splits,
-                            SplitModels& models, std::vector<uint32_t>& vs, std::string& error) {
+bool SplitChunkReader::open(const uint8_t* p, size_t size, uint64_t max_splits, SplitModels& models,
+                            std::string& error) {
   ByteReader r(p, size);
   const uint64_t count = r.varint(), group_count = r.varint();
   if (!r.ok || count == 0 || count > max_splits || group_count == 0 || group_count > count)
@@ -86,37 +131,28 @@ bool SplitChunkReader::open(const uint8_t* p, size_t size, uint64_t vertices_bef
   if (count > uint64_t(size) * 64) return error = "SPLT split count beyond its bytes", false;
   models_ = &models;
   SplitModels& m = models;
-  RangeDecoder groups(p + offset[kStreamGroups], len[kStreamGroups]), gaps(p + offset[kStreamGaps], len[kStreamGaps]);
-  const size_t first = vs.size();
-  vs.resize(first + count);
+  RangeDecoder gr(p + offset[kStreamGroups], len[kStreamGroups]);
+  groups_.clear();
+  groups_.reserve(group_count);
   uint64_t done = 0;
   bool ok = true;
   for (uint64_t gi = 0; ok && gi < group_count; ++gi) {
     uint32_t g;
-    ok = decode_uint(groups, m.groups, g) && uint64_t(g) + 1 <= count - done;
+    ok = decode_uint(gr, m.groups, g) && uint64_t(g) + 1 <= count - done;
     if (!ok) break;
-    ++g;
-    const uint64_t limit = vertices_before + done;
-    uint64_t v = 0;
-    for (uint32_t i = 0; ok && i < g; ++i) {
-      uint32_t gap = 0;
-      const uint64_t pos = i == 0 ? 0 : v + 1;
-      ok = decode_uint(gaps, m.gaps[gap_context(limit, pos, g - i)], gap);
-      v = pos + gap;
-      ok = ok && v < limit;
-      vs[first + done + i] = uint32_t(v);
-    }
-    done += g;
+    RangeState st = gr.state();
+    const bool near = st.bit(m.near) != 0;
+    gr.set_state(st);
+    groups_.push_back({g + 1, near});
+    largest_ = std::max<size_t>(largest_, g + 1);
+    done += g + 1;
   }
-  ok = ok && done == count && groups.ok && gaps.ok;
-  if (!ok) {
-    vs.resize(first);
-    return error = "SPLT groups or gaps malformed", false;
-  }
+  if (!(ok && done == count && gr.ok)) return error = "SPLT groups malformed", false;
   // The mesh-dependent streams are decoded as the splits are applied: keep their bytes.
-  const size_t lo = offset[kStreamWedgeCount];
+  const size_t lo = offset[kStreamChoice];
   bytes_.assign(p + lo, p + size);
   auto dec = [&](int k) { return std::make_unique<RangeDecoder>(bytes_.data() + (offset[k] - lo), len[k]); };
+  choice_dec_ = dec(kStreamChoice);
   count_dec_ = dec(kStreamWedgeCount);
   rank_dec_ = dec(kStreamWedgeRank);
   for (int a = 0; a < 3; ++a) res_dec_[a] = dec(kStreamResidualX + a);
@@ -129,6 +165,27 @@ namespace {
 // address from the axis and context (register pressure); here the model is one pointer.
 [[gnu::noinline]] bool decode_symbol(RangeDecoder& rc, UIntModel& m, uint32_t& x) { return decode_uint(rc, m, x); }
 }  // namespace
+
+bool SplitChunkReader::group(VertexChoice& choice, uint32_t limit, std::vector<uint32_t>& vs) {
+  if (next_group_ >= groups_.size()) return false;
+  const GroupCode g = groups_[next_group_];
+  vs.resize(g.size);
+  choice.start_group();
+  RangeState st = choice_dec_->state();
+  uint16_t* models = models_->choice;
+  size_t at = 0;
+  const bool ok = choice.scan(g.near, limit, g.size, [&](uint32_t w, uint32_t ctx) {
+    const uint32_t b = st.bit(models[ctx]);
+    if (!st.ok) return -1;  // past the end: a valid stream never gets here
+    if (b) vs[at++] = w;
+    return int(b);
+  });
+  choice_dec_->set_state(st);
+  if (!ok || !choice_dec_->ok) return false;
+  ++next_group_;
+  chosen_ += g.size;
+  return true;
+}
 
 bool SplitChunkReader::wedge(uint32_t k, bool closed, uint32_t& count, uint32_t& rank) {
   return decode_symbol(*count_dec_, models_->wedge_count[wedge_context(k, closed)], count) &&

@@ -37,7 +37,7 @@ if(NOT rc EQUAL 0 OR NOT EXISTS ${out})
   message(FATAL_ERROR "whole sample: expected success, got rc=${rc}")
 endif()
 
-# A damaged wedge stream with a valid CRC: framing, groups and gaps are fine, so feed() and
+# A damaged wedge stream with a valid CRC: framing and groups are fine, so feed() and
 # finish() succeed and the damage shows only when the splits are first applied (the first
 # byte of the first SPLT chunk's wedge_count stream must be 0). Still an error: nothing
 # written, non-zero exit; --salvage writes the last good level and exits 2.

@@ -143,11 +143,19 @@ struct Replay {
   std::vector<int32_t> coords;
   pmz::WedgeScratch scratch;
   std::unique_ptr<pmz::SplitModels> models = std::make_unique<pmz::SplitModels>();  // carried across chunks
+  pmz::VertexChoice choice;
   uint64_t work = 0, vertices = 6;  // vertices: as the decoder counts them (all splits)
   Replay() {
     std::string error;
     pm.build(6, kOctaFaces, 8, error);
     coords.assign(kOctaCoords, kOctaCoords + 18);
+    choice.reset(pm);
+  }
+  // A group of one split at v: its code, choice bits appended to bits.
+  pmz::GroupCode group(uint32_t v, std::vector<uint32_t>& bits) {
+    choice.start_group();
+    const uint32_t vs[1] = {v};
+    return {1, pmz::choice_bits(choice, pm.vertex_count(), vs, bits)};
   }
 };
 
@@ -156,14 +164,18 @@ struct Replay {
 // residuals r.
 Bytes split_payload(Replay& rp, const std::vector<uint32_t>& at, int32_t r = 0) {
   std::vector<pmz::SplitSymbols> codes;
+  std::vector<pmz::GroupCode> groups;
+  std::vector<uint32_t> bits;
   for (uint32_t v : at) {
     pmz::SplitSymbols c{v, 0, 0, 0, 0, {0, 0, 0}, {r, r, r}};
     uint32_t a, b;
+    groups.push_back(rp.group(v, bits));
     if (rp.work < (8u << 20) && rp.pm.gather_ring(v)) {
       rp.work += rp.pm.ring().size();
       c.wedge_context = pmz::wedge_context(uint32_t(rp.pm.ring().size()), rp.pm.ring_closed());
       c.rank_context = rp.pm.ring_closed() ? 1 : 0;
       if (pmz::wedge_ranks(rp.coords.data(), v, rp.pm, 0, 0, a, b, rp.scratch) && rp.pm.split_gathered(v, a, b)) {
+        rp.choice.applied(rp.pm, a != pmz::kNoRank, b != pmz::kNoRank);
         pmz::PositionPrediction pred;  // HEAD curvature 0, as header() writes
         pmz::predict_position(rp.coords.data(), rp.pm.u_ring(), rp.pm.ring(), 0, 0, pred);
         std::copy(pred.context, pred.context + 3, c.residual_context);
@@ -175,7 +187,7 @@ Bytes split_payload(Replay& rp, const std::vector<uint32_t>& at, int32_t r = 0) 
     codes.push_back(c);
   }
   Bytes p;
-  pmz::encode_split_chunk(std::vector<uint32_t>(at.size(), 1), codes.data(), codes.size(), rp.vertices, *rp.models, p);
+  pmz::encode_split_chunk(groups, bits, codes.data(), codes.size(), *rp.models, p);
   rp.vertices += at.size();
   return p;
 }
@@ -469,18 +481,23 @@ TEST(Hostile, WedgeSymbolsAtUint32MaxAreInvalid) {
     // Split 0 as the decoder sees it (contexts from a replay), then split 6 with the bad symbol.
     Replay rp;
     std::vector<pmz::SplitSymbols> codes(2);
+    std::vector<pmz::GroupCode> groups;
+    std::vector<uint32_t> bits;
+    groups.push_back(rp.group(0, bits));
     ASSERT_TRUE(rp.pm.gather_ring(0));
     codes[0] = {0, pmz::wedge_context(uint32_t(rp.pm.ring().size()), rp.pm.ring_closed()), 0, 0,
                 rp.pm.ring_closed() ? 1u : 0u, {0, 0, 0}, {0, 0, 0}};
     uint32_t a, b;
     ASSERT_TRUE(pmz::wedge_ranks(rp.coords.data(), 0, rp.pm, 0, 0, a, b, rp.scratch));
     ASSERT_TRUE(rp.pm.split_gathered(0, a, b));
+    rp.choice.applied(rp.pm, a != pmz::kNoRank, b != pmz::kNoRank);
     pmz::PositionPrediction pred;
     pmz::predict_position(rp.coords.data(), rp.pm.u_ring(), rp.pm.ring(), 0, 0, pred);
     std::copy(pred.context, pred.context + 3, codes[0].residual_context);
     int32_t cu[3];
     pmz::position_from_residuals(pred, codes[0].residual, cu);
     rp.coords.insert(rp.coords.end(), cu, cu + 3);
+    groups.push_back(rp.group(6, bits));
     ASSERT_TRUE(rp.pm.gather_ring(6));
     ASSERT_TRUE(rp.pm.ring_closed());
     ASSERT_EQ(rp.pm.ring().size(), 3u);
@@ -490,7 +507,7 @@ TEST(Hostile, WedgeSymbolsAtUint32MaxAreInvalid) {
     head(f, header(6, 8, 2, 12));
     pmz::append_chunk(f, pmz::kChunkBase, octa_base_payload());
     Bytes p;
-    pmz::encode_split_chunk({1, 1}, codes.data(), codes.size(), 6, *rp.models, p);
+    pmz::encode_split_chunk(groups, bits, codes.data(), codes.size(), *rp.models, p);
     pmz::append_chunk(f, pmz::kChunkSplits, p);
     pmz::append_chunk(f, pmz::kChunkEnd, {});
     pmz::Decoder d;
@@ -502,6 +519,45 @@ TEST(Hostile, WedgeSymbolsAtUint32MaxAreInvalid) {
     EXPECT_EQ(d.coarsen(), 1u);
     EXPECT_EQ(d.refine(), 1u);  // the split before the bad one stays usable
     EXPECT_EQ(d.face_count(), 10u);
+  }
+}
+
+// Vertex choice (spec section 2): a group whose candidates run out before its splits are all
+// found (a near group with no previous group; no candidate bit set among all vertices; none
+// set among a near list) passes the chunk checks, and is refused when its first split is
+// applied: status corrupt, the mesh at the split before, which stays usable.
+TEST(Hostile, VertexChoiceRunningOutOfCandidatesIsRefused) {
+  for (int which = 0; which < 3; ++which) {
+    Replay rp;
+    Bytes f = signature();
+    head(f, header(6, 8, which == 2 ? 2 : 1, which == 2 ? 12 : 10));
+    pmz::append_chunk(f, pmz::kChunkBase, octa_base_payload());
+    if (which == 2) pmz::append_chunk(f, pmz::kChunkSplits, split_payload(rp, {0}));  // a good first group
+    std::vector<uint32_t> bits;
+    rp.choice.start_group();
+    const bool near = which != 1;
+    // Every candidate's bit 0, with the contexts the decoder uses (none for an empty near list).
+    EXPECT_FALSE(rp.choice.scan(near, rp.pm.vertex_count(), 1, [&](uint32_t, uint32_t ctx) {
+      bits.push_back(ctx << 1);
+      return 0;
+    }));
+    EXPECT_EQ(bits.size(), which == 0 ? 0u : 6u);  // all 6 vertices / 0's ring of 4, 0 and u
+    const pmz::SplitSymbols code{0, 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}};
+    Bytes p;
+    pmz::encode_split_chunk({{1, near}}, bits, &code, 1, *rp.models, p);
+    pmz::append_chunk(f, pmz::kChunkSplits, p);
+    pmz::append_chunk(f, pmz::kChunkEnd, {});
+    pmz::Decoder d;
+    ASSERT_EQ(d.feed(f.data(), f.size()), pmz::Status::ok) << which << ": " << d.error_message();
+    const uint64_t good = which == 2 ? 1 : 0;
+    EXPECT_EQ(d.refine(), good) << which;
+    EXPECT_EQ(d.status(), pmz::Status::corrupt) << which;
+    EXPECT_NE(d.error_message().find("vertex choice"), std::string::npos) << d.error_message();
+    expect_valid(d);
+    EXPECT_EQ(d.face_count(), 8u + 2 * good);
+    EXPECT_EQ(d.coarsen(), good);
+    EXPECT_EQ(d.refine(), good);
+    EXPECT_EQ(d.face_count(), 8u + 2 * good);
   }
 }
 
@@ -570,6 +626,12 @@ TEST(Hostile, CoarseningNeedsNoAllocation) {
   pmz::ProgressiveMesh pm;
   std::string error;
   ASSERT_TRUE(pm.build(nv, faces.data(), nf, error)) << error;
+  pmz::VertexChoice choice;
+  choice.reset(pm);
+  choice.start_group();
+  std::vector<uint32_t> bits;
+  const uint32_t vs[1] = {0};
+  const pmz::GroupCode group{1, pmz::choice_bits(choice, nv, vs, bits)};
   ASSERT_TRUE(pm.gather_ring(0));
   ASSERT_TRUE(pm.ring_closed());
   ASSERT_EQ(pm.ring().size(), n);
@@ -583,7 +645,7 @@ TEST(Hostile, CoarseningNeedsNoAllocation) {
   std::copy(pred.context, pred.context + 3, code.residual_context);
   Bytes splt;
   auto models = std::make_unique<pmz::SplitModels>();
-  pmz::encode_split_chunk({1}, &code, 1, nv, *models, splt);
+  pmz::encode_split_chunk({group}, bits, &code, 1, *models, splt);
   Bytes f = signature();
   head(f, header(nv, nf, 1, nf + 2));
   pmz::append_chunk(f, pmz::kChunkBase, base);

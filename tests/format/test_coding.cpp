@@ -486,3 +486,134 @@ TEST(WedgeSymbols, OrderMatchesSpecReference) {
       }
     }
 }
+
+// ---- Vertex choice (spec section 2, "Vertex choice") ----
+
+namespace {
+// Octahedron (closed) or the octahedron less one face (open: a boundary of three edges).
+void build_octahedron(ProgressiveMesh& pm, bool open) {
+  const uint32_t faces[] = {0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5};
+  std::string error;
+  ASSERT_TRUE(pm.build(6, faces, open ? 7 : 8, error)) << error;
+}
+
+// A random valid wedge of the ring gathered last (canonical ranks, kNoRank for a boundary side).
+void random_wedge(const ProgressiveMesh& pm, std::mt19937& rng, uint32_t& a, uint32_t& b) {
+  const uint32_t k = uint32_t(pm.ring().size());
+  if (pm.ring_closed()) {
+    a = rng() % k;
+    b = (a + 1 + rng() % (k - 1)) % k;
+    return;
+  }
+  do {
+    a = rng() % (k + 1);
+    b = rng() % (k + 1);
+    a = a == k ? kNoRank : a;
+    b = b == k ? kNoRank : b;
+  } while ((a == kNoRank && b == kNoRank) || (a != kNoRank && b != kNoRank && a >= b));
+}
+
+// The spec's context of candidate w: (min(bitlen(floor(rem / left)), 20) * 2 + near) * 13 +
+// min(degree, 12), rem = candidates from w to the end of the list, left = splits still to find.
+uint32_t spec_context(uint64_t rem, uint64_t left, bool near, uint32_t degree) {
+  const uint64_t e = rem / left;
+  uint32_t bits = 0;
+  while (bits < 64 && (e >> bits) != 0) ++bits;
+  return (std::min(bits, 20u) * 2 + (near ? 1 : 0)) * 13 + std::min(degree, 12u);
+}
+}  // namespace
+
+// Degrees (base: ring sizes; per split: v gets k - |R| + 2 + [vl] + [vr], u gets |R|, vl and vr
+// one more) stay the ring sizes of a manifold mesh under random splits, closed and open.
+TEST(VertexChoice, DegreesAreTheRingSizes) {
+  std::mt19937 rng(5);
+  for (int open = 0; open < 2; ++open) {
+    ProgressiveMesh pm;
+    build_octahedron(pm, open);
+    VertexChoice choice;
+    choice.reset(pm);
+    for (int step = 0; step < 400; ++step) {
+      const uint32_t v = rng() % pm.vertex_count();
+      ASSERT_TRUE(pm.gather_ring(v));
+      const uint32_t k = uint32_t(pm.ring().size());
+      uint32_t a, b;
+      random_wedge(pm, rng, a, b);
+      choice.reserve(k);
+      ASSERT_TRUE(pm.split_gathered(v, a, b));
+      choice.applied(pm, a != kNoRank, b != kNoRank);
+      const uint32_t r = uint32_t(pm.u_ring().size());
+      EXPECT_EQ(choice.degree(v), k - r + 2 + (a != kNoRank) + (b != kNoRank));
+      for (uint32_t w = 0; w < pm.vertex_count(); ++w) {
+        ASSERT_TRUE(pm.gather_ring(w));
+        ASSERT_EQ(choice.degree(w), pm.ring().size()) << "open " << open << " step " << step << " w " << w;
+      }
+    }
+  }
+}
+
+// choice_bits() codes exactly the spec's candidates and contexts: every vertex below the
+// vertex count, or (near) the previous group's neighbourhood (v's ring before each split, v,
+// u; ascending, distinct), one bit per candidate up to the group's last split.
+TEST(VertexChoice, CandidatesAndContextsAreTheSpecFormula) {
+  std::mt19937 rng(8);
+  ProgressiveMesh pm;
+  build_octahedron(pm, false);
+  VertexChoice choice;
+  choice.reset(pm);
+  std::vector<uint32_t> noted;  // the neighbourhood of the group just applied
+  for (int group = 0; group < 60; ++group) {
+    const uint32_t limit = pm.vertex_count();
+    // The next group: a few random vertices, from the neighbourhood or anywhere.
+    std::vector<uint32_t> pool = noted, vs;
+    std::sort(pool.begin(), pool.end());
+    pool.erase(std::unique(pool.begin(), pool.end()), pool.end());
+    const bool want_near = !pool.empty() && group % 3 != 0;
+    if (!want_near) {
+      pool.clear();
+      for (uint32_t w = 0; w < limit; ++w) pool.push_back(w);
+    }
+    for (uint32_t w : pool)
+      if (vs.size() < 6 && rng() % 4 == 0) vs.push_back(w);
+    if (vs.empty()) vs.push_back(pool[rng() % pool.size()]);
+    choice.start_group();
+    std::vector<uint32_t> bits;
+    const bool near = choice_bits(choice, limit, vs, bits);
+    // Near exactly when the neighbourhood holds every vertex of the group.
+    EXPECT_EQ(near, std::all_of(vs.begin(), vs.end(), [&](uint32_t v) {
+                return std::find(noted.begin(), noted.end(), v) != noted.end();
+              }));
+    if (want_near) {
+      EXPECT_TRUE(near);
+    }
+    std::vector<uint32_t> cand;
+    if (near) {
+      cand = noted;
+      std::sort(cand.begin(), cand.end());
+      cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
+    } else {
+      for (uint32_t w = 0; w < limit; ++w) cand.push_back(w);
+    }
+    std::vector<uint32_t> want;
+    uint64_t left = vs.size();
+    for (size_t i = 0; i < cand.size() && left; ++i) {
+      const bool hit = std::find(vs.begin(), vs.end(), cand[i]) != vs.end();
+      want.push_back(spec_context(cand.size() - i, left, near, choice.degree(cand[i])) << 1 | (hit ? 1u : 0u));
+      left -= hit;
+    }
+    ASSERT_EQ(left, 0u);
+    ASSERT_EQ(bits, want) << "group " << group;
+    // Apply the group (splits of one group need not be independent for the coding).
+    noted.clear();
+    for (uint32_t v : vs) {
+      ASSERT_TRUE(pm.gather_ring(v));
+      noted.insert(noted.end(), pm.ring().begin(), pm.ring().end());
+      noted.push_back(v);
+      noted.push_back(pm.vertex_count());
+      uint32_t a, b;
+      random_wedge(pm, rng, a, b);
+      choice.reserve(pm.ring().size());
+      ASSERT_TRUE(pm.split_gathered(v, a, b));
+      choice.applied(pm, a != kNoRank, b != kNoRank);
+    }
+  }
+}

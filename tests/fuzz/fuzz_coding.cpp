@@ -247,27 +247,33 @@ void fuzz_range_round_trip(const uint8_t* data, size_t size) {
   }
 }
 
-// SPLT payload decoding on arbitrary bytes: groups and gaps all or nothing with vertices in
-// range; then wedge and residual symbols with contexts taken from the input, until a stream
-// ends. The decoded symbols re-encode (same contexts) to a payload that decodes to the same.
+// SPLT payload decoding on arbitrary bytes: groups all or nothing; then, group by group, the
+// vertex choice over vertices of the given degrees (all candidates: no split is applied, so
+// near groups find no candidate and fail), wedge and residual symbols with contexts taken from
+// the input, until a stream ends. The decoded symbols re-encode (same contexts) to a payload
+// that decodes to the same.
 void fuzz_split_chunk(const uint8_t* data, size_t size) {
   if (size < 3) return;
-  const uint64_t vertices_before = 1 + data[0];
+  const uint32_t vertices_before = 1 + data[0];
   const uint64_t max_splits = uint64_t(data[1]) << (data[1] % 12);
   const uint8_t ctx_seed = data[2];
   data += 3;
   size -= 3;
-  std::vector<uint32_t> vs(3, 0);
+  // A fan of triangles around vertex 0 over the first vertices: degrees 0, 2, 3 and 12+.
+  std::vector<uint32_t> faces;
+  const uint32_t fan = std::min<uint32_t>(vertices_before - 1, 1 + ctx_seed % 16);
+  for (uint32_t i = 1; i < fan; ++i) faces.insert(faces.end(), {0, i, i + 1});
+  pmz::ProgressiveMesh pm;
   std::string error;
+  PMZ_FUZZ_CHECK(pm.build(vertices_before, faces.data(), faces.size() / 3, error));
   pmz::SplitChunkReader reader;
   auto models = std::make_unique<pmz::SplitModels>();
-  if (!reader.open(data, size, vertices_before, max_splits, *models, vs, error)) {
-    PMZ_FUZZ_CHECK(vs.size() == 3 && !error.empty());
+  if (!reader.open(data, size, max_splits, *models, error)) {
+    PMZ_FUZZ_CHECK(!error.empty());
     return;
   }
-  const size_t count = vs.size() - 3;
-  PMZ_FUZZ_CHECK(count >= 1 && count <= max_splits && reader.split_count() == count);
-  for (size_t i = 0; i < count; ++i) PMZ_FUZZ_CHECK(vs[3 + i] < vertices_before + i);
+  const size_t count = reader.split_count();
+  PMZ_FUZZ_CHECK(count >= 1 && count <= max_splits);
   uint64_t n = 0, stream_bytes[pmz::kSplitStreamCount];
   PMZ_FUZZ_CHECK(pmz::split_chunk_stream_sizes(data, size, n, stream_bytes) && n == count);
   auto contexts = [&](size_t i, pmz::SplitSymbols& s) {
@@ -279,31 +285,65 @@ void fuzz_split_chunk(const uint8_t* data, size_t size) {
     for (int a = 0; a < 3; ++a) s.residual_context[a] = (h >> (8 + 3 * a)) % pmz::kResidualContexts;
     return std::pair<uint32_t, bool>(k, closed);
   };
+  // No split is applied here, so the vertex count (and every group's limit) stays vertices_before.
+  pmz::VertexChoice choice;
+  choice.reset(pm);
   std::vector<pmz::SplitSymbols> got;
-  for (size_t i = 0; i < count; ++i) {
-    pmz::SplitSymbols s{vs[3 + i], 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}};
-    auto [k, closed] = contexts(i, s);
-    if (!reader.wedge(k, closed, s.wedge_count, s.wedge_rank) || !reader.residuals(s.residual_context, s.residual))
-      break;
-    got.push_back(s);
+  std::vector<uint32_t> sizes, vs;
+  bool ok = true;
+  while (ok && got.size() < count) {
+    const uint32_t limit = vertices_before;
+    if (!reader.group(choice, limit, vs)) break;
+    PMZ_FUZZ_CHECK(!vs.empty() && reader.chosen() == got.size() + vs.size());
+    for (size_t j = 0; j < vs.size(); ++j) PMZ_FUZZ_CHECK(vs[j] < limit && (j == 0 || vs[j - 1] < vs[j]));
+    size_t done = 0;
+    for (uint32_t v : vs) {
+      pmz::SplitSymbols s{v, 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}};
+      auto [k, closed] = contexts(got.size(), s);
+      if (!reader.wedge(k, closed, s.wedge_count, s.wedge_rank) || !reader.residuals(s.residual_context, s.residual)) {
+        ok = false;
+        break;
+      }
+      got.push_back(s);
+      ++done;
+    }
+    if (done) sizes.push_back(uint32_t(done));
   }
   if (got.empty()) return;
-  // Re-encode the decoded prefix (one split per group satisfies the group rule) and decode.
+  // Re-encode the decoded prefix (its groups, all over every vertex, the last one possibly cut)
+  // and decode it again.
+  pmz::VertexChoice enc_choice, dec_choice;
+  enc_choice.reset(pm);
+  dec_choice.reset(pm);
+  std::vector<pmz::GroupCode> groups;
+  std::vector<uint32_t> bits;
+  size_t at = 0;
+  for (uint32_t g : sizes) {
+    enc_choice.start_group();
+    std::vector<uint32_t> group_vs;
+    for (size_t i = at; i < at + g; ++i) group_vs.push_back(got[i].v);
+    const bool near = pmz::choice_bits(enc_choice, vertices_before, group_vs, bits);
+    PMZ_FUZZ_CHECK(!near);  // nothing noted: the near list is empty
+    groups.push_back({g, near});
+    at += g;
+  }
   std::vector<uint8_t> payload;
   auto enc_models = std::make_unique<pmz::SplitModels>(), dec_models = std::make_unique<pmz::SplitModels>();
-  pmz::encode_split_chunk(std::vector<uint32_t>(got.size(), 1), got.data(), got.size(), vertices_before, *enc_models,
-                          payload);
-  std::vector<uint32_t> again;
+  pmz::encode_split_chunk(groups, bits, got.data(), got.size(), *enc_models, payload);
   pmz::SplitChunkReader r2;
-  PMZ_FUZZ_CHECK(r2.open(payload.data(), payload.size(), vertices_before, got.size(), *dec_models, again, error));
-  PMZ_FUZZ_CHECK(again.size() == got.size());
-  for (size_t i = 0; i < got.size(); ++i) {
-    pmz::SplitSymbols s{again[i], 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}};
-    auto [k, closed] = contexts(i, s);
-    PMZ_FUZZ_CHECK(s.v == got[i].v && r2.wedge(k, closed, s.wedge_count, s.wedge_rank) &&
-                   r2.residuals(s.residual_context, s.residual));
-    PMZ_FUZZ_CHECK(s.wedge_count == got[i].wedge_count && s.wedge_rank == got[i].wedge_rank);
-    PMZ_FUZZ_CHECK(std::memcmp(s.residual, got[i].residual, sizeof s.residual) == 0);
+  PMZ_FUZZ_CHECK(r2.open(payload.data(), payload.size(), got.size(), *dec_models, error));
+  PMZ_FUZZ_CHECK(r2.split_count() == got.size());
+  for (size_t i = 0; i < got.size();) {
+    PMZ_FUZZ_CHECK(r2.group(dec_choice, vertices_before, vs));
+    for (uint32_t v : vs) {
+      pmz::SplitSymbols s{v, 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}};
+      auto [k, closed] = contexts(i, s);
+      PMZ_FUZZ_CHECK(s.v == got[i].v && r2.wedge(k, closed, s.wedge_count, s.wedge_rank) &&
+                     r2.residuals(s.residual_context, s.residual));
+      PMZ_FUZZ_CHECK(s.wedge_count == got[i].wedge_count && s.wedge_rank == got[i].wedge_rank);
+      PMZ_FUZZ_CHECK(std::memcmp(s.residual, got[i].residual, sizeof s.residual) == 0);
+      ++i;
+    }
   }
 }
 

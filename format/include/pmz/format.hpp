@@ -27,8 +27,8 @@ inline constexpr uint32_t kChunkEnd = fourcc('E', 'N', 'D', ' ');
 
 // Streams of one SPLT chunk, in payload order.
 enum SplitStream : int {
-  kStreamGroups = 0,  // splits per group (varint)
-  kStreamGaps,        // v - previous v - 1 within a group; first: v (varint)
+  kStreamGroups = 0,  // per group: splits - 1, near flag
+  kStreamChoice,      // per candidate vertex of a group: whether it splits
   kStreamWedgeCount,  // wedge: interior count (spec, section 4)
   kStreamWedgeRank,   // wedge: rank among the candidates of that count
   kStreamResidualX,  // position residual slot 0 (first tangent axis; spec section 5)

@@ -1,9 +1,11 @@
 // Coding of one SPLT chunk: groups of vertex splits into seven range-coded streams with
 // adaptive context models (spec/format.md, "SPLT"). Writer and decoder share this code.
 //
-// Groups and gaps (which vertices split) are decoded when the chunk arrives. Wedge and residual
-// symbols use contexts from the mesh the decoder already has (v's ring, u's ring and the
-// prediction), so they are decoded split by split as each split is first applied.
+// Groups (sizes and near flags) are decoded when the chunk arrives. Which vertices split (the
+// choice stream), wedge and residual symbols use contexts from the mesh the decoder already has
+// (vertex degrees and the previous group's neighbourhood, v's ring, u's ring and the
+// prediction), so they are decoded as the splits are first applied: a group's vertices when
+// its first split is, the other symbols split by split.
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -19,12 +21,15 @@ namespace pmz {
 
 class ProgressiveMesh;
 
-inline constexpr uint32_t kGapContexts = 33, kWedgeContexts = 18;
+inline constexpr uint32_t kWedgeContexts = 18;
+// Vertex choice contexts (spec section 2, "Vertex choice"): density x near x degree.
+inline constexpr uint32_t kChoiceDensities = 21, kChoiceDegrees = 13;
+inline constexpr uint32_t kChoiceContexts = kChoiceDensities * 2 * kChoiceDegrees;
 
 // One split's symbols and the contexts they are coded with (the writer computes the contexts
 // by replaying the decoder's mesh).
 struct SplitSymbols {
-  uint32_t v;                    // vertex that splits
+  uint32_t v;                    // vertex that splits (coded by the group's choice bits)
   uint32_t wedge_context;        // wedge_context(k, closed) of v's ring
   uint32_t wedge_count, wedge_rank;
   uint32_t rank_context;         // 1 closed, 0 open
@@ -33,41 +38,112 @@ struct SplitSymbols {
 };
 
 // Context models, created once per file and carried from SPLT chunk to chunk (a chunk needs
-// the mesh of the chunks before it anyway). Groups and gaps models advance as chunks arrive,
-// the others as splits are first applied: both in stream order.
+// the mesh of the chunks before it anyway). The groups models advance as chunks arrive, the
+// others as splits are first applied: both in stream order.
 struct SplitModels {
   UIntModel groups;
-  UIntModel gaps[kGapContexts];
+  uint16_t near = kProbInit;
+  uint16_t choice[kChoiceContexts];
+  SplitModels() {
+    for (uint16_t& p : choice) p = kProbInit;
+  }
   UIntModel wedge_count[kWedgeContexts];
   UIntModel wedge_rank[2];
   UIntModel residual[3][kResidualContexts];
 };
 
-// Appends the SPLT payload for the given groups (sizes sum to count); vertices_before: the
-// vertex count before the chunk; models: the file's models (updated). stream_bytes[k] receives
-// the coded size of stream k (optional).
-void encode_split_chunk(const std::vector<uint32_t>& group_sizes, const SplitSymbols* splits, size_t count,
-                        uint64_t vertices_before, SplitModels& models, std::vector<uint8_t>& payload,
+// A group of the chunk: its size and whether its vertices are chosen among the previous
+// group's neighbourhood (near) or among all vertices.
+struct GroupCode {
+  uint32_t size;
+  bool near;
+};
+
+// Which vertices split (spec/format.md, "Vertex choice"): the state the writer and the decoder
+// keep in step, updated at every first application of a split, in stream order.
+// - degree of every vertex: base vertices their ring size, then per split the rule of
+//   applied() (the ring sizes on a manifold mesh);
+// - the neighbourhood of the splits since start_group(): v's ring before the split, v and u.
+// A group's candidates, in order: near: the previous group's neighbourhood (ascending,
+// distinct); otherwise every vertex below the vertex count at the group's start. One bit per
+// candidate says whether it splits, until the group's splits are all found.
+class VertexChoice {
+ public:
+  void reset(ProgressiveMesh& base);  // degrees from the base rings (0 without a face)
+  // Starts a group: the neighbourhood noted since the last call becomes the near list.
+  void start_group();
+  // Calls f(w, context) per candidate, in order, until it returned 1 (w splits) `size` times;
+  // false if the candidates ran out first or f returned -1 (stop). limit: the vertex count at
+  // the group's start.
+  template <class F>
+  bool scan(bool near, uint32_t limit, uint32_t size, F&& f) const {
+    uint32_t left = size;
+    const uint64_t n = near ? near_.size() : limit;
+    for (uint64_t i = 0; i < n && left; ++i) {
+      const uint32_t w = near ? near_[i] : uint32_t(i);
+      const int r = f(w, context(w, (n - i) / left, near));
+      if (r < 0) return false;
+      left -= uint32_t(r);
+    }
+    return left == 0;
+  }
+  // Writer: whether every vertex of vs is in the near list (vs ascending).
+  bool covers(std::span<const uint32_t> vs) const;
+  // Decoder, before a split with a ring of k vertices: room so that applied() does not allocate.
+  void reserve(size_t k);
+  // Right after pm.split_gathered() (its ring and u_ring still those of the split).
+  void applied(const ProgressiveMesh& pm, bool has_left, bool has_right);
+  uint32_t degree(uint32_t w) const { return degree_[w]; }
+
+ private:
+  // (min(bitlen(expected gap), 20) * 2 + near) * 13 + min(degree, 12)
+  uint32_t context(uint32_t w, uint64_t expected, bool near) const {
+    const uint32_t d = expected ? 64u - uint32_t(__builtin_clzll(expected)) : 0u;
+    const uint32_t deg = degree_[w];
+    return ((d < kChoiceDensities ? d : kChoiceDensities - 1) * 2 + (near ? 1 : 0)) * kChoiceDegrees +
+           (deg < kChoiceDegrees ? deg : kChoiceDegrees - 1);
+  }
+  std::vector<uint32_t> degree_, near_, noted_;
+};
+
+// Writer: the choice bits of a group of vertices vs (ascending, all below limit) as
+// (context << 1 | bit), after choice.start_group(); returns the near flag it chose (near
+// whenever the near list holds every vertex of the group).
+bool choice_bits(const VertexChoice& choice, uint32_t limit, std::span<const uint32_t> vs,
+                 std::vector<uint32_t>& bits);
+
+// Appends the SPLT payload for the given groups (sizes sum to count) and choice bits (the
+// concatenation of choice_bits() of the groups); models: the file's models (updated).
+// stream_bytes[k] receives the coded size of stream k (optional).
+void encode_split_chunk(const std::vector<GroupCode>& groups, const std::vector<uint32_t>& choice,
+                        const SplitSymbols* splits, size_t count, SplitModels& models, std::vector<uint8_t>& payload,
                         uint64_t* stream_bytes = nullptr);
 
-// Decoder side of one SPLT chunk. open() copies the payload, decodes groups and gaps (every v
-// must be below the vertex count at the start of its group: vertices_before + splits of
-// earlier groups; at most max_splits) and validates them before appending anything to vs.
-// models (the file's, see SplitModels) must outlive the reader.
-// Then wedge() and residuals() return the symbols of the splits in order, with the contexts
-// the caller computes from its mesh; false when a stream is malformed or exhausted.
+// Decoder side of one SPLT chunk. open() copies the payload, decodes the groups (sizes summing
+// to the split count, at most max_splits) and validates them. models (the file's, see
+// SplitModels) must outlive the reader. Then, in stream order: group() decodes the vertices of
+// the next group (when its first split is first applied), wedge() and residuals() the
+// symbols of each split, with the contexts the caller computes from its mesh; false when a
+// stream is malformed or exhausted, or a group's candidates run out.
 class SplitChunkReader {
  public:
-  bool open(const uint8_t* p, size_t size, uint64_t vertices_before, uint64_t max_splits, SplitModels& models,
-            std::vector<uint32_t>& vs, std::string& error);
+  bool open(const uint8_t* p, size_t size, uint64_t max_splits, SplitModels& models, std::string& error);
+  // Splits whose vertices were decoded so far (a group's all at once).
+  uint64_t chosen() const { return chosen_; }
+  // The next group's vertices into vs (resized to its size); choice.start_group() is called.
+  bool group(VertexChoice& choice, uint32_t limit, std::vector<uint32_t>& vs);
   bool wedge(uint32_t k, bool closed, uint32_t& count, uint32_t& rank);
   bool residuals(const uint32_t context[3], int32_t residual[3]);
   uint64_t split_count() const { return count_; }
+  size_t largest_group() const { return largest_; }
 
  private:
   std::vector<uint8_t> bytes_;
   SplitModels* models_ = nullptr;
-  std::unique_ptr<RangeDecoder> count_dec_, rank_dec_, res_dec_[3];
+  std::vector<GroupCode> groups_;
+  size_t next_group_ = 0, largest_ = 0;
+  uint64_t chosen_ = 0;
+  std::unique_ptr<RangeDecoder> choice_dec_, count_dec_, rank_dec_, res_dec_[3];
   uint64_t count_ = 0;
 };
 
