@@ -13,6 +13,8 @@ void VertexChoice::reset(ProgressiveMesh& base) {
   degree_.assign(base.vertex_count(), 0);
   for (uint32_t w = 0; w < base.vertex_count(); ++w)
     if (base.gather_ring(w)) degree_[w] = uint32_t(base.ring().size());
+  mark_.assign(base.vertex_count(), 0);
+  epoch_ = 0;
   near_.clear();
   noted_.clear();
 }
@@ -20,8 +22,21 @@ void VertexChoice::reset(ProgressiveMesh& base) {
 void VertexChoice::start_group() {
   near_.swap(noted_);
   noted_.clear();
-  std::sort(near_.begin(), near_.end());
-  near_.erase(std::unique(near_.begin(), near_.end()), near_.end());
+  const size_t n = degree_.size();  // the vertex count: every noted vertex is below it
+  if (near_.size() * 8 < n) {       // sparse: sort
+    std::sort(near_.begin(), near_.end());
+    near_.erase(std::unique(near_.begin(), near_.end()), near_.end());
+    return;
+  }
+  // Dense: mark, then collect in index order (no allocation: at most near_.size() distinct).
+  if (++epoch_ == 0) {
+    std::fill(mark_.begin(), mark_.end(), 0);
+    epoch_ = 1;
+  }
+  for (uint32_t w : near_) mark_[w] = epoch_;
+  near_.clear();
+  for (uint32_t w = 0; w < n; ++w)
+    if (mark_[w] == epoch_) near_.push_back(w);
 }
 
 bool VertexChoice::covers(std::span<const uint32_t> vs) const {
@@ -43,6 +58,7 @@ void make_room(std::vector<T>& b, size_t extra) {
 void VertexChoice::reserve(size_t k) {
   make_room(noted_, k + 2);
   make_room(degree_, 1);
+  make_room(mark_, 1);
 }
 
 void VertexChoice::applied(const ProgressiveMesh& pm, bool has_left, bool has_right) {
@@ -50,6 +66,7 @@ void VertexChoice::applied(const ProgressiveMesh& pm, bool has_left, bool has_ri
   const uint32_t v = ur[0], u = pm.vertex_count() - 1, r = uint32_t(ur.size());
   degree_[v] = uint32_t(ring.size()) + 2 + (has_left ? 1 : 0) + (has_right ? 1 : 0) - r;
   degree_.push_back(r);
+  mark_.push_back(0);
   if (has_left) ++degree_[ur[1]];
   if (has_right) ++degree_[ur[r - 1]];
   noted_.insert(noted_.end(), ring.begin(), ring.end());

@@ -104,6 +104,8 @@ class VertexChoice {
            (deg < kChoiceDegrees ? deg : kChoiceDegrees - 1);
   }
   std::vector<uint32_t> degree_, near_, noted_;
+  std::vector<uint32_t> mark_;  // per vertex: epoch_ when in the near list being built
+  uint32_t epoch_ = 0;
 };
 
 // Writer: the choice bits of a group of vertices vs (ascending, all below limit) as
