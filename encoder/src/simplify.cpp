@@ -435,6 +435,14 @@ void Engine::perform(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb, float c) 
   }
   m.out[u] = kNone;
   heap.remove(u);
+  // The vertex now at the top is most often the next one taken; its target and flags are read
+  // first thing then, and would be misses: start them while the 1-ring is updated.
+  if (!heap.empty()) {
+    const uint32_t next = heap.top();
+    __builtin_prefetch(&target[next]);
+    __builtin_prefetch(&stale[next]);
+    __builtin_prefetch(&m.out[next]);
+  }
   fix_out(v, v_vl != kNone ? v_vl : v_vr != kNone ? v_vr : corners.empty() ? kNone : corners[0]);
   if (vl != kNone) fix_out(vl, vl_v != kNone ? vl_v : v_vl != kNone ? HalfEdgeMesh::next(v_vl) : kNone);
   if (vr != kNone) fix_out(vr, vr_v != kNone ? vr_v : v_vr != kNone ? HalfEdgeMesh::next(v_vr) : kNone);
