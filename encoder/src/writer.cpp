@@ -21,6 +21,9 @@ namespace {
 
 constexpr double kWindowGrowth = 1.25;  // a window grows the vertex count by at most 25%
 constexpr uint32_t kFirstChunkSplits = 256, kMaxChunkSplits = 16384;
+// A group larger than this is cut (the rest starts a group in the next chunk, whose vertices
+// are then chosen among all vertices: slow to decode, spec "Vertex choice").
+constexpr uint32_t kMaxGroupPiece = 4 * kMaxChunkSplits;
 // HEAD (curvature, fine_curvature) pairs the writer tries (eighths; spec section 6): those
 // best on some corpus mesh out of a wider set (plus no offset at all).
 struct Curvatures {
@@ -352,8 +355,10 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
     uint32_t at = 0;
     for (uint32_t group : plan.group_sizes) {
       for (uint32_t left = group; left;) {
-        // A stream group: the group, or the part of it that fits the chunk.
-        const uint32_t n = std::min<uint32_t>(left, chunk_limit - uint32_t(chunk[0].size()));
+        // A stream group: the whole group, in a chunk of its own if it does not fit the current
+        // one; a group over kMaxGroupPiece in pieces of that size.
+        if (!chunk[0].empty() && chunk[0].size() + left > chunk_limit) flush();
+        const uint32_t n = std::min(left, kMaxGroupPiece);
         vs.clear();
         for (uint32_t i = at; i < at + n; ++i) vs.push_back(plan.decoded_id[seq.collapses[plan.order[i]].v]);
         choice.start_group();
@@ -385,7 +390,7 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
             chunk[k].push_back(code);
           }
         }
-        if (chunk[0].size() == chunk_limit) flush();
+        if (chunk[0].size() >= chunk_limit) flush();
       }
     }
     flush();
