@@ -381,10 +381,12 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
             return error = "internal: split rejected", false;
           choice.applied(pm, rl != kNoRank, rr != kNoRank);
           const uint32_t u = pm.vertex_count() - 1;
+          RingBasis basis;  // the ring part once; per candidate only the offset and contexts
+          ring_basis(coords.data(), pm.u_ring(), pm.ring(), true, true, basis);
           for (size_t k = 0; k < kCandidates; ++k) {
             PositionPrediction pred;
-            predict_position(coords.data(), pm.u_ring(), pm.ring(), kCurvatureCandidates[k].curvature,
-                             kCurvatureCandidates[k].fine, pred);
+            predict_from_basis(coords.data(), pm.u_ring(), uint32_t(pm.ring().size()), basis,
+                               kCurvatureCandidates[k].curvature, kCurvatureCandidates[k].fine, pred);
             position_residuals(pred, &coords[size_t(u) * 3], code.residual);
             for (int s = 0; s < 3; ++s) code.residual_context[s] = pred.context[s];
             chunk[k].push_back(code);

@@ -36,14 +36,19 @@ int64_t round_div_wide(Int128 num, Int128 den) {
   return int64_t(q);
 }
 
-void predict_position(const int32_t* coords, std::span<const uint32_t> u_ring, std::span<const uint32_t> v_ring,
-                      uint32_t curvature, uint32_t fine, PositionPrediction& out) {
+namespace {
+
+// Inlined into predict_position (the decoder's per-split call) and the two exported steps.
+[[gnu::always_inline]] inline void ring_basis_impl(const int32_t* coords, std::span<const uint32_t> u_ring,
+                                                   std::span<const uint32_t> v_ring, bool with_l, bool with_e,
+                                                   RingBasis& basis) {
   const uint32_t m = uint32_t(u_ring.size());
   const int32_t* cv = coords + size_t(u_ring[0]) * 3;
   const int64_t vx = cv[0], vy = cv[1], vz = cv[2];
   // Centroid of u's ring with v counted twice; the largest offset from v decides whether the
   // normal fits 64-bit arithmetic (then the same values as the 128-bit sums).
-  int64_t sum[3] = {2 * vx, 2 * vy, 2 * vz};
+  int64_t* sum = basis.sum;
+  sum[0] = 2 * vx, sum[1] = 2 * vy, sum[2] = 2 * vz;
   // Newell normal of u's ring around v (the first offset, v's own, is 0: N = sum over
   // i = 1 .. m-2 of d_i x d_{i+1}), in 64 bits while every offset is below 2^24 and m < 2^14
   // (|terms| < 2^49: the same values as 128-bit sums), else again in 128 bits; then scaled to
@@ -62,14 +67,14 @@ void predict_position(const int32_t* coords, std::span<const uint32_t> u_ring, s
     U[2] += px * uy - py * ux;
     px = ux, py = uy, pz = uz;
   }
-  for (int a = 0; a < 3; ++a) out.p[a] = floor_mean(sum[a], int64_t(m) + 1);
+  int64_t* n = basis.n;
   if (spread_v < (uint64_t(1) << 24) && m < (1u << 14)) {
     const int64_t N[3] = {int64_t(U[0]), int64_t(U[1]), int64_t(U[2])};
     const uint64_t big = uint64_t(N[0] < 0 ? -N[0] : N[0]) | uint64_t(N[1] < 0 ? -N[1] : N[1]) |
                          uint64_t(N[2] < 0 ? -N[2] : N[2]);
     const uint32_t bits = big ? 64u - uint32_t(__builtin_clzll(big)) : 0u;
     const uint32_t shift = bits > kNormalBits ? bits - kNormalBits : 0;
-    for (int a = 0; a < 3; ++a) out.n[a] = N[a] >> shift;
+    for (int a = 0; a < 3; ++a) n[a] = N[a] >> shift;
   } else {
     Int128 W[3] = {0, 0, 0};
     int64_t prev[3] = {0, 0, 0};
@@ -83,39 +88,59 @@ void predict_position(const int32_t* coords, std::span<const uint32_t> u_ring, s
     }
     const uint32_t bits = bitlen128(abs128(W[0]) | abs128(W[1]) | abs128(W[2]));
     const uint32_t shift = bits > kNormalBits ? bits - kNormalBits : 0;
-    for (int a = 0; a < 3; ++a) out.n[a] = int64_t(W[a] >> shift);
+    for (int a = 0; a < 3; ++a) n[a] = int64_t(W[a] >> shift);
   }
-  const int64_t n0 = out.n[0], n1 = out.n[1], n2 = out.n[2];
+  const int64_t n0 = n[0], n1 = n[1], n2 = n[2];
   // Axis order by |n|, smallest first, ties by smaller axis.
-  uint8_t* ax = out.axis;
+  uint8_t* ax = basis.axis;
   ax[0] = 0, ax[1] = 1, ax[2] = 2;
-  const int64_t mag[3] = {n0 < 0 ? -n0 : n0, n1 < 0 ? -n1 : n1, n2 < 0 ? -n2 : n2};
+  int64_t* mag = basis.mag;
+  mag[0] = n0 < 0 ? -n0 : n0, mag[1] = n1 < 0 ? -n1 : n1, mag[2] = n2 < 0 ? -n2 : n2;
   auto before = [&](int x, int y) { return mag[x] < mag[y] || (mag[x] == mag[y] && x < y); };
   if (before(ax[1], ax[0])) std::swap(ax[0], ax[1]);
   if (before(ax[2], ax[1])) std::swap(ax[1], ax[2]);
   if (before(ax[1], ax[0])) std::swap(ax[0], ax[1]);
-  // Curvature offsets along n (spec section 5, step 4), one rounding for both: curvature/8 of
-  // the projection of v's umbrella vector over its ring before the split, L / k = c[v] -
-  // mean(v's ring), plus fine/8 of v's umbrella vector over u's other neighbours, E / (m - 1)
-  // = c[v] - mean(u's ring without v). |L|, |E| < 2^56 (k, m <= 2^24); numerator < 2^118.
-  const int64_t q = n0 * n0 + n1 * n1 + n2 * n2;
+  // The curvature offsets' projections on n (spec section 5, step 4): v's umbrella vector over
+  // its ring before the split, L = k c[v] - sum of that ring, and over u's other neighbours,
+  // E = (m - 1) c[v] - their sum = (m + 1) c[v] - sum. |L|, |E| < 2^56 (k, m <= 2^24).
+  basis.l_dot_n = basis.e_dot_n = 0;
   const uint32_t k = uint32_t(v_ring.size());
+  if (with_l && k && k <= (1u << 24)) {
+    const int64_t kk = int64_t(k);
+    int64_t L[3] = {kk * vx, kk * vy, kk * vz};
+    for (uint32_t w : v_ring) {
+      const int32_t* cw = coords + size_t(w) * 3;
+      L[0] -= cw[0], L[1] -= cw[1], L[2] -= cw[2];
+    }
+    basis.l_dot_n = Int128(L[0]) * n0 + Int128(L[1]) * n1 + Int128(L[2]) * n2;
+  }
+  if (with_e && m >= 2 && m <= (1u << 24)) {
+    const int64_t mm = int64_t(m) - 1;
+    const int64_t E[3] = {(mm + 2) * vx - sum[0], (mm + 2) * vy - sum[1], (mm + 2) * vz - sum[2]};
+    basis.e_dot_n = Int128(E[0]) * n0 + Int128(E[1]) * n1 + Int128(E[2]) * n2;
+  }
+}
+
+[[gnu::always_inline]] inline void predict_from_basis_impl(const int32_t* coords, std::span<const uint32_t> u_ring,
+                                                           uint32_t v_ring_size, const RingBasis& basis,
+                                                           uint32_t curvature, uint32_t fine, PositionPrediction& out) {
+  const uint32_t m = uint32_t(u_ring.size());
+  const int64_t n0 = basis.n[0], n1 = basis.n[1], n2 = basis.n[2];
+  for (int a = 0; a < 3; ++a) {
+    out.p[a] = floor_mean(basis.sum[a], int64_t(m) + 1);
+    out.n[a] = basis.n[a];
+    out.axis[a] = basis.axis[a];
+  }
+  // Curvature offsets along n, one rounding for both: curvature/8 of L / k and fine/8 of
+  // E / (m - 1) projected on n. Numerator < 2^118.
+  const int64_t q = n0 * n0 + n1 * n1 + n2 * n2;
+  const uint32_t k = v_ring_size;
   const bool use_l = curvature && k && k <= (1u << 24), use_e = fine && m >= 2 && m <= (1u << 24);
   if (q && (use_l || use_e)) {
     const int64_t kk = use_l ? int64_t(k) : 1, mm = int64_t(m) - 1;
     Int128 t = 0;
-    if (use_l) {
-      int64_t L[3] = {kk * vx, kk * vy, kk * vz};
-      for (uint32_t w : v_ring) {
-        const int32_t* cw = coords + size_t(w) * 3;
-        L[0] -= cw[0], L[1] -= cw[1], L[2] -= cw[2];
-      }
-      t = (Int128(L[0]) * n0 + Int128(L[1]) * n1 + Int128(L[2]) * n2) * (int64_t(curvature) * mm);
-    }
-    if (use_e) {  // E = (m - 1) c[v] - sum over u's other neighbours = (m + 1) c[v] - sum
-      const int64_t E[3] = {(mm + 2) * vx - sum[0], (mm + 2) * vy - sum[1], (mm + 2) * vz - sum[2]};
-      t += (Int128(E[0]) * n0 + Int128(E[1]) * n1 + Int128(E[2]) * n2) * (int64_t(fine) * kk);
-    }
+    if (use_l) t = basis.l_dot_n * (int64_t(curvature) * mm);
+    if (use_e) t += basis.e_dot_n * (int64_t(fine) * kk);
     const Int128 den = Int128(8 * kk * mm) * q;
     for (int a = 0; a < 3; ++a) out.p[a] += round_div(t * out.n[a], den);
   }
@@ -135,11 +160,32 @@ void predict_position(const int32_t* coords, std::span<const uint32_t> u_ring, s
     const int64_t dot = dx * n0 + dy * n1 + dz * n2;
     off += uint64_t(dot < 0 ? -dot : dot);
   }
+  const uint8_t* ax = basis.axis;
+  const int64_t* mag = basis.mag;
   const int c = ax[2];
   for (int s = 0; s < 2; ++s) out.context[s] = context_of_mean(spread[ax[s]], m);
   if (mag[c] == 0) off = spread[c];  // n = 0: the normal axis' own spread
   const uint64_t div = uint64_t(mag[c] ? mag[c] : 1) * m;  // < 2^17 * 2^32
   out.context[2] = off >> 64 ? context_of(off / div) : context_of_mean(uint64_t(off), div);
+}
+
+}  // namespace
+
+void ring_basis(const int32_t* coords, std::span<const uint32_t> u_ring, std::span<const uint32_t> v_ring,
+                bool with_l, bool with_e, RingBasis& basis) {
+  ring_basis_impl(coords, u_ring, v_ring, with_l, with_e, basis);
+}
+
+void predict_from_basis(const int32_t* coords, std::span<const uint32_t> u_ring, uint32_t v_ring_size,
+                        const RingBasis& basis, uint32_t curvature, uint32_t fine, PositionPrediction& out) {
+  predict_from_basis_impl(coords, u_ring, v_ring_size, basis, curvature, fine, out);
+}
+
+void predict_position(const int32_t* coords, std::span<const uint32_t> u_ring, std::span<const uint32_t> v_ring,
+                      uint32_t curvature, uint32_t fine, PositionPrediction& out) {
+  RingBasis basis;
+  ring_basis_impl(coords, u_ring, v_ring, curvature != 0, fine != 0, basis);
+  predict_from_basis_impl(coords, u_ring, uint32_t(v_ring.size()), basis, curvature, fine, out);
 }
 
 }  // namespace pmz

@@ -319,6 +319,17 @@ TEST(PositionPrediction, IsTheSpecFormula) {
       ASSERT_EQ(pp.axis[a], e.axis[a]) << trial << " slot " << a;
       ASSERT_EQ(pp.context[a], e.context[a]) << trial << " slot " << a;
     }
+    // The writer's two-step form (ring part once, then this pair) gives the same prediction.
+    RingBasis basis;
+    ring_basis(coords.data(), R, K, true, true, basis);
+    PositionPrediction two;
+    predict_from_basis(coords.data(), R, uint32_t(K.size()), basis, curvature, fine, two);
+    for (int a = 0; a < 3; ++a) {
+      ASSERT_EQ(two.p[a], e.p[a]) << trial << " axis " << a;
+      ASSERT_EQ(two.n[a], e.n[a]) << trial << " axis " << a;
+      ASSERT_EQ(two.axis[a], e.axis[a]) << trial << " slot " << a;
+      ASSERT_EQ(two.context[a], e.context[a]) << trial << " slot " << a;
+    }
     // Residuals of a vertex near the prediction, then back: the normal axis from the tangent
     // plane through p (rounded half up), everything modulo 2^32.
     int32_t cu[3], r[3], back[3];

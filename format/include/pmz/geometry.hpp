@@ -38,10 +38,28 @@ struct PositionPrediction {
   uint32_t context[3];  // residual context per slot (coding order)
 };
 
+// What the prediction needs from the rings whatever the curvature weights: the centroid sums,
+// the scaled normal, the axis order and the umbrella vectors' projections on the normal.
+struct RingBasis {
+  int64_t sum[3];   // c[v] twice plus u's other neighbours
+  int64_t n[3];     // scaled normal of u's ring
+  int64_t mag[3];   // |n[a]|
+  uint8_t axis[3];  // coding order
+  Int128 l_dot_n;   // (k c[v] - sum of v's ring) . n when asked and k in 1..2^24, else 0
+  Int128 e_dot_n;   // ((m + 1) c[v] - sum) . n when asked and m in 2..2^24, else 0
+};
+
 // u_ring: v, then u's other neighbours in order (ProgressiveMesh::u_ring()); v_ring: v's ring
 // before the split (ProgressiveMesh::ring(), any order); curvature and fine: HEAD fields, 0..8.
 void predict_position(const int32_t* coords, std::span<const uint32_t> u_ring, std::span<const uint32_t> v_ring,
                       uint32_t curvature, uint32_t fine, PositionPrediction& out);
+// The same in two steps, for a writer trying several curvature pairs on one split: the ring
+// part once, then per pair the offset and the contexts (results identical to predict_position).
+// with_l / with_e: whether l_dot_n / e_dot_n are wanted (some pair has curvature / fine > 0).
+void ring_basis(const int32_t* coords, std::span<const uint32_t> u_ring, std::span<const uint32_t> v_ring,
+                bool with_l, bool with_e, RingBasis& basis);
+void predict_from_basis(const int32_t* coords, std::span<const uint32_t> u_ring, uint32_t v_ring_size,
+                        const RingBasis& basis, uint32_t curvature, uint32_t fine, PositionPrediction& out);
 
 // Prediction of the normal axis (slot 2) once the tangent residuals r0, r1 (slots 0, 1) are
 // known: the plane through p with normal n.
