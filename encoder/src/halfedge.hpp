@@ -57,6 +57,13 @@ void for_each_outgoing(const HalfEdgeMesh& m, uint32_t v, F&& f) {
   } while (h != kNone && h != start);
 }
 
+// Starts the loads of the face of half-edge h: its vert and twin entries (slots 4f .. 4f + 3,
+// 16 bytes each, never across a cache line).
+inline void prefetch_face_links(const HalfEdgeMesh& m, uint32_t h) {
+  __builtin_prefetch(&m.vert[h & ~3u]);
+  __builtin_prefetch(&m.twin[h & ~3u]);
+}
+
 // f(w, h) for each neighbour w of v; h is a half-edge of the edge (v, w): outgoing v->w, except
 // for the last neighbour of a boundary vertex, where it is the incoming boundary half-edge w->v.
 template <class F>
@@ -101,8 +108,7 @@ void for_each_neighbour_interleaved(const HalfEdgeMesh& m, const std::vector<uin
         continue;
       }
       walk[i] = n;
-      __builtin_prefetch(&m.vert[n & ~3u]);
-      __builtin_prefetch(&m.twin[n & ~3u]);
+      prefetch_face_links(m, n);
       prefetch_face(HalfEdgeMesh::face(n));
       i += 2;
     }
@@ -116,10 +122,7 @@ void for_each_neighbour_interleaved(const HalfEdgeMesh& m, const std::vector<uin
 template <class P>
 void prefetch_fans(const HalfEdgeMesh& m, const std::vector<uint32_t>& centres, std::vector<uint32_t>& walk,
                    P&& prefetch_neighbour) {
-  auto prefetch = [&](uint32_t h) {
-    __builtin_prefetch(&m.vert[h & ~3u]);
-    __builtin_prefetch(&m.twin[h & ~3u]);
-  };
+  auto prefetch = [&](uint32_t h) { prefetch_face_links(m, h); };
   walk.clear();
   for (uint32_t c : centres)
     if (const uint32_t start = m.out[c]; start != kNone) walk.push_back(start), walk.push_back(start);

@@ -472,8 +472,7 @@ void Engine::update_after(uint32_t u, uint32_t v) {
     for (uint32_t w : ring1)
       if (const uint32_t h = m.out[w]; h != kNone) {
         __builtin_prefetch(&feat.face[HalfEdgeMesh::face(h)]);
-        __builtin_prefetch(&m.vert[h & ~3u]);
-        __builtin_prefetch(&m.twin[h & ~3u]);
+        prefetch_face_links(m, h);
       }
     // Flags the 2-ring without a visited set (setting a flag twice is harmless); the 1-ring,
     // flagged too, gets its key recomputed below. (Flagging only next to a changed B or Q is
