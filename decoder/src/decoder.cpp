@@ -395,7 +395,7 @@ bool Decoder::Impl::apply() {
   }
   auto invalid = [&] { return refuse(Status::corrupt, "split " + std::to_string(applied) + " has an invalid wedge"); };
   if (applied - lazy_first == lazy.front().chosen()) {  // a group's first split: choose its vertices
-    if (!lazy.front().group(choice, mesh.vertex_count(), group_vs))
+    if (!lazy.front().group(choice, mesh, group_vs))
       return refuse(Status::corrupt, "split " + std::to_string(applied) + ": vertex choice malformed");
     for (size_t i = 0; i < group_vs.size(); ++i) splits[applied + i].v = group_vs[i];
   }

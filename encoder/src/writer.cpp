@@ -362,7 +362,10 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
         vs.clear();
         for (uint32_t i = at; i < at + n; ++i) vs.push_back(plan.decoded_id[seq.collapses[plan.order[i]].v]);
         choice.start_group();
-        chunk_groups.push_back({n, choice_bits(choice, pm.vertex_count(), vs, chunk_choice)});
+        bool near;
+        if (!choice_bits(choice, pm, pm.vertex_count(), vs, chunk_choice, near))
+          return error = "internal: a group's split vertices are adjacent", false;
+        chunk_groups.push_back({n, near});
         left -= n;
         for (uint32_t i = 0; i < n; ++i) {
           const HalfEdgeCollapse& c = seq.collapses[plan.order[at++]];

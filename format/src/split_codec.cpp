@@ -29,14 +29,18 @@ void VertexChoice::start_group() {
     return;
   }
   // Dense: mark, then collect in index order (no allocation: at most near_.size() distinct).
-  if (++epoch_ == 0) {
-    std::fill(mark_.begin(), mark_.end(), 0);
-    epoch_ = 1;
-  }
-  for (uint32_t w : near_) mark_[w] = epoch_;
+  const uint32_t epoch = next_epoch();
+  for (uint32_t w : near_) mark_[w] = epoch;
   near_.clear();
   for (uint32_t w = 0; w < n; ++w)
-    if (mark_[w] == epoch_) near_.push_back(w);
+    if (mark_[w] == epoch) near_.push_back(w);
+}
+
+void VertexChoice::exclude_ring(const ProgressiveMesh& mesh, uint32_t w, uint32_t epoch) {
+  mesh.for_each_fan_face(w, [&](uint32_t a, uint32_t b) {
+    mark_[a] = epoch;
+    mark_[b] = epoch;
+  });
 }
 
 bool VertexChoice::covers(std::span<const uint32_t> vs) const {
@@ -74,17 +78,18 @@ void VertexChoice::applied(const ProgressiveMesh& pm, bool has_left, bool has_ri
   noted_.push_back(u);
 }
 
-bool choice_bits(const VertexChoice& choice, uint32_t limit, std::span<const uint32_t> vs,
-                 std::vector<uint32_t>& bits) {
-  const bool near = choice.covers(vs);
+bool choice_bits(VertexChoice& choice, const ProgressiveMesh& mesh, uint32_t limit, std::span<const uint32_t> vs,
+                 std::vector<uint32_t>& bits, bool& near) {
+  near = choice.covers(vs);
   size_t at = 0;
-  choice.scan(near, limit, uint32_t(vs.size()), [&](uint32_t w, uint32_t ctx) {
+  const bool ok = choice.scan(mesh, near, limit, uint32_t(vs.size()), [&](uint32_t w, uint32_t ctx) {
+    if (at < vs.size() && vs[at] < w) return -1;  // vs[at] was skipped: excluded
     const bool hit = at < vs.size() && vs[at] == w;
     at += hit;
     bits.push_back(ctx << 1 | (hit ? 1u : 0u));
     return hit ? 1 : 0;
   });
-  return near;
+  return ok && at == vs.size();
 }
 
 void encode_split_chunk(const std::vector<GroupCode>& groups, const std::vector<uint32_t>& choice,
@@ -183,7 +188,11 @@ namespace {
 [[gnu::noinline]] bool decode_symbol(RangeDecoder& rc, UIntModel& m, uint32_t& x) { return decode_uint(rc, m, x); }
 }  // namespace
 
-bool SplitChunkReader::group(VertexChoice& choice, uint32_t limit, std::vector<uint32_t>& vs) {
+SplitModels::SplitModels() {
+  for (uint32_t c = 0; c < kChoiceContexts; ++c) choice[c] = choice_prior(c / (2 * kChoiceDegrees));
+}
+
+bool SplitChunkReader::group(VertexChoice& choice, const ProgressiveMesh& mesh, std::vector<uint32_t>& vs) {
   if (next_group_ >= groups_.size()) return false;
   const GroupCode g = groups_[next_group_];
   vs.resize(g.size);
@@ -191,7 +200,7 @@ bool SplitChunkReader::group(VertexChoice& choice, uint32_t limit, std::vector<u
   RangeState st = choice_dec_->state();
   uint16_t* models = models_->choice;
   size_t at = 0;
-  const bool ok = choice.scan(g.near, limit, g.size, [&](uint32_t w, uint32_t ctx) {
+  const bool ok = choice.scan(mesh, g.near, mesh.vertex_count(), g.size, [&](uint32_t w, uint32_t ctx) {
     const uint32_t b = st.bit(models[ctx]);
     if (!st.ok) return -1;  // past the end: a valid stream never gets here
     if (b) vs[at++] = w;

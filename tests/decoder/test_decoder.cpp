@@ -197,7 +197,7 @@ TEST_F(DecoderTest, RejectsWrongMagicAndVersion) {
   EXPECT_EQ(d.face_count(), 0u);
 
   b = file;
-  b[8 + 12] = 4;  // HEAD payload: version_major (4: the previous major, format 4 position prediction)
+  b[8 + 12] = 5;  // HEAD payload: version_major (5: the previous major, before vertex-choice exclusion)
   fix_crc(b, 8);
   pmz::Decoder v;
   EXPECT_EQ(v.feed(b.data(), b.size()), pmz::Status::bad_version);

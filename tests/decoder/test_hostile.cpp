@@ -155,7 +155,9 @@ struct Replay {
   pmz::GroupCode group(uint32_t v, std::vector<uint32_t>& bits) {
     choice.start_group();
     const uint32_t vs[1] = {v};
-    return {1, pmz::choice_bits(choice, pm.vertex_count(), vs, bits)};
+    bool near = false;
+    EXPECT_TRUE(pmz::choice_bits(choice, pm, pm.vertex_count(), vs, bits, near));
+    return {1, near};
   }
 };
 
@@ -522,6 +524,43 @@ TEST(Hostile, WedgeSymbolsAtUint32MaxAreInvalid) {
   }
 }
 
+// Vertex choice exclusion (spec section 2): a stream whose group would split two adjacent
+// vertices (0, then 2 in 0's ring on the octahedron), coded as if 2 were still a candidate, is
+// refused cleanly: after 0 the decoder reads 1's bit (0), skips 0's ring (2..5) without a bit,
+// runs out of candidates and reports the group corrupt; the mesh stays at the level before.
+TEST(Hostile, VertexChoiceExclusionViolationIsRefused) {
+  Replay rp;
+  Bytes f = signature();
+  head(f, header(6, 8, 2, 12));
+  pmz::append_chunk(f, pmz::kChunkBase, octa_base_payload());
+  std::vector<uint32_t> bits;
+  rp.choice.start_group();
+  // The bits a writer ignoring exclusion would code for {0, 2}: 0 -> 1, 1 -> 0, 2 -> 1; the
+  // decoder's contexts for the two it reads, any context for the third.
+  const uint32_t want[] = {1, 0};
+  size_t at = 0;
+  EXPECT_FALSE(rp.choice.scan(rp.pm, false, rp.pm.vertex_count(), 2, [&](uint32_t w, uint32_t ctx) {
+    EXPECT_EQ(w, at);  // candidates 0 and 1 only: 2..5 are excluded
+    bits.push_back(ctx << 1 | want[at]);
+    return int(want[at++]);
+  }));
+  ASSERT_EQ(bits.size(), 2u);
+  bits.push_back(bits[1] | 1);
+  const pmz::SplitSymbols code[2] = {{0, 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}}, {2, 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}}};
+  Bytes p;
+  pmz::encode_split_chunk({{2, false}}, bits, code, 2, *rp.models, p);
+  pmz::append_chunk(f, pmz::kChunkSplits, p);
+  pmz::append_chunk(f, pmz::kChunkEnd, {});
+  pmz::Decoder d;
+  ASSERT_EQ(d.feed(f.data(), f.size()), pmz::Status::ok) << d.error_message();
+  EXPECT_EQ(d.refine(), 0u);
+  EXPECT_EQ(d.status(), pmz::Status::corrupt);
+  EXPECT_NE(d.error_message().find("vertex choice"), std::string::npos) << d.error_message();
+  expect_valid(d);
+  EXPECT_EQ(d.face_count(), 8u);
+  EXPECT_EQ(d.refine(), 0u);
+}
+
 // Vertex choice (spec section 2): a group whose candidates run out before its splits are all
 // found (a near group with no previous group; no candidate bit set among all vertices; none
 // set among a near list) passes the chunk checks, and is refused when its first split is
@@ -537,7 +576,7 @@ TEST(Hostile, VertexChoiceRunningOutOfCandidatesIsRefused) {
     rp.choice.start_group();
     const bool near = which != 1;
     // Every candidate's bit 0, with the contexts the decoder uses (none for an empty near list).
-    EXPECT_FALSE(rp.choice.scan(near, rp.pm.vertex_count(), 1, [&](uint32_t, uint32_t ctx) {
+    EXPECT_FALSE(rp.choice.scan(rp.pm, near, rp.pm.vertex_count(), 1, [&](uint32_t, uint32_t ctx) {
       bits.push_back(ctx << 1);
       return 0;
     }));
@@ -631,7 +670,9 @@ TEST(Hostile, CoarseningNeedsNoAllocation) {
   choice.start_group();
   std::vector<uint32_t> bits;
   const uint32_t vs[1] = {0};
-  const pmz::GroupCode group{1, pmz::choice_bits(choice, nv, vs, bits)};
+  bool near = false;
+  ASSERT_TRUE(pmz::choice_bits(choice, pm, nv, vs, bits, near));
+  const pmz::GroupCode group{1, near};
   ASSERT_TRUE(pm.gather_ring(0));
   ASSERT_TRUE(pm.ring_closed());
   ASSERT_EQ(pm.ring().size(), n);

@@ -572,6 +572,7 @@ TEST(VertexChoice, CandidatesAndContextsAreTheSpecFormula) {
   VertexChoice choice;
   choice.reset(pm);
   std::vector<uint32_t> noted;  // the neighbourhood of the group just applied
+  size_t skipped_total = 0;     // candidates skipped by exclusion (the test must exercise it)
   for (int group = 0; group < 60; ++group) {
     const uint32_t limit = pm.vertex_count();
     // The next group: a few random vertices, from the neighbourhood or anywhere.
@@ -583,12 +584,21 @@ TEST(VertexChoice, CandidatesAndContextsAreTheSpecFormula) {
       pool.clear();
       for (uint32_t w = 0; w < limit; ++w) pool.push_back(w);
     }
+    // Exclusion: no vertex in the closed one-ring (now) of one taken before.
+    std::vector<uint8_t> taken_ring(limit, 0);
+    auto take = [&](uint32_t w) {
+      vs.push_back(w);
+      taken_ring[w] = 1;
+      if (pm.gather_ring(w))
+        for (uint32_t x : pm.ring()) taken_ring[x] = 1;
+    };
     for (uint32_t w : pool)
-      if (vs.size() < 6 && rng() % 4 == 0) vs.push_back(w);
-    if (vs.empty()) vs.push_back(pool[rng() % pool.size()]);
+      if (vs.size() < 6 && !taken_ring[w] && rng() % 4 == 0) take(w);
+    if (vs.empty()) take(pool[rng() % pool.size()]);
     choice.start_group();
     std::vector<uint32_t> bits;
-    const bool near = choice_bits(choice, limit, vs, bits);
+    bool near = false;
+    ASSERT_TRUE(choice_bits(choice, pm, limit, vs, bits, near));
     // Near exactly when the neighbourhood holds every vertex of the group.
     EXPECT_EQ(near, std::all_of(vs.begin(), vs.end(), [&](uint32_t v) {
                 return std::find(noted.begin(), noted.end(), v) != noted.end();
@@ -606,11 +616,23 @@ TEST(VertexChoice, CandidatesAndContextsAreTheSpecFormula) {
     }
     std::vector<uint32_t> want;
     uint64_t left = vs.size();
+    std::vector<uint8_t> excluded(limit, 0);  // closed one-rings of the vertices found so far
+    size_t skipped = 0;
     for (size_t i = 0; i < cand.size() && left; ++i) {
+      if (excluded[cand[i]]) {
+        ++skipped;
+        continue;
+      }
       const bool hit = std::find(vs.begin(), vs.end(), cand[i]) != vs.end();
       want.push_back(spec_context(cand.size() - i, left, near, choice.degree(cand[i])) << 1 | (hit ? 1u : 0u));
       left -= hit;
+      if (hit) {
+        excluded[cand[i]] = 1;
+        ASSERT_TRUE(pm.gather_ring(cand[i]));
+        for (uint32_t x : pm.ring()) excluded[x] = 1;
+      }
     }
+    skipped_total += skipped;
     ASSERT_EQ(left, 0u);
     ASSERT_EQ(bits, want) << "group " << group;
     // Apply the group (splits of one group need not be independent for the coding).
@@ -627,4 +649,41 @@ TEST(VertexChoice, CandidatesAndContextsAreTheSpecFormula) {
       choice.applied(pm, a != kNoRank, b != kNoRank);
     }
   }
+  EXPECT_GT(skipped_total, 0u);
+}
+
+// A group whose vertices violate exclusion (one in the closed one-ring of an earlier one)
+// cannot be coded: choice_bits() says so instead of writing bits a decoder would read
+// differently. Also a vertex repeated.
+TEST(VertexChoice, AdjacentVerticesInAGroupAreRefused) {
+  ProgressiveMesh pm;
+  build_octahedron(pm, false);
+  VertexChoice choice;
+  choice.reset(pm);
+  for (const std::vector<uint32_t>& vs : {std::vector<uint32_t>{0, 2}, std::vector<uint32_t>{2, 4},
+                                          std::vector<uint32_t>{0, 0}}) {
+    choice.start_group();
+    std::vector<uint32_t> bits;
+    bool near = true;
+    EXPECT_FALSE(choice_bits(choice, pm, pm.vertex_count(), vs, bits, near)) << vs[0] << " " << vs[1];
+  }
+  choice.start_group();
+  std::vector<uint32_t> bits;
+  bool near = true;
+  const std::vector<uint32_t> opposite_apexes{0, 1};  // 0 and 1 are not adjacent on the octahedron
+  EXPECT_TRUE(choice_bits(choice, pm, pm.vertex_count(), opposite_apexes, bits, near));
+  EXPECT_FALSE(near);
+  // Vertex 0's bit, then 1's (not in 0's ring); none after the group's last split.
+  ASSERT_EQ(bits.size(), 2u);
+  EXPECT_EQ(bits[0] & 1, 1u);
+  EXPECT_EQ(bits[1] & 1, 1u);
+}
+
+// The choice models start from the expected gap (spec "Vertex choice"): probability of a 0,
+// scaled to 2048, min(2048 - floor(8192 / (3 * 2^d)), 1984) for class d >= 1, 1024 for d = 0.
+TEST(VertexChoice, ModelPriorsAreTheSpecTable) {
+  const SplitModels m;
+  const uint16_t want[21] = {1024, 683,  1366, 1707, 1878, 1963, 1984, 1984, 1984, 1984, 1984,
+                             1984, 1984, 1984, 1984, 1984, 1984, 1984, 1984, 1984, 1984};
+  for (uint32_t c = 0; c < kChoiceContexts; ++c) EXPECT_EQ(m.choice[c], want[c / (2 * kChoiceDegrees)]) << c;
 }

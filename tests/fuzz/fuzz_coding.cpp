@@ -293,9 +293,14 @@ void fuzz_split_chunk(const uint8_t* data, size_t size) {
   bool ok = true;
   while (ok && got.size() < count) {
     const uint32_t limit = vertices_before;
-    if (!reader.group(choice, limit, vs)) break;
+    if (!reader.group(choice, pm, vs)) break;
     PMZ_FUZZ_CHECK(!vs.empty() && reader.chosen() == got.size() + vs.size());
     for (size_t j = 0; j < vs.size(); ++j) PMZ_FUZZ_CHECK(vs[j] < limit && (j == 0 || vs[j - 1] < vs[j]));
+    // Exclusion: no vertex of the group in the one-ring of another.
+    for (size_t j = 0; j < vs.size(); ++j)
+      pm.for_each_fan_face(vs[j], [&](uint32_t a, uint32_t b) {
+        PMZ_FUZZ_CHECK(!std::binary_search(vs.begin(), vs.end(), a) && !std::binary_search(vs.begin(), vs.end(), b));
+      });
     size_t done = 0;
     for (uint32_t v : vs) {
       pmz::SplitSymbols s{v, 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}};
@@ -322,7 +327,8 @@ void fuzz_split_chunk(const uint8_t* data, size_t size) {
     enc_choice.start_group();
     std::vector<uint32_t> group_vs;
     for (size_t i = at; i < at + g; ++i) group_vs.push_back(got[i].v);
-    const bool near = pmz::choice_bits(enc_choice, vertices_before, group_vs, bits);
+    bool near = true;
+    PMZ_FUZZ_CHECK(pmz::choice_bits(enc_choice, pm, vertices_before, group_vs, bits, near));
     PMZ_FUZZ_CHECK(!near);  // nothing noted: the near list is empty
     groups.push_back({g, near});
     at += g;
@@ -334,7 +340,7 @@ void fuzz_split_chunk(const uint8_t* data, size_t size) {
   PMZ_FUZZ_CHECK(r2.open(payload.data(), payload.size(), got.size(), *dec_models, error));
   PMZ_FUZZ_CHECK(r2.split_count() == got.size());
   for (size_t i = 0; i < got.size();) {
-    PMZ_FUZZ_CHECK(r2.group(dec_choice, vertices_before, vs));
+    PMZ_FUZZ_CHECK(r2.group(dec_choice, pm, vs));
     for (uint32_t v : vs) {
       pmz::SplitSymbols s{v, 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}};
       auto [k, closed] = contexts(i, s);

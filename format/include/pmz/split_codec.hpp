@@ -8,6 +8,7 @@
 // its first split is, the other symbols split by split.
 #pragma once
 #include <cstddef>
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -43,14 +44,18 @@ struct SplitSymbols {
 struct SplitModels {
   UIntModel groups;
   uint16_t near = kProbInit;
-  uint16_t choice[kChoiceContexts];
-  SplitModels() {
-    for (uint16_t& p : choice) p = kProbInit;
-  }
+  uint16_t choice[kChoiceContexts];  // initialised from the expected gap (choice_prior)
+  SplitModels();
   UIntModel wedge_count[kWedgeContexts];
   UIntModel wedge_rank[2];
   UIntModel residual[3][kResidualContexts];
 };
+
+// Initial probability of a 0 (scaled to 2048) of the choice models of expected-gap class d
+// (spec "Vertex choice"): a 1 has probability about 1 / (1.5 * 2^(d - 1)) there.
+inline uint16_t choice_prior(uint32_t d) {
+  return d == 0 ? uint16_t(kProbInit) : uint16_t(std::min(2048u - 8192u / (3u << d), 1984u));
+}
 
 // A group of the chunk: its size and whether its vertices are chosen among the previous
 // group's neighbourhood (near) or among all vertices.
@@ -74,16 +79,22 @@ class VertexChoice {
   void start_group();
   // Calls f(w, context) per candidate, in order, until it returned 1 (w splits) `size` times;
   // false if the candidates ran out first or f returned -1 (stop). limit: the vertex count at
-  // the group's start.
+  // the group's start. Exclusion: a candidate in the closed one-ring (in mesh, the mesh at the
+  // group's start) of a vertex f chose before in this group is skipped (no call: it cannot split).
   template <class F>
-  bool scan(bool near, uint32_t limit, uint32_t size, F&& f) const {
+  bool scan(const ProgressiveMesh& mesh, bool near, uint32_t limit, uint32_t size, F&& f) {
     uint32_t left = size;
     const uint64_t n = near ? near_.size() : limit;
+    const uint32_t excluded = next_epoch();
     for (uint64_t i = 0; i < n && left; ++i) {
       const uint32_t w = near ? near_[i] : uint32_t(i);
+      if (mark_[w] == excluded) continue;
       const int r = f(w, context(w, (n - i) / left, near));
       if (r < 0) return false;
-      left -= uint32_t(r);
+      if (r) {
+        --left;
+        if (left) exclude_ring(mesh, w, excluded);
+      }
     }
     return left == 0;
   }
@@ -103,16 +114,30 @@ class VertexChoice {
     return ((d < kChoiceDensities ? d : kChoiceDensities - 1) * 2 + (near ? 1 : 0)) * kChoiceDegrees +
            (deg < kChoiceDegrees ? deg : kChoiceDegrees - 1);
   }
+  // A fresh mark value (all of mark_ differs from it).
+  uint32_t next_epoch() {
+    if (++epoch_ == 0) {
+      std::fill(mark_.begin(), mark_.end(), 0);
+      epoch_ = 1;
+    }
+    return epoch_;
+  }
+  // Marks w's one-ring with epoch (w itself is behind the scan already).
+  void exclude_ring(const ProgressiveMesh& mesh, uint32_t w, uint32_t epoch);
   std::vector<uint32_t> degree_, near_, noted_;
-  std::vector<uint32_t> mark_;  // per vertex: epoch_ when in the near list being built
+  // Per vertex: epoch_ when in the near list being built (start_group), or when excluded from
+  // the group being scanned (scan)
+  std::vector<uint32_t> mark_;
   uint32_t epoch_ = 0;
 };
 
 // Writer: the choice bits of a group of vertices vs (ascending, all below limit) as
 // (context << 1 | bit), after choice.start_group(); returns the near flag it chose (near
 // whenever the near list holds every vertex of the group).
-bool choice_bits(const VertexChoice& choice, uint32_t limit, std::span<const uint32_t> vs,
-                 std::vector<uint32_t>& bits);
+// False if a vertex of vs is excluded by an earlier one (in its one-ring in mesh, the mesh at
+// the group's start): such a group cannot be coded.
+bool choice_bits(VertexChoice& choice, const ProgressiveMesh& mesh, uint32_t limit, std::span<const uint32_t> vs,
+                 std::vector<uint32_t>& bits, bool& near);
 
 // Appends the SPLT payload for the given groups (sizes sum to count) and choice bits (the
 // concatenation of choice_bits() of the groups); models: the file's models (updated).
@@ -133,7 +158,8 @@ class SplitChunkReader {
   // Splits whose vertices were decoded so far (a group's all at once).
   uint64_t chosen() const { return chosen_; }
   // The next group's vertices into vs (resized to its size); choice.start_group() is called.
-  bool group(VertexChoice& choice, uint32_t limit, std::vector<uint32_t>& vs);
+  // mesh: the mesh at the group's start (limit its vertex count).
+  bool group(VertexChoice& choice, const ProgressiveMesh& mesh, std::vector<uint32_t>& vs);
   bool wedge(uint32_t k, bool closed, uint32_t& count, uint32_t& rank);
   bool residuals(const uint32_t context[3], int32_t residual[3]);
   uint64_t split_count() const { return count_; }
