@@ -410,17 +410,14 @@ bool Decoder::Impl::apply() {
     // Decoded symbols cannot be put back: allocate what wedge_ranks needs before decoding them
     // (an allocation failure then leaves this split to retry, not a symbol lost).
     if (k > wedge_scratch_ring) {
-      wedge_scratch.q.reserve((size_t(k) * 2 + 3) * 3);
-      wedge_scratch.score64.reserve(size_t(k) + 1);
-      wedge_scratch.score.reserve(size_t(k) + 1);
-      wedge_scratch.order.reserve(size_t(k) + 1);
+      wedge_scratch.reserve(k);
       wedge_scratch_ring = k;
     }
     choice.reserve(k);
     uint32_t count, rank;
     if (!lazy.front().wedge(k, mesh.ring_closed(), count, rank))
       return refuse(Status::corrupt, "split " + std::to_string(applied) + ": wedge streams malformed");
-    if (!wedge_ranks(coords.data(), s.v, mesh, count, rank, s.a, s.b, wedge_scratch)) return invalid();
+    if (!wedge_ranks(coords.data(), choice.degrees(), s.v, mesh, count, rank, s.a, s.b, wedge_scratch)) return invalid();
   }
   if (!mesh.split_gathered(s.v, s.a, s.b)) return invalid();
   const bool has_l = s.a != kNoRank, has_r = s.b != kNoRank;

@@ -379,7 +379,7 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
           code.v = v;
           code.wedge_context = wedge_context(uint32_t(pm.ring().size()), pm.ring_closed());
           code.rank_context = pm.ring_closed() ? 1 : 0;
-          if (!wedge_symbols(coords.data(), v, pm, rl, rr, code.wedge_count, code.wedge_rank, scratch) ||
+          if (!wedge_symbols(coords.data(), choice.degrees(), v, pm, rl, rr, code.wedge_count, code.wedge_rank, scratch) ||
               !pm.split_gathered(v, rl, rr))
             return error = "internal: split rejected", false;
           choice.applied(pm, rl != kNoRank, rr != kNoRank);

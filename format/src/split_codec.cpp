@@ -234,81 +234,117 @@ namespace {
 constexpr uint32_t kMaxScoredRing = 1u << 24;  // larger rings: all scores 0 (order by index)
 constexpr uint32_t kTopSelect = 16;            // ranks below: insertion into the best rank + 1
 
-// Scores of the candidates with `count` interior ring vertices; returns how many (n).
-// Closed: candidate j has a = j, b = (j + count + 1) mod k. Open: interior starts at j
-// (0 .. k - count), a = j - 1 (none for j = 0), b = j + count (none for k).
-// E = 2 W + e_a + e_b = (sum over the interior) + (sum over the interior widened by a and b),
-// both differences of prefix sums q of e in canonical order, q[i + 1] = e_0 + .. + e_{i-1}:
-// closed, the ring is summed twice around so windows need no modulo; open, q is padded by
-// one on each side (q[0] = q[1] = 0, q[k + 2] = q[k + 1]) so a missing a or b adds nothing.
-// With pointer t = q + j + (closed ? 1 : 0): E = t[count + 1] - t[1] + t[count + 2] - t[0].
-// Every |E| <= 2 k max|e|: when that is surely below 2^31 the squares and their sum fit in 64 bits
-// (score64, exactly the values of the spec's 128-bit ones); otherwise 128-bit scores.
-uint32_t wedge_candidates(const int32_t* coords, uint32_t v, const ProgressiveMesh& pm, uint32_t count,
-                          WedgeScratch& s) {
+// Scores of the n candidates with `count` interior ring vertices, in integer type I, from prefix
+// sums over the ring in extended canonical order (closed: once around and on as far as the
+// windows reach; open: once, padded by a missing position on each side, offset 0): entry x of
+// p holds the sums of e (3 axes) and of |e|^2 over the positions below x, 4 per entry; wm
+// holds each position's weights m and r. Candidate j's ends are positions a = j and b = j + 1 + count,
+// its interior a + 1 .. b - 1: with P = p[x] sums, E = P[b] - P[a + 1] + P[b + 1] - P[a]
+// (2 * interior + both ends), S = P2[b] - P2[a + 1], |e_a|^2 = P2[a + 1] - P2[a], |e_b|^2 =
+// P2[b + 1] - P2[b] (0 for a missing end, so T = 2 or 4 times their sum). G = |E|^2 + c (4 S -
+// c T); key = G m_a m_b when G >= 0, else G r_a r_b with r = 12 / m (wm: m, r per position).
+template <class I, bool kClosed>
+void score_candidates(const I* p, const uint8_t* wm, uint32_t n, uint32_t count, uint32_t k, I* out) {
+  const I c = I(count);
+  const size_t span = size_t(count + 1) * 4;
+  for (uint32_t j = 0; j < n; ++j, p += 4) {
+    const I* pa = p;
+    const I* pf = p + 4;
+    const I* pb = p + span;
+    const I* pb1 = pb + 4;
+    const I ex = pb[0] - pf[0] + pb1[0] - pa[0], ey = pb[1] - pf[1] + pb1[1] - pa[1],
+            ez = pb[2] - pf[2] + pb1[2] - pa[2];
+    const I S = pb[3] - pf[3], ends = pf[3] - pa[3] + pb1[3] - pb[3];
+    const I T = (kClosed || (j > 0 && j + count < k)) ? 2 * ends : 4 * ends;
+    const I G = ex * ex + ey * ey + ez * ez + c * (4 * S - c * T);
+    const uint8_t* ma = wm + size_t(j) * 2;
+    const uint8_t* mb = ma + span / 2;
+    out[j] = G * I(G >= 0 ? ma[0] * mb[0] : ma[1] * mb[1]);
+  }
+}
+
+// Scores of the candidates with `count` interior ring vertices (into s.score64 when s.narrow,
+// else s.score); returns how many (n). Closed: candidate j has a = j, b = (j + count + 1) mod
+// k. Open: interior starts at j (0 .. k - count), a = j - 1 (none for j = 0), b = j + count
+// (none for k). Every |key| fits 64 bits when k (max|e| + 1) < 2^26 (narrow), else 128 bits;
+// the values are the same. The sums are first taken in 64 bits, wrapping (unsigned), while the
+// spread is found; only a ring that is not narrow is summed again in 128 bits.
+template <class I, class U>
+uint32_t score_ring(const int32_t* coords, const uint32_t* degree, const ProgressiveMesh& pm, uint32_t count,
+                    const int32_t* cv, std::vector<I>& buf, std::vector<I>& score, WedgeScratch& s) {
   const std::span<const uint32_t> ring = pm.ring();
   const uint32_t k = uint32_t(ring.size()), start = pm.ring_start();
   const bool closed = pm.ring_closed();
   const uint32_t n = closed ? k : k - count + 1;
+  // Positions: closed 0 .. k + count + 1 (rank x mod k), open 0 .. k + 1 (rank x - 1; 0 and
+  // k + 1 missing); prefix entries one more.
+  const uint32_t len = closed ? k + count + 2 : k + 2;
+  if (buf.size() < size_t(len + 1) * 4) buf.resize(size_t(len + 1) * 4);
+  if (s.w.size() < size_t(len) * 2) s.w.resize(size_t(len) * 2);
+  if (score.size() < n) score.resize(n);
+  // End weights (spec section 4): m = 4, 3, 2 for degree <= 4, 5, more, and r = 12 / m (a
+  // negative G is ordered by G / (m_a m_b)), by degree clamped to 7; a missing end as degree 7.
+  static constexpr uint8_t kWeight[8][2] = {{4, 3}, {4, 3}, {4, 3}, {4, 3}, {4, 3}, {3, 4}, {2, 6}, {2, 6}};
+  I* q = buf.data();
+  uint8_t* wm = s.w.data();
+  const int64_t cx = cv[0], cy = cv[1], cz = cv[2];
+  U x = 0, y = 0, z = 0, t = 0;
+  uint64_t spread = 0;  // OR of |e| - (e < 0) per component, so every |e| <= spread + 1
+  uint32_t at = 0;
+  auto put = [&](const int64_t dx, const int64_t dy, const int64_t dz, uint32_t d) {
+    q[0] = I(x);
+    q[1] = I(y);
+    q[2] = I(z);
+    q[3] = I(t);
+    q += 4;
+    spread |= uint64_t(dx ^ (dx >> 63)) | uint64_t(dy ^ (dy >> 63)) | uint64_t(dz ^ (dz >> 63));
+    x += U(dx);
+    y += U(dy);
+    z += U(dz);
+    t += U(dx) * U(dx) + U(dy) * U(dy) + U(dz) * U(dz);
+    wm[at * 2] = kWeight[d][0];
+    wm[at * 2 + 1] = kWeight[d][1];
+    ++at;
+  };
+  auto put_vertex = [&](uint32_t w) {
+    const int32_t* cw = coords + size_t(w) * 3;
+    const uint32_t d = degree[w];
+    put(cw[0] - cx, cw[1] - cy, cw[2] - cz, d < 7 ? d : 7);
+  };
+  if (!closed) put(0, 0, 0, 7);
+  for (uint32_t j = start; j < k; ++j) put_vertex(ring[j]);
+  for (uint32_t j = 0; j < start; ++j) put_vertex(ring[j]);
+  if (closed) {
+    for (uint32_t i = 0; at < len; ++i) put_vertex(ring[start + i < k ? start + i : start + i - k]);
+  } else {
+    put(0, 0, 0, 7);
+  }
+  q[0] = I(x);
+  q[1] = I(y);
+  q[2] = I(z);
+  q[3] = I(t);
+  s.narrow = spread < (uint64_t(1) << 26) && (spread + 1) * k < (uint64_t(1) << 26);
+  if (sizeof(I) == 8 && !s.narrow) return 0;  // sums may have wrapped: redo in 128 bits
+  if (closed)
+    score_candidates<I, true>(buf.data(), wm, n, count, k, score.data());
+  else
+    score_candidates<I, false>(buf.data(), wm, n, count, k, score.data());
+  return n;
+}
+
+uint32_t wedge_candidates(const int32_t* coords, const uint32_t* degree, uint32_t v, const ProgressiveMesh& pm,
+                          uint32_t count, WedgeScratch& s) {
+  const uint32_t k = uint32_t(pm.ring().size());
   if (k > kMaxScoredRing) {
+    const uint32_t n = pm.ring_closed() ? k : k - count + 1;
     s.narrow = true;
     s.score64.assign(n, 0);
     return n;
   }
-  const uint32_t len = closed ? 2 * k + 1 : k + 3;  // entries of q per axis
-  if (s.q.size() < size_t(len) * 3) s.q.resize(size_t(len) * 3);
-  int64_t* q = s.q.data();
   const int32_t* cv = coords + size_t(v) * 3;
-  const int64_t cx = cv[0], cy = cv[1], cz = cv[2];
-  // spread: OR of |e| - (e < 0) per component, so every |e| <= spread + 1.
-  uint64_t spread = 0;
-  int64_t x = 0, y = 0, z = 0;
-  q[0] = q[1] = q[2] = 0;
-  q[3] = q[4] = q[5] = 0;
-  int64_t* o = q + 6;
-  auto add = [&](uint32_t w) {
-    const int32_t* cw = coords + size_t(w) * 3;
-    const int64_t dx = cw[0] - cx, dy = cw[1] - cy, dz = cw[2] - cz;
-    spread |= uint64_t(dx ^ (dx >> 63)) | uint64_t(dy ^ (dy >> 63)) | uint64_t(dz ^ (dz >> 63));
-    o[0] = x += dx;
-    o[1] = y += dy;
-    o[2] = z += dz;
-    o += 3;
-  };
-  for (uint32_t j = start; j < k; ++j) add(ring[j]);
-  for (uint32_t j = 0; j < start; ++j) add(ring[j]);
-  if (closed) {  // second turn, as far as the windows reach: q[k + 1 + i] = total + q[i + 1], i <= count + 1
-    const int64_t* p = q + 6;
-    for (uint32_t i = 1; i <= count + 1; ++i, o += 3, p += 3) {
-      o[0] = p[0] + x;
-      o[1] = p[1] + y;
-      o[2] = p[2] + z;
-    }
-  } else {  // pad: q[k + 2] = q[k + 1]
-    for (int a = 0; a < 3; ++a) o[a] = o[a - 3];
-  }
-  const int64_t* t = q + (closed ? 3 : 0);
-  const size_t c1 = size_t(count + 1) * 3, c2 = c1 + 3;
-  s.narrow = spread < (uint64_t(1) << 30) && (spread + 1) * k < (uint64_t(1) << 30);  // k < 2^24: no overflow
-  if (s.narrow) {
-    if (s.score64.size() < n) s.score64.resize(n);
-    uint64_t* sc = s.score64.data();
-    for (uint32_t j = 0; j < n; ++j, t += 3) {
-      const int64_t ex = t[c1] - t[3] + t[c2] - t[0], ey = t[c1 + 1] - t[4] + t[c2 + 1] - t[1],
-                    ez = t[c1 + 2] - t[5] + t[c2 + 2] - t[2];
-      sc[j] = uint64_t(ex * ex) + uint64_t(ey * ey) + uint64_t(ez * ez);
-    }
-  } else {
-    if (s.score.size() < n) s.score.resize(n);
-    for (uint32_t j = 0; j < n; ++j, t += 3) {
-      WedgeScore sc = 0;
-      for (int a = 0; a < 3; ++a) {
-        const WedgeScoreSigned e = t[c1 + a] - t[3 + a] + t[c2 + a] - t[a];
-        sc += WedgeScore(e * e);
-      }
-      s.score[j] = sc;
-    }
-  }
+  if (const uint32_t n = score_ring<int64_t, uint64_t>(coords, degree, pm, count, cv, s.q, s.score64, s)) return n;
+  const uint32_t n = score_ring<WedgeScoreSigned, WedgeScore>(coords, degree, pm, count, cv, s.q128, s.score, s);
+  s.narrow = false;
   return n;
 }
 
@@ -359,8 +395,8 @@ inline uint32_t max_count(const ProgressiveMesh& pm) {
 
 }  // namespace
 
-bool wedge_symbols(const int32_t* coords, uint32_t v, const ProgressiveMesh& pm, uint32_t rank_l, uint32_t rank_r,
-                   uint32_t& count, uint32_t& rank, WedgeScratch& s) {
+bool wedge_symbols(const int32_t* coords, const uint32_t* degree, uint32_t v, const ProgressiveMesh& pm,
+                   uint32_t rank_l, uint32_t rank_r, uint32_t& count, uint32_t& rank, WedgeScratch& s) {
   const uint32_t k = uint32_t(pm.ring().size());
   uint32_t j;
   if (pm.ring_closed()) {
@@ -374,16 +410,16 @@ bool wedge_symbols(const int32_t* coords, uint32_t v, const ProgressiveMesh& pm,
     j = rank_l == kNoRank ? 0 : rank_l + 1;
     count = (rank_r == kNoRank ? k : rank_r) - j;
   }
-  const uint32_t n = wedge_candidates(coords, v, pm, count, s);
+  const uint32_t n = wedge_candidates(coords, degree, v, pm, count, s);
   rank = s.narrow ? rank_of(s.score64.data(), n, j) : rank_of(s.score.data(), n, j);
   return true;
 }
 
-bool wedge_ranks(const int32_t* coords, uint32_t v, const ProgressiveMesh& pm, uint32_t count, uint32_t rank,
-                 uint32_t& rank_l, uint32_t& rank_r, WedgeScratch& s) {
+bool wedge_ranks(const int32_t* coords, const uint32_t* degree, uint32_t v, const ProgressiveMesh& pm,
+                 uint32_t count, uint32_t rank, uint32_t& rank_l, uint32_t& rank_r, WedgeScratch& s) {
   const uint32_t k = uint32_t(pm.ring().size());
   if (k < 2 || count > max_count(pm)) return false;
-  const uint32_t n = wedge_candidates(coords, v, pm, count, s);
+  const uint32_t n = wedge_candidates(coords, degree, v, pm, count, s);
   if (rank >= n) return false;
   const uint32_t j =
       s.narrow ? select(s.score64.data(), n, rank, s.order) : select(s.score.data(), n, rank, s.order);

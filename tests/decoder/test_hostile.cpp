@@ -176,7 +176,7 @@ Bytes split_payload(Replay& rp, const std::vector<uint32_t>& at, int32_t r = 0) 
       rp.work += rp.pm.ring().size();
       c.wedge_context = pmz::wedge_context(uint32_t(rp.pm.ring().size()), rp.pm.ring_closed());
       c.rank_context = rp.pm.ring_closed() ? 1 : 0;
-      if (pmz::wedge_ranks(rp.coords.data(), v, rp.pm, 0, 0, a, b, rp.scratch) && rp.pm.split_gathered(v, a, b)) {
+      if (pmz::wedge_ranks(rp.coords.data(), rp.choice.degrees(), v, rp.pm, 0, 0, a, b, rp.scratch) && rp.pm.split_gathered(v, a, b)) {
         rp.choice.applied(rp.pm, a != pmz::kNoRank, b != pmz::kNoRank);
         pmz::PositionPrediction pred;  // HEAD curvature 0, as header() writes
         pmz::predict_position(rp.coords.data(), rp.pm.u_ring(), rp.pm.ring(), 0, 0, pred);
@@ -490,7 +490,7 @@ TEST(Hostile, WedgeSymbolsAtUint32MaxAreInvalid) {
     codes[0] = {0, pmz::wedge_context(uint32_t(rp.pm.ring().size()), rp.pm.ring_closed()), 0, 0,
                 rp.pm.ring_closed() ? 1u : 0u, {0, 0, 0}, {0, 0, 0}};
     uint32_t a, b;
-    ASSERT_TRUE(pmz::wedge_ranks(rp.coords.data(), 0, rp.pm, 0, 0, a, b, rp.scratch));
+    ASSERT_TRUE(pmz::wedge_ranks(rp.coords.data(), rp.choice.degrees(), 0, rp.pm, 0, 0, a, b, rp.scratch));
     ASSERT_TRUE(rp.pm.split_gathered(0, a, b));
     rp.choice.applied(rp.pm, a != pmz::kNoRank, b != pmz::kNoRank);
     pmz::PositionPrediction pred;
@@ -679,7 +679,7 @@ TEST(Hostile, CoarseningNeedsNoAllocation) {
   pmz::SplitSymbols code{0, pmz::wedge_context(n, true), n - 2, 0, 1, {0, 0, 0}, {0, 0, 0}};
   pmz::WedgeScratch scratch;
   uint32_t ra, rb;
-  ASSERT_TRUE(pmz::wedge_ranks(coords.data(), 0, pm, n - 2, 0, ra, rb, scratch));
+  ASSERT_TRUE(pmz::wedge_ranks(coords.data(), choice.degrees(), 0, pm, n - 2, 0, ra, rb, scratch));
   ASSERT_TRUE(pm.split_gathered(0, ra, rb));
   pmz::PositionPrediction pred;
   pmz::predict_position(coords.data(), pm.u_ring(), pm.ring(), 0, 0, pred);

@@ -114,6 +114,8 @@ TEST(WedgeSymbols, EveryWedgeRoundTrips) {
         std::vector<int32_t> coords(size_t(k + 1) * 3, 0);
         for (auto& c : coords)
           c = geometry == 0 ? 0 : geometry == 1 ? int32_t(rng() % 16384) : int32_t(rng());
+        std::vector<uint32_t> deg(k + 1);
+        for (auto& d : deg) d = rng() % 9;
         ASSERT_TRUE(pm.gather_ring(0));
         ASSERT_EQ(pm.ring().size(), k);
         ASSERT_EQ(pm.ring_closed(), closed == 1);
@@ -124,74 +126,153 @@ TEST(WedgeSymbols, EveryWedgeRoundTrips) {
             uint32_t count = 0, rank = 0, ga = 0, gb = 0;
             const bool valid = closed ? (a < k && b < k && a != b)
                                       : !(ra == kNoRank && rb == kNoRank) && (ra == kNoRank || rb == kNoRank || ra < rb);
-            ASSERT_EQ(wedge_symbols(coords.data(), 0, pm, ra, rb, count, rank, scratch), valid);
+            ASSERT_EQ(wedge_symbols(coords.data(), deg.data(), 0, pm, ra, rb, count, rank, scratch), valid);
             if (!valid) continue;
             ++pairs;
-            ASSERT_TRUE(wedge_ranks(coords.data(), 0, pm, count, rank, ga, gb, scratch))
+            ASSERT_TRUE(wedge_ranks(coords.data(), deg.data(), 0, pm, count, rank, ga, gb, scratch))
                 << "k " << k << " closed " << closed << " count " << count << " rank " << rank;
             EXPECT_EQ(ga, ra);
             EXPECT_EQ(gb, rb);
             // Out of range symbols are refused.
-            EXPECT_FALSE(wedge_ranks(coords.data(), 0, pm, closed ? k - 1 : k, 0, ga, gb, scratch));
-            EXPECT_FALSE(wedge_ranks(coords.data(), 0, pm, count, k + 1, ga, gb, scratch));
+            EXPECT_FALSE(wedge_ranks(coords.data(), deg.data(), 0, pm, closed ? k - 1 : k, 0, ga, gb, scratch));
+            EXPECT_FALSE(wedge_ranks(coords.data(), deg.data(), 0, pm, count, k + 1, ga, gb, scratch));
           }
         EXPECT_EQ(pairs, closed ? k * (k - 1) : (k + 1) * k / 2 + k);
       }
   });
 }
 
-// The wedge order against spec/format.md section 4 written out directly (a second reading of
-// the formula, not the codec's prefix sums): E = 2 * sum of e over the interior + e_a + e_b,
-// score = |E|^2 in 128 bits, highest first, ties by smaller j. Coordinates up to the int32
-// extremes (lossless mode codes float bit patterns) so both of the codec's paths are covered.
+// The wedge order of spec/format.md section 4 written out directly (a second reading of the
+// formula, not the codec's prefix sums and packed weights): per candidate, in 128 bits, E = 2 *
+// (sum of e over the interior) + e_a + e_b, S = sum of |e|^2 over the interior, T = 2 (|e_a|^2 +
+// |e_b|^2) with both ends, 4 |e|^2 of the one end, 0 without; G = |E|^2 + 4 c S - c^2 T; weight
+// m = 4 (degree <= 4), 3 (degree 5), 2 (more, or a missing end). Order: G >= 0 before G < 0;
+// among G >= 0 by G m_a m_b, among G < 0 by the fraction G / (m_a m_b) (compared by cross
+// multiplication, not by the codec's 12 / m weights), highest first; ties by smaller j.
+// Returns the candidates j in order.
+std::vector<uint32_t> spec_wedge_order(const std::vector<int32_t>& coords, const std::vector<uint32_t>& deg,
+                                       const ProgressiveMesh& pm, uint32_t count) {
+  const uint32_t k = uint32_t(pm.ring().size());
+  const bool closed = pm.ring_closed();
+  auto vertex = [&](uint32_t r) { return pm.ring()[(r + pm.ring_start()) % k]; };  // canonical rank r
+  auto e = [&](uint32_t r, int a) { return WedgeScoreSigned(coords[size_t(vertex(r)) * 3 + a]) - coords[a]; };
+  auto len2 = [&](uint32_t r) { return e(r, 0) * e(r, 0) + e(r, 1) * e(r, 1) + e(r, 2) * e(r, 2); };
+  auto weight = [&](bool has, uint32_t r) -> WedgeScoreSigned {
+    if (!has) return 2;
+    const uint32_t d = deg[vertex(r)];
+    return d <= 4 ? 4 : d == 5 ? 3 : 2;
+  };
+  const uint32_t n = closed ? k : k - count + 1;
+  std::vector<WedgeScoreSigned> G(n), M(n);
+  for (uint32_t j = 0; j < n; ++j) {
+    const uint32_t first = closed ? j + 1 : j;
+    const bool has_a = closed || j > 0, has_b = closed || j + count < k;
+    const uint32_t ra = closed ? j : j - 1, rb = (first + count) % k;
+    WedgeScoreSigned S = 0, E2 = 0;
+    for (uint32_t i = first; i < first + count; ++i) S += len2(i % k);
+    for (int a = 0; a < 3; ++a) {
+      WedgeScoreSigned E = 0;
+      for (uint32_t i = first; i < first + count; ++i) E += 2 * e(i % k, a);
+      if (has_a) E += e(ra, a);
+      if (has_b) E += e(rb, a);
+      E2 += E * E;
+    }
+    const WedgeScoreSigned T = has_a && has_b ? 2 * (len2(ra) + len2(rb)) : has_a ? 4 * len2(ra) : has_b ? 4 * len2(rb) : 0;
+    const WedgeScoreSigned c = count;
+    G[j] = E2 + 4 * c * S - c * c * T;
+    M[j] = weight(has_a, ra) * weight(has_b, rb);
+  }
+  std::vector<uint32_t> order(n);
+  for (uint32_t j = 0; j < n; ++j) order[j] = j;
+  std::stable_sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) {
+    const bool px = G[x] >= 0, py = G[y] >= 0;
+    if (px != py) return px;
+    if (px) return G[x] * M[x] > G[y] * M[y];
+    return G[x] * M[y] > G[y] * M[x];  // G[x] / M[x] > G[y] / M[y], M > 0
+  });
+  return order;
+}
+
+// The codec's order is the spec's: coordinates up to the int32 extremes (lossless mode codes
+// float bit patterns) so both of the codec's paths (64- and 128-bit) are covered, with random
+// degrees (every weight) and geometry with negative G (interior near v, ends far).
 TEST(WedgeSymbols, OrderIsTheSpecFormula) {
   std::mt19937 rng(5);
   WedgeScratch scratch;
+  uint64_t negative = 0, weighted = 0;
   for_each_fan(10, [&](ProgressiveMesh& pm, uint32_t k, int closed) {
       ASSERT_TRUE(pm.gather_ring(0));
-      for (int geometry = 0; geometry < 4; ++geometry) {
+      for (int geometry = 0; geometry < 5; ++geometry) {
         std::vector<int32_t> coords(size_t(k + 1) * 3);
         for (auto& c : coords)
           c = geometry == 0   ? int32_t(rng() % 5)  // many ties
               : geometry == 1 ? int32_t(rng() % 16384)
               : geometry == 2 ? int32_t(rng())
-                              : (rng() & 1 ? INT32_MAX : INT32_MIN);
-        // e by canonical rank.
-        std::vector<WedgeScoreSigned> e(size_t(k) * 3);
-        for (uint32_t r = 0; r < k; ++r) {
-          const uint32_t w = pm.ring()[(r + pm.ring_start()) % k];
-          for (int a = 0; a < 3; ++a) e[r * 3 + a] = WedgeScoreSigned(coords[w * 3 + a]) - coords[a];
-        }
+              : geometry == 3 ? (rng() & 1 ? INT32_MAX : INT32_MIN)
+                              : int32_t(rng() % 3) + (rng() % 3 == 0 ? 1000 : 0);  // some far, some near
+        std::vector<uint32_t> deg(k + 1);
+        for (auto& d : deg) d = rng() % 9;
         const uint32_t max_count = closed ? k - 2 : k - 1;
         for (uint32_t count = 0; count <= max_count; ++count) {
-          const uint32_t n = closed ? k : k - count + 1;
-          std::vector<WedgeScore> score(n);
-          for (uint32_t j = 0; j < n; ++j) {
-            WedgeScoreSigned E[3] = {0, 0, 0};
-            for (uint32_t i = 0; i < count; ++i) {
-              const uint32_t r = closed ? (j + 1 + i) % k : j + i;
-              for (int a = 0; a < 3; ++a) E[a] += 2 * e[r * 3 + a];
-            }
-            const bool has_a = closed || j > 0, has_b = closed || j + count < k;
-            const uint32_t ra = closed ? j : j - 1, rb = closed ? (j + count + 1) % k : j + count;
-            for (int a = 0; a < 3; ++a) E[a] += (has_a ? e[ra * 3 + a] : 0) + (has_b ? e[rb * 3 + a] : 0);
-            for (int a = 0; a < 3; ++a) score[j] += (WedgeScore)(E[a] * E[a]);
-          }
-          std::vector<uint32_t> order(n);
-          for (uint32_t j = 0; j < n; ++j) order[j] = j;
-          std::stable_sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) { return score[x] > score[y]; });
+          const std::vector<uint32_t> order = spec_wedge_order(coords, deg, pm, count);
+          const uint32_t n = uint32_t(order.size());
           for (uint32_t rank = 0; rank < n; ++rank) {
             const uint32_t j = order[rank];
-            uint32_t ga, gb;
-            ASSERT_TRUE(wedge_ranks(coords.data(), 0, pm, count, rank, ga, gb, scratch));
             const uint32_t ra = closed ? j : (j == 0 ? kNoRank : j - 1);
             const uint32_t rb = closed ? (j + count + 1) % k : (j + count == k ? kNoRank : j + count);
+            uint32_t ga, gb, gc, gr;
+            ASSERT_TRUE(wedge_ranks(coords.data(), deg.data(), 0, pm, count, rank, ga, gb, scratch));
             EXPECT_EQ(ga, ra) << "k " << k << " closed " << closed << " count " << count << " rank " << rank;
             EXPECT_EQ(gb, rb) << "k " << k << " closed " << closed << " count " << count << " rank " << rank;
+            ASSERT_TRUE(wedge_symbols(coords.data(), deg.data(), 0, pm, ra, rb, gc, gr, scratch));
+            EXPECT_EQ(gc, count);
+            EXPECT_EQ(gr, rank);
           }
+          negative += !scratch.narrow ? 0 : std::count_if(scratch.score64.begin(), scratch.score64.begin() + n, [](int64_t x) { return x < 0; });
+          weighted += n > 1;
         }
       }
   });
+  EXPECT_GT(negative, 100u);  // the negative branch is exercised
+  EXPECT_GT(weighted, 100u);
+}
+
+// A hand-computed case pinning each term: closed ring of 4 around v = 0 at e = (10,0,0),
+// (0,1,0), (-3,0,0), (0,-1,0) (ranks 0..3), count 1. Candidate j: a = j, interior j + 1, b = j + 2.
+//  j=0: E = 2 (0,1,0) + (10,0,0) + (-3,0,0) = (7,2,0): |E|^2 53; S 1; T 2 (100 + 9) = 218; G = 53 + 4 - 218 = -161
+//  j=1: E = 2 (-3,0,0) + (0,1,0) + (0,-1,0) = (-6,0,0): 36; S 9; T 2 (1 + 1) = 4; G = 36 + 36 - 4 = 68
+//  j=2: E = 2 (0,-1,0) + (-3,0,0) + (10,0,0) = (7,-2,0): 53; S 1; T 218; G = -161
+//  j=3: E = 2 (10,0,0) + (0,-1,0) + (0,1,0) = (20,0,0): 400; S 100; T 4; G = 400 + 400 - 4 = 796
+// Degrees by rank 5, 4, 6, 4: weights m = 3, 4, 2, 4 (r = 12 / m = 4, 3, 6, 3). Codec keys:
+// j=0 (ends ranks 0, 2): -161 * 4 * 6 = -3864; j=1 (1, 3): 68 * 4 * 4 = 1088; j=2 (2, 0): -3864;
+// j=3 (3, 1): 796 * 4 * 4 = 12736. Order 3, 1, 0, 2 (0 and 2 tie: smaller j first).
+TEST(WedgeSymbols, HandComputedScore) {
+  ProgressiveMesh pm;
+  ASSERT_TRUE(build_fan(pm, 4, true));
+  ASSERT_TRUE(pm.gather_ring(0));
+  std::vector<int32_t> coords(5 * 3, 0);
+  const int32_t e[4][3] = {{10, 0, 0}, {0, 1, 0}, {-3, 0, 0}, {0, -1, 0}};
+  for (uint32_t r = 0; r < 4; ++r)
+    for (int a = 0; a < 3; ++a) coords[size_t(pm.ring()[(r + pm.ring_start()) % 4]) * 3 + a] = e[r][a];
+  std::vector<uint32_t> deg(5, 6);
+  const uint32_t want_deg[4] = {5, 4, 6, 4};
+  for (uint32_t r = 0; r < 4; ++r) deg[pm.ring()[(r + pm.ring_start()) % 4]] = want_deg[r];
+  WedgeScratch scratch;
+  const uint32_t want[4] = {3, 1, 0, 2};
+  for (uint32_t rank = 0; rank < 4; ++rank) {
+    uint32_t ga, gb;
+    ASSERT_TRUE(wedge_ranks(coords.data(), deg.data(), 0, pm, 1, rank, ga, gb, scratch));
+    EXPECT_EQ(ga, want[rank]) << rank;
+  }
+  const int64_t want_keys[4] = {-3864, 1088, -3864, 12736};  // negative G times r_a r_b = 144 / (m_a m_b)
+  for (uint32_t j = 0; j < 4; ++j) EXPECT_EQ(scratch.score64[j], want_keys[j]) << j;
+  // Degrees 5 -> 4 at rank 2 (weight 4): j = 1's key 68 * 4 * 4 unchanged, j = 2's -161 * 144 / 12.
+  deg[pm.ring()[(2 + pm.ring_start()) % 4]] = 4;
+  uint32_t ga, gb;
+  ASSERT_TRUE(wedge_ranks(coords.data(), deg.data(), 0, pm, 1, 2, ga, gb, scratch));
+  EXPECT_EQ(scratch.score64[2], -161 * 12);
+  EXPECT_EQ(scratch.score64[0], -161 * 12);
+  EXPECT_EQ(scratch.score64[1], 68 * 16);
 }
 
 // Position prediction (spec section 5), recomputed here from the spec's words with different
@@ -440,10 +521,9 @@ TEST(PositionPrediction, FineOffsetAndOneRounding) {
 }
 
 // Larger rings than above, up to 40 (the selection switches to nth_element from rank 16): the
-// codec gives exactly the spec order (section 4): scores as
-// written there (128-bit, E = 2 * interior sum + e_a + e_b) and a full sort, highest first, ties
-// by smaller j. Rings up to 40 cover both selection paths (ranks below 16 and nth_element), coordinates
-// small (64-bit scores), tied (all zero) and full-range (128-bit scores).
+// codec gives exactly the spec order (spec_wedge_order). Rings up to 40 cover both selection
+// paths (ranks below 16 and nth_element), coordinates small (64-bit scores), tied (all zero)
+// and full-range (128-bit scores), random degrees.
 TEST(WedgeSymbols, OrderMatchesSpecReference) {
   std::mt19937 rng(23);
   WedgeScratch scratch;
@@ -456,40 +536,22 @@ TEST(WedgeSymbols, OrderMatchesSpecReference) {
         std::vector<int32_t> coords(size_t(k + 1) * 3, 0);
         for (auto& c : coords)
           c = geometry == 0 ? 0 : geometry == 1 ? int32_t(rng() % 16384) : geometry == 2 ? int32_t(rng() % 5) : int32_t(rng());
+        std::vector<uint32_t> deg(k + 1);
+        for (auto& d : deg) d = rng() % 9;
         ASSERT_TRUE(pm.gather_ring(0));
-        const uint32_t start = pm.ring_start();
-        std::vector<int64_t> e(k * 3);
-        for (uint32_t i = 0; i < k; ++i)
-          for (int a = 0; a < 3; ++a)
-            e[i * 3 + a] = int64_t(coords[size_t(pm.ring()[(start + i) % k]) * 3 + a]) - coords[a];
         const uint32_t max_count = closed ? k - 2 : k - 1;
         for (uint32_t count = 0; count <= max_count; ++count) {
-          const uint32_t n = closed ? k : k - count + 1;
-          std::vector<WedgeScore> score(n);
-          for (uint32_t j = 0; j < n; ++j) {
-            const uint32_t first = closed ? j + 1 : j;
-            for (int a = 0; a < 3; ++a) {
-              WedgeScoreSigned E = 0;
-              for (uint32_t i = first; i < first + count; ++i) E += 2 * e[(i % k) * 3 + a];
-              if (closed || j > 0) E += e[((closed ? j : j - 1) % k) * 3 + a];
-              if (closed || j + count < k) E += e[((first + count) % k) * 3 + a];
-              score[j] += WedgeScore(E * E);
-            }
-          }
-          std::vector<uint32_t> order(n);
-          for (uint32_t j = 0; j < n; ++j) order[j] = j;
-          std::sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) {
-            return score[x] > score[y] || (score[x] == score[y] && x < y);
-          });
+          const std::vector<uint32_t> order = spec_wedge_order(coords, deg, pm, count);
+          const uint32_t n = uint32_t(order.size());
           for (uint32_t rank = 0; rank < n; ++rank) {
             const uint32_t j = order[rank];
             const uint32_t ra = closed ? j : (j == 0 ? kNoRank : j - 1);
             const uint32_t rb = closed ? (j + count + 1) % k : (j + count == k ? kNoRank : j + count);
             uint32_t ga = 0, gb = 0, gc = 0, gr = 0;
-            ASSERT_TRUE(wedge_ranks(coords.data(), 0, pm, count, rank, ga, gb, scratch));
+            ASSERT_TRUE(wedge_ranks(coords.data(), deg.data(), 0, pm, count, rank, ga, gb, scratch));
             ASSERT_EQ(ga, ra) << "k " << k << " closed " << closed << " count " << count << " rank " << rank;
             ASSERT_EQ(gb, rb);
-            ASSERT_TRUE(wedge_symbols(coords.data(), 0, pm, ra, rb, gc, gr, scratch));
+            ASSERT_TRUE(wedge_symbols(coords.data(), deg.data(), 0, pm, ra, rb, gc, gr, scratch));
             ASSERT_EQ(gc, count);
             ASSERT_EQ(gr, rank);
           }

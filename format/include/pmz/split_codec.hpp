@@ -105,6 +105,7 @@ class VertexChoice {
   // Right after pm.split_gathered() (its ring and u_ring still those of the split).
   void applied(const ProgressiveMesh& pm, bool has_left, bool has_right);
   uint32_t degree(uint32_t w) const { return degree_[w]; }
+  const uint32_t* degrees() const { return degree_.data(); }  // per vertex (the wedge score's end weights)
 
  private:
   // (min(bitlen(expected gap), 20) * 2 + near) * 13 + min(degree, 12)
@@ -185,24 +186,37 @@ __extension__ typedef __int128 WedgeScoreSigned;
 
 // Reusable buffers for the wedge scores (no allocation per split once grown).
 struct WedgeScratch {
-  std::vector<int64_t> q;           // prefix sums of the ring offsets from v, 3 per entry
-  std::vector<uint64_t> score64;    // per candidate, when narrow (the same values, in 64 bits)
-  std::vector<WedgeScore> score;    // per candidate, otherwise
+  std::vector<uint8_t> w;                 // end weights m, 12 / m per ring position (extended canonical order)
+  std::vector<int64_t> q;                 // prefix sums of e (3 axes) and |e|^2 per position, when narrow
+  std::vector<WedgeScoreSigned> q128;     // the same otherwise
+  std::vector<int64_t> score64;           // per candidate, when narrow (the same values, in 64 bits)
+  std::vector<WedgeScoreSigned> score;    // per candidate, otherwise
   std::vector<uint32_t> order;
   bool narrow = true;
+  // Room for a ring of k vertices (any count), so scoring it does not allocate.
+  void reserve(size_t k) {
+    const size_t len = 2 * k + 2;
+    w.reserve(len * 2);
+    q.reserve((len + 1) * 4);
+    q128.reserve((len + 1) * 4);
+    score64.reserve(k + 1);
+    score.reserve(k + 1);
+    order.reserve(k + 1);
+  }
 };
 
 // wedge_count context: ring size (clamped to 8) and whether the fan is closed; wedge_rank
 // uses only the latter (measured: more rank contexts learn too slowly on small meshes).
 inline uint32_t wedge_context(uint32_t k, bool closed) { return 2 * (k < 8 ? k : 8) + (closed ? 1 : 0); }
 
+// degree: VertexChoice::degrees() (the end weights of the score).
 // Writer: the wedge (canonical ranks, kNoRank for a boundary side) of the ring gathered last in
 // pm as symbols (interior count, rank among the candidates of that count). False if the ranks
 // are not a valid wedge.
-bool wedge_symbols(const int32_t* coords, uint32_t v, const ProgressiveMesh& pm, uint32_t rank_l,
-                   uint32_t rank_r, uint32_t& count, uint32_t& rank, WedgeScratch& s);
+bool wedge_symbols(const int32_t* coords, const uint32_t* degree, uint32_t v, const ProgressiveMesh& pm,
+                   uint32_t rank_l, uint32_t rank_r, uint32_t& count, uint32_t& rank, WedgeScratch& s);
 // Decoder: symbols back to ranks; false if count or rank is out of range for the ring.
-bool wedge_ranks(const int32_t* coords, uint32_t v, const ProgressiveMesh& pm, uint32_t count, uint32_t rank,
-                 uint32_t& rank_l, uint32_t& rank_r, WedgeScratch& s);
+bool wedge_ranks(const int32_t* coords, const uint32_t* degree, uint32_t v, const ProgressiveMesh& pm,
+                 uint32_t count, uint32_t rank, uint32_t& rank_l, uint32_t& rank_r, WedgeScratch& s);
 
 }  // namespace pmz
