@@ -4,8 +4,6 @@
 // it decoded, and moves the mesh between levels with the shared ProgressiveMesh core.
 #include "pmz/decoder.hpp"
 
-#include <zstd.h>
-
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -14,6 +12,7 @@
 #include <new>
 #include <span>
 
+#include "pmz/base_codec.hpp"
 #include "pmz/format.hpp"
 #include "pmz/progressive_mesh.hpp"
 #include "pmz/split_codec.hpp"
@@ -67,7 +66,6 @@ struct Decoder::Impl {
   bool signature_done = false;
   uint64_t chunk_index = 0, chunk_offset = 0;
   uint64_t parse_base = 0;  // stream offset of the buffer parse() is looking at
-  ZSTD_DCtx* dctx = nullptr;
   Quantizer quant;
 
   ProgressiveMesh mesh;
@@ -94,9 +92,7 @@ struct Decoder::Impl {
   std::vector<int32_t> coords;    // 3 per computed vertex (computed >= vertex_count)
   std::vector<float> positions;
   std::vector<uint32_t> parents;
-  std::vector<uint8_t> scratch[kSplitStreamCount];
 
-  ~Impl() { ZSTD_freeDCtx(dctx); }
   Status fail(Status s, const std::string& what) {
     status = s;
     message = std::string("pmz: ") + status_name(s) + ": " + what + " (chunk " +
@@ -310,7 +306,6 @@ Status Decoder::Impl::head(const uint8_t* p, size_t n) {
   std::memcpy(info.bbox_min, h.bbox_min, sizeof h.bbox_min);
   std::memcpy(info.bbox_max, h.bbox_max, sizeof h.bbox_max);
   quant.init(h.position_bits, h.bbox_min, h.bbox_max);
-  if (!dctx && !(dctx = ZSTD_createDCtx())) return fail(Status::out_of_memory, "zstd context");
   return Status::ok;
 }
 
@@ -320,37 +315,17 @@ Status Decoder::Impl::base(const uint8_t* p, size_t n) {
   if (!r.ok || vn != info.base_vertices || fn != info.base_faces)
     return fail(Status::corrupt, "BASE counts differ from HEAD");
   std::string err;
-  std::vector<uint8_t>& pos = scratch[0];
-  std::vector<uint8_t>& idx = scratch[1];
-  if (!read_stream(r, dctx, limits.max_chunk_bytes, pos, err) ||
-      !read_stream(r, dctx, limits.max_chunk_bytes, idx, err))
-    return fail(Status::corrupt, "BASE: " + err);
-  // Each value takes at least one byte: check before allocating per-vertex arrays.
-  if (pos.size() < vn * 3 || idx.size() < fn * 3) return fail(Status::corrupt, "BASE streams too short");
-  std::vector<int32_t> c(vn * 3);
-  std::vector<uint32_t> faces(fn * 3);
-  ByteReader pr(pos.data(), pos.size()), ir(idx.data(), idx.size());
-  uint32_t prev[3] = {0, 0, 0};
-  for (size_t i = 0; i < vn * 3; ++i) {
-    uint64_t z = pr.varint();
-    if (z > 0xFFFFFFFFu) pr.ok = false;
-    prev[i % 3] += uint32_t(zigzag_decode(uint32_t(z)));
-    c[i] = int32_t(prev[i % 3]);
+  BaseMesh bm;
+  switch (decode_base(r.p, r.remaining(), uint32_t(vn), uint32_t(fn), bm, err)) {
+    case BaseResult::ok: break;
+    case BaseResult::corrupt: return fail(Status::corrupt, err);
+    case BaseResult::limit_exceeded: return fail(Status::limit_exceeded, err);
   }
-  uint32_t last = 0;
-  for (size_t i = 0; i < fn * 3; ++i) {
-    uint64_t z = ir.varint();
-    if (z > 0xFFFFFFFFu) ir.ok = false;
-    last += uint32_t(zigzag_decode(uint32_t(z)));
-    faces[i] = last;
-  }
-  if (!pr.ok || !ir.ok || pr.remaining() || ir.remaining())
-    return fail(Status::corrupt, "BASE streams malformed");
   ProgressiveMesh m;
-  if (!m.build(uint32_t(vn), faces.data(), fn, err)) return fail(Status::corrupt, "BASE: " + err);
+  if (!m.build(uint32_t(vn), bm.faces.data(), fn, err)) return fail(Status::corrupt, "BASE: " + err);
   mesh = std::move(m);
   choice.reset(mesh);
-  coords = std::move(c);
+  coords = std::move(bm.coords);
   positions.resize(vn * 3);
   for (size_t i = 0; i < vn * 3; ++i) positions[i] = quant.dequantize(coords[i], int(i % 3));
   parents.assign(vn, 0xFFFFFFFFu);

@@ -10,6 +10,7 @@
 #include <iterator>
 #include <memory>
 
+#include "pmz/base_codec.hpp"
 #include "pmz/decoder.hpp"
 #include "pmz/format.hpp"
 #include "pmz/progressive_mesh.hpp"
@@ -39,6 +40,7 @@ struct Plan {
   std::vector<uint32_t> order;             // final position -> collapse index
   std::vector<uint32_t> group_sizes;       // batches in final order
   std::vector<uint32_t> decoded_id;        // input id -> decoded id
+  std::vector<uint8_t> base_stream;        // BASE's range-coded traversal
 };
 
 uint32_t find_root(std::vector<uint32_t>& parent, uint32_t x) {
@@ -71,26 +73,12 @@ void file_quantizer(const IndexedMesh& mesh, uint32_t bits, FileHeader& h, Quant
   quant.init(h.position_bits, h.bbox_min, h.bbox_max);
 }
 
-// BASE payload: coordinates (3 per base vertex, in base order) as per-axis deltas, faces as
-// index deltas.
-std::vector<uint8_t> base_payload(const std::vector<int32_t>& coords, uint32_t base_n,
-                                  const std::vector<uint32_t>& faces, int zstd_level) {
-  std::vector<uint8_t> pos, idx, payload;
-  int32_t prev[3] = {0, 0, 0};
-  for (uint32_t d = 0; d < base_n; ++d)
-    for (int a = 0; a < 3; ++a) {
-      put_varint(pos, zigzag_encode(int32_t(uint32_t(coords[d * 3 + a]) - uint32_t(prev[a]))));
-      prev[a] = coords[d * 3 + a];
-    }
-  uint32_t last = 0;
-  for (uint32_t x : faces) {
-    put_varint(idx, zigzag_encode(int32_t(x - last)));
-    last = x;
-  }
-  put_varint(payload, base_n);
-  put_varint(payload, faces.size() / 3);
-  put_stream(payload, pos, zstd_level);
-  put_stream(payload, idx, zstd_level);
+// BASE payload (spec section 2): the counts, then the range-coded traversal.
+std::vector<uint8_t> base_payload(uint32_t vertices, uint32_t faces, const std::vector<uint8_t>& stream) {
+  std::vector<uint8_t> payload;
+  put_varint(payload, vertices);
+  put_varint(payload, faces);
+  payload.insert(payload.end(), stream.begin(), stream.end());
   return payload;
 }
 
@@ -126,81 +114,30 @@ bool make_plan(const CollapseSequence& seq, const WriteOptions& opt, Plan& plan,
     base_faces.insert(base_faces.end(), t, t + 3);
   }
   const uint32_t base_face_n = uint32_t(base_faces.size() / 3);
-  // Base order (spec section 6): faces breadth-first over shared vertices, component after
-  // component in input order; base vertices numbered by first appearance in those faces (then
-  // any surviving vertex without a face, ascending). Consecutive base vertices and indices are
-  // then mostly neighbours, which BASE's delta coding rewards.
-  std::vector<uint32_t> face_order;
-  {
-    std::vector<uint32_t> start(size_t(n) + 1, 0), incident(base_faces.size());
-    for (uint32_t x : base_faces) ++start[x + 1];
-    for (uint32_t i = 0; i < n; ++i) start[i + 1] += start[i];
-    std::vector<uint32_t> fill(start.begin(), start.end() - 1);
-    for (uint32_t c = 0; c < base_faces.size(); ++c) incident[fill[base_faces[c]]++] = c / 3;
-    std::vector<uint8_t> seen(base_face_n, 0);
-    face_order.reserve(base_face_n);
-    for (uint32_t f0 = 0; f0 < base_face_n; ++f0) {
-      if (seen[f0]) continue;
-      seen[f0] = 1;
-      for (size_t head = face_order.size(), at = (face_order.push_back(f0), head); at < face_order.size(); ++at) {
-        const uint32_t f = face_order[at];
-        for (int k = 0; k < 3; ++k) {
-          const uint32_t x = base_faces[f * 3 + k];
-          for (uint32_t i = start[x]; i < start[x + 1]; ++i)
-            if (!seen[incident[i]]) {
-              seen[incident[i]] = 1;
-              face_order.push_back(incident[i]);
-            }
-        }
-      }
-    }
-  }
-  // Base vertex numbering: by first appearance in that face order (then any surviving vertex
-  // without a face, ascending), or ascending input id with the faces in input order; the
-  // writer keeps whichever codes the smaller BASE (the first helps scattered inputs,
-  // elephant-with-holes 3985 -> 3141 bytes; the second inputs whose order is already coherent,
-  // cheese 4636 against 4904).
+  // Base order (spec section 2, "BASE"): the base coder numbers vertices and faces in its
+  // traversal order (components started from the faces in input order), then the vertices
+  // without faces in ascending input id.
   std::vector<uint32_t> gid(n, kNoVertex), input_of_gid(n);
   uint32_t base_n = 0;
   {
-    std::vector<uint32_t> appearance, ascending;  // base input ids in each numbering
-    std::vector<uint8_t> taken(n, 0);
-    for (uint32_t f : face_order)
-      for (int k = 0; k < 3; ++k) {
-        const uint32_t x = base_faces[f * 3 + k];
-        if (!taken[x]) taken[x] = 1, appearance.push_back(x);
-      }
-    for (uint32_t i = 0; i < n; ++i) {
-      if (!removed[i] && !taken[i]) appearance.push_back(i);
-      if (!removed[i]) ascending.push_back(i);
-    }
-    std::vector<uint32_t> identity(base_face_n);
-    for (uint32_t f = 0; f < base_face_n; ++f) identity[f] = f;
+    std::vector<uint32_t> surviving, local(n, kNoVertex);
+    for (uint32_t i = 0; i < n; ++i)
+      if (!removed[i]) local[i] = uint32_t(surviving.size()), surviving.push_back(i);
+    for (uint32_t& x : base_faces) x = local[x];
     FileHeader h;
     Quantizer quant;
     file_quantizer(mesh, opt.position_bits, h, quant);
-    size_t best = SIZE_MAX;
-    for (int option = 0; option < 2; ++option) {
-      const std::vector<uint32_t>& verts = option ? ascending : appearance;
-      const std::vector<uint32_t>& order = option ? identity : face_order;
-      std::vector<int32_t> coords(verts.size() * 3);
-      for (size_t d = 0; d < verts.size(); ++d) {
-        gid[verts[d]] = uint32_t(d);
-        for (int a = 0; a < 3; ++a) coords[d * 3 + a] = quant.quantize(mesh.positions[size_t(verts[d]) * 3 + a], a);
-      }
-      std::vector<uint32_t> faces_out;
-      faces_out.reserve(base_faces.size());
-      for (uint32_t f : order)
-        for (int k = 0; k < 3; ++k) faces_out.push_back(gid[base_faces[f * 3 + k]]);
-      const size_t size = base_payload(coords, uint32_t(verts.size()), faces_out, opt.zstd_level).size();
-      if (size < best) {
-        best = size;
-        plan.base_faces.swap(faces_out);
-        for (size_t d = 0; d < verts.size(); ++d) input_of_gid[d] = verts[d];
-      }
-    }
-    base_n = uint32_t(ascending.size());
-    for (uint32_t d = 0; d < base_n; ++d) gid[input_of_gid[d]] = d;
+    std::vector<int32_t> coords(surviving.size() * 3);
+    for (size_t d = 0; d < surviving.size(); ++d)
+      for (int a = 0; a < 3; ++a) coords[d * 3 + a] = quant.quantize(mesh.positions[size_t(surviving[d]) * 3 + a], a);
+    base_n = uint32_t(surviving.size());
+    std::vector<uint32_t> given_of;
+    BaseMesh decoded;
+    plan.base_stream.clear();
+    if (!encode_base(coords.data(), base_n, base_faces.data(), base_face_n, plan.base_stream, given_of, decoded, error))
+      return error = "base mesh: " + error, false;
+    plan.base_faces = std::move(decoded.faces);
+    for (uint32_t d = 0; d < base_n; ++d) gid[input_of_gid[d] = surviving[given_of[d]]] = d;
   }
   // Greedy ids of the splits: u of each split in decode order (base vertices: as above; for
   // them also the decoded ids).
@@ -314,7 +251,7 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
   h.full_faces = mesh.face_count();
   h.total_splits = splits;
 
-  const std::vector<uint8_t> base = base_payload(coords, base_n, plan.base_faces, opt.zstd_level);
+  const std::vector<uint8_t> base = base_payload(base_n, h.base_faces, plan.base_stream);
 
   // Splits: replay in final order with the decoder's core to get ranks and predictions. The
   // curvature weight (HEAD) is the file's: one replay codes the splits once per candidate

@@ -36,7 +36,6 @@ int main(int argc, char** argv) {
   app.add_option("--position-bits", wopt.position_bits, "quantization bits (0 = lossless float32)")
       ->check(CLI::Range(0, 30));
   app.add_option("--base-faces", wopt.base_faces, "stop simplifying at this many faces (0: as far as possible)");
-  app.add_option("--zstd-level", wopt.zstd_level, "zstd level")->check(CLI::Range(1, 22));
   CLI11_PARSE(app, argc, argv);
 
   auto t0 = std::chrono::steady_clock::now();

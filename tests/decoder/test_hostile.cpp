@@ -12,6 +12,7 @@
 #include <new>
 #include <vector>
 
+#include "pmz/base_codec.hpp"
 #include "pmz/decoder.hpp"
 #include "pmz/format.hpp"
 #include "pmz/progressive_mesh.hpp"
@@ -77,19 +78,6 @@ struct PeakScope {
 using Bytes = std::vector<uint8_t>;
 
 void varint(Bytes& out, uint64_t v) { pmz::put_varint(out, v); }
-// Stream stored raw (stored_size 0).
-void raw_stream(Bytes& out, const Bytes& raw) {
-  varint(out, raw.size());
-  varint(out, 0);
-  out.insert(out.end(), raw.begin(), raw.end());
-}
-// Stream header claiming raw_size, followed by `stored` given bytes.
-void claimed_stream(Bytes& out, uint64_t raw_size, const Bytes& stored) {
-  varint(out, raw_size);
-  varint(out, stored.size());
-  out.insert(out.end(), stored.begin(), stored.end());
-}
-
 pmz::FileHeader header(uint32_t base_vertices, uint32_t base_faces, uint32_t splits,
                        uint32_t full_faces) {
   pmz::FileHeader h;
@@ -110,30 +98,39 @@ void head(Bytes& file, const pmz::FileHeader& h) {
   pmz::append_chunk(file, pmz::kChunkHead, p);
 }
 
-// Octahedron: 6 vertices, 8 faces, closed (every vertex interior, valence 4).
-const uint32_t kOctaFaces[24] = {0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4,
-                                 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5};
-const int32_t kOctaCoords[18] = {16383, 8192, 8192, 0, 8192, 8192, 8192, 16383, 8192,
-                                 8192, 0, 8192, 8192, 8192, 16383, 8192, 8192, 0};
-
-Bytes octa_base_payload() {
-  Bytes pos, idx, p;
-  int32_t prev[3] = {0, 0, 0};
-  for (int i = 0; i < 18; ++i) {
-    varint(pos, pmz::zigzag_encode(int32_t(uint32_t(kOctaCoords[i]) - uint32_t(prev[i % 3]))));
-    prev[i % 3] = kOctaCoords[i];
-  }
-  uint32_t last = 0;
-  for (uint32_t v : kOctaFaces) {
-    varint(idx, pmz::zigzag_encode(int32_t(v - last)));
-    last = v;
-  }
-  varint(p, 6);
-  varint(p, 8);
-  raw_stream(p, pos);
-  raw_stream(p, idx);
-  return p;
+// A BASE payload coded as the writer codes it. encode_base numbers vertices and faces in its
+// traversal order: coords and faces are replaced by the decoded ones (what the decoder's mesh
+// holds); returns the decoded id of each given vertex.
+std::vector<uint32_t> base_payload(std::vector<int32_t>& coords, std::vector<uint32_t>& faces, Bytes& payload) {
+  const uint32_t n = uint32_t(coords.size() / 3), fn = uint32_t(faces.size() / 3);
+  Bytes stream;
+  std::vector<uint32_t> given_of, decoded_of(n);
+  pmz::BaseMesh decoded;
+  std::string error;
+  EXPECT_TRUE(pmz::encode_base(coords.data(), n, faces.data(), fn, stream, given_of, decoded, error)) << error;
+  payload.clear();
+  varint(payload, n);
+  varint(payload, fn);
+  payload.insert(payload.end(), stream.begin(), stream.end());
+  for (uint32_t d = 0; d < n; ++d) decoded_of[given_of[d]] = d;
+  coords = decoded.coords;
+  faces = decoded.faces;
+  return decoded_of;
 }
+
+// Octahedron: 6 vertices, 8 faces, closed (every vertex interior, valence 4), as BASE codes it.
+struct Octahedron {
+  std::vector<uint32_t> faces = {0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5};
+  std::vector<int32_t> coords = {16383, 8192, 8192, 0, 8192, 8192, 8192, 16383, 8192,
+                                 8192, 0, 8192, 8192, 8192, 16383, 8192, 8192, 0};
+  Bytes payload;
+  Octahedron() { base_payload(coords, faces, payload); }
+};
+const Octahedron& octa() {
+  static const Octahedron o;
+  return o;
+}
+Bytes octa_base_payload() { return octa().payload; }
 
 // Replays the decoder's mesh so crafted SPLT payloads carry the contexts the decoder computes
 // (wedge and residual models depend on the mesh). Stops replaying once the ring work exceeds
@@ -147,8 +144,8 @@ struct Replay {
   uint64_t work = 0, vertices = 6;  // vertices: as the decoder counts them (all splits)
   Replay() {
     std::string error;
-    pm.build(6, kOctaFaces, 8, error);
-    coords.assign(kOctaCoords, kOctaCoords + 18);
+    pm.build(6, octa().faces.data(), 8, error);
+    coords = octa().coords;
     choice.reset(pm);
   }
   // A group of one split at v: its code, choice bits appended to bits.
@@ -343,30 +340,103 @@ TEST(Hostile, ChunkOverTheLimitIsRefusedFromItsHeader) {
   EXPECT_NE(d.error_message().find("chunk"), std::string::npos) << d.error_message();
 }
 
-// A BASE stream header that claims a huge decompressed size next to a few stored bytes: zstd
-// cannot expand a frame by more than its block format allows (a 4-byte RLE block gives at most
-// 128 KiB), so the decoder must not allocate the claimed size before decompressing.
-TEST(Hostile, StreamClaimingHugeRawSizeDoesNotAllocateIt) {
-  const Bytes tiny_frame = {0x28, 0xB5, 0x2F, 0xFD, 0x00, 0x00, 0x01, 0x00, 0x00};  // bad frame
-  for (uint64_t claim : {uint64_t(200) << 20, uint64_t(9) * 32768 + 1, uint64_t(9) * 32768}) {
+// BASE counts far beyond what its bytes can hold (spec section 7: at most 384 faces and 48
+// vertices per byte of the range-coded stream): refused before the per-vertex and per-face
+// arrays are allocated. The same counts are fine for the limits, so only that check stops them.
+TEST(Hostile, BaseCountsBeyondItsBytesDoNotAllocate) {
+  for (const auto& [nv, nf] : {std::pair<uint32_t, uint32_t>{1000000, 8}, {6, 4000000}}) {
     Bytes f = signature();
-    head(f, header(6, 8, 4, 16));
+    head(f, header(nv, nf, 0, nf));
     Bytes p;
-    varint(p, 6);
-    varint(p, 8);
-    claimed_stream(p, claim, tiny_frame);  // "positions"
+    varint(p, nv);
+    varint(p, nf);
+    const Bytes& octa_stream = octa().payload;
+    p.insert(p.end(), octa_stream.begin() + 2, octa_stream.end());
     pmz::append_chunk(f, pmz::kChunkBase, p);
     PeakScope scope;
     pmz::Decoder d;
-    EXPECT_EQ(d.feed(f.data(), f.size()), pmz::Status::corrupt) << claim;
-    EXPECT_FALSE(d.error_message().empty());
-    EXPECT_LE(scope.peak(), 32768u * tiny_frame.size() + (64u << 10))
-        << claim << ": allocation driven by a claimed size";
+    EXPECT_EQ(d.feed(f.data(), f.size()), pmz::Status::corrupt) << nv << " " << nf;
+    EXPECT_NE(d.error_message().find("can hold"), std::string::npos) << d.error_message();
+    EXPECT_LE(scope.peak(), size_t(64) << 10) << nv << " " << nf << ": allocation driven by a claimed count";
     expect_valid(d);
+    EXPECT_EQ(d.face_count(), 0u);
   }
 }
 
-// A SPLT chunk may claim at most what its bytes can code (spec: 64 splits per byte); the
+// The octahedron's BASE cut short at every length, and with counts that do not match its
+// stream (fewer vertices than it creates, more faces than it holds): corrupt, no mesh.
+TEST(Hostile, BaseTruncatedOrMiscountedIsCorrupt) {
+  const Bytes& full = octa().payload;
+  auto feed_base = [](const Bytes& payload, uint32_t nv, uint32_t nf) {
+    Bytes f = signature();
+    head(f, header(nv, nf, 0, nf));
+    pmz::append_chunk(f, pmz::kChunkBase, payload);
+    pmz::Decoder d;
+    const pmz::Status s = d.feed(f.data(), f.size());
+    expect_valid(d);
+    return std::pair<pmz::Status, bool>(s, d.info().base_done);
+  };
+  ASSERT_EQ(feed_base(full, 6, 8).first, pmz::Status::ok);
+  for (size_t n = 2; n < full.size(); ++n) {
+    const auto [s, done] = feed_base(Bytes(full.begin(), full.begin() + n), 6, 8);
+    EXPECT_EQ(s, pmz::Status::corrupt) << "cut at " << n;
+    EXPECT_FALSE(done);
+  }
+  for (const auto& [nv, nf] : {std::pair<uint32_t, uint32_t>{5, 8}, {3, 8}, {6, 9}, {6, 12}}) {
+    Bytes p;
+    varint(p, nv);
+    varint(p, nf);
+    p.insert(p.end(), full.begin() + 2, full.end());
+    const auto [s, done] = feed_base(p, nv, nf);
+    EXPECT_EQ(s, pmz::Status::corrupt) << nv << " vertices, " << nf << " faces";
+    EXPECT_FALSE(done);
+  }
+}
+
+// Random BASE streams with small counts, and the octahedron's with a byte changed: decoded or
+// refused, never a crash; the decoder's mesh is valid either way.
+TEST(Hostile, RandomAndMutatedBaseStreams) {
+  uint64_t state = 0x9E3779B97F4A7C15ull;
+  auto rnd = [&] {
+    state ^= state << 13;
+    state ^= state >> 7;
+    state ^= state << 17;
+    return state;
+  };
+  int decoded = 0, refused = 0;
+  for (int trial = 0; trial < 6000; ++trial) {
+    const bool mutated = trial % 2;
+    const uint32_t nv = mutated ? 6 : 3 + rnd() % 12, nf = mutated ? 8 : 1 + rnd() % 16;
+    Bytes p;
+    if (mutated) {
+      p = octa().payload;
+      p[2 + rnd() % (p.size() - 2)] ^= uint8_t(1 + rnd() % 255);
+    } else {
+      varint(p, nv);
+      varint(p, nf);
+      p.push_back(0);
+      for (size_t i = 0, len = 4 + rnd() % 200; i < len; ++i) p.push_back(uint8_t(rnd()));
+    }
+    Bytes f = signature();
+    head(f, header(nv, nf, 0, nf));
+    pmz::append_chunk(f, pmz::kChunkBase, p);
+    pmz::Decoder d;
+    const pmz::Status s = d.feed(f.data(), f.size());
+    EXPECT_TRUE(s == pmz::Status::ok || s == pmz::Status::corrupt || s == pmz::Status::limit_exceeded) << int(s);
+    if (s == pmz::Status::ok) {
+      decoded += mutated;
+      EXPECT_EQ(d.face_count(), nf);
+    } else {
+      ++refused;
+      EXPECT_FALSE(d.error_message().empty());
+      EXPECT_EQ(d.face_count(), 0u);
+    }
+    expect_valid(d);
+  }
+  EXPECT_GT(decoded, 0);
+  EXPECT_GT(refused, 3000);
+}
+
 // split records it allocates stay proportional to the chunk.
 TEST(Hostile, SplitCountIsBoundedByTheChunkBytes) {
   const uint32_t n = 1u << 24;
@@ -535,12 +605,22 @@ TEST(Hostile, VertexChoiceExclusionViolationIsRefused) {
   pmz::append_chunk(f, pmz::kChunkBase, octa_base_payload());
   std::vector<uint32_t> bits;
   rp.choice.start_group();
-  // The bits a writer ignoring exclusion would code for {0, 2}: 0 -> 1, 1 -> 0, 2 -> 1; the
-  // decoder's contexts for the two it reads, any context for the third.
-  const uint32_t want[] = {1, 0};
+  // The bits a writer ignoring exclusion would code for {0, 2} (2 is a neighbour of 0: BASE's
+  // first face is (0, 1, 2)): 0 -> 1, then 0 for the vertex opposite 0, 1 for 2; the decoder's
+  // contexts for the two it reads, any context for the third.
+  uint32_t opposite = 0;  // the one vertex without a face at 0
+  for (uint32_t x = 1; x < 6; ++x) {
+    bool adjacent = false;
+    for (size_t f = 0; f < 24; f += 3)
+      for (int k = 0; k < 3; ++k)
+        adjacent |= octa().faces[f + k] == 0 && (octa().faces[f + (k + 1) % 3] == x || octa().faces[f + (k + 2) % 3] == x);
+    if (!adjacent) opposite = x;
+  }
+  ASSERT_GT(opposite, 2u);
+  const uint32_t want[] = {1, 0}, candidates[] = {0, opposite};
   size_t at = 0;
   EXPECT_FALSE(rp.choice.scan(rp.pm, false, rp.pm.vertex_count(), 2, [&](uint32_t w, uint32_t ctx) {
-    EXPECT_EQ(w, at);  // candidates 0 and 1 only: 2..5 are excluded
+    EXPECT_EQ(w, candidates[at]);  // the neighbours of 0 are excluded
     bits.push_back(ctx << 1 | want[at]);
     return int(want[at++]);
   }));
@@ -652,15 +732,8 @@ TEST(Hostile, CoarseningNeedsNoAllocation) {
     const double t = 2 * 3.14159265358979 * i / n;
     coords.insert(coords.end(), {int32_t(8192 + 8000 * std::cos(t)), int32_t(8192 + 8000 * std::sin(t)), 8192});
   }
-  Bytes pos, idx, base;
-  for (size_t i = 0; i < coords.size(); ++i)
-    varint(pos, pmz::zigzag_encode(int32_t(uint32_t(coords[i]) - uint32_t(i < 3 ? 0 : coords[i - 3]))));
-  for (size_t i = 0; i < faces.size(); ++i)
-    varint(idx, pmz::zigzag_encode(int32_t(faces[i] - (i ? faces[i - 1] : 0))));
-  varint(base, nv);
-  varint(base, nf);
-  raw_stream(base, pos);
-  raw_stream(base, idx);
+  Bytes base;
+  const uint32_t apex = base_payload(coords, faces, base)[0];
   // The split at the apex, with the contexts the decoder computes.
   pmz::ProgressiveMesh pm;
   std::string error;
@@ -669,18 +742,18 @@ TEST(Hostile, CoarseningNeedsNoAllocation) {
   choice.reset(pm);
   choice.start_group();
   std::vector<uint32_t> bits;
-  const uint32_t vs[1] = {0};
+  const uint32_t vs[1] = {apex};
   bool near = false;
   ASSERT_TRUE(pmz::choice_bits(choice, pm, nv, vs, bits, near));
   const pmz::GroupCode group{1, near};
-  ASSERT_TRUE(pm.gather_ring(0));
+  ASSERT_TRUE(pm.gather_ring(apex));
   ASSERT_TRUE(pm.ring_closed());
   ASSERT_EQ(pm.ring().size(), n);
-  pmz::SplitSymbols code{0, pmz::wedge_context(n, true), n - 2, 0, 1, {0, 0, 0}, {0, 0, 0}};
+  pmz::SplitSymbols code{apex, pmz::wedge_context(n, true), n - 2, 0, 1, {0, 0, 0}, {0, 0, 0}};
   pmz::WedgeScratch scratch;
   uint32_t ra, rb;
-  ASSERT_TRUE(pmz::wedge_ranks(coords.data(), choice.degrees(), 0, pm, n - 2, 0, ra, rb, scratch));
-  ASSERT_TRUE(pm.split_gathered(0, ra, rb));
+  ASSERT_TRUE(pmz::wedge_ranks(coords.data(), choice.degrees(), apex, pm, n - 2, 0, ra, rb, scratch));
+  ASSERT_TRUE(pm.split_gathered(apex, ra, rb));
   pmz::PositionPrediction pred;
   pmz::predict_position(coords.data(), pm.u_ring(), pm.ring(), 0, 0, pred);
   std::copy(pred.context, pred.context + 3, code.residual_context);

@@ -1,12 +1,15 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <climits>
 #include <cstdlib>
 #include <cstring>
 #include <random>
 
+#include "pmz/base_codec.hpp"
 #include "pmz/coding.hpp"
+#include "pmz/range_coder.hpp"
 #include "pmz/progressive_mesh.hpp"
 #include "pmz/split_codec.hpp"
 
@@ -748,4 +751,148 @@ TEST(VertexChoice, ModelPriorsAreTheSpecTable) {
   const uint16_t want[21] = {1024, 683,  1366, 1707, 1878, 1963, 1984, 1984, 1984, 1984, 1984,
                              1984, 1984, 1984, 1984, 1984, 1984, 1984, 1984, 1984, 1984};
   for (uint32_t c = 0; c < kChoiceContexts; ++c) EXPECT_EQ(m.choice[c], want[c / (2 * kChoiceDegrees)]) << c;
+}
+
+// ---- BASE (spec section 2, "BASE") ----
+
+namespace {
+
+using Tri = std::array<uint32_t, 3>;
+Tri rotated(uint32_t a, uint32_t b, uint32_t c) {  // smallest first, orientation kept
+  if (b < a && b < c) return {b, c, a};
+  if (c < a && c < b) return {c, a, b};
+  return {a, b, c};
+}
+
+// encode_base then decode_base: the decoder gets exactly the writer's decoded mesh, which is
+// the input renumbered by given_of (faces as a set, each up to rotation; coordinates equal).
+void base_round_trip(const std::vector<int32_t>& coords, const std::vector<uint32_t>& faces) {
+  const uint32_t n = uint32_t(coords.size() / 3), fn = uint32_t(faces.size() / 3);
+  std::vector<uint8_t> stream;
+  std::vector<uint32_t> given_of;
+  BaseMesh enc, dec;
+  std::string error;
+  ASSERT_TRUE(encode_base(coords.data(), n, faces.data(), fn, stream, given_of, enc, error)) << error;
+  ASSERT_EQ(decode_base(stream.data(), stream.size(), n, fn, dec, error), BaseResult::ok) << error;
+  EXPECT_EQ(dec.coords, enc.coords);
+  EXPECT_EQ(dec.faces, enc.faces);
+  ASSERT_EQ(given_of.size(), n);
+  std::vector<uint8_t> seen(n, 0);
+  for (uint32_t d = 0; d < n; ++d) {
+    ASSERT_LT(given_of[d], n);
+    EXPECT_FALSE(seen[given_of[d]]++);
+    for (int a = 0; a < 3; ++a) EXPECT_EQ(dec.coords[d * 3 + a], coords[given_of[d] * 3 + a]);
+  }
+  std::vector<Tri> want, got;
+  for (uint32_t f = 0; f < fn; ++f) {
+    want.push_back(rotated(faces[f * 3], faces[f * 3 + 1], faces[f * 3 + 2]));
+    got.push_back(rotated(given_of[dec.faces[f * 3]], given_of[dec.faces[f * 3 + 1]], given_of[dec.faces[f * 3 + 2]]));
+  }
+  std::sort(want.begin(), want.end());
+  std::sort(got.begin(), got.end());
+  EXPECT_EQ(want, got);
+  // Counts the stream cannot hold, and every shorter stream, are refused.
+  EXPECT_EQ(decode_base(stream.data(), stream.size(), n + 1, fn, dec, error), BaseResult::corrupt);
+  for (size_t cut = 0; cut < stream.size(); ++cut)
+    EXPECT_NE(decode_base(stream.data(), cut, n, fn, dec, error), BaseResult::ok) << "cut at " << cut;
+}
+
+}  // namespace
+
+TEST(BaseCodec, RoundTripsComponentsBoundariesAndVerticesWithoutFaces) {
+  std::mt19937 rng(5);
+  // A 6x5 grid with two holes, a separate fan, a bowtie sharing a vertex with the fan (edge-
+  // manifold, not vertex-manifold), two vertices without faces; vertices in scattered order.
+  const int w = 6, h = 5;
+  std::vector<uint32_t> faces;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      if ((x == 2 && y == 2) || (x == 4 && y == 1)) continue;
+      const uint32_t a = uint32_t(y * (w + 1) + x), b = a + 1, c = a + w + 1, d = c + 1;
+      faces.insert(faces.end(), {a, b, d, a, d, c});
+    }
+  const uint32_t g = (w + 1) * (h + 1);  // fan around g: g+1..g+6, open
+  for (uint32_t i = 1; i < 6; ++i) faces.insert(faces.end(), {g, g + i, g + i + 1});
+  faces.insert(faces.end(), {g, g + 8, g + 7});  // touches the fan at g only
+  const uint32_t n = g + 11;                     // g+9, g+10 without faces
+  std::vector<uint32_t> perm(n);
+  for (uint32_t i = 0; i < n; ++i) perm[i] = i;
+  std::shuffle(perm.begin(), perm.end(), rng);
+  for (uint32_t& x : faces) x = perm[x];
+  std::vector<int32_t> coords(n * 3);
+  for (int32_t& c : coords) c = int32_t(rng() % 16384);
+  base_round_trip(coords, faces);
+  // Lossless coordinates are any int32 patterns: differences wrap modulo 2^32.
+  for (size_t i = 0; i < coords.size(); ++i) coords[i] = int32_t(rng()) | (i % 2 ? INT32_MIN : 0);
+  coords[0] = INT32_MAX, coords[1] = INT32_MIN;
+  base_round_trip(coords, faces);
+  // No faces at all; a closed octahedron.
+  base_round_trip({1, 2, 3, -4, 5, 6}, {});
+  base_round_trip({9, 0, 0, 0, 9, 0, 0, 0, 9, 1, 1, 1, 5, 5, 5, 7, 7, 7},
+                  {0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5});
+}
+
+TEST(BaseCodec, WriterRefusesWhatIsNotEdgeManifold) {
+  const std::vector<int32_t> coords(12, 0);
+  std::vector<uint8_t> stream;
+  std::vector<uint32_t> given_of;
+  BaseMesh out;
+  std::string error;
+  const uint32_t twice[] = {0, 1, 2, 0, 1, 3};  // directed edge 0 -> 1 twice
+  EXPECT_FALSE(encode_base(coords.data(), 4, twice, 2, stream, given_of, out, error));
+  const uint32_t repeated[] = {0, 1, 1};
+  EXPECT_FALSE(encode_base(coords.data(), 4, repeated, 1, stream, given_of, out, error));
+  const uint32_t range[] = {0, 1, 4};
+  EXPECT_FALSE(encode_base(coords.data(), 4, range, 1, stream, given_of, out, error));
+}
+
+// The symbols of two faces coded by hand, in the order and with the models spec section 2
+// gives: the predictor bit (0: parallelogram), the first face (0, 1, 2) with three new
+// vertices, then across the first gate, 0 -> 1, a face whose third vertex is new (3); nothing
+// after the last face. Then a stream whose second vertex refers to an earlier vertex past the
+// one made so far: corrupt.
+TEST(BaseCodec, HandCodedStreamIsTheSpec) {
+  auto code = [](bool bad_reference) {
+    std::vector<uint8_t> out;
+    RangeEncoder rc(out);
+    rc.direct(0, 1);
+    uint16_t is_new[5] = {kProbInit, kProbInit, kProbInit, kProbInit, kProbInit}, face = kProbInit;
+    UIntModel jump[3], par[3], other;
+    const int32_t c[4][3] = {{100, 200, 300}, {110, 190, 300}, {105, 210, 301}, {105, 180, 299}};
+    int32_t last[3] = {0, 0, 0};
+    for (int v = 0; v < 3; ++v) {
+      if (bad_reference && v == 1) {
+        rc.bit(is_new[0], 0);
+        encode_uint(rc, other, 1);  // vertices - 1 - id = 1 with one vertex made: id -1
+        break;
+      }
+      rc.bit(is_new[0], 1);
+      for (int a = 0; a < 3; ++a) encode_uint(rc, jump[a], zigzag_encode(c[v][a] - last[a]));
+      std::copy(c[v], c[v] + 3, last);
+    }
+    if (!bad_reference) {
+      // Gate 0 -> 1 (face 0's first half-edge): face (1, 0, 3) beyond it. Open into 0: 2 -> 0,
+      // so L = 2; out of 1: 1 -> 2, R = 2 = L, so none: context 1 + 1 = 2. The parallelogram
+      // predicts vertex 3 exactly (so the writer keeps that predictor).
+      rc.bit(face, 1);
+      rc.bit(is_new[2], 1);
+      for (int a = 0; a < 3; ++a) encode_uint(rc, par[a], zigzag_encode(c[3][a] - (c[0][a] + c[1][a] - c[2][a])));
+    }
+    rc.finish();
+    return out;
+  };
+  const std::vector<uint8_t> good = code(false), bad = code(true);
+  BaseMesh m;
+  std::string error;
+  ASSERT_EQ(decode_base(good.data(), good.size(), 4, 2, m, error), BaseResult::ok) << error;
+  EXPECT_EQ(m.faces, (std::vector<uint32_t>{0, 1, 2, 1, 0, 3}));
+  EXPECT_EQ(m.coords, (std::vector<int32_t>{100, 200, 300, 110, 190, 300, 105, 210, 301, 105, 180, 299}));
+  // The writer codes these very bytes.
+  std::vector<uint8_t> stream;
+  std::vector<uint32_t> given_of;
+  BaseMesh enc;
+  ASSERT_TRUE(encode_base(m.coords.data(), 4, m.faces.data(), 2, stream, given_of, enc, error)) << error;
+  EXPECT_EQ(stream, good);
+  EXPECT_EQ(decode_base(bad.data(), bad.size(), 4, 2, m, error), BaseResult::corrupt);
+  EXPECT_NE(error.find("malformed"), std::string::npos) << error;
 }

@@ -91,7 +91,7 @@ def main():
             'two': merge(sphere(3, 5), shifted),
         }
         settings = {'q14': ['--position-bits', '14'], 'lossless': ['--position-bits', '0'],
-                    'q4': ['--position-bits', '4', '--zstd-level', '1']}
+                    'q4': ['--position-bits', '4']}
         with tempfile.TemporaryDirectory() as tmp:
             for name, mesh in meshes.items():
                 off = os.path.join(tmp, name + '.off')
@@ -121,19 +121,14 @@ def main():
         put('decoder', name + '-whole', b'\x00' + data)
         put('decoder', name + '-bytes', bytes([1, 0, 1 << 2]) + data)
         put('decoder', name + '-mixed', bytes([4, 7, 5 << 2 | 1, 200, 9 << 2 | 2, 31, 3 << 2 | 3, 130, 2 << 2]) + data)
-        # fuzz_coding: BASE streams (part 2, after the two counts) and whole SPLT payloads
+        # fuzz_coding: whole BASE payloads (part 7) and whole SPLT payloads
         # (part 6, with 256 vertices before, a generous split budget and a context seed).
         at = 8
         while at + 12 <= len(data):
             kind, size = data[at:at + 4], struct.unpack('<I', data[at + 4:at + 8])[0]
             payload = data[at + 12:at + 12 + size]
             if kind == b'BASE':
-                p = 0
-                for _ in range(2):
-                    while p < len(payload) and payload[p] & 0x80:
-                        p += 1
-                    p += 1
-                put('coding', '%s-BASE-%d' % (name, at), b'\x02' + payload[p:])
+                put('coding', '%s-BASE-%d' % (name, at), b'\x07' + payload)
             elif kind == b'SPLT':
                 put('coding', '%s-SPLT-%d' % (name, at), b'\x06\xff\xfb\x00' + payload)
             at += 12 + size
@@ -141,6 +136,7 @@ def main():
     put('coding', 'reader', b'\x00\x10' + bytes(range(16)) + b'\x81\x80\x01\xff\xff\xff\xff\x0f' * 4)
     put('coding', 'varints', b'\x01' + struct.pack('<8Q', 0, 1, 127, 128, 1 << 35, 2**63, 2**64 - 1, 300))
     put('coding', 'quantizer', b'\x03\x0e' + struct.pack('<6f', -1, -2, -3, 1, 2, 3) + struct.pack('<4f', 0.5, -1, 3, 1e30))
+    put('coding', 'stream', b'\x02\x05\x00' + bytes(range(5)))
     put('coding', 'range', b'\x05' + struct.pack('<8I', 0, 1, 2, 3, 1000, 65535, 2**31, 2**32 - 1))
     put('coding', 'mesh', b'\x04\x05\x04' + bytes([0, 1, 2, 0, 2, 3, 0, 3, 4, 0, 4, 1, 0, 1, 0xff, 0xff, 0, 0]))
     total = sum(os.path.getsize(os.path.join(out_dir, s, f)) for s in ('decoder', 'container', 'coding')

@@ -11,7 +11,6 @@ namespace pmz {
 struct WriteOptions {
   uint32_t position_bits = 14;  // 0 = lossless float32; else quantized over the largest extent
   uint64_t base_faces = 0;      // 0: as small as the sequence goes
-  int zstd_level = 19;
 };
 
 struct WriteStats {
