@@ -390,9 +390,11 @@ bool Decoder::Impl::apply() {
     }
     choice.reserve(k);
     uint32_t count, rank;
-    if (!lazy.front().wedge(k, mesh.ring_closed(), count, rank))
-      return refuse(Status::corrupt, "split " + std::to_string(applied) + ": wedge streams malformed");
-    if (!wedge_ranks(coords.data(), choice.degrees(), s.v, mesh, count, rank, s.a, s.b, wedge_scratch)) return invalid();
+    auto malformed = [&] { return refuse(Status::corrupt, "split " + std::to_string(applied) + ": wedge streams malformed"); };
+    if (!lazy.front().wedge_count(k, mesh.ring_closed(), count)) return malformed();
+    if (!wedge_scores(coords.data(), choice.degrees(), s.v, mesh, count, wedge_scratch)) return invalid();
+    if (!lazy.front().wedge_rank(rank_context(mesh.ring_closed(), wedge_scratch.confident), rank)) return malformed();
+    if (!wedge_pick(mesh, count, rank, s.a, s.b, wedge_scratch)) return invalid();
   }
   if (!mesh.split_gathered(s.v, s.a, s.b)) return invalid();
   const bool has_l = s.a != kNoRank, has_r = s.b != kNoRank;

@@ -315,10 +315,10 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
           SplitSymbols code;
           code.v = v;
           code.wedge_context = wedge_context(uint32_t(pm.ring().size()), pm.ring_closed());
-          code.rank_context = pm.ring_closed() ? 1 : 0;
           if (!wedge_symbols(coords.data(), choice.degrees(), v, pm, rl, rr, code.wedge_count, code.wedge_rank, scratch) ||
               !pm.split_gathered(v, rl, rr))
             return error = "internal: split rejected", false;
+          code.rank_context = rank_context(pm.ring_closed(), scratch.confident);
           choice.applied(pm, rl != kNoRank, rr != kNoRank);
           const uint32_t u = pm.vertex_count() - 1;
           RingBasis basis;  // the ring part once; per candidate only the offset and contexts

@@ -109,8 +109,9 @@ void encode_split_chunk(const std::vector<GroupCode>& groups, const std::vector<
     for (uint32_t b : choice) ch.bit(m->choice[b >> 1], b & 1);
     for (size_t at = 0; at < count; ++at) {
       const SplitSymbols& s = splits[at];
-      encode_uint(wc, m->wedge_count[s.wedge_context], s.wedge_count);
-      encode_uint(wr, m->wedge_rank[s.rank_context], s.wedge_rank);
+      encode_small(wc, m->wedge_count[s.wedge_context], s.wedge_count);
+      wr.bit(m->rank_zero[s.rank_context], s.wedge_rank > 0 ? 1 : 0);
+      if (s.wedge_rank > 0) encode_small(wr, m->wedge_rank[s.rank_context], s.wedge_rank - 1);
       for (int a = 0; a < 3; ++a)
         encode_uint(*res[a], m->residual[a][s.residual_context[a]], zigzag_encode(s.residual[a]));
     }
@@ -186,6 +187,12 @@ namespace {
 // One symbol per call: inlined into the three-axis loop, GCC recomputes each bit's model
 // address from the axis and context (register pressure); here the model is one pointer.
 [[gnu::noinline]] bool decode_symbol(RangeDecoder& rc, UIntModel& m, uint32_t& x) { return decode_uint(rc, m, x); }
+[[gnu::noinline]] bool decode_small(RangeDecoder& rc, SmallModel& m, uint32_t& x) {
+  RangeState st = rc.state();
+  const bool ok = decode_small(st, m, x);
+  rc.set_state(st);
+  return ok && rc.ok;
+}
 }  // namespace
 
 SplitModels::SplitModels() {
@@ -213,9 +220,20 @@ bool SplitChunkReader::group(VertexChoice& choice, const ProgressiveMesh& mesh, 
   return true;
 }
 
-bool SplitChunkReader::wedge(uint32_t k, bool closed, uint32_t& count, uint32_t& rank) {
-  return decode_symbol(*count_dec_, models_->wedge_count[wedge_context(k, closed)], count) &&
-         decode_symbol(*rank_dec_, models_->wedge_rank[closed ? 1 : 0], rank) && count_dec_->ok && rank_dec_->ok;
+bool SplitChunkReader::wedge_count(uint32_t k, bool closed, uint32_t& count) {
+  return decode_small(*count_dec_, models_->wedge_count[wedge_context(k, closed)], count);
+}
+
+bool SplitChunkReader::wedge_rank(uint32_t context, uint32_t& rank) {
+  RangeState st = rank_dec_->state();
+  const uint32_t nonzero = st.bit(models_->rank_zero[context]);
+  rank_dec_->set_state(st);
+  if (!rank_dec_->ok) return false;
+  if (!nonzero) return rank = 0, true;
+  uint32_t rest;
+  if (!decode_small(*rank_dec_, models_->wedge_rank[context], rest) || rest == 0xFFFFFFFFu) return false;
+  rank = rest + 1;
+  return true;
 }
 
 bool SplitChunkReader::residuals(const uint32_t context[3], int32_t residual[3]) {
@@ -332,6 +350,23 @@ uint32_t score_ring(const int32_t* coords, const uint32_t* degree, const Progres
   return n;
 }
 
+// Whether the best of the n scores is over twice the second (equal scores count twice): n < 2,
+// second <= 0, or best - second > second (no overflow: both positive).
+template <class I>
+bool is_confident(const I* sc, uint32_t n) {
+  if (n < 2) return true;
+  I best = sc[0] > sc[1] ? sc[0] : sc[1], second = sc[0] > sc[1] ? sc[1] : sc[0];
+  for (uint32_t j = 2; j < n; ++j) {
+    if (sc[j] > best) {
+      second = best;
+      best = sc[j];
+    } else if (sc[j] > second) {
+      second = sc[j];
+    }
+  }
+  return second <= 0 || best - second > second;
+}
+
 uint32_t wedge_candidates(const int32_t* coords, const uint32_t* degree, uint32_t v, const ProgressiveMesh& pm,
                           uint32_t count, WedgeScratch& s) {
   const uint32_t k = uint32_t(pm.ring().size());
@@ -339,13 +374,18 @@ uint32_t wedge_candidates(const int32_t* coords, const uint32_t* degree, uint32_
     const uint32_t n = pm.ring_closed() ? k : k - count + 1;
     s.narrow = true;
     s.score64.assign(n, 0);
-    return n;
+    s.confident = true;
+    return s.n = n;
   }
   const int32_t* cv = coords + size_t(v) * 3;
-  if (const uint32_t n = score_ring<int64_t, uint64_t>(coords, degree, pm, count, cv, s.q, s.score64, s)) return n;
+  if (const uint32_t n = score_ring<int64_t, uint64_t>(coords, degree, pm, count, cv, s.q, s.score64, s)) {
+    s.confident = is_confident(s.score64.data(), n);
+    return s.n = n;
+  }
   const uint32_t n = score_ring<WedgeScoreSigned, WedgeScore>(coords, degree, pm, count, cv, s.q128, s.score, s);
   s.narrow = false;
-  return n;
+  s.confident = is_confident(s.score.data(), n);
+  return s.n = n;
 }
 
 // Candidate order: higher score first, ties by smaller j.
@@ -415,11 +455,21 @@ bool wedge_symbols(const int32_t* coords, const uint32_t* degree, uint32_t v, co
   return true;
 }
 
+bool wedge_scores(const int32_t* coords, const uint32_t* degree, uint32_t v, const ProgressiveMesh& pm,
+                  uint32_t count, WedgeScratch& s) {
+  if (pm.ring().size() < 2 || count > max_count(pm)) return false;
+  wedge_candidates(coords, degree, v, pm, count, s);
+  return true;
+}
+
 bool wedge_ranks(const int32_t* coords, const uint32_t* degree, uint32_t v, const ProgressiveMesh& pm,
                  uint32_t count, uint32_t rank, uint32_t& rank_l, uint32_t& rank_r, WedgeScratch& s) {
-  const uint32_t k = uint32_t(pm.ring().size());
-  if (k < 2 || count > max_count(pm)) return false;
-  const uint32_t n = wedge_candidates(coords, degree, v, pm, count, s);
+  return wedge_scores(coords, degree, v, pm, count, s) && wedge_pick(pm, count, rank, rank_l, rank_r, s);
+}
+
+bool wedge_pick(const ProgressiveMesh& pm, uint32_t count, uint32_t rank, uint32_t& rank_l, uint32_t& rank_r,
+                WedgeScratch& s) {
+  const uint32_t k = uint32_t(pm.ring().size()), n = s.n;
   if (rank >= n) return false;
   const uint32_t j =
       s.narrow ? select(s.score64.data(), n, rank, s.order) : select(s.score.data(), n, rank, s.order);

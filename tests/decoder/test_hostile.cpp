@@ -172,8 +172,9 @@ Bytes split_payload(Replay& rp, const std::vector<uint32_t>& at, int32_t r = 0) 
     if (rp.work < (8u << 20) && rp.pm.gather_ring(v)) {
       rp.work += rp.pm.ring().size();
       c.wedge_context = pmz::wedge_context(uint32_t(rp.pm.ring().size()), rp.pm.ring_closed());
-      c.rank_context = rp.pm.ring_closed() ? 1 : 0;
+      const bool closed = rp.pm.ring_closed();
       if (pmz::wedge_ranks(rp.coords.data(), rp.choice.degrees(), v, rp.pm, 0, 0, a, b, rp.scratch) && rp.pm.split_gathered(v, a, b)) {
+        c.rank_context = pmz::rank_context(closed, rp.scratch.confident);
         rp.choice.applied(rp.pm, a != pmz::kNoRank, b != pmz::kNoRank);
         pmz::PositionPrediction pred;  // HEAD curvature 0, as header() writes
         pmz::predict_position(rp.coords.data(), rp.pm.u_ring(), rp.pm.ring(), 0, 0, pred);
@@ -561,6 +562,7 @@ TEST(Hostile, WedgeSymbolsAtUint32MaxAreInvalid) {
                 rp.pm.ring_closed() ? 1u : 0u, {0, 0, 0}, {0, 0, 0}};
     uint32_t a, b;
     ASSERT_TRUE(pmz::wedge_ranks(rp.coords.data(), rp.choice.degrees(), 0, rp.pm, 0, 0, a, b, rp.scratch));
+    codes[0].rank_context = pmz::rank_context(rp.pm.ring_closed(), rp.scratch.confident);
     ASSERT_TRUE(rp.pm.split_gathered(0, a, b));
     rp.choice.applied(rp.pm, a != pmz::kNoRank, b != pmz::kNoRank);
     pmz::PositionPrediction pred;
@@ -573,8 +575,10 @@ TEST(Hostile, WedgeSymbolsAtUint32MaxAreInvalid) {
     ASSERT_TRUE(rp.pm.gather_ring(6));
     ASSERT_TRUE(rp.pm.ring_closed());
     ASSERT_EQ(rp.pm.ring().size(), 3u);
-    codes[1] = {6, pmz::wedge_context(3, true), which == 0 ? 0xFFFFFFFFu : 0u, which == 1 ? 0xFFFFFFFFu : 0u, 1,
-                {0, 0, 0}, {0, 0, 0}};
+    // The rank's context as the decoder computes it for count 0 (which == 1; unused for which == 0).
+    ASSERT_TRUE(pmz::wedge_scores(rp.coords.data(), rp.choice.degrees(), 6, rp.pm, 0, rp.scratch));
+    codes[1] = {6, pmz::wedge_context(3, true), which == 0 ? 0xFFFFFFFFu : 0u, which == 1 ? 0xFFFFFFFFu : 0u,
+                pmz::rank_context(true, rp.scratch.confident), {0, 0, 0}, {0, 0, 0}};
     Bytes f = signature();
     head(f, header(6, 8, 2, 12));
     pmz::append_chunk(f, pmz::kChunkBase, octa_base_payload());
@@ -753,6 +757,7 @@ TEST(Hostile, CoarseningNeedsNoAllocation) {
   pmz::WedgeScratch scratch;
   uint32_t ra, rb;
   ASSERT_TRUE(pmz::wedge_ranks(coords.data(), choice.degrees(), apex, pm, n - 2, 0, ra, rb, scratch));
+  code.rank_context = pmz::rank_context(true, scratch.confident);
   ASSERT_TRUE(pm.split_gathered(apex, ra, rb));
   pmz::PositionPrediction pred;
   pmz::predict_position(coords.data(), pm.u_ring(), pm.ring(), 0, 0, pred);

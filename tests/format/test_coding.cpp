@@ -109,6 +109,44 @@ void for_each_fan(uint32_t max_k, Body body) {
 // Wedge symbols (spec section 4): every valid wedge of a fan maps to (count, rank) and back,
 // on closed and open fans, random and degenerate (all scores tied) geometry, and lossless-range
 // coordinates (the scores need 128 bits there).
+// Small values (spec section 8): round trip at the edges of the tree and of the escape, and the
+// bytes of values below 15 equal four tree bits written out by hand (node from 1, most
+// significant first); the escape is the tree's 15 then the uint model.
+TEST(SmallModel, RoundTripsAndIsTheSpecTree) {
+  const uint32_t values[] = {0, 1, 2, 7, 8, 14, 15, 16, 17, 30, 31, 1000, 0xFFFFFFF0u, 0xFFFFFFFEu, 0xFFFFFFFFu};
+  std::vector<uint8_t> bytes, manual;
+  {
+    RangeEncoder e(bytes), m(manual);
+    SmallModel a;
+    uint16_t tree[16];
+    for (auto& p : tree) p = kProbInit;
+    UIntModel escape;
+    for (int pass = 0; pass < 3; ++pass)
+      for (uint32_t x : values) {
+        encode_small(e, a, x);
+        const uint32_t s = x < 15 ? x : 15;
+        for (uint32_t node = 1, i = 4; i-- > 0;) {
+          m.bit(tree[node], (s >> i) & 1);
+          node = node * 2 + ((s >> i) & 1);
+        }
+        if (s == 15) encode_uint(m, escape, x - 15);
+      }
+    e.finish();
+    m.finish();
+  }
+  EXPECT_EQ(bytes, manual);
+  RangeDecoder d(bytes.data(), bytes.size());
+  RangeState st = d.state();
+  SmallModel a;
+  for (int pass = 0; pass < 3; ++pass)
+    for (uint32_t x : values) {
+      uint32_t got = 0;
+      ASSERT_TRUE(decode_small(st, a, got));
+      EXPECT_EQ(got, x);
+    }
+  EXPECT_TRUE(st.ok);
+}
+
 TEST(WedgeSymbols, EveryWedgeRoundTrips) {
   std::mt19937 rng(11);
   WedgeScratch scratch;
@@ -152,9 +190,10 @@ TEST(WedgeSymbols, EveryWedgeRoundTrips) {
 // m = 4 (degree <= 4), 3 (degree 5), 2 (more, or a missing end). Order: G >= 0 before G < 0;
 // among G >= 0 by G m_a m_b, among G < 0 by the fraction G / (m_a m_b) (compared by cross
 // multiplication, not by the codec's 12 / m weights), highest first; ties by smaller j.
-// Returns the candidates j in order.
+// Returns the candidates j in order; confident: the rank's context bit (n < 2, or the second
+// highest score <= 0, or the highest over twice the second; scores G m_a m_b for G >= 0).
 std::vector<uint32_t> spec_wedge_order(const std::vector<int32_t>& coords, const std::vector<uint32_t>& deg,
-                                       const ProgressiveMesh& pm, uint32_t count) {
+                                       const ProgressiveMesh& pm, uint32_t count, bool& confident) {
   const uint32_t k = uint32_t(pm.ring().size());
   const bool closed = pm.ring_closed();
   auto vertex = [&](uint32_t r) { return pm.ring()[(r + pm.ring_start()) % k]; };  // canonical rank r
@@ -193,6 +232,7 @@ std::vector<uint32_t> spec_wedge_order(const std::vector<int32_t>& coords, const
     if (px) return G[x] * M[x] > G[y] * M[y];
     return G[x] * M[y] > G[y] * M[x];  // G[x] / M[x] > G[y] / M[y], M > 0
   });
+  confident = n < 2 || G[order[1]] <= 0 || G[order[0]] * M[order[0]] > 2 * (G[order[1]] * M[order[1]]);
   return order;
 }
 
@@ -203,6 +243,7 @@ TEST(WedgeSymbols, OrderIsTheSpecFormula) {
   std::mt19937 rng(5);
   WedgeScratch scratch;
   uint64_t negative = 0, weighted = 0;
+  bool confident_seen[2] = {false, false};
   for_each_fan(10, [&](ProgressiveMesh& pm, uint32_t k, int closed) {
       ASSERT_TRUE(pm.gather_ring(0));
       for (int geometry = 0; geometry < 5; ++geometry) {
@@ -217,7 +258,8 @@ TEST(WedgeSymbols, OrderIsTheSpecFormula) {
         for (auto& d : deg) d = rng() % 9;
         const uint32_t max_count = closed ? k - 2 : k - 1;
         for (uint32_t count = 0; count <= max_count; ++count) {
-          const std::vector<uint32_t> order = spec_wedge_order(coords, deg, pm, count);
+          bool confident;
+          const std::vector<uint32_t> order = spec_wedge_order(coords, deg, pm, count, confident);
           const uint32_t n = uint32_t(order.size());
           for (uint32_t rank = 0; rank < n; ++rank) {
             const uint32_t j = order[rank];
@@ -225,6 +267,8 @@ TEST(WedgeSymbols, OrderIsTheSpecFormula) {
             const uint32_t rb = closed ? (j + count + 1) % k : (j + count == k ? kNoRank : j + count);
             uint32_t ga, gb, gc, gr;
             ASSERT_TRUE(wedge_ranks(coords.data(), deg.data(), 0, pm, count, rank, ga, gb, scratch));
+            EXPECT_EQ(scratch.confident, confident) << "k " << k << " closed " << closed << " count " << count;
+            confident_seen[confident] = true;
             EXPECT_EQ(ga, ra) << "k " << k << " closed " << closed << " count " << count << " rank " << rank;
             EXPECT_EQ(gb, rb) << "k " << k << " closed " << closed << " count " << count << " rank " << rank;
             ASSERT_TRUE(wedge_symbols(coords.data(), deg.data(), 0, pm, ra, rb, gc, gr, scratch));
@@ -238,6 +282,7 @@ TEST(WedgeSymbols, OrderIsTheSpecFormula) {
   });
   EXPECT_GT(negative, 100u);  // the negative branch is exercised
   EXPECT_GT(weighted, 100u);
+  EXPECT_TRUE(confident_seen[0] && confident_seen[1]);
 }
 
 // A hand-computed case pinning each term: closed ring of 4 around v = 0 at e = (10,0,0),
@@ -269,6 +314,7 @@ TEST(WedgeSymbols, HandComputedScore) {
   }
   const int64_t want_keys[4] = {-3864, 1088, -3864, 12736};  // negative G times r_a r_b = 144 / (m_a m_b)
   for (uint32_t j = 0; j < 4; ++j) EXPECT_EQ(scratch.score64[j], want_keys[j]) << j;
+  EXPECT_TRUE(scratch.confident);  // 12736 > 2 * 1088
   // Degrees 5 -> 4 at rank 2 (weight 4): j = 1's key 68 * 4 * 4 unchanged, j = 2's -161 * 144 / 12.
   deg[pm.ring()[(2 + pm.ring_start()) % 4]] = 4;
   uint32_t ga, gb;
@@ -544,7 +590,8 @@ TEST(WedgeSymbols, OrderMatchesSpecReference) {
         ASSERT_TRUE(pm.gather_ring(0));
         const uint32_t max_count = closed ? k - 2 : k - 1;
         for (uint32_t count = 0; count <= max_count; ++count) {
-          const std::vector<uint32_t> order = spec_wedge_order(coords, deg, pm, count);
+          bool confident;
+          const std::vector<uint32_t> order = spec_wedge_order(coords, deg, pm, count, confident);
           const uint32_t n = uint32_t(order.size());
           for (uint32_t rank = 0; rank < n; ++rank) {
             const uint32_t j = order[rank];
@@ -552,6 +599,7 @@ TEST(WedgeSymbols, OrderMatchesSpecReference) {
             const uint32_t rb = closed ? (j + count + 1) % k : (j + count == k ? kNoRank : j + count);
             uint32_t ga = 0, gb = 0, gc = 0, gr = 0;
             ASSERT_TRUE(wedge_ranks(coords.data(), deg.data(), 0, pm, count, rank, ga, gb, scratch));
+            ASSERT_EQ(scratch.confident, confident) << "k " << k << " closed " << closed << " count " << count;
             ASSERT_EQ(ga, ra) << "k " << k << " closed " << closed << " count " << count << " rank " << rank;
             ASSERT_EQ(gb, rb);
             ASSERT_TRUE(wedge_symbols(coords.data(), deg.data(), 0, pm, ra, rb, gc, gr, scratch));

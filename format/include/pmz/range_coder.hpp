@@ -194,4 +194,39 @@ inline void encode_uint(RangeEncoder& rc, UIntModel& m, uint32_t x) {
   return ok;
 }
 
+// An adaptive model for small unsigned values (wedge symbols): min(x, 15) as four bits, most
+// significant first, through a binary tree (node from 1, 16 entries); x >= 15 then codes x - 15
+// with a uint model.
+struct SmallModel {
+  uint16_t tree[16];
+  UIntModel escape;
+  SmallModel() {
+    for (auto& p : tree) p = kProbInit;
+  }
+};
+inline constexpr uint32_t kSmallEscape = 15;
+
+inline void encode_small(RangeEncoder& rc, SmallModel& m, uint32_t x) {
+  const uint32_t s = x < kSmallEscape ? x : kSmallEscape;
+  uint32_t node = 1;
+  for (int i = 3; i >= 0; --i) {
+    const uint32_t b = (s >> i) & 1;
+    rc.bit(m.tree[node], b);
+    node = node * 2 + b;
+  }
+  if (s == kSmallEscape) encode_uint(rc, m.escape, x - kSmallEscape);
+}
+
+// False when the escaped value is corrupt (bit length above 32, or x beyond uint32).
+[[gnu::always_inline]] inline bool decode_small(RangeState& st, SmallModel& m, uint32_t& x) {
+  uint32_t node = 1;
+  for (int i = 0; i < 4; ++i) node = node * 2 + st.bit(m.tree[node]);
+  x = node - 16;
+  if (x < kSmallEscape) return true;
+  uint32_t rest;
+  if (!decode_uint(st, m.escape, rest) || rest > 0xFFFFFFFFu - kSmallEscape) return false;
+  x = kSmallEscape + rest;
+  return true;
+}
+
 }  // namespace pmz

@@ -22,7 +22,7 @@ namespace pmz {
 
 class ProgressiveMesh;
 
-inline constexpr uint32_t kWedgeContexts = 18;
+inline constexpr uint32_t kWedgeContexts = 18, kRankContexts = 4;
 // Vertex choice contexts (spec section 2, "Vertex choice"): density x near x degree.
 inline constexpr uint32_t kChoiceDensities = 21, kChoiceDegrees = 13;
 inline constexpr uint32_t kChoiceContexts = kChoiceDensities * 2 * kChoiceDegrees;
@@ -33,7 +33,7 @@ struct SplitSymbols {
   uint32_t v;                    // vertex that splits (coded by the group's choice bits)
   uint32_t wedge_context;        // wedge_context(k, closed) of v's ring
   uint32_t wedge_count, wedge_rank;
-  uint32_t rank_context;         // 1 closed, 0 open
+  uint32_t rank_context;         // rank_context(closed, confident)
   uint32_t residual_context[3];  // PositionPrediction::context, per slot
   int32_t residual[3];           // position residual per slot (two tangent axes, the normal axis)
 };
@@ -46,8 +46,9 @@ struct SplitModels {
   uint16_t near = kProbInit;
   uint16_t choice[kChoiceContexts];  // initialised from the expected gap (choice_prior)
   SplitModels();
-  UIntModel wedge_count[kWedgeContexts];
-  UIntModel wedge_rank[2];
+  SmallModel wedge_count[kWedgeContexts];
+  uint16_t rank_zero[kRankContexts] = {kProbInit, kProbInit, kProbInit, kProbInit};  // rank > 0
+  SmallModel wedge_rank[kRankContexts];  // rank - 1 when rank > 0
   UIntModel residual[3][kResidualContexts];
 };
 
@@ -161,7 +162,9 @@ class SplitChunkReader {
   // The next group's vertices into vs (resized to its size); choice.start_group() is called.
   // mesh: the mesh at the group's start (limit its vertex count).
   bool group(VertexChoice& choice, const ProgressiveMesh& mesh, std::vector<uint32_t>& vs);
-  bool wedge(uint32_t k, bool closed, uint32_t& count, uint32_t& rank);
+  // The wedge symbols, each when its context is known: count (v's ring), then rank (the scores).
+  bool wedge_count(uint32_t k, bool closed, uint32_t& count);
+  bool wedge_rank(uint32_t context, uint32_t& rank);
   bool residuals(const uint32_t context[3], int32_t residual[3]);
   uint64_t split_count() const { return count_; }
   size_t largest_group() const { return largest_; }
@@ -193,6 +196,8 @@ struct WedgeScratch {
   std::vector<WedgeScoreSigned> score;    // per candidate, otherwise
   std::vector<uint32_t> order;
   bool narrow = true;
+  uint32_t n = 0;          // candidates scored last
+  bool confident = true;   // their best score is over twice the second (spec section 4)
   // Room for a ring of k vertices (any count), so scoring it does not allocate.
   void reserve(size_t k) {
     const size_t len = 2 * k + 2;
@@ -205,17 +210,26 @@ struct WedgeScratch {
   }
 };
 
-// wedge_count context: ring size (clamped to 8) and whether the fan is closed; wedge_rank
-// uses only the latter (measured: more rank contexts learn too slowly on small meshes).
+// wedge_count context: ring size (clamped to 8) and whether the fan is closed.
 inline uint32_t wedge_context(uint32_t k, bool closed) { return 2 * (k < 8 ? k : 8) + (closed ? 1 : 0); }
+// wedge_rank context: whether the fan is closed, and whether the best candidate's score is over
+// twice the second's (WedgeScratch::confident).
+inline uint32_t rank_context(bool closed, bool confident) { return (closed ? 2u : 0u) + (confident ? 1u : 0u); }
 
 // degree: VertexChoice::degrees() (the end weights of the score).
 // Writer: the wedge (canonical ranks, kNoRank for a boundary side) of the ring gathered last in
-// pm as symbols (interior count, rank among the candidates of that count). False if the ranks
-// are not a valid wedge.
+// pm as symbols (interior count, rank among the candidates of that count); s.confident then
+// gives the rank's context. False if the ranks are not a valid wedge.
 bool wedge_symbols(const int32_t* coords, const uint32_t* degree, uint32_t v, const ProgressiveMesh& pm,
                    uint32_t rank_l, uint32_t rank_r, uint32_t& count, uint32_t& rank, WedgeScratch& s);
-// Decoder: symbols back to ranks; false if count or rank is out of range for the ring.
+// Decoder, in two steps around the rank's decoding: the scores of the candidates with `count`
+// interior vertices (s.n of them; s.confident: the rank's context); false if count is out of
+// range for the ring. Then the ranks of the candidate at position `rank`; false if rank >= s.n.
+bool wedge_scores(const int32_t* coords, const uint32_t* degree, uint32_t v, const ProgressiveMesh& pm,
+                  uint32_t count, WedgeScratch& s);
+bool wedge_pick(const ProgressiveMesh& pm, uint32_t count, uint32_t rank, uint32_t& rank_l, uint32_t& rank_r,
+                WedgeScratch& s);
+// Both steps.
 bool wedge_ranks(const int32_t* coords, const uint32_t* degree, uint32_t v, const ProgressiveMesh& pm,
                  uint32_t count, uint32_t rank, uint32_t& rank_l, uint32_t& rank_r, WedgeScratch& s);
 
