@@ -85,6 +85,18 @@ struct Decoder::Impl {
   uint32_t wedge_scratch_ring = 0;  // wedge_scratch has room for rings up to this size
   VertexChoice choice;              // degrees and neighbourhoods at the first-application frontier
   std::vector<uint32_t> group_vs;
+  uint64_t group_first = 0;  // the first split of the group being found
+  bool choice_ok = false;    // its scan can continue (else splits without a vertex are refused)
+  // Continues the scan of the group being found (lazy.front()'s) until `upto` of its vertices
+  // are known (within what the lag allows: the caller applied enough of its splits), into
+  // splits[].v; a failure leaves the splits without a vertex, refused when reached.
+  void find_vertices(uint32_t upto) {
+    if (!choice_ok) return;
+    const uint32_t before = choice.found();
+    group_vs.clear();
+    choice_ok = lazy.front().find(choice, nullptr, upto, group_vs);
+    for (size_t i = 0; i < group_vs.size(); ++i) splits[group_first + before + i].v = group_vs[i];
+  }
   std::vector<uint8_t> sides;     // per split below `decoded`: kHasLeft | kHasRight
   uint64_t ring_work = 0;         // sum of ring sizes over first applications
   static constexpr uint64_t kRingWorkPerSplit = 64, kRingWorkSlack = 1u << 22;
@@ -325,6 +337,7 @@ Status Decoder::Impl::base(const uint8_t* p, size_t n) {
   if (!m.build(uint32_t(vn), bm.faces.data(), fn, err)) return fail(Status::corrupt, "BASE: " + err);
   mesh = std::move(m);
   choice.reset(mesh);
+  group_vs.reserve(kChoiceLag + 2);  // find_vertices() adds at most kChoiceLag + 1 at a time
   coords = std::move(bm.coords);
   positions.resize(vn * 3);
   for (size_t i = 0; i < vn * 3; ++i) positions[i] = quant.dequantize(coords[i], int(i % 3));
@@ -369,11 +382,13 @@ bool Decoder::Impl::apply() {
     return true;
   }
   auto invalid = [&] { return refuse(Status::corrupt, "split " + std::to_string(applied) + " has an invalid wedge"); };
-  if (applied - lazy_first == lazy.front().chosen()) {  // a group's first split: choose its vertices
-    if (!lazy.front().group(choice, mesh, group_vs))
-      return refuse(Status::corrupt, "split " + std::to_string(applied) + ": vertex choice malformed");
-    for (size_t i = 0; i < group_vs.size(); ++i) splits[applied + i].v = group_vs[i];
+  SplitChunkReader& reader = lazy.front();
+  if (applied - lazy_first == reader.group_end()) {  // a group's first split: start its scan
+    group_first = applied;
+    choice_ok = reader.begin_group(choice, mesh.vertex_count());
+    find_vertices(kChoiceLag + 1);
   }
+  if (s.v == kNoCorner) return refuse(Status::corrupt, "split " + std::to_string(applied) + ": vertex choice malformed");
   if (!mesh.gather_ring(s.v)) return invalid();
   {  // first application: the wedge symbols, with contexts from v's ring
     const uint32_t k = uint32_t(mesh.ring().size());
@@ -399,6 +414,8 @@ bool Decoder::Impl::apply() {
   if (!mesh.split_gathered(s.v, s.a, s.b)) return invalid();
   const bool has_l = s.a != kNoRank, has_r = s.b != kNoRank;
   choice.applied(mesh, has_l, has_r);  // a residual failure below ends the stream anyway
+  // The group's vertices kChoiceLag + 1 ahead (the lag: this split's ring is noted now).
+  find_vertices(uint32_t(applied - group_first) + 2 + kChoiceLag);
   {  // the position, then what re-applying the split needs
     PositionPrediction pred;
     int32_t residual[3], c[3];

@@ -15,6 +15,7 @@ void VertexChoice::reset(ProgressiveMesh& base) {
     if (base.gather_ring(w)) degree_[w] = uint32_t(base.ring().size());
   mark_.assign(base.vertex_count(), 0);
   epoch_ = 0;
+  excluded_ = 0;
   near_.clear();
   noted_.clear();
 }
@@ -36,11 +37,21 @@ void VertexChoice::start_group() {
     if (mark_[w] == epoch) near_.push_back(w);
 }
 
-void VertexChoice::exclude_ring(const ProgressiveMesh& mesh, uint32_t w, uint32_t epoch) {
-  mesh.for_each_fan_face(w, [&](uint32_t a, uint32_t b) {
-    mark_[a] = epoch;
-    mark_[b] = epoch;
-  });
+void VertexChoice::exclude(const ProgressiveMesh& mesh, uint32_t w) {
+  mark_[w] = excluded_;
+  mesh.for_each_fan_face(w, [&](uint32_t a, uint32_t b) { mark_[a] = mark_[b] = excluded_; });
+}
+
+bool VertexChoice::independent(const ProgressiveMesh& mesh, std::span<const uint32_t> vs) {
+  const uint32_t epoch = next_epoch();
+  for (uint32_t v : vs) {
+    if (mark_[v] == epoch) return false;
+    mark_[v] = epoch;
+  }
+  bool ok = true;
+  for (uint32_t v : vs)
+    mesh.for_each_fan_face(v, [&](uint32_t a, uint32_t b) { ok = ok && mark_[a] != epoch && mark_[b] != epoch; });
+  return ok;
 }
 
 bool VertexChoice::covers(std::span<const uint32_t> vs) const {
@@ -73,6 +84,10 @@ void VertexChoice::applied(const ProgressiveMesh& pm, bool has_left, bool has_ri
   mark_.push_back(0);
   if (has_left) ++degree_[ur[1]];
   if (has_right) ++degree_[ur[r - 1]];
+  // Exclusion (the scan's caller applies the split when its closed one-ring starts to count).
+  const uint32_t excluded = excluded_;
+  mark_[v] = excluded;
+  for (uint32_t w : ring) mark_[w] = excluded;
   noted_.insert(noted_.end(), ring.begin(), ring.end());
   noted_.push_back(v);
   noted_.push_back(u);
@@ -81,15 +96,17 @@ void VertexChoice::applied(const ProgressiveMesh& pm, bool has_left, bool has_ri
 bool choice_bits(VertexChoice& choice, const ProgressiveMesh& mesh, uint32_t limit, std::span<const uint32_t> vs,
                  std::vector<uint32_t>& bits, bool& near) {
   near = choice.covers(vs);
+  if (!choice.independent(mesh, vs)) return false;
+  choice.begin_scan(near, limit, uint32_t(vs.size()));
   size_t at = 0;
-  const bool ok = choice.scan(mesh, near, limit, uint32_t(vs.size()), [&](uint32_t w, uint32_t ctx) {
-    if (at < vs.size() && vs[at] < w) return -1;  // vs[at] was skipped: excluded
-    const bool hit = at < vs.size() && vs[at] == w;
+  const int r = choice.scan(&mesh, uint32_t(vs.size()), [&](uint32_t w, uint32_t ctx) {
+    if (vs[at] < w) return -1;  // vs[at] was skipped: excluded
+    const bool hit = vs[at] == w;
     at += hit;
     bits.push_back(ctx << 1 | (hit ? 1u : 0u));
     return hit ? 1 : 0;
   });
-  return ok && at == vs.size();
+  return r == 1 && at == vs.size();
 }
 
 void encode_split_chunk(const std::vector<GroupCode>& groups, const std::vector<uint32_t>& choice,
@@ -199,25 +216,32 @@ SplitModels::SplitModels() {
   for (uint32_t c = 0; c < kChoiceContexts; ++c) choice[c] = choice_prior(c / (2 * kChoiceDegrees));
 }
 
-bool SplitChunkReader::group(VertexChoice& choice, const ProgressiveMesh& mesh, std::vector<uint32_t>& vs) {
+bool SplitChunkReader::begin_group(VertexChoice& choice, uint32_t limit) {
   if (next_group_ >= groups_.size()) return false;
-  const GroupCode g = groups_[next_group_];
-  vs.resize(g.size);
+  const GroupCode g = groups_[next_group_++];
   choice.start_group();
+  choice.begin_scan(g.near, limit, g.size);
+  group_end_ += g.size;
+  return true;
+}
+
+bool SplitChunkReader::find(VertexChoice& choice, const ProgressiveMesh* mesh, uint32_t upto,
+                            std::vector<uint32_t>& vs) {
   RangeState st = choice_dec_->state();
-  uint16_t* models = models_->choice;
-  size_t at = 0;
-  const bool ok = choice.scan(mesh, g.near, mesh.vertex_count(), g.size, [&](uint32_t w, uint32_t ctx) {
-    const uint32_t b = st.bit(models[ctx]);
+  uint16_t* m = models_->choice;
+  const int r = choice.scan(mesh, upto, [&](uint32_t w, uint32_t ctx) {
+    const uint32_t b = st.bit(m[ctx]);
     if (!st.ok) return -1;  // past the end: a valid stream never gets here
-    if (b) vs[at++] = w;
+    if (b) vs.push_back(w);
     return int(b);
   });
   choice_dec_->set_state(st);
-  if (!ok || !choice_dec_->ok) return false;
-  ++next_group_;
-  chosen_ += g.size;
-  return true;
+  return r == 1 && choice_dec_->ok;
+}
+
+bool SplitChunkReader::group(VertexChoice& choice, const ProgressiveMesh& mesh, std::vector<uint32_t>& vs) {
+  vs.clear();
+  return begin_group(choice, mesh.vertex_count()) && find(choice, &mesh, 0xFFFFFFFFu, vs);
 }
 
 bool SplitChunkReader::wedge_count(uint32_t k, bool closed, uint32_t& count) {

@@ -706,7 +706,7 @@ TEST(VertexChoice, CandidatesAndContextsAreTheSpecFormula) {
         for (uint32_t x : pm.ring()) taken_ring[x] = 1;
     };
     for (uint32_t w : pool)
-      if (vs.size() < 6 && !taken_ring[w] && rng() % 4 == 0) take(w);
+      if (vs.size() < 24 && !taken_ring[w] && rng() % 2 == 0) take(w);
     if (vs.empty()) take(pool[rng() % pool.size()]);
     choice.start_group();
     std::vector<uint32_t> bits;
@@ -727,23 +727,26 @@ TEST(VertexChoice, CandidatesAndContextsAreTheSpecFormula) {
     } else {
       for (uint32_t w = 0; w < limit; ++w) cand.push_back(w);
     }
-    std::vector<uint32_t> want;
+    // The spec's exclusion: no bit for a candidate in the closed one-ring (here: at the group's
+    // start) of the group's j-th vertex found, j <= found - 1 - 8.
+    std::vector<uint32_t> want, found;
     uint64_t left = vs.size();
-    std::vector<uint8_t> excluded(limit, 0);  // closed one-rings of the vertices found so far
     size_t skipped = 0;
     for (size_t i = 0; i < cand.size() && left; ++i) {
-      if (excluded[cand[i]]) {
+      bool excluded = false;
+      for (size_t j = 0; j + 1 + 8 <= found.size() && !excluded; ++j) {
+        excluded = cand[i] == found[j];
+        ASSERT_TRUE(pm.gather_ring(found[j]));
+        for (uint32_t x : pm.ring()) excluded = excluded || x == cand[i];
+      }
+      if (excluded) {
         ++skipped;
         continue;
       }
       const bool hit = std::find(vs.begin(), vs.end(), cand[i]) != vs.end();
       want.push_back(spec_context(cand.size() - i, left, near, choice.degree(cand[i])) << 1 | (hit ? 1u : 0u));
       left -= hit;
-      if (hit) {
-        excluded[cand[i]] = 1;
-        ASSERT_TRUE(pm.gather_ring(cand[i]));
-        for (uint32_t x : pm.ring()) excluded[x] = 1;
-      }
+      if (hit) found.push_back(cand[i]);
     }
     skipped_total += skipped;
     ASSERT_EQ(left, 0u);
@@ -790,6 +793,87 @@ TEST(VertexChoice, AdjacentVerticesInAGroupAreRefused) {
   ASSERT_EQ(bits.size(), 2u);
   EXPECT_EQ(bits[0] & 1, 1u);
   EXPECT_EQ(bits[1] & 1, 1u);
+}
+
+// Exclusion lags kChoiceLag splits behind: the writer and the whole-group reader agree on an
+// independent group long enough for it to act, and a stream coding a vertex that exclusion
+// removed (as a writer ignoring it would) runs out of candidates and is refused, not misread.
+// A 9 x 9 grid, vertex (x, y) numbered y * 9 + x except that (1, 0) and (8, 8) swap numbers:
+// the ten smallest even-even vertices (pairwise non-adjacent) are 0, 1 (= (8, 8)), 2, 4, 6, 8,
+// 18, 20, 22, 24, and 80 = (1, 0) is a neighbour of 0, excluded once ten are found.
+TEST(VertexChoice, ExclusionLagsAndAViolatingStreamIsRefused) {
+  constexpr uint32_t kN = 9;
+  auto id = [](uint32_t x, uint32_t y) {
+    const uint32_t i = y * kN + x;
+    return i == 1 ? kN * kN - 1 : i == kN * kN - 1 ? 1 : i;
+  };
+  std::vector<uint32_t> faces;
+  for (uint32_t y = 0; y + 1 < kN; ++y)
+    for (uint32_t x = 0; x + 1 < kN; ++x) {
+      const uint32_t a = id(x, y), b = id(x + 1, y), c = id(x, y + 1), d = id(x + 1, y + 1);
+      faces.insert(faces.end(), {a, b, d, a, d, c});
+    }
+  ProgressiveMesh pm;
+  std::string error;
+  ASSERT_TRUE(pm.build(kN * kN, faces.data(), faces.size() / 3, error)) << error;
+  const uint32_t limit = kN * kN;
+  const std::vector<uint32_t> vs{0, 1, 2, 4, 6, 8, 18, 20, 22, 24};
+  ASSERT_TRUE(pm.gather_ring(0));
+  ASSERT_NE(std::find(pm.ring().begin(), pm.ring().end(), 80u), pm.ring().end());
+  auto decode = [&](const std::vector<uint32_t>& bits, uint32_t size, std::vector<uint32_t>& got) {
+    std::vector<uint8_t> payload;
+    SplitModels em, dm;
+    std::vector<SplitSymbols> codes(size, SplitSymbols{0, 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}});
+    encode_split_chunk({{size, false}}, bits, codes.data(), codes.size(), em, payload);
+    SplitChunkReader r;
+    EXPECT_TRUE(r.open(payload.data(), payload.size(), size, dm, error)) << error;
+    VertexChoice dec;
+    dec.reset(pm);
+    return r.group(dec, pm, got);
+  };
+  {  // the independent group: coded and decoded back
+    VertexChoice enc;
+    enc.reset(pm);
+    enc.start_group();
+    std::vector<uint32_t> bits, got;
+    bool near = true;
+    ASSERT_TRUE(choice_bits(enc, pm, limit, vs, bits, near));
+    EXPECT_FALSE(near);
+    EXPECT_EQ(bits.size(), 25u);  // candidates 0 .. 24, none excluded before the tenth is found
+    ASSERT_TRUE(decode(bits, uint32_t(vs.size()), got));
+    EXPECT_EQ(got, vs);
+  }
+  // The group plus 80: the writer refuses it (80 is in 0's ring); the bits of a writer that
+  // ignores exclusion (hits at vs and 80) decode to no group: after the tenth vertex, 80 gets
+  // no bit, and the bits read for the candidates 25 .. 79 are 0.
+  std::vector<uint32_t> bad = vs;
+  bad.push_back(80);
+  {
+    VertexChoice enc;
+    enc.reset(pm);
+    enc.start_group();
+    std::vector<uint32_t> bits;
+    bool near = true;
+    EXPECT_FALSE(choice_bits(enc, pm, limit, bad, bits, near));
+  }
+  VertexChoice naive;
+  naive.reset(pm);
+  naive.start_group();
+  naive.begin_scan(false, limit, uint32_t(bad.size()));
+  std::vector<uint32_t> bits;
+  uint32_t last_ctx = 0;
+  EXPECT_EQ(naive.scan(&pm, uint32_t(bad.size()), [&](uint32_t w, uint32_t ctx) {
+    const bool hit = std::find(bad.begin(), bad.end(), w) != bad.end();
+    EXPECT_NE(w, 80u);  // excluded: never offered
+    bits.push_back(ctx << 1 | (hit ? 1u : 0u));
+    last_ctx = ctx;
+    return hit ? 1 : 0;
+  }), 0);
+  EXPECT_EQ(bits.size(), 77u);  // 0 .. 79 less 70, 71, 79 (in the ring of 1 = (8, 8))
+  bits.push_back(last_ctx << 1 | 1);  // the naive writer's bit for 80
+  std::vector<uint32_t> got;
+  EXPECT_FALSE(decode(bits, uint32_t(bad.size()), got));
+  EXPECT_EQ(got, vs);  // what it found before running out
 }
 
 // The choice models start from the expected gap (spec "Vertex choice"): probability of a 0,

@@ -65,42 +65,71 @@ struct GroupCode {
   bool near;
 };
 
+// Exclusion lag (spec "Vertex choice"): a group's j-th split excludes its closed one-ring from
+// the group's candidates once kChoiceLag more splits of the group are found, so the decoder
+// can find the group's vertices kChoiceLag + 1 splits ahead of the split it applies (for the
+// fan prefetching) and take each ring from that split's own ring walk.
+inline constexpr uint32_t kChoiceLag = 8;
+
 // Which vertices split (spec/format.md, "Vertex choice"): the state the writer and the decoder
 // keep in step, updated at every first application of a split, in stream order.
 // - degree of every vertex: base vertices their ring size, then per split the rule of
 //   applied() (the ring sizes on a manifold mesh);
-// - the neighbourhood of the splits since start_group(): v's ring before the split, v and u.
+// - the neighbourhood of the splits since start_group(): v's ring before the split, v and u;
+// - exclusion: per vertex, the first split of the current group whose closed one-ring holds it.
 // A group's candidates, in order: near: the previous group's neighbourhood (ascending,
 // distinct); otherwise every vertex below the vertex count at the group's start. One bit per
-// candidate says whether it splits, until the group's splits are all found.
+// candidate not excluded says whether it splits, until the group's splits are all found.
 class VertexChoice {
  public:
   void reset(ProgressiveMesh& base);  // degrees from the base rings (0 without a face)
   // Starts a group: the neighbourhood noted since the last call becomes the near list.
   void start_group();
-  // Calls f(w, context) per candidate, in order, until it returned 1 (w splits) `size` times;
-  // false if the candidates ran out first or f returned -1 (stop). limit: the vertex count at
-  // the group's start. Exclusion: a candidate in the closed one-ring (in mesh, the mesh at the
-  // group's start) of a vertex f chose before in this group is skipped (no call: it cannot split).
+  // Then the group's scan: `size` splits, the first of them split number first_split of the
+  // file (0-based, in stream order); limit: the vertex count at the group's start.
+  void begin_scan(bool near, uint32_t limit, uint32_t size) {
+    near_scan_ = near;
+    n_ = near ? near_.size() : limit;
+    i_ = 0;
+    size_ = size;
+    found_ = 0;
+    chosen_.clear();
+    excluded_ = next_epoch();
+  }
+  uint32_t found() const { return found_; }  // splits of the group found so far
+  // Continues the scan: calls f(w, context) per candidate not excluded, in order, until f
+  // returned 1 (w splits) so often that `upto` (at most the group's size) splits are found.
+  // 1 when they are, 0 if the candidates ran out first, -1 if f returned -1 (stop).
+  // Exclusion: a candidate is skipped when it is in the closed one-ring of the group's split j
+  // (0-based) with j <= found - 1 - kChoiceLag. With mesh (the mesh at the group's start:
+  // writer, tests) that ring is taken from mesh once the scan gets there; without (decoder),
+  // applied() notes it, and the caller applies split j right before it continues the scan to
+  // j + 2 + kChoiceLag found (so every split noted is one whose ring counts, and no other).
   template <class F>
-  bool scan(const ProgressiveMesh& mesh, bool near, uint32_t limit, uint32_t size, F&& f) {
-    uint32_t left = size;
-    const uint64_t n = near ? near_.size() : limit;
-    const uint32_t excluded = next_epoch();
-    for (uint64_t i = 0; i < n && left; ++i) {
-      const uint32_t w = near ? near_[i] : uint32_t(i);
-      if (mark_[w] == excluded) continue;
-      const int r = f(w, context(w, (n - i) / left, near));
-      if (r < 0) return false;
+  int scan(const ProgressiveMesh* mesh, uint32_t upto, F&& f) {
+    if (upto > size_) upto = size_;
+    const uint64_t n = n_;
+    while (found_ < upto) {
+      if (i_ >= n) return 0;
+      const uint64_t i = i_++;
+      const uint32_t w = near_scan_ ? near_[i] : uint32_t(i);
+      if (mark_[w] == excluded_) continue;
+      const int r = f(w, context(w, (n - i) / (size_ - found_), near_scan_));
+      if (r < 0) return -1;
       if (r) {
-        --left;
-        if (left) exclude_ring(mesh, w, excluded);
+        ++found_;
+        if (mesh) {
+          chosen_.push_back(w);
+          if (found_ > kChoiceLag) exclude(*mesh, chosen_[found_ - 1 - kChoiceLag]);
+        }
       }
     }
-    return left == 0;
+    return 1;
   }
   // Writer: whether every vertex of vs is in the near list (vs ascending).
   bool covers(std::span<const uint32_t> vs) const;
+  // Writer: whether no vertex of vs is in the closed one-ring (in mesh) of another.
+  bool independent(const ProgressiveMesh& mesh, std::span<const uint32_t> vs);
   // Decoder, before a split with a ring of k vertices: room so that applied() does not allocate.
   void reserve(size_t k);
   // Right after pm.split_gathered() (its ring and u_ring still those of the split).
@@ -124,20 +153,26 @@ class VertexChoice {
     }
     return epoch_;
   }
-  // Marks w's one-ring with epoch (w itself is behind the scan already).
-  void exclude_ring(const ProgressiveMesh& mesh, uint32_t w, uint32_t epoch);
+  void exclude(const ProgressiveMesh& mesh, uint32_t w);  // w's closed one-ring in mesh
   std::vector<uint32_t> degree_, near_, noted_;
-  // Per vertex: epoch_ when in the near list being built (start_group), or when excluded from
-  // the group being scanned (scan)
+  // Per vertex: epoch_ when in the near list being built (start_group), excluded_ when
+  // excluded from the group being scanned, another value of epoch_ in independent().
   std::vector<uint32_t> mark_;
-  uint32_t epoch_ = 0;
+  uint32_t epoch_ = 0, excluded_ = 0;
+  // The scan: near or all vertices, candidates n_, next candidate i_, the group's size and
+  // splits found; with a mesh, the vertices found.
+  bool near_scan_ = false;
+  uint64_t n_ = 0, i_ = 0;
+  uint32_t size_ = 0, found_ = 0;
+  std::vector<uint32_t> chosen_;
 };
 
 // Writer: the choice bits of a group of vertices vs (ascending, all below limit) as
-// (context << 1 | bit), after choice.start_group(); returns the near flag it chose (near
-// whenever the near list holds every vertex of the group).
-// False if a vertex of vs is excluded by an earlier one (in its one-ring in mesh, the mesh at
-// the group's start): such a group cannot be coded.
+// (context << 1 | bit), after
+// choice.start_group(), with exclusion from the rings in mesh (the mesh at the group's start);
+// near: the flag it chose (near whenever the near list holds every vertex of the group). False
+// if the group cannot be coded: a vertex of vs in the closed one-ring of another (the rings the
+// decoder notes when it applies the splits would then differ from mesh's), or excluded.
 bool choice_bits(VertexChoice& choice, const ProgressiveMesh& mesh, uint32_t limit, std::span<const uint32_t> vs,
                  std::vector<uint32_t>& bits, bool& near);
 
@@ -157,10 +192,17 @@ void encode_split_chunk(const std::vector<GroupCode>& groups, const std::vector<
 class SplitChunkReader {
  public:
   bool open(const uint8_t* p, size_t size, uint64_t max_splits, SplitModels& models, std::string& error);
-  // Splits whose vertices were decoded so far (a group's all at once).
-  uint64_t chosen() const { return chosen_; }
-  // The next group's vertices into vs (resized to its size); choice.start_group() is called.
-  // mesh: the mesh at the group's start (limit its vertex count).
+  // The vertex choice, group by group. group_end(): the chunk's splits up to the end of the
+  // group begun last (0 before the first). begin_group() starts the next group (after every
+  // split of the one before was applied; choice.start_group() is called), limit the vertex
+  // count; false if there is none. find() then continues the group's scan (VertexChoice::scan, mesh as there) until
+  // `upto` of its vertices are found, appending the new ones to vs; false if the choice stream
+  // is malformed or exhausted, or the candidates ran out.
+  uint64_t group_end() const { return group_end_; }
+  bool begin_group(VertexChoice& choice, uint32_t limit);
+  bool find(VertexChoice& choice, const ProgressiveMesh* mesh, uint32_t upto, std::vector<uint32_t>& vs);
+  // Both for a whole group, exclusion from the rings in mesh, the mesh at the group's start
+  // (tests, fuzzing): vs receives the group's vertices.
   bool group(VertexChoice& choice, const ProgressiveMesh& mesh, std::vector<uint32_t>& vs);
   // The wedge symbols, each when its context is known: count (v's ring), then rank (the scores).
   bool wedge_count(uint32_t k, bool closed, uint32_t& count);
@@ -174,7 +216,7 @@ class SplitChunkReader {
   SplitModels* models_ = nullptr;
   std::vector<GroupCode> groups_;
   size_t next_group_ = 0, largest_ = 0;
-  uint64_t chosen_ = 0;
+  uint64_t group_end_ = 0;
   std::unique_ptr<RangeDecoder> choice_dec_, count_dec_, rank_dec_, res_dec_[3];
   uint64_t count_ = 0;
 };
