@@ -13,7 +13,8 @@ namespace {
 
 constexpr uint32_t kNone = 0xFFFFFFFFu;
 // Counts a stream of S bytes can hold (spec section 7): a face costs at least two adaptive
-// decisions, a vertex at least 18, and S bytes decode at most 755 (S - 4) of them.
+// decisions, a vertex at least 18, and S bytes decode at most 755 (S + 1) of them (the
+// decoder reads up to 4 zero bytes past the end, spec section 8): bounds are per (S + 1).
 constexpr uint64_t kFacesPerByte = 384, kVerticesPerByte = 48;
 // Open-edge list scans (spec section 2, "BASE"): at most this much per half-edge, plus slack.
 constexpr uint64_t kWorkPerHalfEdge = 16, kWorkSlack = uint64_t(1) << 22;
@@ -318,7 +319,7 @@ bool encode_base(const int32_t* coords, uint32_t n, const uint32_t* faces, uint3
 
 BaseResult decode_base(const uint8_t* p, size_t size, uint32_t n, uint32_t fn, BaseMesh& out,
                        std::string& error) {
-  if (fn > kFacesPerByte * size || n > kVerticesPerByte * size) {
+  if (fn > kFacesPerByte * (size + 1) || n > kVerticesPerByte * (size + 1)) {
     error = "BASE counts beyond what its " + std::to_string(size) + " bytes can hold";
     return BaseResult::corrupt;
   }

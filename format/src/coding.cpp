@@ -1,5 +1,7 @@
 #include "pmz/coding.hpp"
 
+#include "pmz/range_coder.hpp"
+
 #include <cstring>
 
 namespace pmz {
@@ -96,6 +98,13 @@ const uint8_t* ByteReader::bytes(size_t n) {
   const uint8_t* r = p;
   p += n;
   return r;
+}
+
+RangeDecoder::RangeDecoder(const uint8_t* p, size_t size) : buf_(p, p + size) {
+  buf_.resize(size + kStreamPad, 0);
+  s_ = {0xFFFFFFFFu, 0, buf_.data(), buf_.data() + buf_.size(), true};
+  for (int i = 0; i < 4; ++i) s_.code = (s_.code << 8) | s_.next();
+  ok = s_.ok;
 }
 
 }  // namespace pmz

@@ -188,10 +188,8 @@ bool SplitChunkReader::open(const uint8_t* p, size_t size, uint64_t max_splits, 
     done += g + 1;
   }
   if (!(ok && done == count && gr.ok)) return error = "SPLT groups malformed", false;
-  // The mesh-dependent streams are decoded as the splits are applied: keep their bytes.
-  const size_t lo = offset[kStreamChoice];
-  bytes_.assign(p + lo, p + size);
-  auto dec = [&](int k) { return std::make_unique<RangeDecoder>(bytes_.data() + (offset[k] - lo), len[k]); };
+  // The mesh-dependent streams are decoded as the splits are applied: each decoder keeps a copy.
+  auto dec = [&](int k) { return std::make_unique<RangeDecoder>(p + offset[k], len[k]); };
   choice_dec_ = dec(kStreamChoice);
   count_dec_ = dec(kStreamWedgeCount);
   rank_dec_ = dec(kStreamWedgeRank);
@@ -213,7 +211,10 @@ namespace {
 }  // namespace
 
 SplitModels::SplitModels() {
-  for (uint32_t c = 0; c < kChoiceContexts; ++c) choice[c] = choice_prior(c / (2 * kChoiceDegrees));
+  for (uint32_t c = 0; c < kChoiceContexts; ++c) {
+    const uint32_t d = c / (2 * kChoiceDegrees);
+    choice[c] = d == 0 ? uint16_t(kProbInit) : primed_model(choice_prior(d));
+  }
 }
 
 bool SplitChunkReader::begin_group(VertexChoice& choice, uint32_t limit) {

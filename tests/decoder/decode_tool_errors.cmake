@@ -39,7 +39,8 @@ endif()
 
 # A damaged wedge stream with a valid CRC: framing and groups are fine, so feed() and
 # finish() succeed and the damage shows only when the splits are first applied (the first
-# byte of the first SPLT chunk's wedge_count stream must be 0). Still an error: nothing
+# SPLT chunk's wedge_count stream filled with 0xFF: every decision decodes as 1, the escape's
+# bit length reads 63 > 32). Still an error: nothing
 # written, non-zero exit; --salvage writes the last good level and exits 2.
 set(script [=[
 import sys, zlib, struct
@@ -59,8 +60,9 @@ _, p = varint(p)
 for k in range(2):
     n, p = varint(p)
     p += n
-_, p = varint(p)
-b[p] = 1
+n, p = varint(p)
+assert n > 0
+b[p:p + n] = b'\xff' * n
 crc = zlib.crc32(bytes(b[at:at + 8]) + bytes(b[at + 12:at + 12 + size]))
 b[at + 8:at + 12] = struct.pack('<I', crc)
 open(sys.argv[2], 'wb').write(b)

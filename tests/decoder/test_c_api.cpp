@@ -53,7 +53,9 @@ TEST(CApi, DecodesSampleFile) {
 TEST(CApi, StatusReportsDamageFoundWhileRefining) {
   std::vector<unsigned char> b = read_sample();
   ASSERT_FALSE(b.empty());
-  // First SPLT chunk: make its wedge_count stream's first byte (must be 0) nonzero.
+  // First SPLT chunk: fill its wedge_count stream with 0xFF bytes. The code value then stays at
+  // the top of the range, so every decision decodes as 1: the small-value tree escapes and the
+  // escape's bit length reads 63 (> 32), corrupt at the first split.
   size_t at = 8;
   auto size_at = [&](size_t p) { return uint32_t(b[p + 4] | b[p + 5] << 8 | b[p + 6] << 16 | uint32_t(b[p + 7]) << 24); };
   while (at + 12 <= b.size() && std::memcmp(&b[at], "SPLT", 4) != 0) at += 12 + size_at(at);
@@ -63,9 +65,10 @@ TEST(CApi, StatusReportsDamageFoundWhileRefining) {
   r.varint();
   r.varint();
   for (int k = 0; k < 2; ++k) r.bytes(size_t(r.varint()));
-  r.varint();
+  const size_t wedge_bytes = size_t(r.varint());
   ASSERT_TRUE(r.ok);
-  b[at + 12 + (size - r.remaining())] = 1;
+  ASSERT_GT(wedge_bytes, 0u);
+  for (size_t i = 0; i < wedge_bytes; ++i) b[at + 12 + (size - r.remaining()) + i] = 0xFF;
   const uint32_t crc = pmz::chunk_crc(&b[at], &b[at + 12], size);
   for (int i = 0; i < 4; ++i) b[at + 8 + i] = uint8_t(crc >> (8 * i));
 

@@ -197,7 +197,7 @@ TEST_F(DecoderTest, RejectsWrongMagicAndVersion) {
   EXPECT_EQ(d.face_count(), 0u);
 
   b = file;
-  b[8 + 12] = 5;  // HEAD payload: version_major (5: the previous major, before vertex-choice exclusion and the wedge score)
+  b[8 + 12] = 5;  // HEAD payload: version_major (5: the previous major, before vertex-choice exclusion, the wedge score and the adaptive coder)
   fix_crc(b, 8);
   pmz::Decoder v;
   EXPECT_EQ(v.feed(b.data(), b.size()), pmz::Status::bad_version);

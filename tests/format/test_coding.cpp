@@ -5,12 +5,14 @@
 #include <climits>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <random>
 
 #include "pmz/base_codec.hpp"
 #include "pmz/coding.hpp"
 #include "pmz/range_coder.hpp"
 #include "pmz/progressive_mesh.hpp"
+#include "pmz/range_coder.hpp"
 #include "pmz/split_codec.hpp"
 
 using namespace pmz;
@@ -75,6 +77,175 @@ TEST(ZigZag, RoundTrips) {
     EXPECT_EQ(zigzag_decode(zigzag_encode(v)), v);
   EXPECT_EQ(zigzag_encode(-1), 1u);
   EXPECT_EQ(zigzag_encode(1), 2u);
+}
+
+// Spec section 8's adaptation, written out from the text: probability and count kept apart.
+struct SpecModel {
+  uint32_t p = 1024, count = 0;
+  void update(uint32_t b) {
+    const uint32_t shift = count < 10 ? 2 : count < 20 ? 3 : count < 31 ? 4 : 5;
+    if (b == 0)
+      p += (2048 - p) >> shift;
+    else
+      p -= p >> shift;
+    if (count < 31) ++count;
+  }
+};
+
+TEST(RangeCoder, AdaptationIsTheSpecSchedule) {
+  // By hand: ten 1 bits at shift 2 from 1024, then shift 3.
+  uint16_t m = uint16_t(kProbInit);
+  const uint32_t want[] = {768, 576, 432, 324, 243, 183, 138, 104, 78, 59, 52};
+  for (uint32_t i = 0; i < 11; ++i) {
+    m = adapt(m, 1);
+    EXPECT_EQ(m & kProbMask, want[i]) << i;
+  }
+  EXPECT_EQ(adapt(uint16_t(kProbInit), 0) & kProbMask, 1280u);
+  std::mt19937 rng(7);
+  for (int run = 0; run < 200; ++run) {
+    SpecModel ref;
+    uint16_t model = uint16_t(kProbInit);
+    const uint32_t bias = rng() % 100;
+    for (int i = 0; i < 100; ++i) {
+      const uint32_t b = rng() % 100 < bias ? 1u : 0u;
+      ref.update(b);
+      model = adapt(model, b);
+      ASSERT_EQ(model & kProbMask, ref.p) << run << " " << i;
+      ASSERT_EQ(uint32_t(model >> kProbBits), ref.count) << run << " " << i;
+    }
+  }
+}
+
+// Every state reachable from the initial model keeps the probability within [15, 2033] (the
+// decoders normalise with one shift, which needs a coded bit to keep >= 2^16 of the range), and
+// both ends are reached.
+TEST(RangeCoder, ReachableProbabilitiesStayInBounds) {
+  std::vector<uint8_t> seen(1u << 16, 0);
+  std::vector<uint16_t> todo = {uint16_t(kProbInit)};
+  seen[kProbInit] = 1;
+  // Every primed start (a prior 15..2033 at count 20), e.g. the choice models'.
+  for (uint32_t p = 15; p <= 2033; ++p) {
+    const uint16_t m = primed_model(p);
+    if (!seen[m]) seen[m] = 1, todo.push_back(m);
+  }
+  uint32_t lo = 2048, hi = 0;
+  while (!todo.empty()) {
+    const uint16_t m = todo.back();
+    todo.pop_back();
+    lo = std::min(lo, uint32_t(m & kProbMask));
+    hi = std::max(hi, uint32_t(m & kProbMask));
+    for (uint32_t b = 0; b < 2; ++b) {
+      const uint16_t n = adapt(m, b);
+      if (!seen[n]) seen[n] = 1, todo.push_back(n);
+    }
+  }
+  EXPECT_EQ(lo, 15u);
+  EXPECT_EQ(hi, 2033u);
+  // Why primed models start at count 20: from 1984 at count 0, ten 0 bits at shift 2 reach 2043.
+  uint16_t m = uint16_t(1984);
+  for (int i = 0; i < 10; ++i) m = adapt(m, 0);
+  EXPECT_EQ(m & kProbMask, 2043u);
+}
+
+TEST(RangeCoder, BitsDirectBitsAndValuesRoundTrip) {
+  std::mt19937 rng(11);
+  std::vector<uint8_t> out;
+  uint16_t enc_models[4], dec_models[4];
+  for (auto& p : enc_models) p = uint16_t(kProbInit);
+  for (auto& p : dec_models) p = uint16_t(kProbInit);
+  auto enc_uint = std::make_unique<UIntModel>(), dec_uint = std::make_unique<UIntModel>();
+  std::vector<uint32_t> bits, values;
+  {
+    RangeEncoder rc(out);
+    for (int i = 0; i < 20000; ++i) {
+      const uint32_t k = i % 4, b = rng() % 100 < 10 + 25 * k ? 1u : 0u;
+      bits.push_back(b);
+      rc.bit(enc_models[k], b);
+      const uint32_t x = uint32_t(rng()) >> (rng() % 32);
+      values.push_back(x);
+      encode_uint(rc, *enc_uint, x);
+      rc.direct(x, 7);
+    }
+    rc.finish();
+  }
+  RangeDecoder rd(out.data(), out.size());
+  RangeState s = rd.state();
+  for (int i = 0; i < 20000; ++i) {
+    ASSERT_EQ(s.bit(dec_models[i % 4]), bits[size_t(i)]) << i;
+    uint32_t x;
+    ASSERT_TRUE(decode_uint(s, *dec_uint, x));
+    ASSERT_EQ(x, values[size_t(i)]) << i;
+    ASSERT_EQ(s.direct(7), x & 127u) << i;
+  }
+  EXPECT_TRUE(s.ok);
+  EXPECT_EQ(std::memcmp(enc_models, dec_models, sizeof enc_models), 0);
+}
+
+// Spec section 8's ending: the value in [low, low + range) with the most trailing zero bits, the
+// stream without its first byte (0) and up to 4 trailing zero bytes; bytes past the end read as 0.
+TEST(RangeCoder, StreamEndingIsTheShortestValue) {
+  std::vector<uint8_t> out;
+  {
+    RangeEncoder rc(out);
+    rc.finish();
+  }
+  EXPECT_TRUE(out.empty());  // nothing coded: value 0, every byte dropped
+  {
+    uint16_t m = uint16_t(kProbInit);
+    RangeEncoder rc(out);
+    rc.bit(m, 0);
+    rc.finish();
+  }
+  EXPECT_TRUE(out.empty());  // a 0 keeps [0, 2^31): 0 again
+  {
+    // A 1 at p = 1024: low = (0xFFFFFFFF >> 11) * 1024 = 0x7FFFFC00, low + range = 0xFFFFFFFF;
+    // 0x80000000 is the value with the most trailing zeros in it: bytes 80 00 00 00 -> 80.
+    uint16_t m = uint16_t(kProbInit);
+    RangeEncoder rc(out);
+    rc.bit(m, 1);
+    rc.finish();
+  }
+  EXPECT_EQ(out, std::vector<uint8_t>{0x80});
+  // An encoder appends after what the vector already holds, and strips only its own bytes.
+  std::vector<uint8_t> more = {0, 0};
+  {
+    RangeEncoder rc(more);
+    rc.finish();
+  }
+  EXPECT_EQ(more, (std::vector<uint8_t>{0, 0}));
+}
+
+TEST(RangeCoder, AtMostFourZeroBytesPastTheEnd) {
+  std::vector<uint8_t> none;
+  RangeDecoder d(none.data(), 0);  // code = 4 implied zero bytes
+  RangeState s = d.state();
+  EXPECT_TRUE(s.ok);
+  uint16_t m = uint16_t(kProbInit);
+  EXPECT_EQ(s.bit(m), 0u);  // range 2^31 - ...: no byte needed yet
+  EXPECT_TRUE(s.ok);
+  (void)s.direct(8);  // the range falls below 2^24: one more byte, a fifth past the end
+  EXPECT_FALSE(s.ok);
+  // Random streams decode from what finish() kept.
+  std::mt19937 rng(5);
+  for (int trial = 0; trial < 300; ++trial) {
+    std::vector<uint8_t> out;
+    std::vector<uint32_t> bits;
+    uint16_t em = uint16_t(kProbInit);
+    {
+      RangeEncoder rc(out);
+      const int n = int(rng() % 200);
+      for (int i = 0; i < n; ++i) {
+        bits.push_back(rng() % 8 == 0 ? 1u : 0u);
+        rc.bit(em, bits.back());
+      }
+      rc.finish();
+    }
+    RangeDecoder rd(out.data(), out.size());
+    RangeState st = rd.state();
+    uint16_t dm = uint16_t(kProbInit);
+    for (uint32_t b : bits) ASSERT_EQ(st.bit(dm), b) << trial;
+    EXPECT_TRUE(st.ok) << trial;
+  }
 }
 
 TEST(ByteReader, FailsPastEnd) {
@@ -882,7 +1053,11 @@ TEST(VertexChoice, ModelPriorsAreTheSpecTable) {
   const SplitModels m;
   const uint16_t want[21] = {1024, 683,  1366, 1707, 1878, 1963, 1984, 1984, 1984, 1984, 1984,
                              1984, 1984, 1984, 1984, 1984, 1984, 1984, 1984, 1984, 1984};
-  for (uint32_t c = 0; c < kChoiceContexts; ++c) EXPECT_EQ(m.choice[c], want[c / (2 * kChoiceDegrees)]) << c;
+  for (uint32_t c = 0; c < kChoiceContexts; ++c) {
+    const uint32_t d = c / (2 * kChoiceDegrees);
+    EXPECT_EQ(m.choice[c] & kProbMask, want[d]) << c;
+    EXPECT_EQ(uint32_t(m.choice[c] >> kProbBits), d == 0 ? 0u : 20u) << c;  // primed: count 20
+  }
 }
 
 // ---- BASE (spec section 2, "BASE") ----
@@ -923,10 +1098,21 @@ void base_round_trip(const std::vector<int32_t>& coords, const std::vector<uint3
   std::sort(want.begin(), want.end());
   std::sort(got.begin(), got.end());
   EXPECT_EQ(want, got);
-  // Counts the stream cannot hold, and every shorter stream, are refused.
+  // Counts the stream cannot hold are refused. Every shorter stream is refused or decodes to
+  // another base: the stream ends at the last nonzero byte of the shortest value of its final
+  // interval (spec section 8), so a cut value lies outside that interval; the zero bytes read
+  // past the end can make it decode (the chunk's CRC is what catches a cut chunk).
   EXPECT_EQ(decode_base(stream.data(), stream.size(), n + 1, fn, dec, error), BaseResult::corrupt);
-  for (size_t cut = 0; cut < stream.size(); ++cut)
-    EXPECT_NE(decode_base(stream.data(), cut, n, fn, dec, error), BaseResult::ok) << "cut at " << cut;
+  size_t refused = 0;
+  for (size_t cut = 0; cut < stream.size(); ++cut) {
+    BaseMesh other;
+    if (decode_base(stream.data(), cut, n, fn, other, error) != BaseResult::ok) {
+      ++refused;
+      continue;
+    }
+    EXPECT_TRUE(other.coords != dec.coords || other.faces != dec.faces) << "cut at " << cut;
+  }
+  EXPECT_GE(refused + 4, stream.size());  // here at most the last 4 cuts decode
 }
 
 }  // namespace

@@ -8,24 +8,50 @@
 
 namespace pmz {
 
-inline constexpr uint32_t kProbBits = 11, kProbInit = 1u << (kProbBits - 1), kMoveBits = 4;
-inline constexpr uint32_t kTop = 1u << 24;
+inline constexpr uint32_t kProbBits = 11, kProbInit = 1u << (kProbBits - 1);
+inline constexpr uint32_t kProbMask = (1u << kProbBits) - 1, kTop = 1u << 24;
+// A stream's bytes past its end read as 0, up to this many; reading further is an error.
+inline constexpr uint32_t kStreamPad = 4;
+
+// A bit model is one uint16: the 11-bit probability of a 0 in bits 0..10, and in bits 11..15
+// how many bits it has coded, saturating at 31. The adaptation shift grows with that count:
+// 2 for the model's first 10 bits, 3 for the next 10, 4 for the next 11, then 5 (spec section 8).
+// kProbInit is the initial model (probability 1/2, count 0). The probability stays within
+// [15, 2033] whatever the bits (the range coders rely on it).
+inline constexpr uint32_t model_shift(uint32_t count) { return 2 + (count >= 10) + (count >= 20) + (count >= 31); }
+// Per count: the next count in bits 11..15, the shift in bits 0..4 (one load per coded bit).
+struct AdaptTable {
+  uint16_t e[32];
+  constexpr AdaptTable() : e() {
+    for (uint32_t c = 0; c < 32; ++c) e[c] = uint16_t((c < 31 ? c + 1 : 31) << kProbBits | model_shift(c));
+  }
+};
+inline constexpr AdaptTable kAdapt{};
+// A model that starts from a prior probability p (15..2033) other than 1/2 starts at count 20
+// (shift 4): at count 0 the fast steps would both forget the prior and could push p out of
+// [15, 2033] (from 1984, ten shift-2 steps of 0 bits reach 2043).
+inline constexpr uint32_t kPriorCount = 20;
+inline uint16_t primed_model(uint32_t p) { return uint16_t(p | kPriorCount << kProbBits); }
+inline uint16_t adapt(uint32_t model, uint32_t b) {
+  const uint32_t pr = model & kProbMask, e = kAdapt.e[model >> kProbBits], shift = e & 31;
+  const uint32_t np = b ? pr - (pr >> shift) : pr + (((1u << kProbBits) - pr) >> shift);
+  return uint16_t((e & ~kProbMask) | np);
+}
 
 inline uint32_t bit_length(uint32_t x) { return x ? 32u - uint32_t(__builtin_clz(x)) : 0u; }
 
 class RangeEncoder {
  public:
-  explicit RangeEncoder(std::vector<uint8_t>& out) : out_(out) {}
+  explicit RangeEncoder(std::vector<uint8_t>& out) : out_(out), start_(out.size()) {}
   void bit(uint16_t& p, uint32_t b) {
-    uint32_t bound = (range_ >> kProbBits) * p;
+    uint32_t bound = (range_ >> kProbBits) * (p & kProbMask);
     if (!b) {
       range_ = bound;
-      p = uint16_t(p + (((1u << kProbBits) - p) >> kMoveBits));
     } else {
       low_ += bound;
       range_ -= bound;
-      p = uint16_t(p - (p >> kMoveBits));
     }
+    p = adapt(p, b);
     while (range_ < kTop) {
       range_ <<= 8;
       shift_low();
@@ -41,8 +67,21 @@ class RangeEncoder {
       }
     }
   }
+  // Ends the stream with the value in [low, low + range) that has the most trailing zero bits
+  // (range >= 2^24 here, so at least 24), flushes it, then drops the stream's first byte (always
+  // 0) and up to kStreamPad trailing zero bytes, which the decoder reads back as zeros (spec
+  // section 8).
   void finish() {
+    for (uint32_t k = 32;; --k) {
+      const uint64_t mask = (uint64_t(1) << k) - 1, v = (low_ + mask) & ~mask;
+      if (v - low_ < range_) {
+        low_ = v;
+        break;
+      }
+    }
     for (int i = 0; i < 5; ++i) shift_low();
+    out_.erase(out_.begin() + std::ptrdiff_t(start_));
+    for (uint32_t i = 0; i < kStreamPad && out_.size() > start_ && out_.back() == 0; ++i) out_.pop_back();
   }
 
  private:
@@ -59,6 +98,7 @@ class RangeEncoder {
     low_ = (low_ & 0x00FFFFFFu) << 8;
   }
   std::vector<uint8_t>& out_;
+  size_t start_;
   uint64_t low_ = 0;
   uint32_t range_ = 0xFFFFFFFFu;
   uint8_t cache_ = 0;
@@ -87,18 +127,17 @@ struct RangeState {
     }
   }
   uint32_t bit(uint16_t& prob) {
-    const uint32_t pr = prob, bound = (range >> kProbBits) * pr;
+    const uint32_t model = prob, bound = (range >> kProbBits) * (model & kProbMask);
     uint32_t b;
     if (code < bound) {
       range = bound;
-      prob = uint16_t(pr + (((1u << kProbBits) - pr) >> kMoveBits));
       b = 0;
     } else {
       code -= bound;
       range -= bound;
-      prob = uint16_t(pr - (pr >> kMoveBits));
       b = 1;
     }
+    prob = adapt(model, b);
     normalize();
     return b;
   }
@@ -119,12 +158,10 @@ struct RangeState {
 
 class RangeDecoder {
  public:
-  // Reading past the end yields zeros and clears ok (a valid stream never does).
-  RangeDecoder(const uint8_t* p, size_t size) : s_{0xFFFFFFFFu, 0, p, p + size, true} {
-    if (size < 5 || s_.next() != 0) s_.ok = false;
-    for (int i = 0; i < 4; ++i) s_.code = (s_.code << 8) | s_.next();
-    ok = s_.ok;
-  }
+  // Decodes its own copy of the size bytes at p followed by kStreamPad zero bytes (the bytes past
+  // a stream's end read as 0, up to kStreamPad); reading further yields zeros and clears ok (a
+  // valid stream never does).
+  RangeDecoder(const uint8_t* p, size_t size);  // coding.cpp
   RangeState state() const { return s_; }
   void set_state(const RangeState& s) {
     s_.range = s.range;
@@ -132,9 +169,12 @@ class RangeDecoder {
     s_.p = s.p;
     ok = ok && s.ok;
   }
+  RangeDecoder(const RangeDecoder&) = delete;
+  RangeDecoder& operator=(const RangeDecoder&) = delete;
   bool ok = true;
 
  private:
+  std::vector<uint8_t> buf_;
   RangeState s_;
 };
 

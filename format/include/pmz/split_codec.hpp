@@ -53,7 +53,8 @@ struct SplitModels {
 };
 
 // Initial probability of a 0 (scaled to 2048) of the choice models of expected-gap class d
-// (spec "Vertex choice"): a 1 has probability about 1 / (1.5 * 2^(d - 1)) there.
+// (spec "Vertex choice"): a 1 has probability about 1 / (1.5 * 2^(d - 1)) there. Models with
+// d >= 1 start at count kPriorCount (primed_model, spec section 8).
 inline uint16_t choice_prior(uint32_t d) {
   return d == 0 ? uint16_t(kProbInit) : uint16_t(std::min(2048u - 8192u / (3u << d), 1984u));
 }
@@ -212,7 +213,6 @@ class SplitChunkReader {
   size_t largest_group() const { return largest_; }
 
  private:
-  std::vector<uint8_t> bytes_;
   SplitModels* models_ = nullptr;
   std::vector<GroupCode> groups_;
   size_t next_group_ = 0, largest_ = 0;
