@@ -20,9 +20,13 @@ void VertexChoice::reset(ProgressiveMesh& base) {
   noted_.clear();
 }
 
-void VertexChoice::start_group() {
+void VertexChoice::start_group(bool near) {
   near_.swap(noted_);
   noted_.clear();
+  if (!near) {
+    near_.clear();
+    return;
+  }
   const size_t n = degree_.size();  // the vertex count: every noted vertex is below it
   if (near_.size() * 8 < n) {       // sparse: sort
     std::sort(near_.begin(), near_.end());
@@ -220,7 +224,7 @@ SplitModels::SplitModels() {
 bool SplitChunkReader::begin_group(VertexChoice& choice, uint32_t limit) {
   if (next_group_ >= groups_.size()) return false;
   const GroupCode g = groups_[next_group_++];
-  choice.start_group();
+  choice.start_group(g.near);
   choice.begin_scan(g.near, limit, g.size);
   group_end_ += g.size;
   return true;

@@ -84,8 +84,9 @@ inline constexpr uint32_t kChoiceLag = 8;
 class VertexChoice {
  public:
   void reset(ProgressiveMesh& base);  // degrees from the base rings (0 without a face)
-  // Starts a group: the neighbourhood noted since the last call becomes the near list.
-  void start_group();
+  // Starts a group: the neighbourhood noted since the last call becomes the near list (if
+  // `near`: a decoder knows the group's flag and skips building a list it does not use).
+  void start_group(bool near = true);
   // Then the group's scan: `size` splits, the first of them split number first_split of the
   // file (0-based, in stream order); limit: the vertex count at the group's start.
   void begin_scan(bool near, uint32_t limit, uint32_t size) {
