@@ -19,11 +19,15 @@ inline constexpr uint32_t kStreamPad = 4;
 // kProbInit is the initial model (probability 1/2, count 0). The probability stays within
 // [15, 2033] whatever the bits (the range coders rely on it).
 inline constexpr uint32_t model_shift(uint32_t count) { return 2 + (count >= 10) + (count >= 20) + (count >= 31); }
-// Per count: the next count in bits 11..15, the shift in bits 0..4 (one load per coded bit).
+// Per count: the shift, and the next count in bits 11..15 (two loads per coded bit, no masking).
 struct AdaptTable {
-  uint16_t e[32];
-  constexpr AdaptTable() : e() {
-    for (uint32_t c = 0; c < 32; ++c) e[c] = uint16_t((c < 31 ? c + 1 : 31) << kProbBits | model_shift(c));
+  uint8_t shift[32];
+  uint16_t next[32];
+  constexpr AdaptTable() : shift(), next() {
+    for (uint32_t c = 0; c < 32; ++c) {
+      shift[c] = uint8_t(model_shift(c));
+      next[c] = uint16_t((c < 31 ? c + 1 : 31) << kProbBits);
+    }
   }
 };
 inline constexpr AdaptTable kAdapt{};
@@ -33,9 +37,9 @@ inline constexpr AdaptTable kAdapt{};
 inline constexpr uint32_t kPriorCount = 20;
 inline uint16_t primed_model(uint32_t p) { return uint16_t(p | kPriorCount << kProbBits); }
 inline uint16_t adapt(uint32_t model, uint32_t b) {
-  const uint32_t pr = model & kProbMask, e = kAdapt.e[model >> kProbBits], shift = e & 31;
+  const uint32_t pr = model & kProbMask, c = model >> kProbBits, shift = kAdapt.shift[c];
   const uint32_t np = b ? pr - (pr >> shift) : pr + (((1u << kProbBits) - pr) >> shift);
-  return uint16_t((e & ~kProbMask) | np);
+  return uint16_t(kAdapt.next[c] | np);
 }
 
 inline uint32_t bit_length(uint32_t x) { return x ? 32u - uint32_t(__builtin_clz(x)) : 0u; }
