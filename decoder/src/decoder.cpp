@@ -102,6 +102,19 @@ struct Decoder::Impl {
   static constexpr uint64_t kRingWorkPerSplit = 64, kRingWorkSlack = 1u << 22;
   uint64_t available = 0, applied = 0;
   std::vector<int32_t> coords;    // 3 per computed vertex (computed >= vertex_count)
+  // Bounding box of coords, its largest side as wedge_scratch.extent (64-bit scores unchecked).
+  int32_t box_lo[3] = {INT32_MAX, INT32_MAX, INT32_MAX}, box_hi[3] = {INT32_MIN, INT32_MIN, INT32_MIN};
+  void grow_box(const int32_t* c) {
+    bool grew = false;
+    for (int a = 0; a < 3; ++a) {
+      if (c[a] < box_lo[a]) box_lo[a] = c[a], grew = true;
+      if (c[a] > box_hi[a]) box_hi[a] = c[a], grew = true;
+    }
+    if (!grew) return;
+    uint64_t extent = 0;
+    for (int a = 0; a < 3; ++a) extent = std::max<uint64_t>(extent, uint64_t(int64_t(box_hi[a]) - box_lo[a]));
+    wedge_scratch.extent = extent;
+  }
   std::vector<float> positions;
   std::vector<uint32_t> parents;
 
@@ -339,6 +352,7 @@ Status Decoder::Impl::base(const uint8_t* p, size_t n) {
   choice.reset(mesh);
   group_vs.reserve(kChoiceLag + 2);  // find_vertices() adds at most kChoiceLag + 1 at a time
   coords = std::move(bm.coords);
+  for (size_t i = 0; i < vn; ++i) grow_box(&coords[i * 3]);
   positions.resize(vn * 3);
   for (size_t i = 0; i < vn * 3; ++i) positions[i] = quant.dequantize(coords[i], int(i % 3));
   parents.assign(vn, 0xFFFFFFFFu);
@@ -425,6 +439,7 @@ bool Decoder::Impl::apply() {
       return refuse(Status::corrupt, "split " + std::to_string(applied) + ": residual streams malformed");
     }
     position_from_residuals(pred, residual, c);
+    grow_box(c);
     for (int k = 0; k < 3; ++k) {
       coords.push_back(c[k]);
       positions.push_back(quant.dequantize(c[k], k));

@@ -281,6 +281,10 @@ namespace {
 constexpr uint32_t kMaxScoredRing = 1u << 24;  // larger rings: all scores 0 (order by index)
 constexpr uint32_t kTopSelect = 16;            // ranks below: insertion into the best rank + 1
 
+// End weights (spec section 4): m = 4, 3, 2 for degree <= 4, 5, more, and r = 12 / m (a
+// negative G is ordered by G / (m_a m_b)), by degree clamped to 7; a missing end as degree 7.
+constexpr uint8_t kWeight[8][2] = {{4, 3}, {4, 3}, {4, 3}, {4, 3}, {4, 3}, {3, 4}, {2, 6}, {2, 6}};
+
 // Scores of the n candidates with `count` interior ring vertices, in integer type I, from prefix
 // sums over the ring in extended canonical order (closed: once around and on as far as the
 // windows reach; open: once, padded by a missing position on each side, offset 0): entry x of
@@ -310,14 +314,13 @@ void score_candidates(const I* p, const uint8_t* wm, uint32_t n, uint32_t count,
   }
 }
 
-// Scores of the candidates with `count` interior ring vertices (into s.score64 when s.narrow,
-// else s.score); returns how many (n). Closed: candidate j has a = j, b = (j + count + 1) mod
-// k. Open: interior starts at j (0 .. k - count), a = j - 1 (none for j = 0), b = j + count
-// (none for k). Every |key| fits 64 bits when k (max|e| + 1) < 2^26 (narrow), else 128 bits;
-// the values are the same. The sums are first taken in 64 bits, wrapping (unsigned), while the
-// spread is found; only a ring that is not narrow is summed again in 128 bits.
+// Scores of the candidates with `count` interior ring vertices (into score); returns how many
+// (n). Closed: candidate j has a = j, b = (j + count + 1) mod k. Open: interior starts at j
+// (0 .. k - count), a = j - 1 (none for j = 0), b = j + count (none for k). Every |key| fits 64
+// bits when k (max|e| + 1) < 2^26 (narrow: score_narrow below, the same values); this is the
+// 128-bit path for the other rings (I = 128 bits; rare: cold, optimized for size).
 template <class I, class U>
-uint32_t score_ring(const int32_t* coords, const uint32_t* degree, const ProgressiveMesh& pm, uint32_t count,
+[[gnu::cold]] uint32_t score_ring(const int32_t* coords, const uint32_t* degree, const ProgressiveMesh& pm, uint32_t count,
                     const int32_t* cv, std::vector<I>& buf, std::vector<I>& score, WedgeScratch& s) {
   const std::span<const uint32_t> ring = pm.ring();
   const uint32_t k = uint32_t(ring.size()), start = pm.ring_start();
@@ -329,14 +332,10 @@ uint32_t score_ring(const int32_t* coords, const uint32_t* degree, const Progres
   if (buf.size() < size_t(len + 1) * 4) buf.resize(size_t(len + 1) * 4);
   if (s.w.size() < size_t(len) * 2) s.w.resize(size_t(len) * 2);
   if (score.size() < n) score.resize(n);
-  // End weights (spec section 4): m = 4, 3, 2 for degree <= 4, 5, more, and r = 12 / m (a
-  // negative G is ordered by G / (m_a m_b)), by degree clamped to 7; a missing end as degree 7.
-  static constexpr uint8_t kWeight[8][2] = {{4, 3}, {4, 3}, {4, 3}, {4, 3}, {4, 3}, {3, 4}, {2, 6}, {2, 6}};
   I* q = buf.data();
   uint8_t* wm = s.w.data();
   const int64_t cx = cv[0], cy = cv[1], cz = cv[2];
   U x = 0, y = 0, z = 0, t = 0;
-  uint64_t spread = 0;  // OR of |e| - (e < 0) per component, so every |e| <= spread + 1
   uint32_t at = 0;
   auto put = [&](const int64_t dx, const int64_t dy, const int64_t dz, uint32_t d) {
     q[0] = I(x);
@@ -344,7 +343,6 @@ uint32_t score_ring(const int32_t* coords, const uint32_t* degree, const Progres
     q[2] = I(z);
     q[3] = I(t);
     q += 4;
-    spread |= uint64_t(dx ^ (dx >> 63)) | uint64_t(dy ^ (dy >> 63)) | uint64_t(dz ^ (dz >> 63));
     x += U(dx);
     y += U(dy);
     z += U(dz);
@@ -370,8 +368,6 @@ uint32_t score_ring(const int32_t* coords, const uint32_t* degree, const Progres
   q[1] = I(y);
   q[2] = I(z);
   q[3] = I(t);
-  s.narrow = spread < (uint64_t(1) << 26) && (spread + 1) * k < (uint64_t(1) << 26);
-  if (sizeof(I) == 8 && !s.narrow) return 0;  // sums may have wrapped: redo in 128 bits
   if (closed)
     score_candidates<I, true>(buf.data(), wm, n, count, k, score.data());
   else
@@ -396,6 +392,120 @@ bool is_confident(const I* sc, uint32_t n) {
   return second <= 0 || best - second > second;
 }
 
+// Whether every score of v's ring fits 64 bits: k (max|e| + 1) < 2^26 (spread: OR of |e| - (e <
+// 0) per component, so every |e| <= spread + 1).
+bool ring_narrow(const int32_t* coords, const ProgressiveMesh& pm, const int32_t* cv) {
+  const std::span<const uint32_t> ring = pm.ring();
+  uint64_t spread = 0;
+  for (uint32_t w : ring) {
+    const int32_t* cw = coords + size_t(w) * 3;
+    const int64_t dx = int64_t(cw[0]) - cv[0], dy = int64_t(cw[1]) - cv[1], dz = int64_t(cw[2]) - cv[2];
+    spread |= uint64_t(dx ^ (dx >> 63)) | uint64_t(dy ^ (dy >> 63)) | uint64_t(dz ^ (dz >> 63));
+  }
+  return spread < (uint64_t(1) << 26) && (spread + 1) * ring.size() < (uint64_t(1) << 26);
+}
+
+// The common case in 64 bits (the values of score_ring, found with less work): one pass over
+// the ring for the offsets e, |e|^2 and the weights per position (extended canonical order as in
+// score_ring; a closed ring's wrapped positions copied, not recomputed), then one pass over the
+// candidates with the interior's sums slid along (add the new end b, drop the first interior
+// position), tracking the best two scores (s.confident) and the first best candidate (s.best,
+// rank 0). For a narrow ring (ring_narrow, or shown by s.extent).
+void score_narrow(const int32_t* coords, const uint32_t* degree, const ProgressiveMesh& pm, uint32_t count,
+                  const int32_t* cv, WedgeScratch& s) {
+  const std::span<const uint32_t> ring = pm.ring();
+  const uint32_t k = uint32_t(ring.size()), start = pm.ring_start();
+  const bool closed = pm.ring_closed();
+  const uint32_t n = closed ? k : k - count + 1;
+  // Positions: closed 0 .. k + count (rank x mod k), open 0 .. k + 1 (rank x - 1; 0 and k + 1
+  // missing: e = 0, weight as degree 7).
+  const uint32_t len = closed ? k + count + 1 : k + 2;
+  if (s.q.size() < size_t(len) * 4) s.q.resize(size_t(len) * 4);
+  if (s.w.size() < size_t(len) * 2) s.w.resize(size_t(len) * 2);
+  if (s.score64.size() < n) s.score64.resize(n);
+  int64_t* const q0 = s.q.data();
+  uint8_t* const w0 = s.w.data();
+  int64_t* q = q0;
+  uint8_t* wm = w0;
+  const int64_t cx = cv[0], cy = cv[1], cz = cv[2];
+  auto put_vertex = [&](uint32_t w) {
+    const int32_t* cw = coords + size_t(w) * 3;
+    const int64_t dx = cw[0] - cx, dy = cw[1] - cy, dz = cw[2] - cz;
+    q[0] = dx;
+    q[1] = dy;
+    q[2] = dz;
+    q[3] = int64_t(uint64_t(dx) * uint64_t(dx) + uint64_t(dy) * uint64_t(dy) + uint64_t(dz) * uint64_t(dz));
+    q += 4;
+    const uint32_t d = degree[w];
+    const uint8_t* m = kWeight[d < 7 ? d : 7];
+    wm[0] = m[0];
+    wm[1] = m[1];
+    wm += 2;
+  };
+  auto put_missing = [&] {
+    q[0] = q[1] = q[2] = q[3] = 0;
+    q += 4;
+    wm[0] = kWeight[7][0];
+    wm[1] = kWeight[7][1];
+    wm += 2;
+  };
+  if (!closed) put_missing();
+  for (uint32_t j = start; j < k; ++j) put_vertex(ring[j]);
+  for (uint32_t j = 0; j < start; ++j) put_vertex(ring[j]);
+  if (closed) {
+    for (uint32_t i = 0; i <= count; ++i) {  // count + 1 < k: no overlap (a few positions: no memcpy call)
+      q[4 * i] = q0[4 * i];
+      q[4 * i + 1] = q0[4 * i + 1];
+      q[4 * i + 2] = q0[4 * i + 2];
+      q[4 * i + 3] = q0[4 * i + 3];
+      wm[2 * i] = w0[2 * i];
+      wm[2 * i + 1] = w0[2 * i + 1];
+    }
+  } else {
+    put_missing();
+  }
+  s.narrow = true;
+  // Candidate j: ends at positions j and j + count + 1, interior j + 1 .. j + count.
+  int64_t wx = 0, wy = 0, wz = 0, S = 0;
+  for (const int64_t* p = q0 + 4; p < q0 + size_t(count + 1) * 4; p += 4) {
+    wx += p[0];
+    wy += p[1];
+    wz += p[2];
+    S += p[3];
+  }
+  const int64_t c = count;
+  const size_t span = size_t(count + 1);
+  int64_t* const out = s.score64.data();
+  int64_t best = INT64_MIN, second = INT64_MIN;
+  uint32_t best_j = 0;
+  for (uint32_t j = 0; j < n; ++j) {
+    const int64_t* a = q0 + size_t(j) * 4;
+    const int64_t* b = a + span * 4;
+    const int64_t ex = 2 * wx + a[0] + b[0], ey = 2 * wy + a[1] + b[1], ez = 2 * wz + a[2] + b[2];
+    const int64_t ends = a[3] + b[3];
+    const int64_t T = (closed || (j > 0 && j + count < k)) ? 2 * ends : 4 * ends;
+    const int64_t G = ex * ex + ey * ey + ez * ez + c * (4 * S - c * T);
+    const uint8_t* ma = w0 + size_t(j) * 2;
+    const uint8_t* mb = ma + span * 2;
+    const int64_t sc = G * int64_t(G >= 0 ? ma[0] * mb[0] : ma[1] * mb[1]);
+    out[j] = sc;
+    if (sc > best) {
+      second = best;
+      best = sc;
+      best_j = j;
+    } else if (sc > second) {
+      second = sc;
+    }
+    wx += b[0] - a[4];
+    wy += b[1] - a[5];
+    wz += b[2] - a[6];
+    S += b[3] - a[7];
+  }
+  s.confident = n < 2 || second <= 0 || best - second > second;
+  s.best = best_j;
+  s.n = n;
+}
+
 uint32_t wedge_candidates(const int32_t* coords, const uint32_t* degree, uint32_t v, const ProgressiveMesh& pm,
                           uint32_t count, WedgeScratch& s) {
   const uint32_t k = uint32_t(pm.ring().size());
@@ -404,16 +514,18 @@ uint32_t wedge_candidates(const int32_t* coords, const uint32_t* degree, uint32_
     s.narrow = true;
     s.score64.assign(n, 0);
     s.confident = true;
+    s.best = 0;
     return s.n = n;
   }
   const int32_t* cv = coords + size_t(v) * 3;
-  if (const uint32_t n = score_ring<int64_t, uint64_t>(coords, degree, pm, count, cv, s.q, s.score64, s)) {
-    s.confident = is_confident(s.score64.data(), n);
-    return s.n = n;
+  if ((s.extent < (uint64_t(1) << 26) && (s.extent + 1) * k < (uint64_t(1) << 26)) || ring_narrow(coords, pm, cv)) {
+    score_narrow(coords, degree, pm, count, cv, s);
+    return s.n;
   }
   const uint32_t n = score_ring<WedgeScoreSigned, WedgeScore>(coords, degree, pm, count, cv, s.q128, s.score, s);
   s.narrow = false;
   s.confident = is_confident(s.score.data(), n);
+  s.best = WedgeScratch::kNoBest;
   return s.n = n;
 }
 
@@ -500,8 +612,9 @@ bool wedge_pick(const ProgressiveMesh& pm, uint32_t count, uint32_t rank, uint32
                 WedgeScratch& s) {
   const uint32_t k = uint32_t(pm.ring().size()), n = s.n;
   if (rank >= n) return false;
-  const uint32_t j =
-      s.narrow ? select(s.score64.data(), n, rank, s.order) : select(s.score.data(), n, rank, s.order);
+  const uint32_t j = rank == 0 && s.best != WedgeScratch::kNoBest ? s.best
+                     : s.narrow                       ? select(s.score64.data(), n, rank, s.order)
+                                                      : select(s.score.data(), n, rank, s.order);
   if (pm.ring_closed()) {
     rank_l = j;
     rank_r = (j + count + 1) % k;

@@ -427,6 +427,15 @@ TEST(WedgeSymbols, OrderIsTheSpecFormula) {
                               : int32_t(rng() % 3) + (rng() % 3 == 0 ? 1000 : 0);  // some far, some near
         std::vector<uint32_t> deg(k + 1);
         for (auto& d : deg) d = rng() % 9;
+        // The decoder's way: the bounding box's largest side as WedgeScratch::extent (64-bit
+        // scores without the per-ring check when it is small enough): the same order.
+        WedgeScratch bounded;
+        bounded.extent = 0;
+        for (int a = 0; a < 3; ++a) {
+          int64_t lo = INT64_MAX, hi = INT64_MIN;
+          for (size_t i = size_t(a); i < coords.size(); i += 3) lo = std::min<int64_t>(lo, coords[i]), hi = std::max<int64_t>(hi, coords[i]);
+          bounded.extent = std::max<uint64_t>(bounded.extent, uint64_t(hi - lo));
+        }
         const uint32_t max_count = closed ? k - 2 : k - 1;
         for (uint32_t count = 0; count <= max_count; ++count) {
           bool confident;
@@ -442,6 +451,11 @@ TEST(WedgeSymbols, OrderIsTheSpecFormula) {
             confident_seen[confident] = true;
             EXPECT_EQ(ga, ra) << "k " << k << " closed " << closed << " count " << count << " rank " << rank;
             EXPECT_EQ(gb, rb) << "k " << k << " closed " << closed << " count " << count << " rank " << rank;
+            uint32_t ba, bb;
+            ASSERT_TRUE(wedge_ranks(coords.data(), deg.data(), 0, pm, count, rank, ba, bb, bounded));
+            EXPECT_EQ(ba, ra);
+            EXPECT_EQ(bb, rb);
+            EXPECT_EQ(bounded.confident, confident);
             ASSERT_TRUE(wedge_symbols(coords.data(), deg.data(), 0, pm, ra, rb, gc, gr, scratch));
             EXPECT_EQ(gc, count);
             EXPECT_EQ(gr, rank);

@@ -233,7 +233,7 @@ __extension__ typedef __int128 WedgeScoreSigned;
 // Reusable buffers for the wedge scores (no allocation per split once grown).
 struct WedgeScratch {
   std::vector<uint8_t> w;                 // end weights m, 12 / m per ring position (extended canonical order)
-  std::vector<int64_t> q;                 // prefix sums of e (3 axes) and |e|^2 per position, when narrow
+  std::vector<int64_t> q;                 // e (3 axes) and |e|^2 per ring position, when narrow
   std::vector<WedgeScoreSigned> q128;     // the same otherwise
   std::vector<int64_t> score64;           // per candidate, when narrow (the same values, in 64 bits)
   std::vector<WedgeScoreSigned> score;    // per candidate, otherwise
@@ -241,6 +241,12 @@ struct WedgeScratch {
   bool narrow = true;
   uint32_t n = 0;          // candidates scored last
   bool confident = true;   // their best score is over twice the second (spec section 4)
+  uint32_t best = 0;       // the candidate at rank 0 (kNoBest: not known, wedge_pick selects)
+  static constexpr uint32_t kNoBest = 0xFFFFFFFFu;
+  // Optional, set by the caller: a bound on |c[w] - c[v]| (per axis) over all vertex pairs, e.g.
+  // the largest side of the coordinates' bounding box. When k (extent + 1) < 2^26 the scores
+  // are computed in 64 bits without checking each ring offset. Unknown: UINT64_MAX.
+  uint64_t extent = UINT64_MAX;
   // Room for a ring of k vertices (any count), so scoring it does not allocate.
   void reserve(size_t k) {
     const size_t len = 2 * k + 2;
