@@ -7,7 +7,7 @@ build=${1:-build}
 shift || true
 
 packages=(build-essential cmake ninja-build pkg-config git
-  libopenmesh-dev libzstd-dev libcli11-dev googletest libgtest-dev
+  libopenmesh-dev libcli11-dev googletest libgtest-dev
   libglfw3-dev libepoxy-dev libimgui-dev libstb-dev libcurl4-openssl-dev
   xvfb xauth libgl1-mesa-dri python3
   libmeshoptimizer-dev draco libopenmesh-apps python3-matplotlib

@@ -21,7 +21,7 @@ namespace pmz {
 namespace {
 
 constexpr double kWindowGrowth = 1.5;  // a window grows the vertex count by at most 50%
-constexpr uint32_t kFirstChunkSplits = 1024, kMaxChunkSplits = 16384;
+constexpr uint32_t kFirstChunkSplits = 256, kMaxChunkSplits = 16384;
 // A group larger than this is cut (the rest starts a group in the next chunk, whose vertices
 // are then chosen among all vertices: slow to decode, spec "Vertex choice").
 constexpr uint32_t kMaxGroupPiece = 4 * kMaxChunkSplits;

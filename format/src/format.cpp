@@ -1,6 +1,5 @@
 #include "pmz/format.hpp"
 
-#include <zstd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -63,51 +62,6 @@ void append_chunk(std::vector<uint8_t>& out, uint32_t type, const std::vector<ui
   put_u32le(out, uint32_t(payload.size()));
   put_u32le(out, chunk_crc(out.data() + at, payload.data(), payload.size()));
   out.insert(out.end(), payload.begin(), payload.end());
-}
-
-void put_stream(std::vector<uint8_t>& out, const std::vector<uint8_t>& raw, int zstd_level) {
-  put_varint(out, raw.size());
-  if (raw.size() >= 32) {
-    std::vector<uint8_t> z(ZSTD_compressBound(raw.size()));
-    size_t n = ZSTD_compress(z.data(), z.size(), raw.data(), raw.size(), zstd_level);
-    if (!ZSTD_isError(n) && n < raw.size()) {
-      put_varint(out, n);
-      out.insert(out.end(), z.begin(), z.begin() + ptrdiff_t(n));
-      return;
-    }
-  }
-  put_varint(out, 0);
-  out.insert(out.end(), raw.begin(), raw.end());
-}
-
-bool read_stream(ByteReader& in, void* dctx, size_t max_raw, std::vector<uint8_t>& out,
-                 std::string& error) {
-  uint64_t raw = in.varint();
-  uint64_t stored = in.varint();
-  if (!in.ok) return error = "stream header truncated", false;
-  if (raw > max_raw) return error = "stream larger than the chunk allows", false;
-  uint64_t take = stored ? stored : raw;
-  const uint8_t* src = in.bytes(take);
-  if (!src) return error = "stream overruns its chunk", false;
-  // zstd expands at most 128 KiB per 4-byte RLE block: a larger claim is a bomb, refused
-  // before allocating.
-  if (stored && raw / 32768 > stored) return error = "stream claims more than its frame can hold", false;
-  out.resize(raw);
-  if (!stored) {
-    if (raw) std::memcpy(out.data(), src, raw);
-    return true;
-  }
-  size_t n = ZSTD_decompressDCtx(static_cast<ZSTD_DCtx*>(dctx), out.data(), raw, src, stored);
-  if (ZSTD_isError(n) || n != raw) return error = "bad zstd stream", false;
-  return true;
-}
-
-bool skip_stream(ByteReader& in, uint64_t& stored_bytes) {
-  uint64_t raw = in.varint();
-  uint64_t stored = in.varint();
-  stored_bytes = stored ? stored : raw;
-  in.bytes(stored_bytes);
-  return in.ok;
 }
 
 void Quantizer::init(uint32_t position_bits, const float bmin[3], const float bmax[3]) {

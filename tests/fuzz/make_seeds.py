@@ -136,7 +136,6 @@ def main():
     put('coding', 'reader', b'\x00\x10' + bytes(range(16)) + b'\x81\x80\x01\xff\xff\xff\xff\x0f' * 4)
     put('coding', 'varints', b'\x01' + struct.pack('<8Q', 0, 1, 127, 128, 1 << 35, 2**63, 2**64 - 1, 300))
     put('coding', 'quantizer', b'\x03\x0e' + struct.pack('<6f', -1, -2, -3, 1, 2, 3) + struct.pack('<4f', 0.5, -1, 3, 1e30))
-    put('coding', 'stream', b'\x02\x05\x00' + bytes(range(5)))
     put('coding', 'range', b'\x05' + struct.pack('<8I', 0, 1, 2, 3, 1000, 65535, 2**31, 2**32 - 1))
     put('coding', 'mesh', b'\x04\x05\x04' + bytes([0, 1, 2, 0, 2, 3, 0, 3, 4, 0, 4, 1, 0, 1, 0xff, 0xff, 0, 0]))
     total = sum(os.path.getsize(os.path.join(out_dir, s, f)) for s in ('decoder', 'container', 'coding')

@@ -1,5 +1,5 @@
-// The .pmz container (spec/format.md): signature, chunk framing, header, quantization, and the
-// zstd-compressed byte streams that chunk payloads are made of. Shared by writer and decoder.
+// The .pmz container (spec/format.md): signature, chunk framing, header and quantization.
+// Shared by writer and decoder.
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -61,16 +61,6 @@ void append_chunk(std::vector<uint8_t>& out, uint32_t type, const std::vector<ui
 inline uint32_t chunk_crc(const uint8_t* header8, const uint8_t* payload, size_t size) {
   return crc32(payload, size, crc32(header8, 8));
 }
-
-// A stream: varint raw_size | varint stored_size | stored bytes (stored_size == 0: the raw
-// bytes follow uncompressed, else a zstd frame of stored_size bytes).
-void put_stream(std::vector<uint8_t>& out, const std::vector<uint8_t>& raw, int zstd_level);
-// Reads one stream into out. Fails (false + message) on sizes over max_raw, a bad frame or a
-// size mismatch. dctx: a ZSTD_DCtx* (void* to keep zstd.h out of this header).
-bool read_stream(ByteReader& in, void* dctx, size_t max_raw, std::vector<uint8_t>& out,
-                 std::string& error);
-// Stored (compressed) size of the next stream without decoding it; advances the reader.
-bool skip_stream(ByteReader& in, uint64_t& stored_bytes);
 
 // Quantization as Draco's -qp: one step for all axes over the largest bounding-box extent.
 // Float bits <-> int32 that orders like the float (lossless mode coordinates).
