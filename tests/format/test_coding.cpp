@@ -318,6 +318,20 @@ TEST(SmallModel, RoundTripsAndIsTheSpecTree) {
   EXPECT_TRUE(st.ok);
 }
 
+// The vertex choice's density class without dividing = bitlen of the quotient.
+TEST(VertexChoiceContext, BitlenQuotientIsBitlenOfTheQuotient) {
+  auto bitlen = [](uint64_t x) { return x ? 64u - uint32_t(__builtin_clzll(x)) : 0u; };
+  std::mt19937_64 rng(3);
+  for (int i = 0; i < 200000; ++i) {
+    const uint64_t D = rng() >> (rng() % 64), m = std::max<uint64_t>(1, rng() >> (rng() % 64));
+    ASSERT_EQ(bitlen_quotient(D, m), bitlen(D / m)) << D << " / " << m;
+  }
+  for (uint64_t D = 0; D < 300; ++D)
+    for (uint64_t m = 1; m < 300; ++m) ASSERT_EQ(bitlen_quotient(D, m), bitlen(D / m)) << D << " / " << m;
+  EXPECT_EQ(bitlen_quotient(UINT64_MAX, 1), 64u);
+  EXPECT_EQ(bitlen_quotient(UINT64_MAX, UINT64_MAX), 1u);
+}
+
 TEST(WedgeSymbols, EveryWedgeRoundTrips) {
   std::mt19937 rng(11);
   WedgeScratch scratch;

@@ -52,6 +52,15 @@ struct SplitModels {
   UIntModel residual[3][kResidualContexts];
 };
 
+// bitlen(floor(D / m)) for m >= 1 without dividing (a division per vertex choice bit costs more
+// than the bit): the quotient has bitlen(D) - bitlen(m) bits or one more, one more exactly when
+// D >= m 2^(bitlen(D) - bitlen(m)), i.e. floor(D / 2^t) >= m.
+inline uint32_t bitlen_quotient(uint64_t D, uint64_t m) {
+  if (D < m) return 0;
+  const uint32_t t = uint32_t(__builtin_clzll(m) - __builtin_clzll(D));
+  return t + ((D >> t) >= m ? 1u : 0u);
+}
+
 // Initial probability of a 0 (scaled to 2048) of the choice models of expected-gap class d
 // (spec "Vertex choice"): a 1 has probability about 1 / (1.5 * 2^(d - 1)) there. Models with
 // d >= 1 start at count kPriorCount (primed_model, spec section 8).
@@ -116,7 +125,7 @@ class VertexChoice {
       const uint64_t i = i_++;
       const uint32_t w = near_scan_ ? near_[i] : uint32_t(i);
       if (mark_[w] == excluded_) continue;
-      const int r = f(w, context(w, (n - i) / (size_ - found_), near_scan_));
+      const int r = f(w, context(w, bitlen_quotient(n - i, size_ - found_), near_scan_));
       if (r < 0) return -1;
       if (r) {
         ++found_;
@@ -140,9 +149,8 @@ class VertexChoice {
   const uint32_t* degrees() const { return degree_.data(); }  // per vertex (the wedge score's end weights)
 
  private:
-  // (min(bitlen(expected gap), 20) * 2 + near) * 13 + min(degree, 12)
-  uint32_t context(uint32_t w, uint64_t expected, bool near) const {
-    const uint32_t d = expected ? 64u - uint32_t(__builtin_clzll(expected)) : 0u;
+  // (min(d, 20) * 2 + near) * 13 + min(degree, 12), d = bitlen(expected gap)
+  uint32_t context(uint32_t w, uint32_t d, bool near) const {
     const uint32_t deg = degree_[w];
     return ((d < kChoiceDensities ? d : kChoiceDensities - 1) * 2 + (near ? 1 : 0)) * kChoiceDegrees +
            (deg < kChoiceDegrees ? deg : kChoiceDegrees - 1);
