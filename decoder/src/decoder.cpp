@@ -171,7 +171,8 @@ struct Decoder::Impl {
     // Ring coordinates matter only where positions are still to be predicted (not when
     // re-refining after coarsening: there they cost about 10% on bunny00-loop2).
     const bool predicting = coords.size() <= (size_t(mesh.vertex_count()) + FanPrefetcher::kWalkers) * 3;
-    fans.step(mesh, coords.data(), predicting ? coords.size() : 0, near < available ? splits[near].v : kNoCorner);
+    fans.step(mesh, coords.data(), predicting ? coords.size() : 0, near < available ? splits[near].v : kNoCorner,
+              choice.degrees());
   }
   // Coarsening: undoing a split rewires the faces across its new faces and repoints
   // vertex_corner of v, vl and vr, all anywhere in the buffers. For the split kUnlinkAhead

@@ -148,9 +148,12 @@ class FanPrefetcher {
   }
   // Once per split, before applying it: advances every walker by one face, then
   // starts one for v_ahead (the split kWalkers further on; kNoCorner for none). coords: 3 per
-  // vertex, coord_count entries (the ring's coordinates are prefetched for the prediction).
-  void step(const ProgressiveMesh& m, const int32_t* coords, size_t coord_count, uint32_t v_ahead) {
-    const uint32_t slot = advance(m, coords, coord_count);
+  // vertex, coord_count entries (the ring's coordinates are prefetched for the prediction);
+  // degree (optional): one per vertex below coord_count / 3 (the wedge scores' end weights read
+  // the ring's degrees: a cache miss per ring vertex on large meshes otherwise).
+  void step(const ProgressiveMesh& m, const int32_t* coords, size_t coord_count, uint32_t v_ahead,
+            const uint32_t* degree = nullptr) {
+    const uint32_t slot = advance(m, coords, coord_count, degree);
     if (v_ahead >= m.vertex_corner.size()) return;
     // v's own coordinates: the wedge scores and the prediction read them (about 3% on the
     // first refinement of bunny00-loop2, median of 7 alternating runs).
@@ -161,13 +164,13 @@ class FanPrefetcher {
   // The same for a split re-applied from its sector hint (ProgressiveMesh::resplit): the walk
   // follows the `count` rewritten faces and the one across the last (whose link changes).
   void step_sector(const ProgressiveMesh& m, uint32_t hint_ahead, uint32_t count) {
-    const uint32_t slot = advance(m, nullptr, 0);
+    const uint32_t slot = advance(m, nullptr, 0, nullptr);
     if (hint_ahead < m.opposite.size()) start(m, slot, hint_ahead, count);
   }
 
  private:
   // Advances every walker by one face; returns the slot of the split applied now (free).
-  uint32_t advance(const ProgressiveMesh& m, const int32_t* coords, size_t coord_count) {
+  uint32_t advance(const ProgressiveMesh& m, const int32_t* coords, size_t coord_count, const uint32_t* degree) {
     const uint32_t* opp = m.opposite.data();
     const uint32_t* cv = m.corner_vertex.data();
     const size_t corners = m.opposite.size();
@@ -178,7 +181,10 @@ class FanPrefetcher {
       const uint32_t n = n_[k];
       if (n >= corners) continue;
       const uint32_t w = cv[n], o = opp[n];
-      if (size_t(w) * 3 < coord_count) __builtin_prefetch(coords + size_t(w) * 3);
+      if (size_t(w) * 3 < coord_count) {
+        __builtin_prefetch(coords + size_t(w) * 3);
+        if (degree) __builtin_prefetch(degree + w);
+      }
       uint32_t next = o == kNoCorner ? kNoCorner : (o % 3 == 0 ? o + 2 : o - 1);
       if (next == n0_[k] || left_[k]-- == 0) next = kNoCorner;
       n_[k] = next;
