@@ -18,27 +18,39 @@ void VertexChoice::reset(ProgressiveMesh& base) {
   excluded_ = 0;
   near_.clear();
   noted_.clear();
+  bits_.assign((size_t(base.vertex_count()) + 63) / 64, 0);
 }
 
 void VertexChoice::start_group(bool near) {
+  const size_t n = degree_.size();  // the vertex count: every noted vertex is below it
+  const size_t words = (n + 63) / 64;
+  if (near && bits_.size() < words) bits_.resize(words);  // writer only: the decoder reserve()d
   near_.swap(noted_);
   noted_.clear();
   if (!near) {
     near_.clear();
     return;
   }
-  const size_t n = degree_.size();  // the vertex count: every noted vertex is below it
-  if (near_.size() * 8 < n) {       // sparse: sort
+  if (near_.size() * 64 < n) {  // sparse: sort
     std::sort(near_.begin(), near_.end());
     near_.erase(std::unique(near_.begin(), near_.end()), near_.end());
     return;
   }
-  // Dense: mark, then collect in index order (no allocation: at most near_.size() distinct).
-  const uint32_t epoch = next_epoch();
-  for (uint32_t w : near_) mark_[w] = epoch;
+  // Dense: a bitmap of the noted vertices, then its set bits in index order, clearing it as it
+  // goes (n / 64 words instead of a mark test per vertex; no allocation: at most near_.size()
+  // distinct).
+  uint64_t* bits = bits_.data();
+  for (uint32_t w : near_) bits[w >> 6] |= uint64_t(1) << (w & 63);
   near_.clear();
-  for (uint32_t w = 0; w < n; ++w)
-    if (mark_[w] == epoch) near_.push_back(w);
+  for (size_t i = 0; i < words; ++i) {
+    uint64_t x = bits[i];
+    if (!x) continue;
+    bits[i] = 0;
+    do {
+      near_.push_back(uint32_t(i * 64 + uint32_t(__builtin_ctzll(x))));
+      x &= x - 1;
+    } while (x);
+  }
 }
 
 void VertexChoice::exclude(const ProgressiveMesh& mesh, uint32_t w) {
@@ -78,6 +90,13 @@ void VertexChoice::reserve(size_t k) {
   make_room(noted_, k + 2);
   make_room(degree_, 1);
   make_room(mark_, 1);
+  // start_group's bitmap for the vertex count after this split (it must not allocate then: the
+  // group's state has begun to change).
+  const size_t words = (degree_.size() + 64) / 64;
+  if (bits_.size() < words) {
+    make_room(bits_, 1);
+    bits_.resize(words);
+  }
 }
 
 void VertexChoice::applied(const ProgressiveMesh& pm, bool has_left, bool has_right) {

@@ -141,7 +141,8 @@ class VertexChoice {
   bool covers(std::span<const uint32_t> vs) const;
   // Writer: whether no vertex of vs is in the closed one-ring (in mesh) of another.
   bool independent(const ProgressiveMesh& mesh, std::span<const uint32_t> vs);
-  // Decoder, before a split with a ring of k vertices: room so that applied() does not allocate.
+  // Decoder, before a split with a ring of k vertices: room so that applied() and the next
+  // start_group() do not allocate.
   void reserve(size_t k);
   // Right after pm.split_gathered() (its ring and u_ring still those of the split).
   void applied(const ProgressiveMesh& pm, bool has_left, bool has_right);
@@ -165,6 +166,7 @@ class VertexChoice {
   }
   void exclude(const ProgressiveMesh& mesh, uint32_t w);  // w's closed one-ring in mesh
   std::vector<uint32_t> degree_, near_, noted_;
+  std::vector<uint64_t> bits_;  // start_group's bitmap of the noted vertices (all 0 between calls)
   // Per vertex: epoch_ when in the near list being built (start_group), excluded_ when
   // excluded from the group being scanned, another value of epoch_ in independent().
   std::vector<uint32_t> mark_;
