@@ -86,7 +86,7 @@ void make_room(std::vector<T>& b, size_t extra) {
 }
 }  // namespace
 
-void VertexChoice::reserve(size_t k) {
+void VertexChoice::grow(size_t k) {
   make_room(noted_, k + 2);
   make_room(degree_, 1);
   make_room(mark_, 1);

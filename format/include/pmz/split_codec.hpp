@@ -142,8 +142,12 @@ class VertexChoice {
   // Writer: whether no vertex of vs is in the closed one-ring (in mesh) of another.
   bool independent(const ProgressiveMesh& mesh, std::span<const uint32_t> vs);
   // Decoder, before a split with a ring of k vertices: room so that applied() and the next
-  // start_group() do not allocate.
-  void reserve(size_t k);
+  // start_group() do not allocate. (Inline: once per split, it rarely needs to grow anything.)
+  void reserve(size_t k) {
+    if (noted_.capacity() - noted_.size() < k + 2 || degree_.capacity() == degree_.size() ||
+        mark_.capacity() == mark_.size() || bits_.size() * 64 <= degree_.size())
+      grow(k);
+  }
   // Right after pm.split_gathered() (its ring and u_ring still those of the split).
   void applied(const ProgressiveMesh& pm, bool has_left, bool has_right);
   uint32_t degree(uint32_t w) const { return degree_[w]; }
@@ -164,7 +168,8 @@ class VertexChoice {
     }
     return epoch_;
   }
-  void exclude(const ProgressiveMesh& mesh, uint32_t w);  // w's closed one-ring in mesh
+  void exclude(const ProgressiveMesh& mesh, uint32_t w);
+  void grow(size_t k);  // reserve()'s work  // w's closed one-ring in mesh
   std::vector<uint32_t> degree_, near_, noted_;
   std::vector<uint64_t> bits_;  // start_group's bitmap of the noted vertices (all 0 between calls)
   // Per vertex: epoch_ when in the near list being built (start_group), excluded_ when
