@@ -119,23 +119,41 @@ class VertexChoice {
   template <class F>
   int scan(const ProgressiveMesh* mesh, uint32_t upto, F&& f) {
     if (upto > size_) upto = size_;
+    // The scan's state in locals (f's stores could alias the members), written back on exit.
     const uint64_t n = n_;
-    while (found_ < upto) {
-      if (i_ >= n) return 0;
-      const uint64_t i = i_++;
-      const uint32_t w = near_scan_ ? near_[i] : uint32_t(i);
-      if (mark_[w] == excluded_) continue;
-      const int r = f(w, context(w, bitlen_quotient(n - i, size_ - found_), near_scan_));
-      if (r < 0) return -1;
+    const uint32_t* const list = near_.data();
+    const uint32_t* const mark = mark_.data();  // exclude() writes marks, never resizes
+    const uint32_t excluded = excluded_;
+    const bool near = near_scan_;
+    uint64_t i = i_;
+    uint32_t found = found_;
+    int result = 1;
+    while (found < upto) {
+      if (i >= n) {
+        result = 0;
+        break;
+      }
+      const uint64_t at = i++;
+      const uint32_t w = near ? list[at] : uint32_t(at);
+      if (mark[w] == excluded) continue;
+      const int r = f(w, context(w, bitlen_quotient(n - at, size_ - found), near));
+      if (r < 0) {
+        result = -1;
+        break;
+      }
       if (r) {
-        ++found_;
+        ++found;
         if (mesh) {
+          i_ = i;
+          found_ = found;
           chosen_.push_back(w);
-          if (found_ > kChoiceLag) exclude(*mesh, chosen_[found_ - 1 - kChoiceLag]);
+          if (found > kChoiceLag) exclude(*mesh, chosen_[found - 1 - kChoiceLag]);
         }
       }
     }
-    return 1;
+    i_ = i;
+    found_ = found;
+    return result;
   }
   // Writer: whether every vertex of vs is in the near list (vs ascending).
   bool covers(std::span<const uint32_t> vs) const;
