@@ -118,7 +118,9 @@ struct Decoder::Impl {
   std::vector<float> positions;
   std::vector<uint32_t> parents;
 
-  Status fail(Status s, const std::string& what) {
+  // Error paths and the once-per-file HEAD are cold: kept small, out of the hot code's way
+  // (the stripped library has a 150 KB budget).
+  [[gnu::cold]] Status fail(Status s, const std::string& what) {
     status = s;
     message = std::string("pmz: ") + status_name(s) + ": " + what + " (chunk " +
               std::to_string(chunk_index) + " at byte " + std::to_string(chunk_offset) + ")";
@@ -126,11 +128,11 @@ struct Decoder::Impl {
   }
   size_t parse(const uint8_t* p, size_t n);
   Status chunk(uint32_t type, const uint8_t* p, size_t n);
-  Status head(const uint8_t* p, size_t n);
+  [[gnu::cold]] Status head(const uint8_t* p, size_t n);
   Status base(const uint8_t* p, size_t n);
   Status split_chunk(const uint8_t* p, size_t n);
   bool apply();
-  bool refuse(Status s, const std::string& what);
+  [[gnu::cold]] bool refuse(Status s, const std::string& what);
   void undo();
   // Up to max_splits splits, stopping once the mesh has face_target faces / before it would
   // have fewer than face_floor.

@@ -379,7 +379,8 @@ template <class I, class U>
   for (uint32_t j = start; j < k; ++j) put_vertex(ring[j]);
   for (uint32_t j = 0; j < start; ++j) put_vertex(ring[j]);
   if (closed) {
-    for (uint32_t i = 0; at < len; ++i) put_vertex(ring[start + i < k ? start + i : start + i - k]);
+    // put_vertex appends one entry each: wrap around the ring until len entries are in.
+    for (uint32_t i = 0, extra = len - at; i < extra; ++i) put_vertex(ring[start + i < k ? start + i : start + i - k]);
   } else {
     put(0, 0, 0, 7);
   }
