@@ -304,114 +304,6 @@ constexpr uint32_t kTopSelect = 16;            // ranks below: insertion into th
 // negative G is ordered by G / (m_a m_b)), by degree clamped to 7; a missing end as degree 7.
 constexpr uint8_t kWeight[8][2] = {{4, 3}, {4, 3}, {4, 3}, {4, 3}, {4, 3}, {3, 4}, {2, 6}, {2, 6}};
 
-// Scores of the n candidates with `count` interior ring vertices, in integer type I, from prefix
-// sums over the ring in extended canonical order (closed: once around and on as far as the
-// windows reach; open: once, padded by a missing position on each side, offset 0): entry x of
-// p holds the sums of e (3 axes) and of |e|^2 over the positions below x, 4 per entry; wm
-// holds each position's weights m and r. Candidate j's ends are positions a = j and b = j + 1 + count,
-// its interior a + 1 .. b - 1: with P = p[x] sums, E = P[b] - P[a + 1] + P[b + 1] - P[a]
-// (2 * interior + both ends), S = P2[b] - P2[a + 1], |e_a|^2 = P2[a + 1] - P2[a], |e_b|^2 =
-// P2[b + 1] - P2[b] (0 for a missing end, so T = 2 or 4 times their sum). G = |E|^2 + c (4 S -
-// c T); key = G m_a m_b when G >= 0, else G r_a r_b with r = 12 / m (wm: m, r per position).
-template <class I, bool kClosed>
-void score_candidates(const I* p, const uint8_t* wm, uint32_t n, uint32_t count, uint32_t k, I* out) {
-  const I c = I(count);
-  const size_t span = size_t(count + 1) * 4;
-  for (uint32_t j = 0; j < n; ++j, p += 4) {
-    const I* pa = p;
-    const I* pf = p + 4;
-    const I* pb = p + span;
-    const I* pb1 = pb + 4;
-    const I ex = pb[0] - pf[0] + pb1[0] - pa[0], ey = pb[1] - pf[1] + pb1[1] - pa[1],
-            ez = pb[2] - pf[2] + pb1[2] - pa[2];
-    const I S = pb[3] - pf[3], ends = pf[3] - pa[3] + pb1[3] - pb[3];
-    const I T = (kClosed || (j > 0 && j + count < k)) ? 2 * ends : 4 * ends;
-    const I G = ex * ex + ey * ey + ez * ez + c * (4 * S - c * T);
-    const uint8_t* ma = wm + size_t(j) * 2;
-    const uint8_t* mb = ma + span / 2;
-    out[j] = G * I(G >= 0 ? ma[0] * mb[0] : ma[1] * mb[1]);
-  }
-}
-
-// Scores of the candidates with `count` interior ring vertices (into score); returns how many
-// (n). Closed: candidate j has a = j, b = (j + count + 1) mod k. Open: interior starts at j
-// (0 .. k - count), a = j - 1 (none for j = 0), b = j + count (none for k). Every |key| fits 64
-// bits when k (max|e| + 1) < 2^26 (narrow: score_narrow below, the same values); this is the
-// 128-bit path for the other rings (I = 128 bits; rare: cold, optimized for size).
-template <class I, class U>
-[[gnu::cold]] uint32_t score_ring(const int32_t* coords, const uint32_t* degree, const ProgressiveMesh& pm, uint32_t count,
-                    const int32_t* cv, std::vector<I>& buf, std::vector<I>& score, WedgeScratch& s) {
-  const std::span<const uint32_t> ring = pm.ring();
-  const uint32_t k = uint32_t(ring.size()), start = pm.ring_start();
-  const bool closed = pm.ring_closed();
-  const uint32_t n = closed ? k : k - count + 1;
-  // Positions: closed 0 .. k + count + 1 (rank x mod k), open 0 .. k + 1 (rank x - 1; 0 and
-  // k + 1 missing); prefix entries one more.
-  const uint32_t len = closed ? k + count + 2 : k + 2;
-  if (buf.size() < size_t(len + 1) * 4) buf.resize(size_t(len + 1) * 4);
-  if (s.w.size() < size_t(len) * 2) s.w.resize(size_t(len) * 2);
-  if (score.size() < n) score.resize(n);
-  I* q = buf.data();
-  uint8_t* wm = s.w.data();
-  const int64_t cx = cv[0], cy = cv[1], cz = cv[2];
-  U x = 0, y = 0, z = 0, t = 0;
-  uint32_t at = 0;
-  auto put = [&](const int64_t dx, const int64_t dy, const int64_t dz, uint32_t d) {
-    q[0] = I(x);
-    q[1] = I(y);
-    q[2] = I(z);
-    q[3] = I(t);
-    q += 4;
-    x += U(dx);
-    y += U(dy);
-    z += U(dz);
-    t += U(dx) * U(dx) + U(dy) * U(dy) + U(dz) * U(dz);
-    wm[at * 2] = kWeight[d][0];
-    wm[at * 2 + 1] = kWeight[d][1];
-    ++at;
-  };
-  auto put_vertex = [&](uint32_t w) {
-    const int32_t* cw = coords + size_t(w) * 3;
-    const uint32_t d = degree[w];
-    put(cw[0] - cx, cw[1] - cy, cw[2] - cz, d < 7 ? d : 7);
-  };
-  if (!closed) put(0, 0, 0, 7);
-  for (uint32_t j = start; j < k; ++j) put_vertex(ring[j]);
-  for (uint32_t j = 0; j < start; ++j) put_vertex(ring[j]);
-  if (closed) {
-    // put_vertex appends one entry each: wrap around the ring until len entries are in.
-    for (uint32_t i = 0, extra = len - at; i < extra; ++i) put_vertex(ring[start + i < k ? start + i : start + i - k]);
-  } else {
-    put(0, 0, 0, 7);
-  }
-  q[0] = I(x);
-  q[1] = I(y);
-  q[2] = I(z);
-  q[3] = I(t);
-  if (closed)
-    score_candidates<I, true>(buf.data(), wm, n, count, k, score.data());
-  else
-    score_candidates<I, false>(buf.data(), wm, n, count, k, score.data());
-  return n;
-}
-
-// Whether the best of the n scores is over twice the second (equal scores count twice): n < 2,
-// second <= 0, or best - second > second (no overflow: both positive).
-template <class I>
-bool is_confident(const I* sc, uint32_t n) {
-  if (n < 2) return true;
-  I best = sc[0] > sc[1] ? sc[0] : sc[1], second = sc[0] > sc[1] ? sc[1] : sc[0];
-  for (uint32_t j = 2; j < n; ++j) {
-    if (sc[j] > best) {
-      second = best;
-      best = sc[j];
-    } else if (sc[j] > second) {
-      second = sc[j];
-    }
-  }
-  return second <= 0 || best - second > second;
-}
-
 // Whether every score of v's ring fits 64 bits: k (max|e| + 1) < 2^26 (spread: OR of |e| - (e <
 // 0) per component, so every |e| <= spread + 1).
 bool ring_narrow(const int32_t* coords, const ProgressiveMesh& pm, const int32_t* cv) {
@@ -425,14 +317,20 @@ bool ring_narrow(const int32_t* coords, const ProgressiveMesh& pm, const int32_t
   return spread < (uint64_t(1) << 26) && (spread + 1) * ring.size() < (uint64_t(1) << 26);
 }
 
-// The common case in 64 bits (the values of score_ring, found with less work): one pass over
-// the ring for the offsets e, |e|^2 and the weights per position (extended canonical order as in
-// score_ring; a closed ring's wrapped positions copied, not recomputed), then one pass over the
-// candidates with the interior's sums slid along (add the new end b, drop the first interior
-// position), tracking the best two scores (s.confident) and the first best candidate (s.best,
-// rank 0). For a narrow ring (ring_narrow, or shown by s.extent).
-void score_narrow(const int32_t* coords, const uint32_t* degree, const ProgressiveMesh& pm, uint32_t count,
-                  const int32_t* cv, WedgeScratch& s) {
+// Scores of the candidates with `count` interior ring vertices, in integer type I (U its unsigned
+// twin): 64 bits for a narrow ring (ring_narrow, or shown by s.extent: every |key| fits), 128
+// otherwise (rare). Closed: candidate j has a = j, b = (j + count + 1) mod k. Open: interior
+// starts at j (0 .. k - count), a = j - 1 (none for j = 0), b = j + count (none for k). One pass
+// over the ring for the offsets e, |e|^2 and the weights per position (extended canonical order;
+// a closed ring's wrapped positions copied, not recomputed), then one pass over the candidates
+// with the interior's sums slid along (add the new end b, drop the first interior position),
+// tracking the best two scores (s.confident) and the first best candidate (s.best, rank 0).
+// G = |E|^2 + c (4 S - c T) with E = 2 * interior + both ends, S the interior's |e|^2, T = 2 or 4
+// times the ends' |e|^2 (0 for a missing end); key = G m_a m_b when G >= 0, else G r_a r_b with
+// r = 12 / m (spec section 4).
+template <class I, class U>
+void score_wedges(const int32_t* coords, const uint32_t* degree, const ProgressiveMesh& pm, uint32_t count,
+                  const int32_t* cv, std::vector<I>& qbuf, std::vector<I>& score, WedgeScratch& s) {
   const std::span<const uint32_t> ring = pm.ring();
   const uint32_t k = uint32_t(ring.size()), start = pm.ring_start();
   const bool closed = pm.ring_closed();
@@ -440,12 +338,12 @@ void score_narrow(const int32_t* coords, const uint32_t* degree, const Progressi
   // Positions: closed 0 .. k + count (rank x mod k), open 0 .. k + 1 (rank x - 1; 0 and k + 1
   // missing: e = 0, weight as degree 7).
   const uint32_t len = closed ? k + count + 1 : k + 2;
-  if (s.q.size() < size_t(len) * 4) s.q.resize(size_t(len) * 4);
+  if (qbuf.size() < size_t(len) * 4) qbuf.resize(size_t(len) * 4);
   if (s.w.size() < size_t(len) * 2) s.w.resize(size_t(len) * 2);
-  if (s.score64.size() < n) s.score64.resize(n);
-  int64_t* const q0 = s.q.data();
+  if (score.size() < n) score.resize(n);
+  I* const q0 = qbuf.data();
   uint8_t* const w0 = s.w.data();
-  int64_t* q = q0;
+  I* q = q0;
   uint8_t* wm = w0;
   const int64_t cx = cv[0], cy = cv[1], cz = cv[2];
   auto put_vertex = [&](uint32_t w) {
@@ -454,7 +352,7 @@ void score_narrow(const int32_t* coords, const uint32_t* degree, const Progressi
     q[0] = dx;
     q[1] = dy;
     q[2] = dz;
-    q[3] = int64_t(uint64_t(dx) * uint64_t(dx) + uint64_t(dy) * uint64_t(dy) + uint64_t(dz) * uint64_t(dz));
+    q[3] = I(U(dx) * U(dx) + U(dy) * U(dy) + U(dz) * U(dz));
     q += 4;
     const uint32_t d = degree[w];
     const uint8_t* m = kWeight[d < 7 ? d : 7];
@@ -484,30 +382,30 @@ void score_narrow(const int32_t* coords, const uint32_t* degree, const Progressi
   } else {
     put_missing();
   }
-  s.narrow = true;
   // Candidate j: ends at positions j and j + count + 1, interior j + 1 .. j + count.
-  int64_t wx = 0, wy = 0, wz = 0, S = 0;
-  for (const int64_t* p = q0 + 4; p < q0 + size_t(count + 1) * 4; p += 4) {
+  I wx = 0, wy = 0, wz = 0, S = 0;
+  for (const I* p = q0 + 4; p < q0 + size_t(count + 1) * 4; p += 4) {
     wx += p[0];
     wy += p[1];
     wz += p[2];
     S += p[3];
   }
-  const int64_t c = count;
+  const I c = I(count);
   const size_t span = size_t(count + 1);
-  int64_t* const out = s.score64.data();
-  int64_t best = INT64_MIN, second = INT64_MIN;
+  I* const out = score.data();
+  const I lowest = I(U(1) << (8 * sizeof(I) - 1));  // the type's minimum (C++20: modular)
+  I best = lowest, second = lowest;
   uint32_t best_j = 0;
   for (uint32_t j = 0; j < n; ++j) {
-    const int64_t* a = q0 + size_t(j) * 4;
-    const int64_t* b = a + span * 4;
-    const int64_t ex = 2 * wx + a[0] + b[0], ey = 2 * wy + a[1] + b[1], ez = 2 * wz + a[2] + b[2];
-    const int64_t ends = a[3] + b[3];
-    const int64_t T = (closed || (j > 0 && j + count < k)) ? 2 * ends : 4 * ends;
-    const int64_t G = ex * ex + ey * ey + ez * ez + c * (4 * S - c * T);
+    const I* a = q0 + size_t(j) * 4;
+    const I* b = a + span * 4;
+    const I ex = 2 * wx + a[0] + b[0], ey = 2 * wy + a[1] + b[1], ez = 2 * wz + a[2] + b[2];
+    const I ends = a[3] + b[3];
+    const I T = (closed || (j > 0 && j + count < k)) ? 2 * ends : 4 * ends;
+    const I G = ex * ex + ey * ey + ez * ez + c * (4 * S - c * T);
     const uint8_t* ma = w0 + size_t(j) * 2;
     const uint8_t* mb = ma + span * 2;
-    const int64_t sc = G * int64_t(G >= 0 ? ma[0] * mb[0] : ma[1] * mb[1]);
+    const I sc = G * I(G >= 0 ? ma[0] * mb[0] : ma[1] * mb[1]);
     out[j] = sc;
     if (sc > best) {
       second = best;
@@ -526,6 +424,16 @@ void score_narrow(const int32_t* coords, const uint32_t* degree, const Progressi
   s.n = n;
 }
 
+// The two instantiations: 64-bit (every split of a real mesh) and 128-bit (cold, kept small).
+void score_narrow(const int32_t* coords, const uint32_t* degree, const ProgressiveMesh& pm, uint32_t count,
+                  const int32_t* cv, WedgeScratch& s) {
+  score_wedges<int64_t, uint64_t>(coords, degree, pm, count, cv, s.q, s.score64, s);
+}
+[[gnu::cold]] void score_wide(const int32_t* coords, const uint32_t* degree, const ProgressiveMesh& pm, uint32_t count,
+                              const int32_t* cv, WedgeScratch& s) {
+  score_wedges<WedgeScoreSigned, WedgeScore>(coords, degree, pm, count, cv, s.q128, s.score, s);
+}
+
 uint32_t wedge_candidates(const int32_t* coords, const uint32_t* degree, uint32_t v, const ProgressiveMesh& pm,
                           uint32_t count, WedgeScratch& s) {
   const uint32_t k = uint32_t(pm.ring().size());
@@ -540,13 +448,12 @@ uint32_t wedge_candidates(const int32_t* coords, const uint32_t* degree, uint32_
   const int32_t* cv = coords + size_t(v) * 3;
   if ((s.extent < (uint64_t(1) << 26) && (s.extent + 1) * k < (uint64_t(1) << 26)) || ring_narrow(coords, pm, cv)) {
     score_narrow(coords, degree, pm, count, cv, s);
-    return s.n;
+    s.narrow = true;
+  } else {
+    score_wide(coords, degree, pm, count, cv, s);
+    s.narrow = false;
   }
-  const uint32_t n = score_ring<WedgeScoreSigned, WedgeScore>(coords, degree, pm, count, cv, s.q128, s.score, s);
-  s.narrow = false;
-  s.confident = is_confident(s.score.data(), n);
-  s.best = WedgeScratch::kNoBest;
-  return s.n = n;
+  return s.n;
 }
 
 // Candidate order: higher score first, ties by smaller j.
@@ -632,9 +539,9 @@ bool wedge_pick(const ProgressiveMesh& pm, uint32_t count, uint32_t rank, uint32
                 WedgeScratch& s) {
   const uint32_t k = uint32_t(pm.ring().size()), n = s.n;
   if (rank >= n) return false;
-  const uint32_t j = rank == 0 && s.best != WedgeScratch::kNoBest ? s.best
-                     : s.narrow                       ? select(s.score64.data(), n, rank, s.order)
-                                                      : select(s.score.data(), n, rank, s.order);
+  const uint32_t j = rank == 0 ? s.best
+                     : s.narrow ? select(s.score64.data(), n, rank, s.order)
+                                : select(s.score.data(), n, rank, s.order);
   if (pm.ring_closed()) {
     rank_l = j;
     rank_r = (j + count + 1) % k;

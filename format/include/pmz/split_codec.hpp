@@ -274,8 +274,7 @@ struct WedgeScratch {
   bool narrow = true;
   uint32_t n = 0;          // candidates scored last
   bool confident = true;   // their best score is over twice the second (spec section 4)
-  uint32_t best = 0;       // the candidate at rank 0 (kNoBest: not known, wedge_pick selects)
-  static constexpr uint32_t kNoBest = 0xFFFFFFFFu;
+  uint32_t best = 0;       // the candidate at rank 0
   // Optional, set by the caller: a bound on |c[w] - c[v]| (per axis) over all vertex pairs, e.g.
   // the largest side of the coordinates' bounding box. When k (extent + 1) < 2^26 the scores
   // are computed in 64 bits without checking each ring offset. Unknown: UINT64_MAX.
