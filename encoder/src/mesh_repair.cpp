@@ -18,6 +18,7 @@
 #include <unordered_map>
 
 #include "pmz/mesh.hpp"
+#include "pmz/progressive_mesh.hpp"  // next_corner, prev_corner
 
 namespace pmz {
 
@@ -26,8 +27,6 @@ namespace {
 constexpr uint32_t kNone = 0xFFFFFFFFu;
 constexpr size_t kMaxEarClipCorners = 64;  // beyond this, a fan (ear clipping is quadratic)
 
-uint32_t next_corner(uint32_t h) { return h % 3 == 2 ? h - 2 : h + 1; }
-uint32_t prev_corner(uint32_t h) { return h % 3 == 0 ? h + 2 : h - 1; }
 
 // Removes cyclically consecutive repeats in place (a b b c a -> a b c).
 void remove_consecutive_repeats(std::vector<uint32_t>& loop) {

@@ -5,6 +5,7 @@
 #include <unordered_map>
 
 #include "pmz/coding.hpp"
+#include "pmz/progressive_mesh.hpp"
 #include "pmz/range_coder.hpp"
 
 namespace pmz {
@@ -19,8 +20,6 @@ constexpr uint64_t kFacesPerByte = 384, kVerticesPerByte = 48;
 // Open-edge list scans (spec section 2, "BASE"): at most this much per half-edge, plus slack.
 constexpr uint64_t kWorkPerHalfEdge = 16, kWorkSlack = uint64_t(1) << 22;
 
-inline uint32_t next_he(uint32_t h) { return h % 3 == 2 ? h - 2 : h + 1; }
-inline uint32_t prev_he(uint32_t h) { return h % 3 == 0 ? h + 2 : h - 1; }
 inline uint64_t edge_key(uint32_t a, uint32_t b) { return uint64_t(a) << 32 | b; }
 
 struct BaseModels {
@@ -62,8 +61,8 @@ class Front {
   }
   uint32_t face_count() const { return uint32_t(faces.size() / 3); }
   uint32_t from(uint32_t h) const { return faces[h]; }
-  uint32_t to(uint32_t h) const { return faces[next_he(h)]; }
-  uint32_t third(uint32_t h) const { return faces[prev_he(h)]; }
+  uint32_t to(uint32_t h) const { return faces[next_corner(h)]; }
+  uint32_t third(uint32_t h) const { return faces[prev_corner(h)]; }
   // Appends face (x, y, z) (distinct vertices below n): each half-edge is glued to its open
   // twin, if any, or becomes open and a gate.
   void add_face(uint32_t x, uint32_t y, uint32_t z) {
@@ -254,7 +253,7 @@ BaseResult code_base(IO& io, uint32_t n, uint32_t fn, uint32_t midpoint, Oracle*
         has = 1;
         if (oracle->done[it->second / 3]) return error = "BASE face coded twice", BaseResult::corrupt;
         oracle->done[it->second / 3] = 1;
-        g = oracle->faces[prev_he(it->second)];
+        g = oracle->faces[prev_corner(it->second)];
       }
     }
     io.bit(m.face, has);
@@ -294,7 +293,7 @@ bool encode_base(const int32_t* coords, uint32_t n, const uint32_t* faces, uint3
   Oracle oracle{coords, faces, {}, std::vector<uint32_t>(n, kNone), std::vector<uint8_t>(fn, 0), &given_of};
   oracle.edge.reserve(size_t(fn) * 3);
   for (uint32_t h = 0; h < fn * 3; ++h) {
-    const uint32_t a = faces[h], b = faces[next_he(h)];
+    const uint32_t a = faces[h], b = faces[next_corner(h)];
     if (a >= n || a == b) return error = "face " + std::to_string(h / 3) + " is out of range or degenerate", false;
     if (!oracle.edge.emplace(edge_key(a, b), h).second)
       return error = "directed edge " + std::to_string(a) + " -> " + std::to_string(b) + " used twice", false;

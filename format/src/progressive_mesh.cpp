@@ -5,11 +5,6 @@
 
 namespace pmz {
 
-namespace {
-inline uint32_t next_corner(uint32_t c) { return c % 3 == 2 ? c - 2 : c + 1; }
-inline uint32_t prev_corner(uint32_t c) { return c % 3 == 0 ? c + 2 : c - 1; }
-}  // namespace
-
 bool ProgressiveMesh::build(uint32_t n, const uint32_t* indices, size_t faces, std::string& error) {
   corner_vertex.assign(indices, indices + faces * 3);
   opposite.assign(faces * 3, kNoCorner);

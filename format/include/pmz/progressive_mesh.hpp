@@ -14,6 +14,9 @@ namespace pmz {
 
 inline constexpr uint32_t kNoCorner = 0xFFFFFFFFu;
 inline constexpr uint32_t kNoRank = 0xFFFFFFFFu;  // wedge side on the boundary
+// Corner c = 3 * face + k: the face's next and previous corners, counter-clockwise (spec section 4).
+inline uint32_t next_corner(uint32_t c) { return c % 3 == 2 ? c - 2 : c + 1; }
+inline uint32_t prev_corner(uint32_t c) { return c % 3 == 0 ? c + 2 : c - 1; }
 
 class ProgressiveMesh {
  public:
