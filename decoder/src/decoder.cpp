@@ -127,7 +127,7 @@ struct Decoder::Impl {
     return s;
   }
   size_t parse(const uint8_t* p, size_t n);
-  Status chunk(uint32_t type, const uint8_t* p, size_t n);
+  Status chunk(uint8_t type, const uint8_t* p, size_t n);
   [[gnu::cold]] Status head(const uint8_t* p, size_t n);
   Status base(const uint8_t* p, size_t n);
   Status split_chunk(const uint8_t* p, size_t n);
@@ -252,32 +252,48 @@ size_t Decoder::Impl::parse(const uint8_t* p, size_t n) {
     signature_done = true;
     at = 8;
   }
-  while (status == Status::ok && n - at >= kChunkHeaderSize) {
-    ByteReader r(p + at, kChunkHeaderSize);
-    uint32_t type = r.u32le(), size = r.u32le(), crc = r.u32le();
+  while (status == Status::ok) {
+    ChunkFrame f;
+    const FrameStatus fs = parse_chunk_frame(p + at, n - at, f);
     chunk_offset = parse_base + at;
-    if (size > limits.max_chunk_bytes) {
-      fail(Status::limit_exceeded, "chunk of " + std::to_string(size) + " bytes");
+    if (chunk_index == 0 && n - at >= 1 && p[at] != kChunkHead) {  // a 6.x or older file?
+      const size_t k = std::min<size_t>(n - at, 14);
+      if (p[at] == kOldHeadType[0] && std::memcmp(p + at, kOldHeadType, std::min<size_t>(k, 4)) == 0) {
+        if (k < 14) break;  // its version bytes (old HEAD payload bytes 0 and 1) are still to come
+        fail(Status::bad_version, "format " + std::to_string(p[at + 12]) + "." + std::to_string(p[at + 13]) +
+                                      " (this decoder reads format " + std::to_string(kVersionMajor) + ")");
+        return n;
+      }
+    }
+    if (fs == FrameStatus::more) break;  // the frame header continues in the next slice
+    if (fs == FrameStatus::malformed) {
+      fail(Status::corrupt, "chunk size varint malformed");
       return n;
     }
-    if (n - at - kChunkHeaderSize < size) break;
-    const uint8_t* payload = p + at + kChunkHeaderSize;
-    if (chunk_crc(p + at, payload, size) != crc) {
+    // Checked before buffering the payload.
+    if (f.payload_size > limits.max_chunk_bytes) {
+      fail(Status::limit_exceeded, "chunk of " + std::to_string(f.payload_size) + " bytes");
+      return n;
+    }
+    const size_t size = size_t(f.payload_size);
+    if (n - at - f.header_size < size) break;
+    const uint8_t* payload = p + at + f.header_size;
+    if (chunk_crc(p + at, f, payload) != f.crc) {
       fail(Status::bad_checksum, "chunk checksum mismatch");
       return n;
     }
     if (info.complete) {
-      at += kChunkHeaderSize + size;  // bytes after the end marker are ignored
+      at += f.header_size + size;  // bytes after the end marker are ignored
       continue;
     }
-    if (chunk(type, payload, size) != Status::ok) return n;
-    at += kChunkHeaderSize + size;
+    if (chunk(f.type, payload, size) != Status::ok) return n;
+    at += f.header_size + size;
     ++chunk_index;
   }
   return at;
 }
 
-Status Decoder::Impl::chunk(uint32_t type, const uint8_t* p, size_t n) {
+Status Decoder::Impl::chunk(uint8_t type, const uint8_t* p, size_t n) {
   if (chunk_index == 0 && type != kChunkHead) return fail(Status::corrupt, "first chunk is not HEAD");
   if (type == kChunkHead) {
     if (info.header_done) return fail(Status::corrupt, "second HEAD chunk");
@@ -302,7 +318,7 @@ Status Decoder::Impl::chunk(uint32_t type, const uint8_t* p, size_t n) {
 
 Status Decoder::Impl::head(const uint8_t* p, size_t n) {
   FileHeader h;
-  if (!read_head_payload(p, n, h)) return fail(Status::corrupt, "HEAD too short");
+  if (!read_head_payload(p, n, h)) return fail(Status::corrupt, "HEAD malformed");
   if (h.version_major != kVersionMajor)
     return fail(Status::bad_version, "format version " + std::to_string(h.version_major) + "." +
                                          std::to_string(h.version_minor));
@@ -313,11 +329,11 @@ Status Decoder::Impl::head(const uint8_t* p, size_t n) {
   for (int a = 0; a < 3; ++a)
     if (!std::isfinite(h.bbox_min[a]) || !std::isfinite(h.bbox_max[a]) || h.bbox_min[a] > h.bbox_max[a])
       return fail(Status::corrupt, "bad bounding box");
-  if (uint64_t(h.base_vertices) + h.total_splits != h.full_vertices || h.base_faces > h.full_faces ||
+  if (h.base_faces > h.full_faces ||
       h.full_faces > uint64_t(h.base_faces) + 2ull * h.total_splits)
     return fail(Status::corrupt, "inconsistent counts in HEAD");
-  if (h.full_vertices > limits.max_vertices || h.full_faces > limits.max_faces)
-    return fail(Status::limit_exceeded, std::to_string(h.full_vertices) + " vertices, " +
+  if (h.full_vertices() > limits.max_vertices || h.full_faces > limits.max_faces)
+    return fail(Status::limit_exceeded, std::to_string(h.full_vertices()) + " vertices, " +
                                             std::to_string(h.full_faces) + " faces");
   info.header_done = true;
   info.version_major = h.version_major;
@@ -328,7 +344,7 @@ Status Decoder::Impl::head(const uint8_t* p, size_t n) {
   info.fine_curvature = h.fine_curvature;
   info.base_vertices = h.base_vertices;
   info.base_faces = h.base_faces;
-  info.full_vertices = h.full_vertices;
+  info.full_vertices = h.full_vertices();
   info.full_faces = h.full_faces;
   info.total_splits = h.total_splits;
   std::memcpy(info.bbox_min, h.bbox_min, sizeof h.bbox_min);
@@ -338,26 +354,24 @@ Status Decoder::Impl::head(const uint8_t* p, size_t n) {
 }
 
 Status Decoder::Impl::base(const uint8_t* p, size_t n) {
-  ByteReader r(p, n);
-  uint64_t vn = r.varint(), fn = r.varint();
-  if (!r.ok || vn != info.base_vertices || fn != info.base_faces)
-    return fail(Status::corrupt, "BASE counts differ from HEAD");
+  // The payload is the range-coded stream; its counts are HEAD's.
+  const uint32_t vn = uint32_t(info.base_vertices), fn = uint32_t(info.base_faces);
   std::string err;
   BaseMesh bm;
-  switch (decode_base(r.p, r.remaining(), uint32_t(vn), uint32_t(fn), bm, err)) {
+  switch (decode_base(p, n, vn, fn, bm, err)) {
     case BaseResult::ok: break;
     case BaseResult::corrupt: return fail(Status::corrupt, err);
     case BaseResult::limit_exceeded: return fail(Status::limit_exceeded, err);
   }
   ProgressiveMesh m;
-  if (!m.build(uint32_t(vn), bm.faces.data(), fn, err)) return fail(Status::corrupt, "BASE: " + err);
+  if (!m.build(vn, bm.faces.data(), fn, err)) return fail(Status::corrupt, "BASE: " + err);
   mesh = std::move(m);
   choice.reset(mesh);
   group_vs.reserve(kChoiceLag + 2);  // find_vertices() adds at most kChoiceLag + 1 at a time
   coords = std::move(bm.coords);
   for (size_t i = 0; i < vn; ++i) grow_box(&coords[i * 3]);
-  positions.resize(vn * 3);
-  for (size_t i = 0; i < vn * 3; ++i) positions[i] = quant.dequantize(coords[i], int(i % 3));
+  positions.resize(size_t(vn) * 3);
+  for (size_t i = 0; i < size_t(vn) * 3; ++i) positions[i] = quant.dequantize(coords[i], int(i % 3));
   parents.assign(vn, 0xFFFFFFFFu);
   info.base_done = true;
   changes = {};

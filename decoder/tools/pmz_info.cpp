@@ -61,17 +61,19 @@ int main(int argc, char** argv) {
   // Section sizes from the framing (the decode above validated it).
   uint64_t head = 8, base = 0, splits = 0, other = 0, chunks = 0;
   uint64_t stream_bytes[pmz::kSplitStreamCount] = {};
-  for (size_t at = 8; at + pmz::kChunkHeaderSize <= data.size();) {
-    pmz::ByteReader r(data.data() + at, pmz::kChunkHeaderSize);
-    uint32_t type = r.u32le(), size = r.u32le();
-    uint64_t total = pmz::kChunkHeaderSize + uint64_t(size);
-    if (type == pmz::kChunkHead) head += total;
-    else if (type == pmz::kChunkBase) base += total;
-    else if (type == pmz::kChunkSplits) {
+  for (size_t at = 8; at < data.size();) {
+    pmz::ChunkFrame f;
+    if (pmz::parse_chunk_frame(data.data() + at, data.size() - at, f) != pmz::FrameStatus::ok ||
+        f.payload_size > data.size() - at - f.header_size)
+      break;  // bytes after END (the decode above validated everything before)
+    const uint64_t total = f.header_size + f.payload_size;
+    if (f.type == pmz::kChunkHead) head += total;
+    else if (f.type == pmz::kChunkBase) base += total;
+    else if (f.type == pmz::kChunkSplits) {
       splits += total;
       ++chunks;
       uint64_t count = 0, sizes[pmz::kSplitStreamCount] = {};
-      pmz::split_chunk_stream_sizes(data.data() + at + pmz::kChunkHeaderSize, size, count, sizes);
+      pmz::split_chunk_stream_sizes(data.data() + at + f.header_size, size_t(f.payload_size), count, sizes);
       for (int k = 0; k < pmz::kSplitStreamCount; ++k) stream_bytes[k] += sizes[k];
     } else other += total;
     at += total;

@@ -73,15 +73,6 @@ void file_quantizer(const IndexedMesh& mesh, uint32_t bits, FileHeader& h, Quant
   quant.init(h.position_bits, h.bbox_min, h.bbox_max);
 }
 
-// BASE payload (spec section 2): the counts, then the range-coded traversal.
-std::vector<uint8_t> base_payload(uint32_t vertices, uint32_t faces, const std::vector<uint8_t>& stream) {
-  std::vector<uint8_t> payload;
-  put_varint(payload, vertices);
-  put_varint(payload, faces);
-  payload.insert(payload.end(), stream.begin(), stream.end());
-  return payload;
-}
-
 bool make_plan(const CollapseSequence& seq, const WriteOptions& opt, Plan& plan, std::string& error) {
   const IndexedMesh& mesh = seq.mesh;
   const uint32_t n = mesh.vertex_count();
@@ -247,11 +238,8 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
 
   h.base_vertices = base_n;
   h.base_faces = uint32_t(plan.base_faces.size() / 3);
-  h.full_vertices = total_v;
   h.full_faces = mesh.face_count();
   h.total_splits = splits;
-
-  const std::vector<uint8_t> base = base_payload(base_n, h.base_faces, plan.base_stream);
 
   // Splits: replay in final order with the decoder's core to get ranks and predictions. The
   // curvature weight (HEAD) is the file's: one replay codes the splits once per candidate
@@ -350,7 +338,7 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
   write_head_payload(head, h);
   append_chunk(out, kChunkHead, head);
   st.header_bytes = out.size();
-  append_chunk(out, kChunkBase, base);
+  append_chunk(out, kChunkBase, plan.base_stream);  // BASE: the stream alone (its counts are HEAD's)
   st.base_bytes = out.size() - st.header_bytes;
   out.insert(out.end(), split_bytes.begin(), split_bytes.end());
   append_chunk(out, kChunkEnd, {});

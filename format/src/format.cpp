@@ -20,47 +20,73 @@ void put_f32le(std::vector<uint8_t>& out, float v) {
 void write_head_payload(std::vector<uint8_t>& out, const FileHeader& h) {
   out.push_back(uint8_t(h.version_major));
   out.push_back(uint8_t(h.version_minor));
-  out.push_back(uint8_t(h.flags));
-  out.push_back(uint8_t(h.flags >> 8));
+  put_varint(out, h.flags);
   out.push_back(uint8_t(h.position_bits));
   out.push_back(uint8_t(h.curvature));
   out.push_back(uint8_t(h.fine_curvature));
-  out.push_back(0);
-  put_u32le(out, h.base_vertices);
-  put_u32le(out, h.base_faces);
-  put_u32le(out, h.full_vertices);
-  put_u32le(out, h.full_faces);
-  put_u32le(out, h.total_splits);
+  put_varint(out, h.base_vertices);
+  put_varint(out, h.base_faces);
+  put_varint(out, h.total_splits);
+  put_varint(out, h.full_faces);
   for (float f : h.bbox_min) put_f32le(out, f);
   for (float f : h.bbox_max) put_f32le(out, f);
 }
 
 bool read_head_payload(const uint8_t* p, size_t size, FileHeader& h) {
-  if (size < kHeadPayloadSize) return false;
   ByteReader r(p, size);
   h.version_major = r.u8();
   h.version_minor = r.u8();
-  h.flags = r.u8();
-  h.flags |= uint32_t(r.u8()) << 8;
+  bool fits = true;
+  auto u32 = [&] {
+    const uint64_t v = r.varint();
+    fits = fits && v <= 0xFFFFFFFFu;
+    return uint32_t(v);
+  };
+  h.flags = u32();
   h.position_bits = r.u8();
   h.curvature = r.u8();
   h.fine_curvature = r.u8();
-  r.bytes(1);
-  h.base_vertices = r.u32le();
-  h.base_faces = r.u32le();
-  h.full_vertices = r.u32le();
-  h.full_faces = r.u32le();
-  h.total_splits = r.u32le();
+  h.base_vertices = u32();
+  h.base_faces = u32();
+  h.total_splits = u32();
+  h.full_faces = u32();
   for (float& f : h.bbox_min) f = r.f32le();
   for (float& f : h.bbox_max) f = r.f32le();
-  return r.ok;
+  return r.ok && fits;
 }
 
-void append_chunk(std::vector<uint8_t>& out, uint32_t type, const std::vector<uint8_t>& payload) {
-  size_t at = out.size();
-  put_u32le(out, type);
-  put_u32le(out, uint32_t(payload.size()));
-  put_u32le(out, chunk_crc(out.data() + at, payload.data(), payload.size()));
+FrameStatus parse_chunk_frame(const uint8_t* p, size_t n, ChunkFrame& f) {
+  if (n < 1) return FrameStatus::more;
+  f.type = p[0];
+  uint64_t v = 0;
+  size_t at = 1;
+  for (int shift = 0;; shift += 7) {
+    if (shift == 70) return FrameStatus::malformed;  // an 11th byte
+    if (at >= n) return FrameStatus::more;
+    const uint8_t b = p[at++];
+    if (shift == 63 && b > 1) return FrameStatus::malformed;  // beyond 64 bits
+    v |= uint64_t(b & 0x7F) << shift;
+    if (!(b & 0x80)) break;
+  }
+  if (n - at < 4) return FrameStatus::more;
+  f.payload_size = v;
+  f.header_size = at + 4;
+  f.crc = uint32_t(p[at]) | uint32_t(p[at + 1]) << 8 | uint32_t(p[at + 2]) << 16 | uint32_t(p[at + 3]) << 24;
+  return FrameStatus::ok;
+}
+
+void repair_chunk_crc(uint8_t* frame, const ChunkFrame& f) {
+  const uint32_t crc = chunk_crc(frame, f, frame + f.header_size);
+  for (int i = 0; i < 4; ++i) frame[f.header_size - 4 + i] = uint8_t(crc >> (8 * i));
+}
+
+void append_chunk(std::vector<uint8_t>& out, uint8_t type, const std::vector<uint8_t>& payload) {
+  const size_t at = out.size();
+  out.push_back(type);
+  put_varint(out, payload.size());
+  const size_t crc_at = out.size();
+  const uint32_t crc = crc32(payload.data(), payload.size(), crc32(out.data() + at, crc_at - at));
+  put_u32le(out, crc);
   out.insert(out.end(), payload.begin(), payload.end());
 }
 

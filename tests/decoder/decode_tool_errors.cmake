@@ -50,11 +50,13 @@ def varint(p):
     while True:
         v |= (b[p] & 0x7F) << s; s += 7; p += 1
         if b[p - 1] < 0x80: return v, p
-at = 8
-while b[at:at + 4] != b'SPLT':
-    at += 12 + struct.unpack('<I', b[at + 4:at + 8])[0]
-size = struct.unpack('<I', b[at + 4:at + 8])[0]
-p = at + 12
+at = 8  # chunks: u8 type (3: SPLT), varint size, u32 CRC of type, size and payload, payload
+while True:
+    size, q = varint(at + 1)
+    if b[at] == 3: break
+    at = q + 4 + size
+p = q + 4
+end = p + size
 _, p = varint(p)
 _, p = varint(p)
 for k in range(2):
@@ -63,8 +65,8 @@ for k in range(2):
 n, p = varint(p)
 assert n > 0
 b[p:p + n] = b'\xff' * n
-crc = zlib.crc32(bytes(b[at:at + 8]) + bytes(b[at + 12:at + 12 + size]))
-b[at + 8:at + 12] = struct.pack('<I', crc)
+crc = zlib.crc32(bytes(b[at:q]) + bytes(b[q + 4:end]))
+b[q:q + 4] = struct.pack('<I', crc)
 open(sys.argv[2], 'wb').write(b)
 ]=])
 file(REMOVE ${out})

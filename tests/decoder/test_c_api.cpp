@@ -57,20 +57,20 @@ TEST(CApi, StatusReportsDamageFoundWhileRefining) {
   // the top of the range, so every decision decodes as 1: the small-value tree escapes and the
   // escape's bit length reads 63 (> 32), corrupt at the first split.
   size_t at = 8;
-  auto size_at = [&](size_t p) { return uint32_t(b[p + 4] | b[p + 5] << 8 | b[p + 6] << 16 | uint32_t(b[p + 7]) << 24); };
-  while (at + 12 <= b.size() && std::memcmp(&b[at], "SPLT", 4) != 0) at += 12 + size_at(at);
-  ASSERT_LE(at + 12, b.size());
-  const uint32_t size = size_at(at);
-  pmz::ByteReader r(&b[at + 12], size);
+  pmz::ChunkFrame f;
+  while (pmz::parse_chunk_frame(&b[at], b.size() - at, f) == pmz::FrameStatus::ok && f.type != pmz::kChunkSplits)
+    at += f.header_size + size_t(f.payload_size);
+  ASSERT_EQ(f.type, pmz::kChunkSplits);
+  const size_t size = size_t(f.payload_size), payload = at + f.header_size;
+  pmz::ByteReader r(&b[payload], size);
   r.varint();
   r.varint();
   for (int k = 0; k < 2; ++k) r.bytes(size_t(r.varint()));
   const size_t wedge_bytes = size_t(r.varint());
   ASSERT_TRUE(r.ok);
   ASSERT_GT(wedge_bytes, 0u);
-  for (size_t i = 0; i < wedge_bytes; ++i) b[at + 12 + (size - r.remaining()) + i] = 0xFF;
-  const uint32_t crc = pmz::chunk_crc(&b[at], &b[at + 12], size);
-  for (int i = 0; i < 4; ++i) b[at + 8 + i] = uint8_t(crc >> (8 * i));
+  for (size_t i = 0; i < wedge_bytes; ++i) b[payload + (size - r.remaining()) + i] = 0xFF;
+  pmz::repair_chunk_crc(&b[at], f);
 
   pmz_decoder* d = pmz_decoder_create(0, 0);
   ASSERT_EQ(pmz_decoder_feed(d, b.data(), b.size()), PMZ_OK);

@@ -1,5 +1,7 @@
 // Streaming decoder behaviour on a committed sample (tests/data/sample.pmz: a 128-face bumpy
-// sphere written by pmz-encode): prefixes, chunkings, level moves, change tracking, bad input.
+// sphere written by pmz-encode; when the bitstream changes, regenerate it with
+// `pmz-encode tests/data/sample.obj -o tests/data/sample.pmz`): prefixes, chunkings, level moves,
+// change tracking, bad input.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -9,6 +11,7 @@
 
 #include "pmz/coding.hpp"
 #include "pmz/decoder.hpp"
+#include "pmz/format.hpp"
 
 namespace {
 
@@ -44,12 +47,36 @@ void expect_valid(const pmz::Decoder& d) {
   }
 }
 
+// The frame of the chunk at chunk_at (spec section 2: type, varint size, CRC).
+pmz::ChunkFrame frame_at(const std::vector<uint8_t>& b, size_t chunk_at) {
+  pmz::ChunkFrame f;
+  EXPECT_EQ(pmz::parse_chunk_frame(b.data() + chunk_at, b.size() - chunk_at, f), pmz::FrameStatus::ok);
+  return f;
+}
+// Offsets of every chunk of a file.
+std::vector<size_t> chunk_offsets(const std::vector<uint8_t>& b) {
+  std::vector<size_t> at;
+  for (size_t c = 8; c < b.size(); c += frame_at(b, c).header_size + frame_at(b, c).payload_size) at.push_back(c);
+  return at;
+}
+
 // Rewrites a chunk's CRC so corruption reaches the parser instead of the checksum.
-void fix_crc(std::vector<uint8_t>& b, size_t chunk_at) {
-  uint32_t size = uint32_t(b[chunk_at + 4]) | uint32_t(b[chunk_at + 5]) << 8 |
-                  uint32_t(b[chunk_at + 6]) << 16 | uint32_t(b[chunk_at + 7]) << 24;
-  uint32_t crc = pmz::crc32(b.data() + chunk_at + 12, size, pmz::crc32(b.data() + chunk_at, 8));
-  for (int i = 0; i < 4; ++i) b[chunk_at + 8 + i] = uint8_t(crc >> (8 * i));
+void fix_crc(std::vector<uint8_t>& b, size_t chunk_at) { pmz::repair_chunk_crc(&b[chunk_at], frame_at(b, chunk_at)); }
+
+// The file with its HEAD replaced by h (the HEAD chunk re-framed: its size may change).
+std::vector<uint8_t> with_head(const std::vector<uint8_t>& file, const pmz::FileHeader& h) {
+  const pmz::ChunkFrame f = frame_at(file, 8);
+  std::vector<uint8_t> b(file.begin(), file.begin() + 8), payload;
+  pmz::write_head_payload(payload, h);
+  pmz::append_chunk(b, pmz::kChunkHead, payload);
+  b.insert(b.end(), file.begin() + ptrdiff_t(8 + f.header_size + f.payload_size), file.end());
+  return b;
+}
+pmz::FileHeader head_of(const std::vector<uint8_t>& file) {
+  const pmz::ChunkFrame f = frame_at(file, 8);
+  pmz::FileHeader h;
+  EXPECT_TRUE(pmz::read_head_payload(&file[8 + f.header_size], size_t(f.payload_size), h));
+  return h;
 }
 
 class DecoderTest : public ::testing::Test {
@@ -197,17 +224,36 @@ TEST_F(DecoderTest, RejectsWrongMagicAndVersion) {
   EXPECT_EQ(d.face_count(), 0u);
 
   b = file;
-  b[8 + 12] = 5;  // HEAD payload: version_major (5: the previous major, before vertex-choice exclusion, the wedge score and the adaptive coder)
+  b[8 + frame_at(b, 8).header_size] = 6;  // HEAD payload: version_major (6: the previous major, before the compact framing)
   fix_crc(b, 8);
   pmz::Decoder v;
   EXPECT_EQ(v.feed(b.data(), b.size()), pmz::Status::bad_version);
   EXPECT_NE(v.error_message().find("version"), std::string::npos);
 }
 
+// A file of format 6.0 or older (chunks framed by four ASCII type bytes, a u32 size and a u32
+// CRC) is refused as such, with its version, however its bytes arrive.
+TEST_F(DecoderTest, RefusesTheFramingBefore70) {
+  std::vector<uint8_t> old(pmz::kSignature, pmz::kSignature + 8);
+  const uint8_t chunk[] = {'H', 'E', 'A', 'D', 52, 0, 0, 0, 0x12, 0x34, 0x56, 0x78, 6, 0, 0, 0};
+  old.insert(old.end(), chunk, chunk + sizeof chunk);
+  old.resize(8 + 12 + 52, 0);
+  for (size_t slice : {size_t(1), size_t(3), old.size()}) {
+    pmz::Decoder d;
+    pmz::Status s = pmz::Status::ok;
+    for (size_t at = 0; at < old.size() && s == pmz::Status::ok; at += slice)
+      s = d.feed(old.data() + at, std::min(slice, old.size() - at));
+    EXPECT_EQ(s, pmz::Status::bad_version) << "slices of " << slice;
+    EXPECT_NE(d.error_message().find("format 6.0"), std::string::npos) << d.error_message();
+  }
+}
+
 TEST_F(DecoderTest, BadChecksumKeepsLastGoodLevel) {
-  // Corrupt the last byte of the last split chunk's payload (just before the END chunk).
+  // Corrupt the last byte of the last split chunk's payload (just before the END chunk: type 4,
+  // size 0 and its CRC, 6 bytes).
   std::vector<uint8_t> b = file;
-  b[b.size() - 13] ^= 0x5A;
+  ASSERT_EQ(b[b.size() - 6], pmz::kChunkEnd);
+  b[b.size() - 7] ^= 0x5A;
   pmz::Decoder d;
   EXPECT_EQ(d.feed(b.data(), b.size()), pmz::Status::bad_checksum);
   EXPECT_TRUE(d.info().base_done);
@@ -226,49 +272,88 @@ TEST_F(DecoderTest, TruncationIsReportedByFinish) {
 }
 
 TEST_F(DecoderTest, AbsurdCountsHitLimitsBeforeAllocating) {
-  std::vector<uint8_t> b = file;
-  // HEAD payload offsets: full_vertices at 16, total_splits at 24; base_vertices at 8.
-  auto put = [&](size_t off, uint32_t v) {
-    for (int i = 0; i < 4; ++i) b[8 + 12 + off + i] = uint8_t(v >> (8 * i));
-  };
-  put(16, 0xFFFFFFF0u);
-  put(24, 0xFFFFFFF0u - 4);
-  put(8, 4);
-  fix_crc(b, 8);
+  pmz::FileHeader h = head_of(file);
+  h.total_splits = 0xFFFFFFF0u;
+  h.full_faces = 0xFFFFFFF0u;
+  std::vector<uint8_t> b = with_head(file, h);
   pmz::Decoder d;
   EXPECT_EQ(d.feed(b.data(), b.size()), pmz::Status::limit_exceeded);
 
-  b = file;
-  put(16, 1000);  // inconsistent with base + splits
-  fix_crc(b, 8);
+  h = head_of(file);
+  h.full_faces = h.base_faces + 2 * h.total_splits + 1;  // more faces than the splits can add
+  b = with_head(file, h);
   pmz::Decoder c;
   EXPECT_EQ(c.feed(b.data(), b.size()), pmz::Status::corrupt);
 
-  // A chunk claiming a huge payload is refused from its header alone.
-  b.assign(file.begin(), file.begin() + 8);
-  const uint8_t huge[12] = {'S', 'P', 'L', 'T', 0xFF, 0xFF, 0xFF, 0x7F, 0, 0, 0, 0};
-  b.insert(b.end(), huge, huge + 12);
+  // A chunk claiming a huge payload is refused from its header alone (the size varint, even
+  // before the CRC bytes arrive: nothing of the payload is buffered).
+  b.assign(file.begin(), file.begin() + ptrdiff_t(8 + frame_at(file, 8).header_size + frame_at(file, 8).payload_size));
+  const uint8_t huge[] = {pmz::kChunkSplits, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0x01, 0, 0, 0, 0};
+  b.insert(b.end(), huge, huge + sizeof huge);
   pmz::DecoderLimits small;
   small.max_chunk_bytes = 1 << 20;
   pmz::Decoder l(small);
   EXPECT_EQ(l.feed(b.data(), b.size()), pmz::Status::limit_exceeded);
+  // Just above the limit: a 3-byte varint.
+  b.resize(b.size() - sizeof huge);
+  const uint8_t above[] = {pmz::kChunkSplits, 0x81, 0x80, 0x40, 0, 0, 0, 0};  // 2^20 + 1
+  b.insert(b.end(), above, above + sizeof above);
+  pmz::Decoder a(small);
+  EXPECT_EQ(a.feed(b.data(), b.size()), pmz::Status::limit_exceeded);
+}
+
+// The chunk frame (spec section 2): a varint size of more than 10 bytes is malformed, a CRC that
+// does not cover type, size and payload is refused, and a frame header cut anywhere across two
+// feed() calls decodes as the whole.
+TEST_F(DecoderTest, ChunkFrameFields) {
+  const size_t head_end = 8 + frame_at(file, 8).header_size + frame_at(file, 8).payload_size;
+  std::vector<uint8_t> b(file.begin(), file.begin() + ptrdiff_t(head_end));
+  const uint8_t eleven[] = {pmz::kChunkSplits, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x00, 0, 0, 0, 0};
+  b.insert(b.end(), eleven, eleven + sizeof eleven);
+  pmz::Decoder m;
+  EXPECT_EQ(m.feed(b.data(), b.size()), pmz::Status::corrupt);
+  EXPECT_NE(m.error_message().find("varint"), std::string::npos);
+
+  for (size_t at : chunk_offsets(file)) {
+    const pmz::ChunkFrame f = frame_at(file, at);
+    for (size_t i = 0; i < f.header_size; ++i) {  // each byte of the frame header: type, size, CRC
+      if (i == 0 && at == 8) continue;              // HEAD's type: "first chunk is not HEAD"
+      b = file;
+      b[at + i] ^= i == 0 ? 0x40 : 0x01;  // another type, size or CRC (a size 1 off stays a varint)
+      pmz::Decoder d;
+      pmz::Status s = d.feed(b.data(), b.size());
+      if (s == pmz::Status::ok) s = d.finish();
+      EXPECT_NE(s, pmz::Status::ok) << "chunk at " << at << ", header byte " << i;
+    }
+  }
+
+  pmz::Decoder whole;
+  ASSERT_EQ(whole.feed(file.data(), file.size()), pmz::Status::ok);
+  whole.refine();
+  const Snapshot want = snap(whole);
+  for (size_t at : chunk_offsets(file))
+    for (size_t cut = at; cut <= at + frame_at(file, at).header_size; ++cut) {
+      pmz::Decoder d;
+      ASSERT_EQ(d.feed(file.data(), cut), pmz::Status::ok);
+      ASSERT_EQ(d.feed(file.data() + cut, file.size() - cut), pmz::Status::ok) << d.error_message();
+      ASSERT_EQ(d.finish(), pmz::Status::ok);
+      d.refine();
+      EXPECT_TRUE(snap(d) == want) << "cut at " << cut;
+    }
 }
 
 TEST_F(DecoderTest, CorruptedPayloadsNeverCrash) {
   // Flip bytes inside chunks and repair the CRCs, so the parser sees the damage.
-  std::vector<size_t> chunks;
-  for (size_t at = 8; at + 12 <= file.size();) {
-    chunks.push_back(at);
-    at += 12 + (uint32_t(file[at + 4]) | uint32_t(file[at + 5]) << 8);
-  }
+  const std::vector<size_t> chunks = chunk_offsets(file);
   std::mt19937 rng(99);
   int errors = 0;
   for (int trial = 0; trial < 2000; ++trial) {
     std::vector<uint8_t> b = file;
     size_t c = chunks[rng() % chunks.size()];
-    size_t size = uint32_t(b[c + 4]) | uint32_t(b[c + 5]) << 8;
+    const pmz::ChunkFrame f = frame_at(b, c);
+    const size_t size = size_t(f.payload_size);
     if (!size) continue;
-    for (int k = 0; k < 1 + int(rng() % 3); ++k) b[c + 12 + rng() % size] ^= uint8_t(1 + rng() % 255);
+    for (int k = 0; k < 1 + int(rng() % 3); ++k) b[c + f.header_size + rng() % size] ^= uint8_t(1 + rng() % 255);
     fix_crc(b, c);
     pmz::Decoder d;
     pmz::Status s = d.feed(b.data(), b.size());
@@ -282,13 +367,20 @@ TEST_F(DecoderTest, CorruptedPayloadsNeverCrash) {
 }
 
 TEST_F(DecoderTest, UnknownChunksAreSkipped) {
-  // Insert an unknown chunk right after HEAD.
-  size_t head_end = 8 + 12 + (uint32_t(file[12]) | uint32_t(file[13]) << 8);
-  std::vector<uint8_t> extra = {'x', 't', 'r', 'a', 3, 0, 0, 0, 0, 0, 0, 0, 1, 2, 3};
+  // Insert unknown chunks right after HEAD: a small one, and one of 300 bytes (a 2-byte size).
+  const size_t head_end = 8 + frame_at(file, 8).header_size + frame_at(file, 8).payload_size;
   std::vector<uint8_t> b(file.begin(), file.begin() + ptrdiff_t(head_end));
-  b.insert(b.end(), extra.begin(), extra.end());
-  fix_crc(b, head_end);
+  pmz::append_chunk(b, 0x7F, {1, 2, 3});
+  pmz::append_chunk(b, 0xFF, std::vector<uint8_t>(300, 0xAB));
+  ASSERT_EQ(b[head_end + 9 + 1], 0xAC);  // the first takes 9 bytes; 300 = varint AC 02
   b.insert(b.end(), file.begin() + ptrdiff_t(head_end), file.end());
+  for (size_t cut = head_end; cut <= head_end + 9 + 7; ++cut) {  // cuts inside both frame headers
+    pmz::Decoder d;
+    ASSERT_EQ(d.feed(b.data(), cut), pmz::Status::ok);
+    ASSERT_EQ(d.feed(b.data() + cut, b.size() - cut), pmz::Status::ok) << d.error_message();
+    d.refine();
+    EXPECT_EQ(d.face_count(), 128u);
+  }
   pmz::Decoder d;
   ASSERT_EQ(d.feed(b.data(), b.size()), pmz::Status::ok) << d.error_message();
   d.refine();

@@ -85,7 +85,6 @@ pmz::FileHeader header(uint32_t base_vertices, uint32_t base_faces, uint32_t spl
   h.base_vertices = base_vertices;
   h.base_faces = base_faces;
   h.total_splits = splits;
-  h.full_vertices = base_vertices + splits;
   h.full_faces = full_faces;
   for (int a = 0; a < 3; ++a) h.bbox_min[a] = -1, h.bbox_max[a] = 1;
   return h;
@@ -108,10 +107,7 @@ std::vector<uint32_t> base_payload(std::vector<int32_t>& coords, std::vector<uin
   pmz::BaseMesh decoded;
   std::string error;
   EXPECT_TRUE(pmz::encode_base(coords.data(), n, faces.data(), fn, stream, given_of, decoded, error)) << error;
-  payload.clear();
-  varint(payload, n);
-  varint(payload, fn);
-  payload.insert(payload.end(), stream.begin(), stream.end());
+  payload = stream;  // BASE: the stream alone (the counts are HEAD's)
   for (uint32_t d = 0; d < n; ++d) decoded_of[given_of[d]] = d;
   coords = decoded.coords;
   faces = decoded.faces;
@@ -227,21 +223,21 @@ void expect_valid(const pmz::Decoder& d) {
   }
 }
 
+// The frame of the chunk at p, if its header parses (spec section 2).
+bool frame_at(const Bytes& b, size_t p, pmz::ChunkFrame& f) {
+  return p < b.size() && pmz::parse_chunk_frame(&b[p], b.size() - p, f) == pmz::FrameStatus::ok;
+}
+
 void fix_crc(Bytes& b, size_t chunk_at) {
-  uint32_t size;
-  std::memcpy(&size, &b[chunk_at + 4], 4);
-  uint32_t crc = pmz::chunk_crc(&b[chunk_at], &b[chunk_at + 12], size);
-  for (int i = 0; i < 4; ++i) b[chunk_at + 8 + i] = uint8_t(crc >> (8 * i));
+  pmz::ChunkFrame f;
+  ASSERT_TRUE(frame_at(b, chunk_at, f));
+  pmz::repair_chunk_crc(&b[chunk_at], f);
 }
 
 std::vector<size_t> chunk_offsets(const Bytes& b) {
   std::vector<size_t> at;
-  for (size_t p = 8; p + 12 <= b.size();) {
-    uint32_t size;
-    std::memcpy(&size, &b[p + 4], 4);
-    at.push_back(p);
-    p += 12 + size;
-  }
+  pmz::ChunkFrame f;
+  for (size_t p = 8; frame_at(b, p, f); p += f.header_size + size_t(f.payload_size)) at.push_back(p);
   return at;
 }
 
@@ -323,8 +319,8 @@ TEST(Hostile, ChunkClaimingHugePayloadBuffersOnlyWhatArrived) {
   // Within max_chunk_bytes, so the decoder waits for the payload; it must not reserve it.
   Bytes f = signature();
   head(f, header(6, 8, 4, 16));
-  const uint8_t big[12] = {'S', 'P', 'L', 'T', 0, 0, 0, 0x0F, 0, 0, 0, 0};  // 240 MB
-  f.insert(f.end(), big, big + 12);
+  const uint8_t big[] = {pmz::kChunkSplits, 0x80, 0x80, 0x80, 0x78, 0, 0, 0, 0};  // 240 MB (15 << 24)
+  f.insert(f.end(), big, big + sizeof big);
   f.resize(f.size() + 1000, 0x55);
   PeakScope scope;
   pmz::Decoder d;
@@ -334,16 +330,37 @@ TEST(Hostile, ChunkClaimingHugePayloadBuffersOnlyWhatArrived) {
   EXPECT_EQ(d.finish(), pmz::Status::truncated);
 }
 
+// The payload size is checked against max_chunk_bytes when the frame header is complete, before
+// anything of the payload is buffered; a size varint of more than 10 bytes is malformed.
 TEST(Hostile, ChunkOverTheLimitIsRefusedFromItsHeader) {
   pmz::DecoderLimits limits;
   limits.max_chunk_bytes = 4096;
-  Bytes f = signature();
-  head(f, header(6, 8, 4, 16));
-  const uint8_t big[12] = {'x', 'x', 'x', 'x', 0x01, 0x10, 0, 0, 0, 0, 0, 0};  // 4097 bytes
-  f.insert(f.end(), big, big + 12);
-  pmz::Decoder d(limits);
-  EXPECT_EQ(d.feed(f.data(), f.size()), pmz::Status::limit_exceeded);
-  EXPECT_NE(d.error_message().find("chunk"), std::string::npos) << d.error_message();
+  struct Case {
+    std::vector<uint8_t> size;  // the varint
+    pmz::Status want;
+  } cases[] = {
+      {{0x81, 0x20}, pmz::Status::limit_exceeded},                                                // 4097
+      {{0xFF, 0xFF, 0xFF, 0xFF, 0x0F}, pmz::Status::limit_exceeded},                              // 2^32 - 1
+      {{0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x01}, pmz::Status::limit_exceeded},  // 2^63
+      {{0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0x02}, pmz::Status::corrupt},         // beyond 64 bits
+      {{0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x00}, pmz::Status::corrupt},   // 11 bytes
+  };
+  for (const Case& c : cases)
+    for (size_t slice : {size_t(1), size_t(1) << 20}) {
+      Bytes f = signature();
+      head(f, header(6, 8, 4, 16));
+      f.push_back(0x7F);  // an unknown type: its size is checked all the same
+      f.insert(f.end(), c.size.begin(), c.size.end());
+      f.insert(f.end(), 4, 0);  // CRC
+      PeakScope scope;
+      pmz::Decoder d(limits);
+      pmz::Status s = pmz::Status::ok;
+      for (size_t at = 0; at < f.size() && s == pmz::Status::ok; at += slice)
+        s = d.feed(&f[at], std::min(slice, f.size() - at));
+      EXPECT_EQ(s, c.want) << c.size.size() << "-byte size, slices of " << slice;
+      EXPECT_NE(d.error_message().find("chunk"), std::string::npos) << d.error_message();
+      EXPECT_LT(scope.peak(), 64u << 10);
+    }
 }
 
 // BASE counts far beyond what its bytes can hold (spec section 7: at most 384 faces and 48
@@ -352,13 +369,8 @@ TEST(Hostile, ChunkOverTheLimitIsRefusedFromItsHeader) {
 TEST(Hostile, BaseCountsBeyondItsBytesDoNotAllocate) {
   for (const auto& [nv, nf] : {std::pair<uint32_t, uint32_t>{1000000, 8}, {6, 4000000}}) {
     Bytes f = signature();
-    head(f, header(nv, nf, 0, nf));
-    Bytes p;
-    varint(p, nv);
-    varint(p, nf);
-    const Bytes& octa_stream = octa().payload;
-    p.insert(p.end(), octa_stream.begin() + 2, octa_stream.end());
-    pmz::append_chunk(f, pmz::kChunkBase, p);
+    head(f, header(nv, nf, 0, nf));  // BASE's counts are HEAD's
+    pmz::append_chunk(f, pmz::kChunkBase, octa().payload);
     PeakScope scope;
     pmz::Decoder d;
     EXPECT_EQ(d.feed(f.data(), f.size()), pmz::Status::corrupt) << nv << " " << nf;
@@ -383,17 +395,13 @@ TEST(Hostile, BaseTruncatedOrMiscountedIsCorrupt) {
     return std::pair<pmz::Status, bool>(s, d.info().base_done);
   };
   ASSERT_EQ(feed_base(full, 6, 8).first, pmz::Status::ok);
-  for (size_t n = 2; n < full.size(); ++n) {
+  for (size_t n = 0; n < full.size(); ++n) {
     const auto [s, done] = feed_base(Bytes(full.begin(), full.begin() + n), 6, 8);
     EXPECT_EQ(s, pmz::Status::corrupt) << "cut at " << n;
     EXPECT_FALSE(done);
   }
   for (const auto& [nv, nf] : {std::pair<uint32_t, uint32_t>{5, 8}, {3, 8}, {6, 9}, {6, 12}}) {
-    Bytes p;
-    varint(p, nv);
-    varint(p, nf);
-    p.insert(p.end(), full.begin() + 2, full.end());
-    const auto [s, done] = feed_base(p, nv, nf);
+    const auto [s, done] = feed_base(full, nv, nf);
     EXPECT_EQ(s, pmz::Status::corrupt) << nv << " vertices, " << nf << " faces";
     EXPECT_FALSE(done);
   }
@@ -416,10 +424,8 @@ TEST(Hostile, RandomAndMutatedBaseStreams) {
     Bytes p;
     if (mutated) {
       p = octa().payload;
-      p[2 + rnd() % (p.size() - 2)] ^= uint8_t(1 + rnd() % 255);
+      p[rnd() % p.size()] ^= uint8_t(1 + rnd() % 255);
     } else {
-      varint(p, nv);
-      varint(p, nf);
       p.push_back(0);
       for (size_t i = 0, len = 4 + rnd() % 200; i < len; ++i) p.push_back(uint8_t(rnd()));
     }
@@ -491,12 +497,12 @@ TEST(Hostile, SplitCountBeyondItsStreamsIsRefusedBeforeAllocating) {
 // ---- time linear in the input ----
 
 TEST(Hostile, ManyTinyChunksDecodeInLinearTime) {
-  // Unknown empty chunks: 12 bytes each, the cheapest work per byte an attacker can ask for.
+  // Unknown empty chunks: 6 bytes each, the cheapest work per byte an attacker can ask for.
   auto make = [](size_t chunks) {
     Bytes f = signature();
     head(f, header(6, 8, 0, 8));
     pmz::append_chunk(f, pmz::kChunkBase, octa_base_payload());
-    for (size_t i = 0; i < chunks; ++i) pmz::append_chunk(f, pmz::fourcc('n', 'o', 'p', ' '), {});
+    for (size_t i = 0; i < chunks; ++i) pmz::append_chunk(f, 0x7F, {});
     pmz::append_chunk(f, pmz::kChunkEnd, {});
     return f;
   };
@@ -512,7 +518,7 @@ TEST(Hostile, ManyTinyChunksDecodeInLinearTime) {
     }
     return best;
   };
-  const Bytes small = make(25000), large = make(100000);  // 300 KB, 1.2 MB
+  const Bytes small = make(50000), large = make(200000);  // 300 KB, 1.2 MB
   for (size_t slice : {size_t(1), size_t(7), size_t(1) << 20}) {
     const double ts = best_of_3(small, slice), tl = best_of_3(large, slice);
     // 4x the bytes: linear is ~4x, quadratic 16x. Generous for noisy shared machines.
@@ -824,9 +830,11 @@ void corrupt_every_byte(const Bytes& file, bool repair_crc) {
       if (repair_crc) {
         // Repair the chunk holding byte i when its header is intact enough to frame it.
         for (size_t c : chunks) {
-          uint32_t size;
-          std::memcpy(&size, &b[c + 4], 4);
-          if (i >= c && i < c + 12 + size && c + 12 + size <= b.size() && (i < c + 8 || i >= c + 12))
+          pmz::ChunkFrame f;
+          if (!frame_at(b, c, f)) continue;
+          const size_t end = f.header_size + size_t(f.payload_size);
+          const bool in_crc = i >= c + f.header_size - 4 && i < c + f.header_size;
+          if (i >= c && f.payload_size <= b.size() - c && end <= b.size() - c && i < c + end && !in_crc)
             fix_crc(b, c);
         }
       }

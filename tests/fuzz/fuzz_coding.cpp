@@ -342,7 +342,8 @@ void fuzz_split_chunk(const uint8_t* data, size_t size) {
   }
 }
 
-// A BASE payload (varint vertex count, varint face count, range-coded stream), counts capped:
+// A BASE payload (the range-coded stream) after its counts (varint vertex count, varint face
+// count, as HEAD holds them), counts capped:
 // decoded or refused, never a crash. A decoded mesh that is edge-manifold (what the decoder
 // accepts) codes again to a stream that decodes to the same mesh up to the writer's numbering.
 void fuzz_base(const uint8_t* data, size_t size) {

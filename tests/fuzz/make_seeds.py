@@ -18,6 +18,18 @@ import tempfile
 SIGNATURE = bytes([0x89, ord('P'), ord('M'), ord('Z'), 0x0D, 0x0A, 0x1A, 0x0A])
 
 
+def varint(b, i):
+    """LEB128 at b[i]: (value, index after it)."""
+    v = shift = 0
+    while True:
+        x = b[i]
+        i += 1
+        v |= (x & 0x7F) << shift
+        shift += 7
+        if not x & 0x80:
+            return v, i
+
+
 def sphere(rings, segments, bump=0.0):
     v = [(0.0, 0.0, 1.0)]
     for i in range(1, rings):
@@ -121,17 +133,26 @@ def main():
         put('decoder', name + '-whole', b'\x00' + data)
         put('decoder', name + '-bytes', bytes([1, 0, 1 << 2]) + data)
         put('decoder', name + '-mixed', bytes([4, 7, 5 << 2 | 1, 200, 9 << 2 | 2, 31, 3 << 2 | 3, 130, 2 << 2]) + data)
-        # fuzz_coding: whole BASE payloads (part 7) and whole SPLT payloads
-        # (part 6, with 256 vertices before, a generous split budget and a context seed).
+        # fuzz_coding: whole BASE payloads (part 7, after the counts HEAD gives them) and whole
+        # SPLT payloads (part 6, with 256 vertices before, a generous split budget and a context
+        # seed). Chunks: u8 type, varint size, u32 CRC, payload (spec section 2).
         at = 8
-        while at + 12 <= len(data):
-            kind, size = data[at:at + 4], struct.unpack('<I', data[at + 4:at + 8])[0]
-            payload = data[at + 12:at + 12 + size]
-            if kind == b'BASE':
-                put('coding', '%s-BASE-%d' % (name, at), b'\x07' + payload)
-            elif kind == b'SPLT':
+        counts = b''
+        while at < len(data):
+            kind = data[at]
+            size, j = varint(data, at + 1)
+            payload = data[j + 4:j + 4 + size]
+            if kind == 1:  # HEAD: version (2 bytes), varint flags, 3 bytes, varint base counts
+                _, k = varint(payload, 2)
+                k += 3
+                _, e = varint(payload, k)
+                _, e = varint(payload, e)
+                counts = payload[k:e]
+            elif kind == 2:
+                put('coding', '%s-BASE-%d' % (name, at), b'\x07' + counts + payload)
+            elif kind == 3:
                 put('coding', '%s-SPLT-%d' % (name, at), b'\x06\xff\xfb\x00' + payload)
-            at += 12 + size
+            at = j + 4 + size
     # fuzz_coding, other parts: a few hand-made inputs.
     put('coding', 'reader', b'\x00\x10' + bytes(range(16)) + b'\x81\x80\x01\xff\xff\xff\xff\x0f' * 4)
     put('coding', 'varints', b'\x01' + struct.pack('<8Q', 0, 1, 127, 128, 1 << 35, 2**63, 2**64 - 1, 300))

@@ -11,19 +11,32 @@
 namespace pmz {
 
 inline constexpr uint8_t kSignature[8] = {0x89, 'P', 'M', 'Z', 0x0D, 0x0A, 0x1A, 0x0A};
-inline constexpr uint32_t kVersionMajor = 6;
+inline constexpr uint32_t kVersionMajor = 7;
 inline constexpr uint32_t kVersionMinor = 0;
 
-// Chunk = fourcc[4] | u32le payload_size | u32le crc32(fourcc, size, payload) | payload.
-inline constexpr size_t kChunkHeaderSize = 12;
-inline constexpr uint32_t fourcc(char a, char b, char c, char d) {
-  return uint32_t(uint8_t(a)) | uint32_t(uint8_t(b)) << 8 | uint32_t(uint8_t(c)) << 16 |
-         uint32_t(uint8_t(d)) << 24;
+// Chunk = u8 type | varint payload_size | u32le crc32(type, size varint, payload) | payload
+// (spec section 2). Types other than these four are skipped (forward compatibility).
+inline constexpr uint8_t kChunkHead = 1, kChunkBase = 2, kChunkSplits = 3, kChunkEnd = 4;
+inline constexpr size_t kMaxChunkHeader = 1 + 10 + 4;  // a varint has at most 10 bytes
+
+struct ChunkFrame {
+  uint8_t type = 0;
+  size_t header_size = 0;     // type, size varint and CRC: where the payload starts
+  uint64_t payload_size = 0;
+  uint32_t crc = 0;
+};
+enum class FrameStatus { ok, more, malformed };
+// Parses the frame header at p[0 .. n): ok, or more when n ends inside it (a push parser waits
+// for more bytes), or malformed when the size varint has more than 10 bytes or exceeds 64 bits.
+FrameStatus parse_chunk_frame(const uint8_t* p, size_t n, ChunkFrame& f);
+// CRC of a chunk whose header starts at frame (f parsed from it) and whose payload follows.
+inline uint32_t chunk_crc(const uint8_t* frame, const ChunkFrame& f, const uint8_t* payload) {
+  return crc32(payload, size_t(f.payload_size), crc32(frame, f.header_size - 4));
 }
-inline constexpr uint32_t kChunkHead = fourcc('H', 'E', 'A', 'D');
-inline constexpr uint32_t kChunkBase = fourcc('B', 'A', 'S', 'E');
-inline constexpr uint32_t kChunkSplits = fourcc('S', 'P', 'L', 'T');
-inline constexpr uint32_t kChunkEnd = fourcc('E', 'N', 'D', ' ');
+// Rewrites the CRC of the complete chunk at frame to match its contents (tests, fuzzing).
+void repair_chunk_crc(uint8_t* frame, const ChunkFrame& f);
+// Chunks before format 7.0 began with four ASCII type bytes, the first being "HEAD".
+inline constexpr uint8_t kOldHeadType[4] = {'H', 'E', 'A', 'D'};
 
 // Streams of one SPLT chunk, in payload order.
 enum SplitStream : int {
@@ -37,30 +50,30 @@ enum SplitStream : int {
   kSplitStreamCount
 };
 
-inline constexpr size_t kHeadPayloadSize = 52;
-inline constexpr uint32_t kKnownFlags = 0;  // HEAD flags: none defined in 1.0
+inline constexpr uint32_t kKnownFlags = 0;  // HEAD flags: none defined
 
+// HEAD (spec section 2). full_vertices is not stored: base_vertices + total_splits.
 struct FileHeader {
   uint32_t version_major = kVersionMajor, version_minor = kVersionMinor;
   uint32_t flags = 0;
   uint32_t position_bits = 14;  // 0 = lossless float32
   uint32_t curvature = 0;       // prediction offset weights, 0..kMaxCurvature (eighths; spec section 5)
   uint32_t fine_curvature = 0;
-  uint32_t base_vertices = 0, base_faces = 0, full_vertices = 0, full_faces = 0;
+  uint32_t base_vertices = 0, base_faces = 0, full_faces = 0;
   uint32_t total_splits = 0;
   float bbox_min[3] = {0, 0, 0}, bbox_max[3] = {0, 0, 0};
+  uint64_t full_vertices() const { return uint64_t(base_vertices) + total_splits; }
 };
 
 void put_u32le(std::vector<uint8_t>& out, uint32_t v);
 void put_f32le(std::vector<uint8_t>& out, float v);
 void write_head_payload(std::vector<uint8_t>& out, const FileHeader& h);
-// Parses the fixed fields; semantic checks (version, counts) are the caller's.
+// Parses the fields (bytes after them are ignored: later minors may append fields); false when
+// the payload ends early, a varint is malformed or a field exceeds its range (flags and counts
+// uint32). Semantic checks (version, counts) are the caller's.
 bool read_head_payload(const uint8_t* p, size_t size, FileHeader& h);
 // Appends a framed chunk (header + payload) to out.
-void append_chunk(std::vector<uint8_t>& out, uint32_t type, const std::vector<uint8_t>& payload);
-inline uint32_t chunk_crc(const uint8_t* header8, const uint8_t* payload, size_t size) {
-  return crc32(payload, size, crc32(header8, 8));
-}
+void append_chunk(std::vector<uint8_t>& out, uint8_t type, const std::vector<uint8_t>& payload);
 
 // Quantization as Draco's -qp: one step for all axes over the largest bounding-box extent.
 // Float bits <-> int32 that orders like the float (lossless mode coordinates).
