@@ -14,9 +14,10 @@ namespace {
 
 constexpr uint32_t kNone = 0xFFFFFFFFu;
 // Counts a stream of S bytes can hold (spec section 7): a face costs at least two adaptive
-// decisions, a vertex at least 18, and S bytes decode at most 755 (S + 1) of them (the
-// decoder reads up to 4 zero bytes past the end, spec section 8): bounds are per (S + 1).
-constexpr uint64_t kFacesPerByte = 384, kVerticesPerByte = 48;
+// decisions, a vertex at least 12 (four length decisions per residual), and S bytes decode at
+// most 755 (S + 1) of them (the decoder reads up to 4 zero bytes past the end, spec section 8):
+// bounds are per (S + 1).
+constexpr uint64_t kFacesPerByte = 384, kVerticesPerByte = 64;
 // Open-edge list scans (spec section 2, "BASE"): at most this much per half-edge, plus slack.
 constexpr uint64_t kWorkPerHalfEdge = 16, kWorkSlack = uint64_t(1) << 22;
 

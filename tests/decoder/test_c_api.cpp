@@ -55,7 +55,7 @@ TEST(CApi, StatusReportsDamageFoundWhileRefining) {
   ASSERT_FALSE(b.empty());
   // First SPLT chunk: fill its wedge_count stream with 0xFF bytes. The code value then stays at
   // the top of the range, so every decision decodes as 1: the small-value tree escapes and the
-  // escape's bit length reads 63 (> 32), corrupt at the first split.
+  // uint's length escape reads 31 (n = 46 > 32), corrupt at the first split.
   size_t at = 8;
   pmz::ChunkFrame f;
   while (pmz::parse_chunk_frame(&b[at], b.size() - at, f) == pmz::FrameStatus::ok && f.type != pmz::kChunkSplits)

@@ -363,7 +363,7 @@ TEST(Hostile, ChunkOverTheLimitIsRefusedFromItsHeader) {
     }
 }
 
-// BASE counts far beyond what its bytes can hold (spec section 7: at most 384 faces and 48
+// BASE counts far beyond what its bytes can hold (spec section 7: at most 384 faces and 64
 // vertices per byte of the range-coded stream): refused before the per-vertex and per-face
 // arrays are allocated. The same counts are fine for the limits, so only that check stops them.
 TEST(Hostile, BaseCountsBeyondItsBytesDoNotAllocate) {

@@ -280,27 +280,104 @@ void for_each_fan(uint32_t max_k, Body body) {
 // Wedge symbols (spec section 4): every valid wedge of a fan maps to (count, rank) and back,
 // on closed and open fans, random and degenerate (all scores tied) geometry, and lossless-range
 // coordinates (the scores need 128 bits there).
+// Unsigned values (spec section 8): the bytes equal the binarization written out by hand
+// (min(n, 15) through a 4-level tree, n - 15 through a 5-level escape tree, two modeled bits
+// below the leading one per n, the rest direct), at the edges of the tree and of the escape;
+// they round-trip; an escape above 17 (n > 32) is corrupt.
+TEST(UIntModel, RoundTripsAndIsTheSpecBinarization) {
+  const uint32_t values[] = {0, 1, 2, 3, 4, 5, 7, 8, 1000, (1u << 13) - 1, 1u << 13, (1u << 14) - 1, 1u << 14,
+                             (1u << 14) + 5, 1u << 15, (1u << 16) + 3, 0x7FFFFFFFu, 0x80000000u, 0xFFFFFFFFu};
+  std::vector<uint8_t> bytes, manual;
+  {
+    RangeEncoder e(bytes), m(manual);
+    auto a = std::make_unique<UIntModel>();
+    uint16_t length[16], escape[32], high[33][4];
+    for (auto& p : length) p = kProbInit;
+    for (auto& p : escape) p = kProbInit;
+    for (auto& h : high)
+      for (auto& p : h) p = kProbInit;
+    for (int pass = 0; pass < 3; ++pass)
+      for (uint32_t x : values) {
+        encode_uint(e, *a, x);
+        const uint32_t n = x ? 32 - uint32_t(__builtin_clz(x)) : 0, s = n < 15 ? n : 15;
+        for (uint32_t node = 1, i = 4; i-- > 0;) {
+          m.bit(length[node], (s >> i) & 1);
+          node = node * 2 + ((s >> i) & 1);
+        }
+        if (s == 15)
+          for (uint32_t node = 1, i = 5; i-- > 0;) {
+            m.bit(escape[node], ((n - 15) >> i) & 1);
+            node = node * 2 + (((n - 15) >> i) & 1);
+          }
+        if (n >= 2) {
+          uint32_t rest = n - 1, node = 1;
+          for (int i = 0; i < 2 && rest; ++i) {
+            const uint32_t b = (x >> --rest) & 1;
+            m.bit(high[n][node], b);
+            node = node * 2 + b;
+          }
+          m.direct(x, rest);
+        }
+      }
+    e.finish();
+    m.finish();
+  }
+  EXPECT_EQ(bytes, manual);
+  RangeDecoder d(bytes.data(), bytes.size());
+  RangeState st = d.state();
+  auto a = std::make_unique<UIntModel>();
+  for (int pass = 0; pass < 3; ++pass)
+    for (uint32_t x : values) {
+      uint32_t got = 0;
+      ASSERT_TRUE(decode_uint(st, *a, got));
+      EXPECT_EQ(got, x);
+    }
+  EXPECT_TRUE(st.ok);
+  // Length 15 then escape e = 17 (n = 32) decodes; e = 18 .. 31 do not.
+  for (uint32_t esc = 17; esc < 32; ++esc) {
+    std::vector<uint8_t> out;
+    {
+      RangeEncoder rc(out);
+      uint16_t length[16], escape[32];
+      for (auto& p : length) p = kProbInit;
+      for (auto& p : escape) p = kProbInit;
+      for (uint32_t node = 1, i = 4; i-- > 0; node = node * 2 + 1) rc.bit(length[node], 1);
+      for (uint32_t node = 1, i = 5; i-- > 0;) {
+        rc.bit(escape[node], (esc >> i) & 1);
+        node = node * 2 + ((esc >> i) & 1);
+      }
+      rc.direct(0, 31);  // n = 32: the two modeled bits read these as 0 too (any bits do)
+      rc.finish();
+    }
+    RangeDecoder rd(out.data(), out.size());
+    RangeState rs = rd.state();
+    auto m = std::make_unique<UIntModel>();
+    uint32_t x = 0;
+    EXPECT_EQ(decode_uint(rs, *m, x), esc == 17) << esc;
+  }
+}
+
 // Small values (spec section 8): round trip at the edges of the tree and of the escape, and the
-// bytes of values below 15 equal four tree bits written out by hand (node from 1, most
-// significant first); the escape is the tree's 15 then the uint model.
+// bytes of values below 7 equal three tree bits written out by hand (node from 1, most
+// significant first); the escape is the tree's 7 then the uint model.
 TEST(SmallModel, RoundTripsAndIsTheSpecTree) {
-  const uint32_t values[] = {0, 1, 2, 7, 8, 14, 15, 16, 17, 30, 31, 1000, 0xFFFFFFF0u, 0xFFFFFFFEu, 0xFFFFFFFFu};
+  const uint32_t values[] = {0, 1, 2, 3, 4, 6, 7, 8, 9, 14, 15, 16, 22, 1000, 0xFFFFFFF8u, 0xFFFFFFFEu, 0xFFFFFFFFu};
   std::vector<uint8_t> bytes, manual;
   {
     RangeEncoder e(bytes), m(manual);
     SmallModel a;
-    uint16_t tree[16];
+    uint16_t tree[8];
     for (auto& p : tree) p = kProbInit;
     UIntModel escape;
     for (int pass = 0; pass < 3; ++pass)
       for (uint32_t x : values) {
         encode_small(e, a, x);
-        const uint32_t s = x < 15 ? x : 15;
-        for (uint32_t node = 1, i = 4; i-- > 0;) {
+        const uint32_t s = x < 7 ? x : 7;
+        for (uint32_t node = 1, i = 3; i-- > 0;) {
           m.bit(tree[node], (s >> i) & 1);
           node = node * 2 + ((s >> i) & 1);
         }
-        if (s == 15) encode_uint(m, escape, x - 15);
+        if (s == 7) encode_uint(m, escape, x - 7);
       }
     e.finish();
     m.finish();
@@ -1176,6 +1253,23 @@ TEST(BaseCodec, RoundTripsComponentsBoundariesAndVerticesWithoutFaces) {
   base_round_trip({1, 2, 3, -4, 5, 6}, {});
   base_round_trip({9, 0, 0, 0, 9, 0, 0, 0, 9, 1, 1, 1, 5, 5, 5, 7, 7, 7},
                   {0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5});
+}
+
+// The cheapest vertices (spec section 7): without faces and all at one point, each codes only
+// its residuals' 12 length decisions, 60.4 per byte: more than 48 per byte (the bound when
+// a length took six decisions), within the decoder's 64.
+TEST(BaseCodec, CheapestVerticesFitTheCountBound) {
+  const uint32_t n = 100000;
+  const std::vector<int32_t> coords(size_t(n) * 3, 7);
+  std::vector<uint8_t> stream;
+  std::vector<uint32_t> given_of;
+  BaseMesh enc, dec;
+  std::string error;
+  ASSERT_TRUE(encode_base(coords.data(), n, nullptr, 0, stream, given_of, enc, error)) << error;
+  EXPECT_GT(n, 48 * (stream.size() + 1));
+  EXPECT_LE(n, 64 * (stream.size() + 1));
+  ASSERT_EQ(decode_base(stream.data(), stream.size(), n, 0, dec, error), BaseResult::ok) << error;
+  EXPECT_EQ(dec.coords, coords);
 }
 
 TEST(BaseCodec, WriterRefusesWhatIsNotEdgeManifold) {

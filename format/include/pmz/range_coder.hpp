@@ -1,4 +1,4 @@
-// Adaptive binary range coder (LZMA's, 11-bit probabilities, but adaptation shift 4) and the
+// Adaptive binary range coder (LZMA's, 11-bit probabilities, adaptation shift 2 growing to 5) and the
 // binarization of unsigned integers used by SPLT streams (spec/format.md, "Range coding").
 // Header-only so the per-bit work inlines into the stream loops.
 #pragma once
@@ -182,24 +182,39 @@ class RangeDecoder {
   RangeState s_;
 };
 
-// An adaptive model for uint32 values: the bit length n (0..32) through a 6-level binary
-// tree, then the two bits below the leading one adaptively (per n), the rest direct.
+// An adaptive model for uint32 values: the bit length n (0..32) as min(n, 15) through a
+// 4-level binary tree; n >= 15 (an escape: residuals of 14-bit positions stay below it) then
+// n - 15 (0..17) through a 5-level tree; then the two bits below the leading one adaptively
+// (per n), the rest direct (spec section 8). Without the escape, the top levels of a 6-level
+// tree would code bits that are almost always 0, each still costing about 0.01 bit.
+inline constexpr uint32_t kLengthEscape = 15;
 struct UIntModel {
-  uint16_t length[64];
+  uint16_t length[16];
+  uint16_t escape[32];
   uint16_t high[33][4];
   UIntModel() {
     for (auto& p : length) p = kProbInit;
+    for (auto& p : escape) p = kProbInit;
     for (auto& h : high)
       for (auto& p : h) p = kProbInit;
   }
 };
 
 inline void encode_uint(RangeEncoder& rc, UIntModel& m, uint32_t x) {
-  uint32_t n = bit_length(x), node = 1;
-  for (int i = 5; i >= 0; --i) {
-    uint32_t b = (n >> i) & 1;
+  const uint32_t n = bit_length(x), s = n < kLengthEscape ? n : kLengthEscape;
+  uint32_t node = 1;
+  for (int i = 3; i >= 0; --i) {
+    const uint32_t b = (s >> i) & 1;
     rc.bit(m.length[node], b);
     node = node * 2 + b;
+  }
+  if (s == kLengthEscape) {
+    node = 1;
+    for (int i = 4; i >= 0; --i) {
+      const uint32_t b = ((n - kLengthEscape) >> i) & 1;
+      rc.bit(m.escape[node], b);
+      node = node * 2 + b;
+    }
   }
   if (n < 2) return;
   uint32_t rest = n - 1, hnode = 1;
@@ -214,9 +229,14 @@ inline void encode_uint(RangeEncoder& rc, UIntModel& m, uint32_t x) {
 // Returns false for a bit length above 32 (corrupt input).
 [[gnu::always_inline]] inline bool decode_uint(RangeState& s, UIntModel& m, uint32_t& x) {
   uint32_t node = 1;
-  for (int i = 0; i < 6; ++i) node = node * 2 + s.bit(m.length[node]);
-  uint32_t n = node - 64;
-  if (n > 32) return false;
+  for (int i = 0; i < 4; ++i) node = node * 2 + s.bit(m.length[node]);
+  uint32_t n = node - 16;
+  if (n == kLengthEscape) [[unlikely]] {
+    node = 1;
+    for (int i = 0; i < 5; ++i) node = node * 2 + s.bit(m.escape[node]);
+    n = node - 32 + kLengthEscape;
+    if (n > 32) return false;
+  }
   if (n < 2) {
     x = n;
     return true;
@@ -238,22 +258,22 @@ inline void encode_uint(RangeEncoder& rc, UIntModel& m, uint32_t x) {
   return ok;
 }
 
-// An adaptive model for small unsigned values (wedge symbols): min(x, 15) as four bits, most
-// significant first, through a binary tree (node from 1, 16 entries); x >= 15 then codes x - 15
+// An adaptive model for small unsigned values (wedge symbols): min(x, 7) as three bits, most
+// significant first, through a binary tree (node from 1, 8 entries); x >= 7 then codes x - 7
 // with a uint model.
 struct SmallModel {
-  uint16_t tree[16];
+  uint16_t tree[8];
   UIntModel escape;
   SmallModel() {
     for (auto& p : tree) p = kProbInit;
   }
 };
-inline constexpr uint32_t kSmallEscape = 15;
+inline constexpr uint32_t kSmallEscape = 7;
 
 inline void encode_small(RangeEncoder& rc, SmallModel& m, uint32_t x) {
   const uint32_t s = x < kSmallEscape ? x : kSmallEscape;
   uint32_t node = 1;
-  for (int i = 3; i >= 0; --i) {
+  for (int i = 2; i >= 0; --i) {
     const uint32_t b = (s >> i) & 1;
     rc.bit(m.tree[node], b);
     node = node * 2 + b;
@@ -264,8 +284,8 @@ inline void encode_small(RangeEncoder& rc, SmallModel& m, uint32_t x) {
 // False when the escaped value is corrupt (bit length above 32, or x beyond uint32).
 [[gnu::always_inline]] inline bool decode_small(RangeState& st, SmallModel& m, uint32_t& x) {
   uint32_t node = 1;
-  for (int i = 0; i < 4; ++i) node = node * 2 + st.bit(m.tree[node]);
-  x = node - 16;
+  for (int i = 0; i < 3; ++i) node = node * 2 + st.bit(m.tree[node]);
+  x = node - 8;
   if (x < kSmallEscape) return true;
   uint32_t rest;
   if (!decode_uint(st, m.escape, rest) || rest > 0xFFFFFFFFu - kSmallEscape) return false;
