@@ -24,15 +24,15 @@ constexpr uint64_t kWorkPerHalfEdge = 16, kWorkSlack = uint64_t(1) << 22;
 inline uint64_t edge_key(uint32_t a, uint32_t b) { return uint64_t(a) << 32 | b; }
 
 struct BaseModels {
-  uint16_t face = kProbInit;   // a gate has a face beyond it
-  uint16_t is_new[5];          // 0: a component's first face; 1 + [left] + 2 [right]
-  uint16_t is_left[2];         // by [right]
-  uint16_t is_right = kProbInit;
+  Prob face = kProbInit;       // a gate has a face beyond it
+  Prob is_new[5];              // 0: a component's first face; 1 + [left] + 2 [right]
+  Prob is_left[2];             // by [right]
+  Prob is_right = kProbInit;
   UIntModel other;             // an earlier vertex: vertices - 1 - id
   UIntModel residual[2][3];    // [0] parallelogram, [1] from the previous vertex; per axis
   BaseModels() {
-    for (uint16_t& p : is_new) p = kProbInit;
-    for (uint16_t& p : is_left) p = kProbInit;
+    for (Prob& p : is_new) p = kProbInit;
+    for (Prob& p : is_left) p = kProbInit;
   }
 };
 
@@ -154,7 +154,7 @@ struct Oracle {
 struct EncodeIO {
   static constexpr bool kEncode = true;
   RangeEncoder rc;
-  void bit(uint16_t& p, uint32_t& b) { rc.bit(p, b); }
+  void bit(Prob& p, uint32_t& b) { rc.bit(p, b); }
   void direct(uint32_t& b) { rc.direct(b, 1); }
   bool uint(UIntModel& m, uint32_t& x) {
     encode_uint(rc, m, x);
@@ -166,7 +166,7 @@ struct EncodeIO {
 struct DecodeIO {
   static constexpr bool kEncode = false;
   RangeState s;
-  void bit(uint16_t& p, uint32_t& b) { b = s.bit(p); }
+  void bit(Prob& p, uint32_t& b) { b = s.bit(p); }
   void direct(uint32_t& b) { b = s.direct(1); }
   bool uint(UIntModel& m, uint32_t& x) { return decode_uint(s, m, x); }
   bool ok() const { return s.ok; }

@@ -236,7 +236,7 @@ namespace {
 SplitModels::SplitModels() {
   for (uint32_t c = 0; c < kChoiceContexts; ++c) {
     const uint32_t d = c / (2 * kChoiceDegrees);
-    choice[c] = d == 0 ? uint16_t(kProbInit) : primed_model(choice_prior(d));
+    choice[c] = d == 0 ? kProbInit : primed_model(choice_prior(d));
   }
 }
 
@@ -252,7 +252,7 @@ bool SplitChunkReader::begin_group(VertexChoice& choice, uint32_t limit) {
 bool SplitChunkReader::find(VertexChoice& choice, const ProgressiveMesh* mesh, uint32_t upto,
                             std::vector<uint32_t>& vs) {
   RangeState st = choice_dec_->state();
-  uint16_t* m = models_->choice;
+  Prob* m = models_->choice;
   const int r = choice.scan(mesh, upto, [&](uint32_t w, uint32_t ctx) {
     const uint32_t b = st.bit(m[ctx]);
     if (!st.ok) return -1;  // past the end: a valid stream never gets here

@@ -81,78 +81,118 @@ TEST(ZigZag, RoundTrips) {
 
 // Spec section 8's adaptation, written out from the text: probability and count kept apart.
 struct SpecModel {
-  uint32_t p = 1024, count = 0;
+  uint32_t p = 16384, count = 0;
   void update(uint32_t b) {
-    const uint32_t shift = count < 10 ? 2 : count < 20 ? 3 : count < 31 ? 4 : 5;
+    const uint32_t shift = count < 8 ? 2 : count < 16 ? 3 : count < 48 ? 4 : count < 127 ? 5 : 6;
     if (b == 0)
-      p += (2048 - p) >> shift;
+      p += (32528 - p) >> shift;
     else
-      p -= p >> shift;
-    if (count < 31) ++count;
+      p -= (p - 240) >> shift;
+    if (count < 127) ++count;
   }
 };
 
 TEST(RangeCoder, AdaptationIsTheSpecSchedule) {
-  // By hand: ten 1 bits at shift 2 from 1024, then shift 3.
-  uint16_t m = uint16_t(kProbInit);
-  const uint32_t want[] = {768, 576, 432, 324, 243, 183, 138, 104, 78, 59, 52};
-  for (uint32_t i = 0; i < 11; ++i) {
+  // By hand: eight 1 bits at shift 2 from 16384, then shift 3: p - 240 = 16144 shrinks by a
+  // quarter per step (the step rounded down), then an eighth.
+  Prob m = kProbInit;
+  const uint32_t want[] = {12348, 9321, 7051, 5349, 4072, 3114, 2396, 1857, 1655};
+  for (uint32_t i = 0; i < 9; ++i) {
     m = adapt(m, 1);
     EXPECT_EQ(m & kProbMask, want[i]) << i;
   }
-  EXPECT_EQ(adapt(uint16_t(kProbInit), 0) & kProbMask, 1280u);
+  EXPECT_EQ(adapt(kProbInit, 0) & kProbMask, 20420u);  // 16384 + (32528 - 16384) / 4
   std::mt19937 rng(7);
   for (int run = 0; run < 200; ++run) {
     SpecModel ref;
-    uint16_t model = uint16_t(kProbInit);
+    Prob model = kProbInit;
     const uint32_t bias = rng() % 100;
-    for (int i = 0; i < 100; ++i) {
+    for (int i = 0; i < 300; ++i) {
       const uint32_t b = rng() % 100 < bias ? 1u : 0u;
       ref.update(b);
       model = adapt(model, b);
       ASSERT_EQ(model & kProbMask, ref.p) << run << " " << i;
-      ASSERT_EQ(uint32_t(model >> kProbBits), ref.count) << run << " " << i;
+      ASSERT_EQ(uint32_t(model >> kCountShift), ref.count) << run << " " << i;
     }
   }
 }
 
-// Every state reachable from the initial model keeps the probability within [15, 2033] (the
-// decoders normalise with one shift, which needs a coded bit to keep >= 2^16 of the range), and
-// both ends are reached.
+// Every state reachable from the initial model or a primed one keeps the probability within
+// [240, 32528] (the decoders normalise with one shift, which needs a coded bit to keep >= 2^16
+// of the range: (2^24 >> 15) * 240 >= 2^16), and it comes within a step of both ends (a step
+// moves p toward 240 or 32528 by a rounded-down fraction, so it never quite gets there).
 TEST(RangeCoder, ReachableProbabilitiesStayInBounds) {
-  std::vector<uint8_t> seen(1u << 16, 0);
-  std::vector<uint16_t> todo = {uint16_t(kProbInit)};
-  seen[kProbInit] = 1;
-  // Every primed start (a prior 15..2033 at count 20), e.g. the choice models'.
-  for (uint32_t p = 15; p <= 2033; ++p) {
-    const uint16_t m = primed_model(p);
-    if (!seen[m]) seen[m] = 1, todo.push_back(m);
-  }
-  uint32_t lo = 2048, hi = 0;
-  while (!todo.empty()) {
-    const uint16_t m = todo.back();
-    todo.pop_back();
-    lo = std::min(lo, uint32_t(m & kProbMask));
-    hi = std::max(hi, uint32_t(m & kProbMask));
-    for (uint32_t b = 0; b < 2; ++b) {
-      const uint16_t n = adapt(m, b);
-      if (!seen[n]) seen[n] = 1, todo.push_back(n);
+  static_assert(kProbMin == 240 && kProbMax == 32528 && kProbBits == 15);
+  static_assert(((kTop >> kProbBits) * kProbMin) >= (1u << 16));
+  // The lowest and highest probability over every state reachable from the starts.
+  auto reach = [](std::vector<Prob> todo, uint32_t& lo, uint32_t& hi) {
+    std::vector<uint8_t> seen(size_t(kMaxCount + 1) << kCountShift, 0);
+    for (Prob m : todo) seen[m] = 1;
+    lo = kProbOne, hi = 0;
+    while (!todo.empty()) {
+      const Prob m = todo.back();
+      todo.pop_back();
+      lo = std::min(lo, uint32_t(m & kProbMask));
+      hi = std::max(hi, uint32_t(m & kProbMask));
+      for (uint32_t b = 0; b < 2; ++b) {
+        const Prob n = adapt(m, b);
+        ASSERT_LT(n, seen.size());
+        if (!seen[n]) seen[n] = 1, todo.push_back(n);
+      }
     }
+  };
+  // Every primed start (a prior 240..32528 at count 16, e.g. the choice models') and the
+  // initial model: the primed starts at the ends are the ends.
+  std::vector<Prob> starts = {kProbInit};
+  for (uint32_t p = kProbMin; p <= kProbMax; ++p) starts.push_back(primed_model(p));
+  uint32_t lo, hi;
+  reach(starts, lo, hi);
+  EXPECT_EQ(lo, 240u);
+  EXPECT_EQ(hi, 32528u);
+  // From the initial model alone the ends are not reached: within 2^shift - 1 of them.
+  reach({kProbInit}, lo, hi);
+  EXPECT_GT(lo, 240u);
+  EXPECT_LT(lo, 240u + 64);
+  EXPECT_LT(hi, 32528u);
+  EXPECT_GT(hi, 32528u - 64);
+}
+
+// Encoder and decoder are inverses at every probability a model can hold: per p in [240, 32528],
+// a run of bits at that p (the first after a 1 at p = 16384, so the range is not 2^32 - 1),
+// then the ending.
+TEST(RangeCoder, EveryProbabilityRoundTrips) {
+  std::mt19937 rng(13);
+  for (uint32_t p = kProbMin; p <= kProbMax; ++p) {
+    const uint32_t bits = rng();
+    std::vector<uint8_t> out;
+    {
+      RangeEncoder rc(out);
+      Prob half = kProbInit;
+      rc.bit(half, 1);
+      for (int i = 0; i < 6; ++i) {
+        Prob m = p;  // the same probability each time (count 0 only matters for adaptation)
+        rc.bit(m, (bits >> i) & 1);
+      }
+      rc.finish();
+    }
+    RangeDecoder rd(out.data(), out.size());
+    RangeState st = rd.state();
+    Prob half = kProbInit;
+    ASSERT_EQ(st.bit(half), 1u) << p;
+    for (int i = 0; i < 6; ++i) {
+      Prob m = p;
+      ASSERT_EQ(st.bit(m), (bits >> i) & 1) << p << " " << i;
+    }
+    ASSERT_TRUE(st.ok) << p;
   }
-  EXPECT_EQ(lo, 15u);
-  EXPECT_EQ(hi, 2033u);
-  // Why primed models start at count 20: from 1984 at count 0, ten 0 bits at shift 2 reach 2043.
-  uint16_t m = uint16_t(1984);
-  for (int i = 0; i < 10; ++i) m = adapt(m, 0);
-  EXPECT_EQ(m & kProbMask, 2043u);
 }
 
 TEST(RangeCoder, BitsDirectBitsAndValuesRoundTrip) {
   std::mt19937 rng(11);
   std::vector<uint8_t> out;
-  uint16_t enc_models[4], dec_models[4];
-  for (auto& p : enc_models) p = uint16_t(kProbInit);
-  for (auto& p : dec_models) p = uint16_t(kProbInit);
+  Prob enc_models[4], dec_models[4];
+  for (auto& p : enc_models) p = kProbInit;
+  for (auto& p : dec_models) p = kProbInit;
   auto enc_uint = std::make_unique<UIntModel>(), dec_uint = std::make_unique<UIntModel>();
   std::vector<uint32_t> bits, values;
   {
@@ -191,16 +231,16 @@ TEST(RangeCoder, StreamEndingIsTheShortestValue) {
   }
   EXPECT_TRUE(out.empty());  // nothing coded: value 0, every byte dropped
   {
-    uint16_t m = uint16_t(kProbInit);
+    Prob m = kProbInit;
     RangeEncoder rc(out);
     rc.bit(m, 0);
     rc.finish();
   }
   EXPECT_TRUE(out.empty());  // a 0 keeps [0, 2^31): 0 again
   {
-    // A 1 at p = 1024: low = (0xFFFFFFFF >> 11) * 1024 = 0x7FFFFC00, low + range = 0xFFFFFFFF;
+    // A 1 at p = 16384: low = (0xFFFFFFFF >> 15) * 16384 = 0x7FFFC000, low + range = 0xFFFFFFFF;
     // 0x80000000 is the value with the most trailing zeros in it: bytes 80 00 00 00 -> 80.
-    uint16_t m = uint16_t(kProbInit);
+    Prob m = kProbInit;
     RangeEncoder rc(out);
     rc.bit(m, 1);
     rc.finish();
@@ -220,7 +260,7 @@ TEST(RangeCoder, AtMostFourZeroBytesPastTheEnd) {
   RangeDecoder d(none.data(), 0);  // code = 4 implied zero bytes
   RangeState s = d.state();
   EXPECT_TRUE(s.ok);
-  uint16_t m = uint16_t(kProbInit);
+  Prob m = kProbInit;
   EXPECT_EQ(s.bit(m), 0u);  // range 2^31 - ...: no byte needed yet
   EXPECT_TRUE(s.ok);
   (void)s.direct(8);  // the range falls below 2^24: one more byte, a fifth past the end
@@ -230,7 +270,7 @@ TEST(RangeCoder, AtMostFourZeroBytesPastTheEnd) {
   for (int trial = 0; trial < 300; ++trial) {
     std::vector<uint8_t> out;
     std::vector<uint32_t> bits;
-    uint16_t em = uint16_t(kProbInit);
+    Prob em = kProbInit;
     {
       RangeEncoder rc(out);
       const int n = int(rng() % 200);
@@ -242,7 +282,7 @@ TEST(RangeCoder, AtMostFourZeroBytesPastTheEnd) {
     }
     RangeDecoder rd(out.data(), out.size());
     RangeState st = rd.state();
-    uint16_t dm = uint16_t(kProbInit);
+    Prob dm = kProbInit;
     for (uint32_t b : bits) ASSERT_EQ(st.bit(dm), b) << trial;
     EXPECT_TRUE(st.ok) << trial;
   }
@@ -291,7 +331,7 @@ TEST(UIntModel, RoundTripsAndIsTheSpecBinarization) {
   {
     RangeEncoder e(bytes), m(manual);
     auto a = std::make_unique<UIntModel>();
-    uint16_t length[16], escape[32], high[33][4];
+    Prob length[16], escape[32], high[33][4];
     for (auto& p : length) p = kProbInit;
     for (auto& p : escape) p = kProbInit;
     for (auto& h : high)
@@ -338,7 +378,7 @@ TEST(UIntModel, RoundTripsAndIsTheSpecBinarization) {
     std::vector<uint8_t> out;
     {
       RangeEncoder rc(out);
-      uint16_t length[16], escape[32];
+      Prob length[16], escape[32];
       for (auto& p : length) p = kProbInit;
       for (auto& p : escape) p = kProbInit;
       for (uint32_t node = 1, i = 4; i-- > 0; node = node * 2 + 1) rc.bit(length[node], 1);
@@ -366,7 +406,7 @@ TEST(SmallModel, RoundTripsAndIsTheSpecTree) {
   {
     RangeEncoder e(bytes), m(manual);
     SmallModel a;
-    uint16_t tree[8];
+    Prob tree[8];
     for (auto& p : tree) p = kProbInit;
     UIntModel escape;
     for (int pass = 0; pass < 3; ++pass)
@@ -1153,15 +1193,16 @@ TEST(VertexChoice, ExclusionLagsAndAViolatingStreamIsRefused) {
 }
 
 // The choice models start from the expected gap (spec "Vertex choice"): probability of a 0,
-// scaled to 2048, min(2048 - floor(8192 / (3 * 2^d)), 1984) for class d >= 1, 1024 for d = 0.
+// scaled to 32768, min(32768 - floor(131072 / (3 * 2^d)), 31744) for class d >= 1, 16384 for
+// d = 0.
 TEST(VertexChoice, ModelPriorsAreTheSpecTable) {
   const SplitModels m;
-  const uint16_t want[21] = {1024, 683,  1366, 1707, 1878, 1963, 1984, 1984, 1984, 1984, 1984,
-                             1984, 1984, 1984, 1984, 1984, 1984, 1984, 1984, 1984, 1984};
+  const uint32_t want[21] = {16384, 10923, 21846, 27307, 30038, 31403, 31744, 31744, 31744, 31744, 31744,
+                             31744, 31744, 31744, 31744, 31744, 31744, 31744, 31744, 31744, 31744};
   for (uint32_t c = 0; c < kChoiceContexts; ++c) {
     const uint32_t d = c / (2 * kChoiceDegrees);
     EXPECT_EQ(m.choice[c] & kProbMask, want[d]) << c;
-    EXPECT_EQ(uint32_t(m.choice[c] >> kProbBits), d == 0 ? 0u : 20u) << c;  // primed: count 20
+    EXPECT_EQ(uint32_t(m.choice[c] >> kCountShift), d == 0 ? 0u : 16u) << c;  // primed: count 16
   }
 }
 
@@ -1296,7 +1337,7 @@ TEST(BaseCodec, HandCodedStreamIsTheSpec) {
     std::vector<uint8_t> out;
     RangeEncoder rc(out);
     rc.direct(0, 1);
-    uint16_t is_new[5] = {kProbInit, kProbInit, kProbInit, kProbInit, kProbInit}, face = kProbInit;
+    Prob is_new[5] = {kProbInit, kProbInit, kProbInit, kProbInit, kProbInit}, face = kProbInit;
     UIntModel jump[3], par[3], other;
     const int32_t c[4][3] = {{100, 200, 300}, {110, 190, 300}, {105, 210, 301}, {105, 180, 299}};
     int32_t last[3] = {0, 0, 0};

@@ -1,4 +1,4 @@
-// Adaptive binary range coder (LZMA's, 11-bit probabilities, adaptation shift 2 growing to 5) and the
+// Adaptive binary range coder (LZMA's, 15-bit probabilities, adaptation shift 2 growing to 6) and the
 // binarization of unsigned integers used by SPLT streams (spec/format.md, "Range coding").
 // Header-only so the per-bit work inlines into the stream loops.
 #pragma once
@@ -8,38 +8,43 @@
 
 namespace pmz {
 
-inline constexpr uint32_t kProbBits = 11, kProbInit = 1u << (kProbBits - 1);
-inline constexpr uint32_t kProbMask = (1u << kProbBits) - 1, kTop = 1u << 24;
+inline constexpr uint32_t kProbBits = 15, kProbOne = 1u << kProbBits, kTop = 1u << 24;
 // A stream's bytes past its end read as 0, up to this many; reading further is an error.
 inline constexpr uint32_t kStreamPad = 4;
 
-// A bit model is one uint16: the 11-bit probability of a 0 in bits 0..10, and in bits 11..15
-// how many bits it has coded, saturating at 31. The adaptation shift grows with that count:
-// 2 for the model's first 10 bits, 3 for the next 10, 4 for the next 11, then 5 (spec section 8).
-// kProbInit is the initial model (probability 1/2, count 0). The probability stays within
-// [15, 2033] whatever the bits (the range coders rely on it).
-inline constexpr uint32_t model_shift(uint32_t count) { return 2 + (count >= 10) + (count >= 20) + (count >= 31); }
-// Per count: the shift, and the next count in bits 11..15 (two loads per coded bit, no masking).
+// A bit model (Prob) is one uint32: the 15-bit probability of a 0 in bits 0..14, and from bit 16
+// how many bits it has coded, saturating at 127. The adaptation shift grows with that count: 2
+// for the model's first 8 bits, 3 for the next 8, 4 for the next 32, 5 for the next 79, then 6
+// (spec section 8). A step moves p toward kProbMin or kProbMax, not 0 or 1, so p stays within
+// [kProbMin, kProbMax] whatever the bits (the range coders' one-shift normalisation relies on
+// it) and a decision costs at least log2(32768 / 32528) > 0.01 bit (the count bounds of spec
+// section 7). kProbInit is the initial model (probability 1/2, count 0).
+using Prob = uint32_t;
+inline constexpr uint32_t kProbMin = 240, kProbMax = kProbOne - kProbMin, kProbInit = kProbOne / 2;
+inline constexpr uint32_t kCountShift = 16, kProbMask = (1u << kCountShift) - 1, kMaxCount = 127;
+inline constexpr uint32_t model_shift(uint32_t count) {
+  return 2 + (count >= 8) + (count >= 16) + (count >= 48) + (count >= kMaxCount);
+}
+// Per count: the shift, and the next count in bits 16.. (two loads per coded bit, no masking).
 struct AdaptTable {
-  uint8_t shift[32];
-  uint16_t next[32];
+  uint8_t shift[kMaxCount + 1];
+  uint32_t next[kMaxCount + 1];
   constexpr AdaptTable() : shift(), next() {
-    for (uint32_t c = 0; c < 32; ++c) {
+    for (uint32_t c = 0; c <= kMaxCount; ++c) {
       shift[c] = uint8_t(model_shift(c));
-      next[c] = uint16_t((c < 31 ? c + 1 : 31) << kProbBits);
+      next[c] = (c < kMaxCount ? c + 1 : kMaxCount) << kCountShift;
     }
   }
 };
 inline constexpr AdaptTable kAdapt{};
-// A model that starts from a prior probability p (15..2033) other than 1/2 starts at count 20
-// (shift 4): at count 0 the fast steps would both forget the prior and could push p out of
-// [15, 2033] (from 1984, ten shift-2 steps of 0 bits reach 2043).
-inline constexpr uint32_t kPriorCount = 20;
-inline uint16_t primed_model(uint32_t p) { return uint16_t(p | kPriorCount << kProbBits); }
-inline uint16_t adapt(uint32_t model, uint32_t b) {
-  const uint32_t pr = model & kProbMask, c = model >> kProbBits, shift = kAdapt.shift[c];
-  const uint32_t np = b ? pr - (pr >> shift) : pr + (((1u << kProbBits) - pr) >> shift);
-  return uint16_t(kAdapt.next[c] | np);
+// A model that starts from a prior probability p (kProbMin..kProbMax) other than 1/2 starts at
+// count 16 (shift 4): the fast first steps would forget the prior.
+inline constexpr uint32_t kPriorCount = 16;
+inline Prob primed_model(uint32_t p) { return p | kPriorCount << kCountShift; }
+inline Prob adapt(uint32_t model, uint32_t b) {
+  const uint32_t pr = model & kProbMask, c = model >> kCountShift, shift = kAdapt.shift[c];
+  const uint32_t np = b ? pr - ((pr - kProbMin) >> shift) : pr + ((kProbMax - pr) >> shift);
+  return kAdapt.next[c] | np;
 }
 
 inline uint32_t bit_length(uint32_t x) { return x ? 32u - uint32_t(__builtin_clz(x)) : 0u; }
@@ -47,7 +52,7 @@ inline uint32_t bit_length(uint32_t x) { return x ? 32u - uint32_t(__builtin_clz
 class RangeEncoder {
  public:
   explicit RangeEncoder(std::vector<uint8_t>& out) : out_(out), start_(out.size()) {}
-  void bit(uint16_t& p, uint32_t b) {
+  void bit(Prob& p, uint32_t b) {
     uint32_t bound = (range_ >> kProbBits) * (p & kProbMask);
     if (!b) {
       range_ = bound;
@@ -122,15 +127,15 @@ struct RangeState {
     return 0;
   }
   // One shift always suffices: normalized range >= 2^24, and a coded bit keeps at least
-  // (2^24 >> 11) * 15 (probabilities stay within [15, 2033], whatever the input) and a direct
-  // bit 2^23, both >= 2^16.
+  // (2^24 >> 15) * 240 (probabilities stay within [kProbMin, kProbMax], whatever the input) and
+  // a direct bit 2^23, both >= 2^16.
   void normalize() {
     if (range < kTop) {
       range <<= 8;
       code = (code << 8) | next();
     }
   }
-  uint32_t bit(uint16_t& prob) {
+  uint32_t bit(Prob& prob) {
     const uint32_t model = prob, bound = (range >> kProbBits) * (model & kProbMask);
     uint32_t b;
     if (code < bound) {
@@ -189,9 +194,9 @@ class RangeDecoder {
 // tree would code bits that are almost always 0, each still costing about 0.01 bit.
 inline constexpr uint32_t kLengthEscape = 15;
 struct UIntModel {
-  uint16_t length[16];
-  uint16_t escape[32];
-  uint16_t high[33][4];
+  Prob length[16];
+  Prob escape[32];
+  Prob high[33][4];
   UIntModel() {
     for (auto& p : length) p = kProbInit;
     for (auto& p : escape) p = kProbInit;
@@ -262,7 +267,7 @@ inline void encode_uint(RangeEncoder& rc, UIntModel& m, uint32_t x) {
 // significant first, through a binary tree (node from 1, 8 entries); x >= 7 then codes x - 7
 // with a uint model.
 struct SmallModel {
-  uint16_t tree[8];
+  Prob tree[8];
   UIntModel escape;
   SmallModel() {
     for (auto& p : tree) p = kProbInit;

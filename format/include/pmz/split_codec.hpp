@@ -43,11 +43,11 @@ struct SplitSymbols {
 // others as splits are first applied: both in stream order.
 struct SplitModels {
   UIntModel groups;
-  uint16_t near = kProbInit;
-  uint16_t choice[kChoiceContexts];  // initialised from the expected gap (choice_prior)
+  Prob near = kProbInit;
+  Prob choice[kChoiceContexts];  // initialised from the expected gap (choice_prior)
   SplitModels();
   SmallModel wedge_count[kWedgeContexts];
-  uint16_t rank_zero[kRankContexts] = {kProbInit, kProbInit, kProbInit, kProbInit};  // rank > 0
+  Prob rank_zero[kRankContexts] = {kProbInit, kProbInit, kProbInit, kProbInit};  // rank > 0
   SmallModel wedge_rank[kRankContexts];  // rank - 1 when rank > 0
   UIntModel residual[3][kResidualContexts];
 };
@@ -61,11 +61,11 @@ inline uint32_t bitlen_quotient(uint64_t D, uint64_t m) {
   return t + ((D >> t) >= m ? 1u : 0u);
 }
 
-// Initial probability of a 0 (scaled to 2048) of the choice models of expected-gap class d
+// Initial probability of a 0 (scaled to 32768) of the choice models of expected-gap class d
 // (spec "Vertex choice"): a 1 has probability about 1 / (1.5 * 2^(d - 1)) there. Models with
 // d >= 1 start at count kPriorCount (primed_model, spec section 8).
-inline uint16_t choice_prior(uint32_t d) {
-  return d == 0 ? uint16_t(kProbInit) : uint16_t(std::min(2048u - 8192u / (3u << d), 1984u));
+inline uint32_t choice_prior(uint32_t d) {
+  return d == 0 ? kProbInit : std::min(32768u - 131072u / (3u << d), 31744u);
 }
 
 // A group of the chunk: its size and whether its vertices are chosen among the previous
