@@ -451,7 +451,7 @@ bool Decoder::Impl::apply() {
     PositionPrediction pred;
     int32_t residual[3], c[3];
     predict_position(coords.data(), mesh.u_ring(), mesh.ring(), info.curvature, info.fine_curvature, pred);
-    if (!lazy.front().residuals(pred.context, residual)) {
+    if (!lazy.front().residuals(pred.context, pred.mix, residual)) {
       mesh.undo_split(s.v, has_l, has_r);
       return refuse(Status::corrupt, "split " + std::to_string(applied) + ": residual streams malformed");
     }

@@ -316,7 +316,7 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
             predict_from_basis(coords.data(), pm.u_ring(), uint32_t(pm.ring().size()), basis,
                                kCurvatureCandidates[k].curvature, kCurvatureCandidates[k].fine, pred);
             position_residuals(pred, &coords[size_t(u) * 3], code.residual);
-            for (int s = 0; s < 3; ++s) code.residual_context[s] = pred.context[s];
+            for (int s = 0; s < 3; ++s) code.residual_context[s] = pred.context[s], code.mix_context[s] = pred.mix[s];
             chunk[k].push_back(code);
           }
         }

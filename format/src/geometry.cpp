@@ -26,6 +26,13 @@ inline uint32_t context_of_mean(uint64_t sum, uint64_t div) {
   return j + 1 < kResidualContexts - 1 ? j + 1 : kResidualContexts - 1;
 }
 
+// min(2 bitlen(x) + h, 41), h the bit below the leading one (0 when bitlen(x) < 2).
+inline uint32_t half_octave_context(uint64_t x) {
+  const uint32_t b = x ? 64u - uint32_t(__builtin_clzll(x)) : 0u;
+  const uint32_t h = b >= 2 ? uint32_t(x >> (b - 2)) & 1u : 0u;
+  return 2 * b + h < kMixTangentContexts - 1 ? 2 * b + h : kMixTangentContexts - 1;
+}
+
 }  // namespace
 
 int64_t round_div_wide(Int128 num, Int128 den) {
@@ -148,22 +155,32 @@ namespace {
   // ring's spread off the plane through p, in units of the normal axis. Every |c[w] - p| is
   // below 2^34 (p is within the ring's box plus at most |L / k|), so each dot product with n
   // fits 64 bits.
-  uint64_t spread[3] = {0, 0, 0};
-  UInt128 off = 0;
+  // The mixing contexts: per axis the largest |c[w] - p| over the ring, and v's (the ring's
+  // first vertex) distance from the plane through p.
   const int64_t p0 = out.p[0], p1 = out.p[1], p2 = out.p[2];
-  for (uint32_t w : u_ring) {
-    const int32_t* cw = coords + size_t(w) * 3;
-    const int64_t dx = cw[0] - p0, dy = cw[1] - p1, dz = cw[2] - p2;
-    spread[0] += uint64_t(dx < 0 ? -dx : dx);
-    spread[1] += uint64_t(dy < 0 ? -dy : dy);
-    spread[2] += uint64_t(dz < 0 ? -dz : dz);
-    const int64_t dot = dx * n0 + dy * n1 + dz * n2;
+  const int32_t* cv = coords + size_t(u_ring[0]) * 3;  // v first
+  int64_t dx = cv[0] - p0, dy = cv[1] - p1, dz = cv[2] - p2, dot = dx * n0 + dy * n1 + dz * n2;
+  uint64_t spread[3] = {uint64_t(dx < 0 ? -dx : dx), uint64_t(dy < 0 ? -dy : dy), uint64_t(dz < 0 ? -dz : dz)};
+  uint64_t far[3] = {spread[0], spread[1], spread[2]};
+  const uint64_t v_off = uint64_t(dot < 0 ? -dot : dot);
+  UInt128 off = v_off;
+  for (uint32_t i = 1; i < m; ++i) {
+    const int32_t* cw = coords + size_t(u_ring[i]) * 3;
+    dx = cw[0] - p0, dy = cw[1] - p1, dz = cw[2] - p2;
+    const uint64_t ex = uint64_t(dx < 0 ? -dx : dx), ey = uint64_t(dy < 0 ? -dy : dy), ez = uint64_t(dz < 0 ? -dz : dz);
+    spread[0] += ex, spread[1] += ey, spread[2] += ez;
+    far[0] = far[0] < ex ? ex : far[0], far[1] = far[1] < ey ? ey : far[1], far[2] = far[2] < ez ? ez : far[2];
+    dot = dx * n0 + dy * n1 + dz * n2;
     off += uint64_t(dot < 0 ? -dot : dot);
   }
   const uint8_t* ax = basis.axis;
   const int64_t* mag = basis.mag;
   const int c = ax[2];
-  for (int s = 0; s < 2; ++s) out.context[s] = context_of_mean(spread[ax[s]], m);
+  for (int s = 0; s < 2; ++s) {
+    out.context[s] = context_of_mean(spread[ax[s]], m);
+    out.mix[s] = half_octave_context(far[ax[s]]);
+  }
+  out.mix[2] = mag[c] ? context_of_mean(v_off, uint64_t(mag[c])) : 0;  // n = 0: no plane
   if (mag[c] == 0) off = spread[c];  // n = 0: the normal axis' own spread
   const uint64_t div = uint64_t(mag[c] ? mag[c] : 1) * m;  // < 2^17 * 2^32
   out.context[2] = off >> 64 ? context_of(off / div) : context_of_mean(uint64_t(off), div);

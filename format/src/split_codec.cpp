@@ -153,7 +153,8 @@ void encode_split_chunk(const std::vector<GroupCode>& groups, const std::vector<
       wr.bit(m->rank_zero[s.rank_context], s.wedge_rank > 0 ? 1 : 0);
       if (s.wedge_rank > 0) encode_small(wr, m->wedge_rank[s.rank_context], s.wedge_rank - 1);
       for (int a = 0; a < 3; ++a)
-        encode_uint(*res[a], m->residual[a][s.residual_context[a]], zigzag_encode(s.residual[a]));
+        encode_uint_mixed(*res[a], m->residual[a][s.residual_context[a]], m->mix(a, s.mix_context[a]),
+                          zigzag_encode(s.residual[a]));
     }
     for (RangeEncoder* e : {&gr, &ch, &wc, &wr, &rx, &ry, &rz}) e->finish();
   }
@@ -224,7 +225,9 @@ bool SplitChunkReader::open(const uint8_t* p, size_t size, uint64_t max_splits, 
 namespace {
 // One symbol per call: inlined into the three-axis loop, GCC recomputes each bit's model
 // address from the axis and context (register pressure); here the model is one pointer.
-[[gnu::noinline]] bool decode_symbol(RangeDecoder& rc, UIntModel& m, uint32_t& x) { return decode_uint(rc, m, x); }
+[[gnu::noinline]] bool decode_symbol(RangeDecoder& rc, UIntModel& m, UIntModel& m2, uint32_t& x) {
+  return decode_uint_mixed(rc, m, m2, x);
+}
 [[gnu::noinline]] bool decode_small(RangeDecoder& rc, SmallModel& m, uint32_t& x) {
   RangeState st = rc.state();
   const bool ok = decode_small(st, m, x);
@@ -284,10 +287,12 @@ bool SplitChunkReader::wedge_rank(uint32_t context, uint32_t& rank) {
   return true;
 }
 
-bool SplitChunkReader::residuals(const uint32_t context[3], int32_t residual[3]) {
+bool SplitChunkReader::residuals(const uint32_t context[3], const uint32_t mix[3], int32_t residual[3]) {
   for (int a = 0; a < 3; ++a) {
     uint32_t z;
-    if (!decode_symbol(*res_dec_[a], models_->residual[a][context[a]], z) || !res_dec_[a]->ok) return false;
+    if (!decode_symbol(*res_dec_[a], models_->residual[a][context[a]], models_->mix(a, mix[a]), z) ||
+        !res_dec_[a]->ok)
+      return false;
     residual[a] = zigzag_decode(z);
   }
   return true;

@@ -167,6 +167,7 @@ struct Replay {
     pmz::PositionPrediction pred;  // HEAD curvature 0, as header() writes
     pmz::predict_position(coords.data(), pm.u_ring(), pm.ring(), 0, 0, pred);
     std::copy(pred.context, pred.context + 3, c.residual_context);
+    std::copy(pred.mix, pred.mix + 3, c.mix_context);
     int32_t cu[3];
     pmz::position_from_residuals(pred, c.residual, cu);
     coords.insert(coords.end(), cu, cu + 3);
@@ -182,7 +183,7 @@ Bytes split_payload(Replay& rp, const std::vector<uint32_t>& at, int32_t r = 0) 
   std::vector<pmz::GroupCode> groups;
   std::vector<uint32_t> bits;
   for (uint32_t v : at) {
-    pmz::SplitSymbols c{v, 0, 0, 0, 0, {0, 0, 0}, {r, r, r}};
+    pmz::SplitSymbols c{v, 0, 0, 0, 0, {0, 0, 0}, {r, r, r}, {0, 0, 0}};
     groups.push_back(rp.group(v, bits));
     if (rp.work < (8u << 20)) rp.apply(v, c);
     codes.push_back(c);
@@ -570,7 +571,7 @@ TEST(Hostile, WedgeSymbolsAtUint32MaxAreInvalid) {
     groups.push_back(rp.group(0, bits));
     ASSERT_TRUE(rp.pm.gather_ring(0));
     codes[0] = {0, pmz::wedge_context(uint32_t(rp.pm.ring().size()), rp.pm.ring_closed()), 0, 0,
-                rp.pm.ring_closed() ? 1u : 0u, {0, 0, 0}, {0, 0, 0}};
+                rp.pm.ring_closed() ? 1u : 0u, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
     uint32_t a, b;
     ASSERT_TRUE(pmz::wedge_ranks(rp.coords.data(), rp.choice.degrees(), 0, rp.pm, 0, 0, a, b, rp.scratch));
     codes[0].rank_context = pmz::rank_context(rp.pm.ring_closed(), rp.scratch.confident);
@@ -579,6 +580,7 @@ TEST(Hostile, WedgeSymbolsAtUint32MaxAreInvalid) {
     pmz::PositionPrediction pred;
     pmz::predict_position(rp.coords.data(), rp.pm.u_ring(), rp.pm.ring(), 0, 0, pred);
     std::copy(pred.context, pred.context + 3, codes[0].residual_context);
+    std::copy(pred.mix, pred.mix + 3, codes[0].mix_context);
     int32_t cu[3];
     pmz::position_from_residuals(pred, codes[0].residual, cu);
     rp.coords.insert(rp.coords.end(), cu, cu + 3);
@@ -589,7 +591,7 @@ TEST(Hostile, WedgeSymbolsAtUint32MaxAreInvalid) {
     // The rank's context as the decoder computes it for count 0 (which == 1; unused for which == 0).
     ASSERT_TRUE(pmz::wedge_scores(rp.coords.data(), rp.choice.degrees(), 6, rp.pm, 0, rp.scratch));
     codes[1] = {6, pmz::wedge_context(3, true), which == 0 ? 0xFFFFFFFFu : 0u, which == 1 ? 0xFFFFFFFFu : 0u,
-                pmz::rank_context(true, rp.scratch.confident), {0, 0, 0}, {0, 0, 0}};
+                pmz::rank_context(true, rp.scratch.confident), {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
     Bytes f = signature();
     head(f, header(6, 8, 2, 12));
     pmz::append_chunk(f, pmz::kChunkBase, octa_base_payload());
@@ -630,7 +632,7 @@ TEST(Hostile, VertexChoiceAdjacentWithinTheLagDecodesConsistently) {
   // The symbols the decoder reads: wedges (0, 0) with its contexts, residuals 0.
   std::vector<pmz::SplitSymbols> codes;
   for (uint32_t v : {0u, 2u}) {
-    pmz::SplitSymbols c{v, 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}};
+    pmz::SplitSymbols c{v, 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
     ASSERT_TRUE(rp.apply(v, c));
     codes.push_back(c);
   }
@@ -673,7 +675,7 @@ TEST(Hostile, VertexChoiceRunningOutOfCandidatesIsRefused) {
       return 0;
     }), 0);
     EXPECT_EQ(bits.size(), which == 0 ? 0u : 6u);  // all 6 vertices / 0's ring of 4, 0 and u
-    const pmz::SplitSymbols code{0, 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}};
+    const pmz::SplitSymbols code{0, 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
     Bytes p;
     pmz::encode_split_chunk({{1, near}}, bits, &code, 1, *rp.models, p);
     pmz::append_chunk(f, pmz::kChunkSplits, p);
@@ -761,7 +763,7 @@ TEST(Hostile, CoarseningNeedsNoAllocation) {
   ASSERT_TRUE(pm.gather_ring(apex));
   ASSERT_TRUE(pm.ring_closed());
   ASSERT_EQ(pm.ring().size(), n);
-  pmz::SplitSymbols code{apex, pmz::wedge_context(n, true), n - 2, 0, 1, {0, 0, 0}, {0, 0, 0}};
+  pmz::SplitSymbols code{apex, pmz::wedge_context(n, true), n - 2, 0, 1, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
   pmz::WedgeScratch scratch;
   uint32_t ra, rb;
   ASSERT_TRUE(pmz::wedge_ranks(coords.data(), choice.degrees(), apex, pm, n - 2, 0, ra, rb, scratch));
@@ -770,6 +772,7 @@ TEST(Hostile, CoarseningNeedsNoAllocation) {
   pmz::PositionPrediction pred;
   pmz::predict_position(coords.data(), pm.u_ring(), pm.ring(), 0, 0, pred);
   std::copy(pred.context, pred.context + 3, code.residual_context);
+    std::copy(pred.mix, pred.mix + 3, code.mix_context);
   Bytes splt;
   auto models = std::make_unique<pmz::SplitModels>();
   pmz::encode_split_chunk({group}, bits, &code, 1, *models, splt);

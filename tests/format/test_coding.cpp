@@ -221,6 +221,95 @@ TEST(RangeCoder, BitsDirectBitsAndValuesRoundTrip) {
   EXPECT_EQ(std::memcmp(enc_models, dec_models, sizeof enc_models), 0);
 }
 
+// Spec section 8, "Mixed unsigned value", decoded by a reference written from the text: the
+// value's binarization (bit length through the 4-level tree, the escape's 5-level tree, two
+// mantissa bits), every modeled bit with the mean (rounded down) of both models' probabilities
+// at the same node, both adapting; the rest direct.
+TEST(RangeCoder, MixedValuesAreTheSpecRule) {
+  struct Ref {
+    SpecModel length[16], escape[32], high[33][4];
+  };
+  std::mt19937 rng(23);
+  constexpr int kFirst = 3, kSecond = 4;
+  auto enc_first = std::make_unique<UIntModel[]>(kFirst), enc_second = std::make_unique<UIntModel[]>(kSecond);
+  auto ref_first = std::make_unique<Ref[]>(kFirst), ref_second = std::make_unique<Ref[]>(kSecond);
+  std::vector<uint8_t> out;
+  std::vector<uint32_t> values, c1, c2;
+  {
+    RangeEncoder rc(out);
+    for (int i = 0; i < 30000; ++i) {
+      const uint32_t a = rng() % kFirst, b = rng() % kSecond;
+      const uint32_t x = i % 97 == 0 ? uint32_t(rng()) >> (rng() % 18) : (uint32_t(rng()) >> (24 + a + b)) + (i % 5 == 0 ? 0 : b);
+      values.push_back(x), c1.push_back(a), c2.push_back(b);
+      encode_uint_mixed(rc, enc_first[a], enc_second[b], x);
+    }
+    rc.finish();
+  }
+  RangeDecoder rd(out.data(), out.size());
+  RangeState s = rd.state();
+  auto bit = [&](SpecModel& m, SpecModel& m2) {
+    const uint32_t p = (m.p + m2.p) / 2, bound = (s.range >> 15) * p;
+    uint32_t b = 0;
+    if (s.code < bound) {
+      s.range = bound;
+    } else {
+      s.code -= bound, s.range -= bound, b = 1;
+    }
+    m.update(b);
+    m2.update(b);
+    s.normalize();
+    return b;
+  };
+  for (size_t i = 0; i < values.size(); ++i) {
+    Ref &f = ref_first[c1[i]], &g = ref_second[c2[i]];
+    uint32_t node = 1;
+    for (int level = 0; level < 4; ++level) node = node * 2 + bit(f.length[node], g.length[node]);
+    uint32_t n = node - 16;
+    if (n == 15) {
+      node = 1;
+      for (int level = 0; level < 5; ++level) node = node * 2 + bit(f.escape[node], g.escape[node]);
+      n = node - 32 + 15;
+    }
+    ASSERT_LE(n, 32u) << i;
+    uint32_t x = n;
+    if (n >= 2) {
+      uint32_t rest = n - 1, h = 1;
+      x = 1;
+      for (int j = 0; j < 2 && rest; ++j, --rest) {
+        const uint32_t b = bit(f.high[n][h], g.high[n][h]);
+        h = h * 2 + b, x = x * 2 + b;
+      }
+      x = (x << rest) | s.direct(rest);
+    }
+    ASSERT_EQ(x, values[i]) << i;
+  }
+  EXPECT_TRUE(s.ok);
+  // Every model of the coder ends where the reference's does (which bits touched which model).
+  auto same = [](const UIntModel& m, const Ref& r) {
+    auto eq = [](Prob x, const SpecModel& y) { return (x & kProbMask) == y.p && (x >> kCountShift) == y.count; };
+    for (int j = 0; j < 16; ++j)
+      if (!eq(m.length[j], r.length[j])) return false;
+    for (int j = 0; j < 32; ++j)
+      if (!eq(m.escape[j], r.escape[j])) return false;
+    for (int n = 0; n < 33; ++n)
+      for (int j = 0; j < 4; ++j)
+        if (!eq(m.high[n][j], r.high[n][j])) return false;
+    return true;
+  };
+  for (int a = 0; a < kFirst; ++a) EXPECT_TRUE(same(enc_first[a], ref_first[a])) << a;
+  for (int b = 0; b < kSecond; ++b) EXPECT_TRUE(same(enc_second[b], ref_second[b])) << b;
+  // And the decoder agrees with both.
+  RangeDecoder rd2(out.data(), out.size());
+  auto dec_first = std::make_unique<UIntModel[]>(kFirst), dec_second = std::make_unique<UIntModel[]>(kSecond);
+  for (size_t i = 0; i < values.size(); ++i) {
+    uint32_t x;
+    ASSERT_TRUE(decode_uint_mixed(rd2, dec_first[c1[i]], dec_second[c2[i]], x));
+    ASSERT_EQ(x, values[i]) << i;
+  }
+  for (int a = 0; a < kFirst; ++a) EXPECT_TRUE(same(dec_first[a], ref_first[a])) << a;
+  for (int b = 0; b < kSecond; ++b) EXPECT_TRUE(same(dec_second[b], ref_second[b])) << b;
+}
+
 // Spec section 8's ending: the value in [low, low + range) with the most trailing zero bits, the
 // stream without its first byte (0) and up to 4 trailing zero bytes; bytes past the end read as 0.
 TEST(RangeCoder, StreamEndingIsTheShortestValue) {
@@ -668,7 +757,15 @@ struct Expected {
   int64_t p[3], n[3];
   int axis[3];
   uint32_t context[3];
+  uint32_t mix[3];
 };
+
+uint32_t half_octave(UInt128 x) {  // min(2 bitlen(x) + the bit below the leading one, 41)
+  uint32_t b = 0;
+  while (b < 128 && (x >> b) != 0) ++b;
+  const uint32_t h = b >= 2 ? uint32_t(x >> (b - 2)) & 1 : 0;
+  return std::min(2 * b + h, 41u);
+}
 
 Expected predict(const std::vector<int32_t>& c, const std::vector<uint32_t>& R, const std::vector<uint32_t>& K,
                  uint32_t curvature, uint32_t fine) {
@@ -729,6 +826,16 @@ Expected predict(const std::vector<int32_t>& c, const std::vector<uint32_t>& R, 
     D += mag(d);
   }
   e.context[2] = ctx(D / (mag(e.n[z] ? e.n[z] : 1) * m));
+  // Second contexts: the ring's largest offset from p per tangent axis, v's distance from the
+  // plane through p in units of the normal axis (0 without a normal).
+  for (int s = 0; s < 2; ++s) {
+    UInt128 X = 0;
+    for (uint32_t w : R) X = std::max(X, mag(C(w, e.axis[s]) - e.p[e.axis[s]]));
+    e.mix[s] = half_octave(X);
+  }
+  I128 dv = 0;
+  for (int a = 0; a < 3; ++a) dv += I128(C(v, a) - e.p[a]) * e.n[a];
+  e.mix[2] = e.n[z] ? ctx(mag(dv) / mag(e.n[z])) : 0;
   return e;
 }
 
@@ -764,6 +871,7 @@ TEST(PositionPrediction, IsTheSpecFormula) {
       ASSERT_EQ(pp.n[a], e.n[a]) << trial << " axis " << a;
       ASSERT_EQ(pp.axis[a], e.axis[a]) << trial << " slot " << a;
       ASSERT_EQ(pp.context[a], e.context[a]) << trial << " slot " << a;
+      ASSERT_EQ(pp.mix[a], e.mix[a]) << trial << " slot " << a;
     }
     // The writer's two-step form (ring part once, then this pair) gives the same prediction.
     RingBasis basis;
@@ -775,6 +883,7 @@ TEST(PositionPrediction, IsTheSpecFormula) {
       ASSERT_EQ(two.n[a], e.n[a]) << trial << " axis " << a;
       ASSERT_EQ(two.axis[a], e.axis[a]) << trial << " slot " << a;
       ASSERT_EQ(two.context[a], e.context[a]) << trial << " slot " << a;
+      ASSERT_EQ(two.mix[a], e.mix[a]) << trial << " slot " << a;
     }
     // Residuals of a vertex near the prediction, then back: the normal axis from the tangent
     // plane through p (rounded half up), everything modulo 2^32.
@@ -1139,7 +1248,7 @@ TEST(VertexChoice, ExclusionLagsAndAViolatingStreamIsRefused) {
   auto decode = [&](const std::vector<uint32_t>& bits, uint32_t size, std::vector<uint32_t>& got) {
     std::vector<uint8_t> payload;
     SplitModels em, dm;
-    std::vector<SplitSymbols> codes(size, SplitSymbols{0, 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}});
+    std::vector<SplitSymbols> codes(size, SplitSymbols{0, 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}});
     encode_split_chunk({{size, false}}, bits, codes.data(), codes.size(), em, payload);
     SplitChunkReader r;
     EXPECT_TRUE(r.open(payload.data(), payload.size(), size, dm, error)) << error;

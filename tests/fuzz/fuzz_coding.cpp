@@ -263,6 +263,8 @@ void fuzz_split_chunk(const uint8_t* data, size_t size) {
     s.wedge_context = pmz::wedge_context(k, closed);
     s.rank_context = pmz::rank_context(closed, (h >> 5) & 1);
     for (int a = 0; a < 3; ++a) s.residual_context[a] = (h >> (8 + 3 * a)) % pmz::kResidualContexts;
+    for (int a = 0; a < 3; ++a)
+      s.mix_context[a] = (h >> (17 + 3 * a)) % (a < 2 ? pmz::kMixTangentContexts : pmz::kMixNormalContexts);
     return std::pair<uint32_t, bool>(k, closed);
   };
   // No split is applied here, so the vertex count (and every group's limit) stays vertices_before.
@@ -291,10 +293,10 @@ void fuzz_split_chunk(const uint8_t* data, size_t size) {
     if (!independent) break;
     size_t done = 0;
     for (uint32_t v : vs) {
-      pmz::SplitSymbols s{v, 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}};
+      pmz::SplitSymbols s{v, 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
       auto [k, closed] = contexts(got.size(), s);
       if (!reader.wedge_count(k, closed, s.wedge_count) || !reader.wedge_rank(s.rank_context, s.wedge_rank) ||
-          !reader.residuals(s.residual_context, s.residual)) {
+          !reader.residuals(s.residual_context, s.mix_context, s.residual)) {
         ok = false;
         break;
       }
@@ -331,10 +333,10 @@ void fuzz_split_chunk(const uint8_t* data, size_t size) {
   for (size_t i = 0; i < got.size();) {
     PMZ_FUZZ_CHECK(r2.group(dec_choice, pm, vs));
     for (uint32_t v : vs) {
-      pmz::SplitSymbols s{v, 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}};
+      pmz::SplitSymbols s{v, 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
       auto [k, closed] = contexts(i, s);
       PMZ_FUZZ_CHECK(s.v == got[i].v && r2.wedge_count(k, closed, s.wedge_count) &&
-                     r2.wedge_rank(s.rank_context, s.wedge_rank) && r2.residuals(s.residual_context, s.residual));
+                     r2.wedge_rank(s.rank_context, s.wedge_rank) && r2.residuals(s.residual_context, s.mix_context, s.residual));
       PMZ_FUZZ_CHECK(s.wedge_count == got[i].wedge_count && s.wedge_rank == got[i].wedge_rank);
       PMZ_FUZZ_CHECK(std::memcmp(s.residual, got[i].residual, sizeof s.residual) == 0);
       ++i;

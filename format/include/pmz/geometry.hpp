@@ -9,6 +9,9 @@
 namespace pmz {
 
 inline constexpr uint32_t kResidualContexts = 21;  // per residual slot
+// Second contexts of the residual slots (spec section 5, "Contexts"): the ring's largest offset
+// from p at half-octave resolution for the tangent slots, v's distance from the plane for the normal.
+inline constexpr uint32_t kMixTangentContexts = 42, kMixNormalContexts = 21;
 inline constexpr uint32_t kMaxCurvature = 8;       // HEAD curvature and fine_curvature: weights in eighths
 inline constexpr uint32_t kNormalBits = 16;        // |n[a]| <= 2^16 after scaling
 
@@ -36,6 +39,7 @@ struct PositionPrediction {
   int64_t n[3];         // scaled normal of u's ring
   uint8_t axis[3];      // coding order: two tangent axes (smallest |n| first), then the normal axis
   uint32_t context[3];  // residual context per slot (coding order)
+  uint32_t mix[3];      // second context per slot, mixed with the first (spec section 5)
 };
 
 // What the prediction needs from the rings whatever the curvature weights: the centroid sums,

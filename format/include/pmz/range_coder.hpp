@@ -47,24 +47,24 @@ inline Prob adapt(uint32_t model, uint32_t b) {
   return kAdapt.next[c] | np;
 }
 
+// The probability of a bit coded with two models: the mean of theirs, rounded down. Both stay
+// within [kProbMin, kProbMax], so the mean does too (the coders' one-shift normalization holds).
+inline uint32_t mix_probability(uint32_t p, uint32_t q) { return ((p & kProbMask) + (q & kProbMask)) >> 1; }
+
 inline uint32_t bit_length(uint32_t x) { return x ? 32u - uint32_t(__builtin_clz(x)) : 0u; }
 
 class RangeEncoder {
  public:
   explicit RangeEncoder(std::vector<uint8_t>& out) : out_(out), start_(out.size()) {}
   void bit(Prob& p, uint32_t b) {
-    uint32_t bound = (range_ >> kProbBits) * (p & kProbMask);
-    if (!b) {
-      range_ = bound;
-    } else {
-      low_ += bound;
-      range_ -= bound;
-    }
+    code(p & kProbMask, b);
     p = adapt(p, b);
-    while (range_ < kTop) {
-      range_ <<= 8;
-      shift_low();
-    }
+  }
+  // A bit with the mean of two models' probabilities (both adapt): spec section 8, "mixed".
+  void bit2(Prob& p, Prob& q, uint32_t b) {
+    code(mix_probability(p, q), b);
+    p = adapt(p, b);
+    q = adapt(q, b);
   }
   void direct(uint32_t value, uint32_t bits) {
     while (bits--) {
@@ -94,6 +94,20 @@ class RangeEncoder {
   }
 
  private:
+  // Codes bit b with probability pr of a 0 (the caller adapts its models).
+  void code(uint32_t pr, uint32_t b) {
+    const uint32_t bound = (range_ >> kProbBits) * pr;
+    if (!b) {
+      range_ = bound;
+    } else {
+      low_ += bound;
+      range_ -= bound;
+    }
+    while (range_ < kTop) {
+      range_ <<= 8;
+      shift_low();
+    }
+  }
   void shift_low() {
     if (uint32_t(low_) < 0xFF000000u || (low_ >> 32) != 0) {
       uint8_t carry = uint8_t(low_ >> 32), temp = cache_;
@@ -135,8 +149,9 @@ struct RangeState {
       code = (code << 8) | next();
     }
   }
-  uint32_t bit(Prob& prob) {
-    const uint32_t model = prob, bound = (range >> kProbBits) * (model & kProbMask);
+  // Decodes a bit with probability pr of a 0 (the caller adapts its models).
+  uint32_t code_bit(uint32_t pr) {
+    const uint32_t bound = (range >> kProbBits) * pr;
     uint32_t b;
     if (code < bound) {
       range = bound;
@@ -146,8 +161,18 @@ struct RangeState {
       range -= bound;
       b = 1;
     }
-    prob = adapt(model, b);
     normalize();
+    return b;
+  }
+  uint32_t bit(Prob& prob) {
+    const uint32_t model = prob, b = code_bit(model & kProbMask);
+    prob = adapt(model, b);
+    return b;
+  }
+  uint32_t bit2(Prob& prob, Prob& prob2) {
+    const uint32_t model = prob, model2 = prob2, b = code_bit(mix_probability(model, model2));
+    prob = adapt(model, b);
+    prob2 = adapt(model2, b);
     return b;
   }
   // One direct bit at a time, as the encoder writes them: a single range >>= n for n bits would
@@ -205,19 +230,22 @@ struct UIntModel {
   }
 };
 
-inline void encode_uint(RangeEncoder& rc, UIntModel& m, uint32_t x) {
+// The binarization above, shared by the plain and the mixed value: bit(at, b) codes (bit(at)
+// decodes) one modeled bit, at(model) picking its probability in a UIntModel.
+template <class Bit>
+[[gnu::always_inline]] inline void encode_uint_with(RangeEncoder& rc, uint32_t x, Bit&& bit) {
   const uint32_t n = bit_length(x), s = n < kLengthEscape ? n : kLengthEscape;
   uint32_t node = 1;
   for (int i = 3; i >= 0; --i) {
     const uint32_t b = (s >> i) & 1;
-    rc.bit(m.length[node], b);
+    bit([node](UIntModel& m) -> Prob& { return m.length[node]; }, b);
     node = node * 2 + b;
   }
   if (s == kLengthEscape) {
     node = 1;
     for (int i = 4; i >= 0; --i) {
       const uint32_t b = ((n - kLengthEscape) >> i) & 1;
-      rc.bit(m.escape[node], b);
+      bit([node](UIntModel& m) -> Prob& { return m.escape[node]; }, b);
       node = node * 2 + b;
     }
   }
@@ -225,20 +253,22 @@ inline void encode_uint(RangeEncoder& rc, UIntModel& m, uint32_t x) {
   uint32_t rest = n - 1, hnode = 1;
   for (uint32_t i = 0; i < 2 && rest; ++i) {
     uint32_t b = (x >> --rest) & 1;
-    rc.bit(m.high[n][hnode], b);
+    bit([n, hnode](UIntModel& m) -> Prob& { return m.high[n][hnode]; }, b);
     hnode = hnode * 2 + b;
   }
   rc.direct(x, rest);  // only the low `rest` bits are written
 }
 
 // Returns false for a bit length above 32 (corrupt input).
-[[gnu::always_inline]] inline bool decode_uint(RangeState& s, UIntModel& m, uint32_t& x) {
+template <class Bit>
+[[gnu::always_inline]] inline bool decode_uint_with(RangeState& s, uint32_t& x, Bit&& bit) {
   uint32_t node = 1;
-  for (int i = 0; i < 4; ++i) node = node * 2 + s.bit(m.length[node]);
+#pragma GCC unroll 4
+  for (int i = 0; i < 4; ++i) node = node * 2 + bit([node](UIntModel& m) -> Prob& { return m.length[node]; });
   uint32_t n = node - 16;
   if (n == kLengthEscape) [[unlikely]] {
     node = 1;
-    for (int i = 0; i < 5; ++i) node = node * 2 + s.bit(m.escape[node]);
+    for (int i = 0; i < 5; ++i) node = node * 2 + bit([node](UIntModel& m) -> Prob& { return m.escape[node]; });
     n = node - 32 + kLengthEscape;
     if (n > 32) return false;
   }
@@ -248,7 +278,7 @@ inline void encode_uint(RangeEncoder& rc, UIntModel& m, uint32_t x) {
   }
   uint32_t rest = n - 1, hnode = 1, v = 1;
   for (uint32_t i = 0; i < 2 && rest; ++i, --rest) {
-    uint32_t b = s.bit(m.high[n][hnode]);
+    uint32_t b = bit([n, hnode](UIntModel& m) -> Prob& { return m.high[n][hnode]; });
     hnode = hnode * 2 + b;
     v = v * 2 + b;
   }
@@ -256,9 +286,36 @@ inline void encode_uint(RangeEncoder& rc, UIntModel& m, uint32_t x) {
   return true;
 }
 
+inline void encode_uint(RangeEncoder& rc, UIntModel& m, uint32_t x) {
+  encode_uint_with(rc, x, [&](auto at, uint32_t b) { rc.bit(at(m), b); });
+}
+
+[[gnu::always_inline]] inline bool decode_uint(RangeState& s, UIntModel& m, uint32_t& x) {
+  return decode_uint_with(s, x, [&](auto at) { return s.bit(at(m)); });
+}
+
 [[gnu::always_inline]] inline bool decode_uint(RangeDecoder& rc, UIntModel& m, uint32_t& x) {
   RangeState s = rc.state();
   const bool ok = decode_uint(s, m, x);
+  rc.set_state(s);
+  return ok;
+}
+
+// A uint32 coded with two uint models (the position residuals, spec section 8 "mixed"): the
+// binarization of encode_uint, every modeled bit with the mean of m's and m2's probabilities at
+// the same node, both adapting; the direct bits as there.
+inline void encode_uint_mixed(RangeEncoder& rc, UIntModel& m, UIntModel& m2, uint32_t x) {
+  encode_uint_with(rc, x, [&](auto at, uint32_t b) { rc.bit2(at(m), at(m2), b); });
+}
+
+// Returns false for a bit length above 32 (corrupt input).
+[[gnu::always_inline]] inline bool decode_uint_mixed(RangeState& s, UIntModel& m, UIntModel& m2, uint32_t& x) {
+  return decode_uint_with(s, x, [&](auto at) { return s.bit2(at(m), at(m2)); });
+}
+
+[[gnu::always_inline]] inline bool decode_uint_mixed(RangeDecoder& rc, UIntModel& m, UIntModel& m2, uint32_t& x) {
+  RangeState s = rc.state();
+  const bool ok = decode_uint_mixed(s, m, m2, x);
   rc.set_state(s);
   return ok;
 }

@@ -36,6 +36,7 @@ struct SplitSymbols {
   uint32_t rank_context;         // rank_context(closed, confident)
   uint32_t residual_context[3];  // PositionPrediction::context, per slot
   int32_t residual[3];           // position residual per slot (two tangent axes, the normal axis)
+  uint32_t mix_context[3];       // PositionPrediction::mix, per slot (the residuals' second models)
 };
 
 // Context models, created once per file and carried from SPLT chunk to chunk (a chunk needs
@@ -50,6 +51,11 @@ struct SplitModels {
   Prob rank_zero[kRankContexts] = {kProbInit, kProbInit, kProbInit, kProbInit};  // rank > 0
   SmallModel wedge_rank[kRankContexts];  // rank - 1 when rank > 0
   UIntModel residual[3][kResidualContexts];
+  // The second model of each residual bit (spec section 5): tangent slots by PositionPrediction::mix
+  // (kMixTangentContexts), the normal slot likewise (kMixNormalContexts).
+  UIntModel mix_tangent[2][kMixTangentContexts];
+  UIntModel mix_normal[kMixNormalContexts];
+  UIntModel& mix(int slot, uint32_t context) { return slot < 2 ? mix_tangent[slot][context] : mix_normal[context]; }
 };
 
 // bitlen(floor(D / m)) for m >= 1 without dividing (a division per vertex choice bit costs more
@@ -242,7 +248,8 @@ class SplitChunkReader {
   // The wedge symbols, each when its context is known: count (v's ring), then rank (the scores).
   bool wedge_count(uint32_t k, bool closed, uint32_t& count);
   bool wedge_rank(uint32_t context, uint32_t& rank);
-  bool residuals(const uint32_t context[3], int32_t residual[3]);
+  // context, mix: PositionPrediction's per slot.
+  bool residuals(const uint32_t context[3], const uint32_t mix[3], int32_t residual[3]);
   uint64_t split_count() const { return count_; }
   size_t largest_group() const { return largest_; }
 
