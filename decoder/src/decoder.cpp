@@ -437,7 +437,7 @@ bool Decoder::Impl::apply() {
     choice.reserve(k);
     uint32_t count, rank;
     auto malformed = [&] { return refuse(Status::corrupt, "split " + std::to_string(applied) + ": wedge streams malformed"); };
-    if (!lazy.front().wedge_count(k, mesh.ring_closed(), count)) return malformed();
+    if (!lazy.front().wedge_count(wedge_context(k, mesh.ring_closed()), count)) return malformed();
     if (!wedge_scores(coords.data(), choice.degrees(), s.v, mesh, count, wedge_scratch)) return invalid();
     if (!lazy.front().wedge_rank(rank_context(mesh.ring_closed(), wedge_scratch.confident), rank)) return malformed();
     if (!wedge_pick(mesh, count, rank, s.a, s.b, wedge_scratch)) return invalid();

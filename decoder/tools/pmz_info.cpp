@@ -1,5 +1,6 @@
 // pmz-info: a .pmz file's header, counts, bytes per section and per stream, and bits per
-// vertex split divided into connectivity (groups, vertex choice, wedges) and geometry (residuals).
+// vertex split divided into connectivity (groups, vertex choice, wedges) and geometry (residuals):
+// the two streams of every SPLT chunk.
 // Reads the container directly (chunk framing + stream sizes); validates by a full decode.
 #include <CLI/CLI.hpp>
 
@@ -80,10 +81,11 @@ int main(int argc, char** argv) {
   }
   const pmz::StreamInfo& i = d.info();
   const double ns = double(std::max<uint64_t>(1, i.total_splits));
-  double conn = 0, geom = 0;
-  for (int k = 0; k < pmz::kSplitStreamCount; ++k)
-    (k <= pmz::kStreamWedgeRank ? conn : geom) += double(stream_bytes[k]) * 8 / ns;
-  const char* names[] = {"groups", "choice", "wedge_count", "wedge_rank", "residual_t0", "residual_t1", "residual_n"};
+  // The two streams of every SPLT chunk are exactly this split (per symbol kind: pmz-encode's
+  // ideal code lengths).
+  const double conn = double(stream_bytes[pmz::kStreamConnectivity]) * 8 / ns;
+  const double geom = double(stream_bytes[pmz::kStreamGeometry]) * 8 / ns;
+  const char* names[pmz::kSplitStreamCount] = {"connectivity", "geometry"};
   const double splits_per_s = refine_s > 0 ? double(i.total_splits) / refine_s : 0;
   const double warm_per_s = warm_s > 0 ? double(i.total_splits) / warm_s : 0;
   if (json) {
@@ -121,10 +123,11 @@ int main(int argc, char** argv) {
               (unsigned long long)base, (unsigned long long)splits, (unsigned long long)other);
   std::printf("  per split connectivity %.2f bits, geometry %.2f bits; %.2f bits/vertex overall\n", conn, geom,
               data.size() * 8.0 / double(std::max<uint64_t>(1, i.full_vertices)));
-  std::printf("  streams  ");
-  for (int k = 0; k < pmz::kSplitStreamCount; ++k)
-    std::printf(" %s %.2f", names[k], double(stream_bytes[k]) * 8 / ns);
-  std::printf(" (bits/split)\n  full refinement %.3f ms (%.1f M splits/s); after coarsening, again %.3f ms (%.1f M splits/s)\n",
+  std::printf("  streams   connectivity %llu bytes, geometry %llu bytes (SPLT framing and counts %llu)\n",
+              (unsigned long long)stream_bytes[pmz::kStreamConnectivity],
+              (unsigned long long)stream_bytes[pmz::kStreamGeometry],
+              (unsigned long long)(splits - stream_bytes[pmz::kStreamConnectivity] - stream_bytes[pmz::kStreamGeometry]));
+  std::printf("  full refinement %.3f ms (%.1f M splits/s); after coarsening, again %.3f ms (%.1f M splits/s)\n",
               refine_s * 1e3, splits_per_s / 1e6, warm_s * 1e3, warm_per_s / 1e6);
   std::printf("  cpu time  full refinement %.3f ms, again %.3f ms\n", refine_cpu * 1e3, warm_cpu * 1e3);
   return 0;

@@ -265,9 +265,10 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
       for (size_t k = 0; k < kCandidates; ++k) {
         payload.clear();
         uint64_t sizes[kSplitStreamCount];
-        encode_split_chunk(chunk_groups, chunk_choice, chunk[k].data(), chunk[k].size(), *models[k], payload, sizes);
-        for (int s = 0; s < kSplitStreamCount; ++s)
-          (s <= kStreamWedgeRank ? trial_st[k].connectivity_bits : trial_st[k].geometry_bits) += sizes[s] * 8;
+        encode_split_chunk(chunk_groups, chunk_choice, chunk[k].data(), chunk[k].size(), *models[k], payload, sizes,
+                           opt.symbol_stats ? trial_st[k].symbol_bits : nullptr);
+        trial_st[k].connectivity_bits += sizes[kStreamConnectivity] * 8;
+        trial_st[k].geometry_bits += sizes[kStreamGeometry] * 8;
         const size_t before = trial[k].size();
         append_chunk(trial[k], kChunkSplits, payload);
         trial_st[k].split_bytes += trial[k].size() - before;

@@ -36,6 +36,8 @@ int main(int argc, char** argv) {
   app.add_option("--position-bits", wopt.position_bits, "quantization bits (0 = lossless float32)")
       ->check(CLI::Range(0, 30));
   app.add_option("--base-faces", wopt.base_faces, "stop simplifying at this many faces (0: as far as possible)");
+  app.add_flag("--symbol-stats", wopt.symbol_stats,
+               "also print the code length per kind of split symbol (groups, choice, wedges, residual slots)");
   CLI11_PARSE(app, argc, argv);
 
   auto t0 = std::chrono::steady_clock::now();
@@ -80,5 +82,13 @@ int main(int argc, char** argv) {
               output.c_str(), seq.mesh.face_count(), seq.mesh.vertex_count(), bytes.size(),
               bytes.size() * 8.0 / nv, st.connectivity_bits / std::max(1.0, double(seq.collapses.size())),
               st.geometry_bits / std::max(1.0, double(seq.collapses.size())), secs);
+  if (!wopt.symbol_stats) return 0;
+  // Per kind of symbol, the bits its symbols take of their stream (the streams interleave kinds,
+  // so their sizes cannot split them further).
+  const char* kinds[pmz::kSymbolKinds] = {"groups", "choice", "wedge_count", "wedge_rank", "residual_t0", "residual_t1", "residual_n"};
+  std::printf("  code bits/split:");
+  for (int k = 0; k < pmz::kSymbolKinds; ++k)
+    std::printf(" %s %.2f", kinds[k], st.symbol_bits[k] / std::max(1.0, double(seq.collapses.size())));
+  std::printf("\n");
   return 0;
 }

@@ -37,11 +37,11 @@ if(NOT rc EQUAL 0 OR NOT EXISTS ${out})
   message(FATAL_ERROR "whole sample: expected success, got rc=${rc}")
 endif()
 
-# A damaged wedge stream with a valid CRC: framing and groups are fine, so feed() and
+# A damaged geometry stream with a valid CRC: framing and groups are fine, so feed() and
 # finish() succeed and the damage shows only when the splits are first applied (the first
-# SPLT chunk's wedge_count stream filled with 0xFF: every decision decodes as 1, the escape's
-# bit length reads 63 > 32). Still an error: nothing
-# written, non-zero exit; --salvage writes the last good level and exits 2.
+# SPLT chunk's geometry stream, its residuals, filled with 0xFF: every decision decodes as 1,
+# the first residual's bit length reads 63 > 32). Still an error: nothing written, non-zero
+# exit; --salvage writes the last good level and exits 2.
 set(script [=[
 import sys, zlib, struct
 b = bytearray(open(sys.argv[1], 'rb').read())
@@ -57,29 +57,26 @@ while True:
     at = q + 4 + size
 p = q + 4
 end = p + size
-_, p = varint(p)
-_, p = varint(p)
-for k in range(2):
-    n, p = varint(p)
-    p += n
-n, p = varint(p)
-assert n > 0
-b[p:p + n] = b'\xff' * n
+_, p = varint(p)  # split_count
+n, p = varint(p)  # the connectivity stream's size; the geometry stream is the rest
+p += n
+assert end > p
+b[p:end] = b'\xff' * (end - p)
 crc = zlib.crc32(bytes(b[at:q]) + bytes(b[q + 4:end]))
 b[q:q + 4] = struct.pack('<I', crc)
 open(sys.argv[2], 'wb').write(b)
 ]=])
 file(REMOVE ${out})
-execute_process(COMMAND ${PYTHON} -c "${script}" ${SAMPLE} ${WORK}/wedge.pmz RESULT_VARIABLE rc)
+execute_process(COMMAND ${PYTHON} -c "${script}" ${SAMPLE} ${WORK}/residual.pmz RESULT_VARIABLE rc)
 if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "could not make the damaged-wedge stream (rc=${rc})")
+  message(FATAL_ERROR "could not make the damaged-geometry stream (rc=${rc})")
 endif()
-expect_refused(${WORK}/wedge.pmz "wedge")
-execute_process(COMMAND ${DECODE} ${WORK}/wedge.pmz -o ${out} --faces 100000 --salvage RESULT_VARIABLE rc)
+expect_refused(${WORK}/residual.pmz "residual")
+execute_process(COMMAND ${DECODE} ${WORK}/residual.pmz -o ${out} --faces 100000 --salvage RESULT_VARIABLE rc)
 if(NOT rc EQUAL 2 OR NOT EXISTS ${out})
-  message(FATAL_ERROR "damaged wedge stream, --salvage: expected exit 2 and an output file, got rc=${rc}")
+  message(FATAL_ERROR "damaged geometry stream, --salvage: expected exit 2 and an output file, got rc=${rc}")
 endif()
-execute_process(COMMAND ${INFO} ${WORK}/wedge.pmz RESULT_VARIABLE rc OUTPUT_QUIET ERROR_VARIABLE err)
-if(rc EQUAL 0 OR NOT err MATCHES "wedge")
-  message(FATAL_ERROR "pmz-info on a damaged wedge stream: expected failure naming it, got rc=${rc}: ${err}")
+execute_process(COMMAND ${INFO} ${WORK}/residual.pmz RESULT_VARIABLE rc OUTPUT_QUIET ERROR_VARIABLE err)
+if(rc EQUAL 0 OR NOT err MATCHES "residual")
+  message(FATAL_ERROR "pmz-info on a damaged geometry stream: expected failure naming it, got rc=${rc}: ${err}")
 endif()

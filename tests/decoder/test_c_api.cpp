@@ -48,14 +48,15 @@ TEST(CApi, DecodesSampleFile) {
   pmz_decoder_destroy(d);
 }
 
-// Damage in a wedge stream (CRC repaired) passes feed() and finish(): it shows when the split is
-// first applied, and pmz_decoder_status() reports it.
+// Damage in a geometry stream (CRC repaired) passes feed() and finish(): it shows when the split
+// is first applied, and pmz_decoder_status() reports it.
 TEST(CApi, StatusReportsDamageFoundWhileRefining) {
   std::vector<unsigned char> b = read_sample();
   ASSERT_FALSE(b.empty());
-  // First SPLT chunk: fill its wedge_count stream with 0xFF bytes. The code value then stays at
-  // the top of the range, so every decision decodes as 1: the small-value tree escapes and the
-  // uint's length escape reads 31 (n = 46 > 32), corrupt at the first split.
+  // First SPLT chunk: fill its geometry stream (the payload after split_count, the connectivity
+  // stream's size and that stream) with 0xFF bytes. The code value then stays at the top of the
+  // range, so every decision decodes as 1: the first residual's length escape reads 31 (n = 46
+  // > 32), corrupt at the first split.
   size_t at = 8;
   pmz::ChunkFrame f;
   while (pmz::parse_chunk_frame(&b[at], b.size() - at, f) == pmz::FrameStatus::ok && f.type != pmz::kChunkSplits)
@@ -64,12 +65,10 @@ TEST(CApi, StatusReportsDamageFoundWhileRefining) {
   const size_t size = size_t(f.payload_size), payload = at + f.header_size;
   pmz::ByteReader r(&b[payload], size);
   r.varint();
-  r.varint();
-  for (int k = 0; k < 2; ++k) r.bytes(size_t(r.varint()));
-  const size_t wedge_bytes = size_t(r.varint());
+  r.bytes(size_t(r.varint()));
   ASSERT_TRUE(r.ok);
-  ASSERT_GT(wedge_bytes, 0u);
-  for (size_t i = 0; i < wedge_bytes; ++i) b[payload + (size - r.remaining()) + i] = 0xFF;
+  ASSERT_GT(r.remaining(), 0u);
+  for (size_t i = size - r.remaining(); i < size; ++i) b[payload + i] = 0xFF;
   pmz::repair_chunk_crc(&b[at], f);
 
   pmz_decoder* d = pmz_decoder_create(0, 0);

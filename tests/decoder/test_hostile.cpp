@@ -450,30 +450,34 @@ TEST(Hostile, RandomAndMutatedBaseStreams) {
   EXPECT_GT(refused, 3000);
 }
 
-// split records it allocates stay proportional to the chunk.
+// A SPLT chunk claiming 60 splits per byte (within the 64 allowed) over streams of zeros: every
+// bit decodes as 0, so its groups are all of one split and cheap enough (about 0.05 bit each)
+// to be accepted; the group and split records it allocates stay proportional to the chunk, and
+// its first split is refused (the vertex choice reads only 0 bits: the candidates run out).
+// With 0xFF streams the first group's size reads a bit length above 32: refused on arrival.
 TEST(Hostile, SplitCountIsBoundedByTheChunkBytes) {
   const uint32_t n = 1u << 24;
-  for (size_t junk : {size_t(100), size_t(1000), size_t(10000)}) {
-    Bytes f = signature();
-    head(f, header(6, 8, n, 8 + 2 * n));
-    pmz::append_chunk(f, pmz::kChunkBase, octa_base_payload());
-    Bytes p;
-    varint(p, junk * 60);  // claimed splits, within 64 per byte
-    varint(p, 1);          // one group
-    for (int k = 0; k < pmz::kSplitStreamCount; ++k) {
-      varint(p, junk / 7);
-      p.resize(p.size() + junk / 7, 0);  // streams of zeros: a valid first byte, then nonsense
+  for (const uint8_t fill : {uint8_t(0), uint8_t(0xFF)})
+    for (size_t junk : {size_t(100), size_t(1000), size_t(10000)}) {
+      Bytes f = signature();
+      head(f, header(6, 8, n, 8 + 2 * n));
+      pmz::append_chunk(f, pmz::kChunkBase, octa_base_payload());
+      Bytes p;
+      varint(p, junk * 60);  // claimed splits, within 64 per byte
+      varint(p, junk / 2);   // connectivity, then geometry to the end
+      p.resize(p.size() + junk, fill);
+      pmz::append_chunk(f, pmz::kChunkSplits, p);
+      PeakScope scope;
+      pmz::Decoder d;
+      d.feed(f.data(), f.size());
+      // Per split its record and at most one group's, plus the file's models (allocated once).
+      EXPECT_LT(scope.peak(), 64 * 24 * p.size() + sizeof(pmz::SplitModels) + (64u << 10)) << junk;
+      EXPECT_EQ(d.splits_available(), fill ? 0u : junk * 60) << junk;
+      EXPECT_EQ(d.status(), fill ? pmz::Status::corrupt : pmz::Status::ok) << junk;
+      EXPECT_EQ(d.refine(), 0u);
+      EXPECT_EQ(d.status(), pmz::Status::corrupt) << junk;
+      expect_valid(d);
     }
-    pmz::append_chunk(f, pmz::kChunkSplits, p);
-    PeakScope scope;
-    pmz::Decoder d;
-    d.feed(f.data(), f.size());
-    EXPECT_EQ(d.status(), pmz::Status::corrupt) << junk;
-    EXPECT_LT(scope.peak(), 64 * 24 * p.size() + (64u << 10)) << junk;
-    EXPECT_EQ(d.splits_available(), 0u);
-    d.refine();
-    expect_valid(d);
-  }
 }
 
 TEST(Hostile, SplitCountBeyondItsStreamsIsRefusedBeforeAllocating) {

@@ -1254,7 +1254,8 @@ TEST(VertexChoice, ExclusionLagsAndAViolatingStreamIsRefused) {
     EXPECT_TRUE(r.open(payload.data(), payload.size(), size, dm, error)) << error;
     VertexChoice dec;
     dec.reset(pm);
-    return r.group(dec, pm, got);
+    std::vector<SplitSymbols> out;
+    return r.group_symbols(dec, pm, out, [](SplitSymbols&) {}, &got);
   };
   {  // the independent group: coded and decoded back
     VertexChoice enc;
@@ -1485,4 +1486,135 @@ TEST(BaseCodec, HandCodedStreamIsTheSpec) {
   EXPECT_EQ(stream, good);
   EXPECT_EQ(decode_base(bad.data(), bad.size(), 4, 2, m, error), BaseResult::corrupt);
   EXPECT_NE(error.find("malformed"), std::string::npos) << error;
+}
+
+// A SPLT payload coded by hand in the order spec section 2 ("SPLT") gives: split_count, the
+// connectivity stream's size, the connectivity stream (the groups; then the group's choice bits
+// through its 9th vertex; per split j its wedge count, rank bit and rank - 1, then the choice bits
+// through the group's (j + 10)-th vertex), the geometry stream (per split the residual slots t0,
+// t1, n). A group of 12 on an 11 x 11 grid (even-even vertices: pairwise non-adjacent), so the
+// choice bits run ahead of the wedges and then between them. The writer codes these very bytes,
+// and the reader, in the decoder's schedule, gets the symbols back.
+TEST(SplitChunk, HandCodedPayloadIsTheSpecOrder) {
+  constexpr uint32_t kN = 11;
+  std::vector<uint32_t> faces;
+  for (uint32_t y = 0; y + 1 < kN; ++y)
+    for (uint32_t x = 0; x + 1 < kN; ++x) {
+      const uint32_t a = y * kN + x, b = a + 1, c = a + kN, d = c + 1;
+      faces.insert(faces.end(), {a, b, d, a, d, c});
+    }
+  ProgressiveMesh pm;
+  std::string error;
+  ASSERT_TRUE(pm.build(kN * kN, faces.data(), faces.size() / 3, error)) << error;
+  const std::vector<uint32_t> vs{0, 2, 4, 6, 8, 10, 22, 24, 26, 28, 30, 32};
+  const uint32_t size = uint32_t(vs.size());
+  VertexChoice enc;
+  enc.reset(pm);
+  enc.start_group();
+  std::vector<uint32_t> bits;
+  bool near = true;
+  ASSERT_TRUE(choice_bits(enc, pm, kN * kN, vs, bits, near));
+  ASSERT_FALSE(near);
+  std::vector<size_t> ones;  // ones[k]: where the group's (k + 1)-th vertex's bit is
+  for (size_t i = 0; i < bits.size(); ++i)
+    if (bits[i] & 1) ones.push_back(i);
+  ASSERT_EQ(ones.size(), size);
+  std::vector<SplitSymbols> codes;
+  for (uint32_t i = 0; i < size; ++i)
+    codes.push_back({vs[i], i % kWedgeContexts, i % 5, i % 3 == 2 ? 17u : i % 3, i % kRankContexts,
+                     {i % kResidualContexts, (i + 1) % kResidualContexts, (i + 7) % kResidualContexts},
+                     {int32_t(i) - 6, int32_t(2 * i), -int32_t(i * i)},
+                     {i % kMixTangentContexts, (i + 3) % kMixTangentContexts, (i + 5) % kMixNormalContexts}});
+
+  SplitModels hm;
+  std::vector<uint8_t> conn, geom;
+  {
+    RangeEncoder cn(conn), ge(geom);
+    encode_uint(cn, hm.groups, size - 1);
+    cn.bit(hm.near, 0);
+    size_t next = 0;
+    auto choice_through = [&](uint32_t k) {  // the bits through the group's k-th vertex (1-based)
+      for (const size_t last = ones[std::min(k, size) - 1]; next <= last; ++next)
+        cn.bit(hm.choice[bits[next] >> 1], bits[next] & 1);
+    };
+    choice_through(9);
+    for (uint32_t j = 0; j < size; ++j) {
+      const SplitSymbols& s = codes[j];
+      encode_small(cn, hm.wedge_count[s.wedge_context], s.wedge_count);
+      cn.bit(hm.rank_zero[s.rank_context], s.wedge_rank > 0);
+      if (s.wedge_rank > 0) encode_small(cn, hm.wedge_rank[s.rank_context], s.wedge_rank - 1);
+      choice_through(j + 10);
+      for (int a = 0; a < 3; ++a)
+        encode_uint_mixed(ge, hm.residual[a][s.residual_context[a]], hm.mix(a, s.mix_context[a]),
+                          zigzag_encode(s.residual[a]));
+    }
+    EXPECT_EQ(next, bits.size());
+    cn.finish();
+    ge.finish();
+  }
+  std::vector<uint8_t> want;
+  put_varint(want, size);
+  put_varint(want, conn.size());
+  want.insert(want.end(), conn.begin(), conn.end());
+  want.insert(want.end(), geom.begin(), geom.end());
+
+  SplitModels em, dm;
+  std::vector<uint8_t> payload;
+  uint64_t sizes[kSplitStreamCount];
+  double kind_bits[kSymbolKinds] = {};
+  encode_split_chunk({{size, false}}, bits, codes.data(), codes.size(), em, payload, sizes, kind_bits);
+  EXPECT_EQ(payload, want);
+  EXPECT_EQ(sizes[kStreamConnectivity], conn.size());
+  EXPECT_EQ(sizes[kStreamGeometry], geom.size());
+  // The code lengths per kind add up to the streams' sizes, within their endings.
+  const double conn_bits =
+      kind_bits[kSymbolGroups] + kind_bits[kSymbolChoice] + kind_bits[kSymbolWedgeCount] + kind_bits[kSymbolWedgeRank];
+  const double geom_bits = kind_bits[kSymbolResidualT0] + kind_bits[kSymbolResidualT1] + kind_bits[kSymbolResidualN];
+  for (double b : kind_bits) EXPECT_GT(b, 0.0);
+  EXPECT_NEAR(conn_bits, 8.0 * double(conn.size()), 16.0);
+  EXPECT_NEAR(geom_bits, 8.0 * double(geom.size()), 16.0);
+  uint64_t count = 0, stream[kSplitStreamCount];
+  ASSERT_TRUE(split_chunk_stream_sizes(payload.data(), payload.size(), count, stream));
+  EXPECT_EQ(count, size);
+  EXPECT_EQ(stream[kStreamConnectivity], conn.size());
+  EXPECT_EQ(stream[kStreamGeometry], geom.size());
+
+  SplitChunkReader r;
+  ASSERT_TRUE(r.open(payload.data(), payload.size(), size, dm, error)) << error;
+  VertexChoice dec;
+  dec.reset(pm);
+  std::vector<SplitSymbols> got;
+  ASSERT_TRUE(r.group_symbols(dec, pm, got, [&](SplitSymbols& s) {
+    const SplitSymbols& c = codes[got.size()];
+    s.wedge_context = c.wedge_context;
+    s.rank_context = c.rank_context;
+    std::copy(c.residual_context, c.residual_context + 3, s.residual_context);
+    std::copy(c.mix_context, c.mix_context + 3, s.mix_context);
+  }));
+  ASSERT_EQ(got.size(), codes.size());
+  for (uint32_t i = 0; i < size; ++i) {
+    EXPECT_EQ(got[i].v, codes[i].v);
+    EXPECT_EQ(got[i].wedge_count, codes[i].wedge_count);
+    EXPECT_EQ(got[i].wedge_rank, codes[i].wedge_rank);
+    EXPECT_EQ(std::vector<int32_t>(got[i].residual, got[i].residual + 3),
+              std::vector<int32_t>(codes[i].residual, codes[i].residual + 3));
+  }
+
+  // A connectivity size beyond the payload, or a payload cut inside the groups: refused when
+  // the chunk arrives.
+  std::vector<uint8_t> bad;
+  put_varint(bad, size);
+  put_varint(bad, payload.size());
+  bad.insert(bad.end(), conn.begin(), conn.end());
+  SplitModels bm;
+  SplitChunkReader br;
+  EXPECT_FALSE(br.open(bad.data(), bad.size(), size, bm, error));
+  EXPECT_NE(error.find("overrun"), std::string::npos) << error;
+  bad.clear();
+  put_varint(bad, size);
+  put_varint(bad, 0);  // an empty connectivity stream: its groups read past the 4 zero bytes
+  SplitModels cm;
+  SplitChunkReader cr;
+  EXPECT_FALSE(cr.open(bad.data(), bad.size(), size, cm, error));
+  EXPECT_NE(error.find("groups"), std::string::npos) << error;
 }

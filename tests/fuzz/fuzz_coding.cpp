@@ -265,18 +265,21 @@ void fuzz_split_chunk(const uint8_t* data, size_t size) {
     for (int a = 0; a < 3; ++a) s.residual_context[a] = (h >> (8 + 3 * a)) % pmz::kResidualContexts;
     for (int a = 0; a < 3; ++a)
       s.mix_context[a] = (h >> (17 + 3 * a)) % (a < 2 ? pmz::kMixTangentContexts : pmz::kMixNormalContexts);
-    return std::pair<uint32_t, bool>(k, closed);
   };
   // No split is applied here, so the vertex count (and every group's limit) stays vertices_before.
   pmz::VertexChoice choice;
   choice.reset(pm);
   std::vector<pmz::SplitSymbols> got;
-  std::vector<uint32_t> sizes, vs;
-  bool ok = true;
-  while (ok && got.size() < count) {
+  std::vector<uint32_t> sizes;
+  while (got.size() < count) {
     const uint32_t limit = vertices_before;
-    if (!reader.group(choice, pm, vs)) break;
-    PMZ_FUZZ_CHECK(!vs.empty() && reader.group_end() == got.size() + vs.size());
+    const size_t first = got.size();
+    const uint64_t end_before = reader.group_end();
+    const bool whole = reader.group_symbols(choice, pm, got, [&](pmz::SplitSymbols& s) { contexts(got.size(), s); });
+    if (reader.group_end() == end_before) break;  // no group left
+    std::vector<uint32_t> vs;
+    for (size_t i = first; i < got.size(); ++i) vs.push_back(got[i].v);
+    if (whole) PMZ_FUZZ_CHECK(reader.group_end() == got.size());
     for (size_t j = 0; j < vs.size(); ++j) PMZ_FUZZ_CHECK(vs[j] < limit && (j == 0 || vs[j - 1] < vs[j]));
     // Exclusion: no vertex in the one-ring of one found kChoiceLag + 1 or more before it.
     bool independent = true;
@@ -290,20 +293,12 @@ void fuzz_split_chunk(const uint8_t* data, size_t size) {
         }
       });
     // The writer codes only groups of pairwise non-adjacent vertices: re-encode those.
-    if (!independent) break;
-    size_t done = 0;
-    for (uint32_t v : vs) {
-      pmz::SplitSymbols s{v, 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
-      auto [k, closed] = contexts(got.size(), s);
-      if (!reader.wedge_count(k, closed, s.wedge_count) || !reader.wedge_rank(s.rank_context, s.wedge_rank) ||
-          !reader.residuals(s.residual_context, s.mix_context, s.residual)) {
-        ok = false;
-        break;
-      }
-      got.push_back(s);
-      ++done;
+    if (!independent) {
+      got.resize(first);
+      break;
     }
-    if (done) sizes.push_back(uint32_t(done));
+    if (!vs.empty()) sizes.push_back(uint32_t(vs.size()));
+    if (!whole) break;
   }
   if (got.empty()) return;
   // Re-encode the decoded prefix (its groups, all over every vertex, the last one possibly cut)
@@ -330,17 +325,14 @@ void fuzz_split_chunk(const uint8_t* data, size_t size) {
   pmz::SplitChunkReader r2;
   PMZ_FUZZ_CHECK(r2.open(payload.data(), payload.size(), got.size(), *dec_models, error));
   PMZ_FUZZ_CHECK(r2.split_count() == got.size());
-  for (size_t i = 0; i < got.size();) {
-    PMZ_FUZZ_CHECK(r2.group(dec_choice, pm, vs));
-    for (uint32_t v : vs) {
-      pmz::SplitSymbols s{v, 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
-      auto [k, closed] = contexts(i, s);
-      PMZ_FUZZ_CHECK(s.v == got[i].v && r2.wedge_count(k, closed, s.wedge_count) &&
-                     r2.wedge_rank(s.rank_context, s.wedge_rank) && r2.residuals(s.residual_context, s.mix_context, s.residual));
-      PMZ_FUZZ_CHECK(s.wedge_count == got[i].wedge_count && s.wedge_rank == got[i].wedge_rank);
-      PMZ_FUZZ_CHECK(std::memcmp(s.residual, got[i].residual, sizeof s.residual) == 0);
-      ++i;
-    }
+  std::vector<pmz::SplitSymbols> again;
+  while (again.size() < got.size())
+    PMZ_FUZZ_CHECK(r2.group_symbols(dec_choice, pm, again, [&](pmz::SplitSymbols& s) { contexts(again.size(), s); }));
+  PMZ_FUZZ_CHECK(again.size() == got.size());
+  for (size_t i = 0; i < got.size(); ++i) {
+    PMZ_FUZZ_CHECK(again[i].v == got[i].v && again[i].wedge_count == got[i].wedge_count &&
+                   again[i].wedge_rank == got[i].wedge_rank);
+    PMZ_FUZZ_CHECK(std::memcmp(again[i].residual, got[i].residual, sizeof got[i].residual) == 0);
   }
 }
 

@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "pmz/format.hpp"
 #include "pmz/simplify.hpp"
 
 namespace pmz {
@@ -11,13 +12,17 @@ namespace pmz {
 struct WriteOptions {
   uint32_t position_bits = 14;  // 0 = lossless float32; else quantized over the largest extent
   uint64_t base_faces = 0;      // 0: as small as the sequence goes
+  bool symbol_stats = false;    // fill WriteStats::symbol_bits
 };
 
 struct WriteStats {
   uint64_t header_bytes = 0, base_bytes = 0, split_bytes = 0;
-  // Coded size of the SPLT streams over all splits: groups, gaps and wedges (connectivity);
-  // position residuals (geometry).
+  // Coded size of the SPLT streams over all splits: groups, vertex choice and wedges
+  // (connectivity); position residuals (geometry).
   uint64_t connectivity_bits = 0, geometry_bits = 0;
+  // With WriteOptions::symbol_stats: the code length of the SPLT symbols by kind (SymbolKind),
+  // in bits: what each kind takes of its stream (the streams' endings add a few bits each).
+  double symbol_bits[kSymbolKinds] = {};
 };
 
 bool write_pmz(const CollapseSequence& seq, const WriteOptions& options,

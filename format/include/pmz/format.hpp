@@ -38,16 +38,22 @@ void repair_chunk_crc(uint8_t* frame, const ChunkFrame& f);
 // Chunks before format 7.0 began with four ASCII type bytes, the first being "HEAD".
 inline constexpr uint8_t kOldHeadType[4] = {'H', 'E', 'A', 'D'};
 
-// Streams of one SPLT chunk, in payload order.
+// Streams of one SPLT chunk, in payload order (spec section 2, "SPLT").
 enum SplitStream : int {
-  kStreamGroups = 0,  // per group: splits - 1, near flag
-  kStreamChoice,      // per candidate vertex of a group: whether it splits
-  kStreamWedgeCount,  // wedge: interior count (spec, section 4)
-  kStreamWedgeRank,   // wedge: rank among the candidates of that count
-  kStreamResidualX,  // position residual slot 0 (first tangent axis; spec section 5)
-  kStreamResidualY,  // slot 1 (second tangent axis)
-  kStreamResidualZ,  // slot 2 (normal axis, predicted from the tangent plane)
+  kStreamConnectivity = 0,  // the groups, then vertex choice and wedge symbols in the decoder's order
+  kStreamGeometry,          // the position residuals, three slots per split
   kSplitStreamCount
+};
+// Kinds of SPLT symbols, for the writer's accounting of ideal code lengths (pmz-encode).
+enum SymbolKind : int {
+  kSymbolGroups = 0,   // per group: splits - 1, near flag
+  kSymbolChoice,       // per candidate vertex of a group: whether it splits
+  kSymbolWedgeCount,   // wedge: interior count (spec, section 4)
+  kSymbolWedgeRank,    // wedge: rank among the candidates of that count
+  kSymbolResidualT0,   // position residual slot 0 (first tangent axis; spec section 5)
+  kSymbolResidualT1,   // slot 1 (second tangent axis)
+  kSymbolResidualN,    // slot 2 (normal axis, predicted from the tangent plane)
+  kSymbolKinds
 };
 
 inline constexpr uint32_t kKnownFlags = 0;  // HEAD flags: none defined

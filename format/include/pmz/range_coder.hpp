@@ -2,6 +2,7 @@
 // binarization of unsigned integers used by SPLT streams (spec/format.md, "Range coding").
 // Header-only so the per-bit work inlines into the stream loops.
 #pragma once
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -56,6 +57,10 @@ inline uint32_t bit_length(uint32_t x) { return x ? 32u - uint32_t(__builtin_clz
 class RangeEncoder {
  public:
   explicit RangeEncoder(std::vector<uint8_t>& out) : out_(out), start_(out.size()) {}
+  // The code length of what was coded so far, in bits: 8 per byte shifted out of the interval,
+  // plus how far it narrowed within the current 32 bits (the writer's accounting per symbol
+  // kind takes differences; the stream's ending comes on top).
+  double position() const { return 8.0 * double(shifts_) + 32.0 - std::log2(double(range_)); }
   void bit(Prob& p, uint32_t b) {
     code(p & kProbMask, b);
     p = adapt(p, b);
@@ -109,6 +114,7 @@ class RangeEncoder {
     }
   }
   void shift_low() {
+    ++shifts_;
     if (uint32_t(low_) < 0xFF000000u || (low_ >> 32) != 0) {
       uint8_t carry = uint8_t(low_ >> 32), temp = cache_;
       do {
@@ -126,6 +132,7 @@ class RangeEncoder {
   uint32_t range_ = 0xFFFFFFFFu;
   uint8_t cache_ = 0;
   uint64_t cache_size_ = 1;
+  uint64_t shifts_ = 0;
 };
 
 // Decoder state as plain values: decode_uint works on a local copy, so a whole symbol's bits

@@ -1,5 +1,6 @@
-// Coding of one SPLT chunk: groups of vertex splits into seven range-coded streams with
-// adaptive context models (spec/format.md, "SPLT"). Writer and decoder share this code.
+// Coding of one SPLT chunk: groups of vertex splits into two range-coded streams with adaptive
+// context models (spec/format.md, "SPLT"): connectivity (groups, vertex choice, wedges) and
+// geometry (position residuals). Writer and decoder share this code.
 //
 // Groups (sizes and near flags) are decoded when the chunk arrives. Which vertices split (the
 // choice stream), wedge and residual symbols use contexts from the mesh the decoder already has
@@ -15,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "pmz/format.hpp"
 #include "pmz/geometry.hpp"
 #include "pmz/range_coder.hpp"
 
@@ -218,16 +220,20 @@ bool choice_bits(VertexChoice& choice, const ProgressiveMesh& mesh, uint32_t lim
                  std::vector<uint32_t>& bits, bool& near);
 
 // Appends the SPLT payload for the given groups (sizes sum to count) and choice bits (the
-// concatenation of choice_bits() of the groups); models: the file's models (updated).
-// stream_bytes[k] receives the coded size of stream k (optional).
+// concatenation of choice_bits() of the groups), every symbol in the order the decoder reads it;
+// models: the file's models (updated). stream_bytes[k] receives the coded size of stream k
+// (optional); symbol_bits[kind] (optional, SymbolKind) has the code length of the chunk's
+// symbols of each kind added (RangeEncoder::position differences; the writer's accounting,
+// pmz-encode --symbol-stats).
 void encode_split_chunk(const std::vector<GroupCode>& groups, const std::vector<uint32_t>& choice,
                         const SplitSymbols* splits, size_t count, SplitModels& models, std::vector<uint8_t>& payload,
-                        uint64_t* stream_bytes = nullptr);
+                        uint64_t* stream_bytes = nullptr, double* symbol_bits = nullptr);
 
 // Decoder side of one SPLT chunk. open() copies the payload, decodes the groups (sizes summing
 // to the split count, at most max_splits) and validates them. models (the file's, see
-// SplitModels) must outlive the reader. Then, in stream order: group() decodes the vertices of
-// the next group (when its first split is first applied), wedge() and residuals() the
+// SplitModels) must outlive the reader. Then, in stream order and in the decoder's schedule
+// (spec "SPLT": the choice, wedge_count and wedge_rank calls read one stream): begin_group()
+// and find() the vertices of each group, wedge_count(), wedge_rank() and residuals() the
 // symbols of each split, with the contexts the caller computes from its mesh; false when a
 // stream is malformed or exhausted, or a group's candidates run out.
 class SplitChunkReader {
@@ -242,11 +248,17 @@ class SplitChunkReader {
   uint64_t group_end() const { return group_end_; }
   bool begin_group(VertexChoice& choice, uint32_t limit);
   bool find(VertexChoice& choice, const ProgressiveMesh* mesh, uint32_t upto, std::vector<uint32_t>& vs);
-  // Both for a whole group, exclusion from the rings in mesh, the mesh at the group's start
-  // (tests, fuzzing): vs receives the group's vertices.
-  bool group(VertexChoice& choice, const ProgressiveMesh& mesh, std::vector<uint32_t>& vs);
-  // The wedge symbols, each when its context is known: count (v's ring), then rank (the scores).
-  bool wedge_count(uint32_t k, bool closed, uint32_t& count);
+  // Tests, fuzzing: the next group with every symbol in the decoder's schedule (its vertices
+  // kChoiceLag + 1 ahead of the split being read, exclusion from the rings in mesh, the mesh at
+  // the group's start); contexts(s) sets the contexts in s (s.v known) before its symbols are
+  // read. Appends the group's splits to out; false where a decoder would refuse (the splits
+  // before that point appended). found (optional) receives the group's vertices found.
+  template <class F>
+  bool group_symbols(VertexChoice& choice, const ProgressiveMesh& mesh, std::vector<SplitSymbols>& out, F&& contexts,
+                     std::vector<uint32_t>* found = nullptr);
+  // The wedge symbols, each when its context is known: count (wedge_context of v's ring), then
+  // rank (rank_context, from the scores).
+  bool wedge_count(uint32_t context, uint32_t& count);
   bool wedge_rank(uint32_t context, uint32_t& rank);
   // context, mix: PositionPrediction's per slot.
   bool residuals(const uint32_t context[3], const uint32_t mix[3], int32_t residual[3]);
@@ -258,12 +270,35 @@ class SplitChunkReader {
   std::vector<GroupCode> groups_;
   size_t next_group_ = 0, largest_ = 0;
   uint64_t group_end_ = 0;
-  std::unique_ptr<RangeDecoder> choice_dec_, count_dec_, rank_dec_, res_dec_[3];
+  uint32_t group_size_ = 0;  // of the group begun last
+  static uint32_t vertex_count(const ProgressiveMesh& mesh);  // (ProgressiveMesh is incomplete here)
+  std::unique_ptr<RangeDecoder> conn_dec_, geo_dec_;  // connectivity and geometry streams
   uint64_t count_ = 0;
 };
 
+template <class F>
+bool SplitChunkReader::group_symbols(VertexChoice& choice, const ProgressiveMesh& mesh, std::vector<SplitSymbols>& out,
+                                     F&& contexts, std::vector<uint32_t>* found) {
+  if (!begin_group(choice, vertex_count(mesh))) return false;
+  const uint32_t size = group_size_;
+  std::vector<uint32_t> local;
+  std::vector<uint32_t>& vs = found ? *found : local;
+  vs.clear();
+  bool more = find(choice, &mesh, kChoiceLag + 1, vs);
+  for (uint32_t j = 0; j < size; ++j) {
+    if (j >= vs.size()) return false;
+    SplitSymbols s{vs[j], 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+    contexts(s);
+    if (!wedge_count(s.wedge_context, s.wedge_count) || !wedge_rank(s.rank_context, s.wedge_rank)) return false;
+    if (more) more = find(choice, &mesh, j + 2 + kChoiceLag, vs);
+    if (!residuals(s.residual_context, s.mix_context, s.residual)) return false;
+    out.push_back(s);
+  }
+  return more;
+}
+
 // Coded stream sizes of a SPLT payload without decoding it (for pmz-info).
-bool split_chunk_stream_sizes(const uint8_t* p, size_t size, uint64_t& count, uint64_t stream_bytes[7]);
+bool split_chunk_stream_sizes(const uint8_t* p, size_t size, uint64_t& count, uint64_t stream_bytes[kSplitStreamCount]);
 
 // ---- Mesh-dependent symbols (spec/format.md, sections 4 and 5) ----
 
