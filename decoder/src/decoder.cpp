@@ -332,6 +332,9 @@ Status Decoder::Impl::head(const uint8_t* p, size_t n) {
   if (h.base_faces > h.full_faces ||
       h.full_faces > uint64_t(h.base_faces) + 2ull * h.total_splits)
     return fail(Status::corrupt, "inconsistent counts in HEAD");
+  // Vertex ids are uint32 with 0xFFFFFFFF for none, whatever the limits (spec section 2).
+  if (h.full_vertices() > 0xFFFFFFFFu)
+    return fail(Status::corrupt, std::to_string(h.full_vertices()) + " vertices in HEAD (2^32 or more)");
   if (h.full_vertices() > limits.max_vertices || h.full_faces > limits.max_faces)
     return fail(Status::limit_exceeded, std::to_string(h.full_vertices()) + " vertices, " +
                                             std::to_string(h.full_faces) + " faces");

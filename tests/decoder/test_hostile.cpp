@@ -286,6 +286,29 @@ TEST(Hostile, CurvatureAboveEightIsRefused) {
 
 // ---- counts beyond the limits ----
 
+// Vertex ids are uint32 (0xFFFFFFFF is "none"): base_vertices + total_splits must stay below
+// 2^32 whatever the limits allow (spec section 2, HEAD; format 6.0 stored full_vertices as a u32).
+TEST(Hostile, FullVerticesBeyondUint32AreCorruptWhateverTheLimits) {
+  pmz::DecoderLimits limits;
+  limits.max_vertices = ~uint64_t(0);
+  limits.max_faces = ~uint64_t(0);
+  for (const auto& [bv, splits] : {std::pair<uint32_t, uint32_t>{6, 0xFFFFFFFFu - 5}, {0xFFFFFFFFu, 1},
+                                   {0x80000000u, 0x80000000u}}) {
+    Bytes f = signature();
+    head(f, header(bv, 8, splits, 8));
+    pmz::Decoder d(limits);
+    EXPECT_EQ(d.feed(f.data(), f.size()), pmz::Status::corrupt) << bv << " + " << splits;
+    EXPECT_NE(d.error_message().find("vertices"), std::string::npos) << d.error_message();
+  }
+  // 2^32 - 1 vertices in all is still a valid HEAD (ids up to 0xFFFFFFFE).
+  Bytes f = signature();
+  head(f, header(6, 8, 0xFFFFFFFFu - 6, 8));
+  pmz::Decoder d(limits);
+  EXPECT_EQ(d.feed(f.data(), f.size()), pmz::Status::ok) << d.error_message();
+  EXPECT_EQ(d.info().full_vertices, 0xFFFFFFFFull);
+}
+
+
 TEST(Hostile, HeaderCountsBeyondLimitsAreRefusedWithoutAllocating) {
   pmz::DecoderLimits limits;
   limits.max_vertices = 1000;
