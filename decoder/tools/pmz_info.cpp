@@ -66,8 +66,12 @@ int main(int argc, char** argv) {
     pmz::ChunkFrame f;
     if (pmz::parse_chunk_frame(data.data() + at, data.size() - at, f) != pmz::FrameStatus::ok ||
         f.payload_size > data.size() - at - f.header_size)
-      break;  // bytes after END (the decode above validated everything before)
+      break;  // cannot happen before END: the decode above validated it
     const uint64_t total = f.header_size + f.payload_size;
+    if (f.type == pmz::kChunkEnd) {
+      other += total;
+      break;  // the decoder ignores what follows END, even bytes that frame as chunks
+    }
     if (f.type == pmz::kChunkHead) head += total;
     else if (f.type == pmz::kChunkBase) base += total;
     else if (f.type == pmz::kChunkSplits) {

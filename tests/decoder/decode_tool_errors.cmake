@@ -40,8 +40,8 @@ endif()
 # A damaged geometry stream with a valid CRC: framing and groups are fine, so feed() and
 # finish() succeed and the damage shows only when the splits are first applied (the first
 # SPLT chunk's geometry stream, its residuals, filled with 0xFF: every decision decodes as 1,
-# the first residual's bit length reads 63 > 32). Still an error: nothing written, non-zero
-# exit; --salvage writes the last good level and exits 2.
+# so the first residual's bit length escapes and the escape reads 31: n = 46 > 32). Still an
+# error: nothing written, non-zero exit; --salvage writes the last good level and exits 2.
 set(script [=[
 import sys, zlib, struct
 b = bytearray(open(sys.argv[1], 'rb').read())
@@ -79,4 +79,24 @@ endif()
 execute_process(COMMAND ${INFO} ${WORK}/residual.pmz RESULT_VARIABLE rc OUTPUT_QUIET ERROR_VARIABLE err)
 if(rc EQUAL 0 OR NOT err MATCHES "residual")
   message(FATAL_ERROR "pmz-info on a damaged geometry stream: expected failure naming it, got rc=${rc}: ${err}")
+endif()
+
+# pmz-info counts the sections up to END: bytes after it (here a well-framed SPLT chunk, which
+# the decoder ignores) change neither the section sizes nor the streams.
+execute_process(COMMAND ${PYTHON} -c "
+import sys, zlib, struct
+b = open(sys.argv[1], 'rb').read()
+h = bytes([3, 4]); p = bytes([1, 1, 0, 0])
+open(sys.argv[2], 'wb').write(b + h + struct.pack('<I', zlib.crc32(h + p)) + p)
+" ${SAMPLE} ${WORK}/trailing.pmz RESULT_VARIABLE rc)
+execute_process(COMMAND ${INFO} ${SAMPLE} RESULT_VARIABLE rc1 OUTPUT_VARIABLE info1)
+execute_process(COMMAND ${INFO} ${WORK}/trailing.pmz RESULT_VARIABLE rc2 OUTPUT_VARIABLE info2)
+string(REGEX MATCH "splits in [^\n]*\n[^\n]*sections[^\n]*" sec1 "${info1}")
+string(REGEX MATCH "splits in [^\n]*\n[^\n]*sections[^\n]*" sec2 "${info2}")
+string(REGEX MATCH "streams[^\n]*" streams1 "${info1}")
+string(REGEX MATCH "streams[^\n]*" streams2 "${info2}")
+string(APPEND sec1 "\n${streams1}")
+string(APPEND sec2 "\n${streams2}")
+if(NOT rc EQUAL 0 OR NOT rc1 EQUAL 0 OR NOT rc2 EQUAL 0 OR sec1 STREQUAL "" OR NOT sec1 STREQUAL sec2)
+  message(FATAL_ERROR "pmz-info with bytes after END: rc=${rc}/${rc1}/${rc2}\n${sec1}\nvs\n${sec2}")
 endif()
