@@ -15,7 +15,7 @@ namespace {
 constexpr uint32_t kNone = 0xFFFFFFFFu;
 // Counts a stream of S bytes can hold (spec section 7): a face costs at least two adaptive
 // decisions, a vertex at least 12 (four length decisions per residual), and S bytes decode at
-// most 755 (S + 1) of them (the decoder reads up to 4 zero bytes past the end, spec section 8):
+// most 755.8 (S + 1) of them (the decoder reads up to 4 zero bytes past the end, spec section 8):
 // bounds are per (S + 1).
 constexpr uint64_t kFacesPerByte = 384, kVerticesPerByte = 64;
 // Open-edge list scans (spec section 2, "BASE"): at most this much per half-edge, plus slack.

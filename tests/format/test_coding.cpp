@@ -160,6 +160,36 @@ TEST(RangeCoder, ReachableProbabilitiesStayInBounds) {
 // Encoder and decoder are inverses at every probability a model can hold: per p in [240, 32528],
 // a run of bits at that p (the first after a 1 at p = 16384, so the range is not 2^32 - 1),
 // then the ending.
+// Spec section 7's count bounds: S bytes hold at most 755.8 (S + 1) adaptive decisions. The
+// cheapest decision is a 1 at p = 240 (the rounding of range >> 15 favours it over a 0 at
+// 32528): a stream of only those reaches 754.46 per byte of the interval (its ending aside), and
+// decodes back. (The BASE bounds, 384 faces and 64 vertices per byte, rest on 755.8 / 2 and
+// 755.8 / 12.)
+TEST(RangeCoder, CheapestDecisionsPerByteAreTheSection7Bound) {
+  const uint32_t decisions = 400000;
+  std::vector<uint8_t> out;
+  {
+    RangeEncoder rc(out);
+    for (uint32_t i = 0; i < decisions; ++i) {
+      Prob m = kProbMin;  // the same probability each time
+      rc.bit(m, 1);
+    }
+    rc.finish();
+  }
+  const double per_byte = double(decisions) / double(out.size() + 1);
+  EXPECT_LE(per_byte, 755.8);
+  EXPECT_GT(per_byte, 750.0);  // 751.9 here: the ending adds a byte or two
+  EXPECT_LT(755.8 / 12, 64.0);
+  EXPECT_LT(755.8 / 2, 384.0);
+  RangeDecoder rd(out.data(), out.size());
+  RangeState st = rd.state();
+  for (uint32_t i = 0; i < decisions; ++i) {
+    Prob m = kProbMin;
+    ASSERT_EQ(st.bit(m), 1u) << i;
+  }
+  EXPECT_TRUE(st.ok);
+}
+
 TEST(RangeCoder, EveryProbabilityRoundTrips) {
   std::mt19937 rng(13);
   for (uint32_t p = kProbMin; p <= kProbMax; ++p) {
