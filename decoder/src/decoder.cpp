@@ -174,7 +174,7 @@ struct Decoder::Impl {
     // re-refining after coarsening: there they cost about 10% on bunny00-loop2).
     const bool predicting = coords.size() <= (size_t(mesh.vertex_count()) + FanPrefetcher::kWalkers) * 3;
     fans.step(mesh, coords.data(), predicting ? coords.size() : 0, near < available ? splits[near].v : kNoCorner,
-              choice.degrees());
+              choice.degrees(), choice.sums_bytes());
   }
   // Coarsening: undoing a split rewires the faces across its new faces and repoints
   // vertex_corner of v, vl and vr, all anywhere in the buffers. For the split kUnlinkAhead
@@ -369,9 +369,9 @@ Status Decoder::Impl::base(const uint8_t* p, size_t n) {
   ProgressiveMesh m;
   if (!m.build(vn, bm.faces.data(), fn, err)) return fail(Status::corrupt, "BASE: " + err);
   mesh = std::move(m);
-  choice.reset(mesh);
-  group_vs.reserve(kChoiceLag + 2);  // find_vertices() adds at most kChoiceLag + 1 at a time
   coords = std::move(bm.coords);
+  choice.reset(mesh, coords.data(), info.position_bits);
+  group_vs.reserve(kChoiceLag + 2);  // find_vertices() adds at most kChoiceLag + 1 at a time
   for (size_t i = 0; i < vn; ++i) grow_box(&coords[i * 3]);
   positions.resize(size_t(vn) * 3);
   for (size_t i = 0; i < size_t(vn) * 3; ++i) positions[i] = quant.dequantize(coords[i], int(i % 3));
@@ -447,9 +447,6 @@ bool Decoder::Impl::apply() {
   }
   if (!mesh.split_gathered(s.v, s.a, s.b)) return invalid();
   const bool has_l = s.a != kNoRank, has_r = s.b != kNoRank;
-  choice.applied(mesh, has_l, has_r);  // a residual failure below ends the stream anyway
-  // The group's vertices kChoiceLag + 1 ahead (the lag: this split's ring is noted now).
-  find_vertices(uint32_t(applied - group_first) + 2 + kChoiceLag);
   {  // the position, then what re-applying the split needs
     PositionPrediction pred;
     int32_t residual[3], c[3];
@@ -466,6 +463,10 @@ bool Decoder::Impl::apply() {
     }
     parents.push_back(s.v);
     sides.push_back(uint8_t((has_l ? kHasLeft : 0) | (has_r ? kHasRight : 0)));
+    // The vertex choice state (its umbrella sums need u's coordinates), then the group's
+    // vertices kChoiceLag + 1 ahead (the lag: this split's ring is noted now).
+    choice.applied(mesh, coords.data(), has_l, has_r);
+    find_vertices(uint32_t(applied - group_first) + 2 + kChoiceLag);
     s.a = mesh.sector_hint();
     s.b = uint32_t(mesh.sector_faces().size());
     if (++decoded - lazy_first == lazy.front().split_count()) {

@@ -256,7 +256,7 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
     std::vector<uint8_t> payload;
     WedgeScratch scratch;
     VertexChoice choice;
-    choice.reset(pm);
+    choice.reset(pm, coords.data(), h.position_bits);
     std::unique_ptr<SplitModels> models[kCandidates];
     for (auto& m : models) m = std::make_unique<SplitModels>();
     uint32_t chunk_limit = kFirstChunkSplits;
@@ -308,7 +308,7 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
               !pm.split_gathered(v, rl, rr))
             return error = "internal: split rejected", false;
           code.rank_context = rank_context(pm.ring_closed(), scratch.confident);
-          choice.applied(pm, rl != kNoRank, rr != kNoRank);
+          choice.applied(pm, coords.data(), rl != kNoRank, rr != kNoRank);
           const uint32_t u = pm.vertex_count() - 1;
           RingBasis basis;  // the ring part once; per candidate only the offset and contexts
           ring_basis(coords.data(), pm.u_ring(), pm.ring(), true, true, basis);

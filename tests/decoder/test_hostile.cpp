@@ -142,7 +142,7 @@ struct Replay {
     std::string error;
     pm.build(6, octa().faces.data(), 8, error);
     coords = octa().coords;
-    choice.reset(pm);
+    choice.reset(pm, coords.data(), 14);
   }
   // A group of one split at v: its code, choice bits appended to bits.
   pmz::GroupCode group(uint32_t v, std::vector<uint32_t>& bits) {
@@ -163,7 +163,6 @@ struct Replay {
     if (!pmz::wedge_ranks(coords.data(), choice.degrees(), v, pm, 0, 0, a, b, scratch) || !pm.split_gathered(v, a, b))
       return false;
     c.rank_context = pmz::rank_context(closed, scratch.confident);
-    choice.applied(pm, a != pmz::kNoRank, b != pmz::kNoRank);
     pmz::PositionPrediction pred;  // HEAD curvature 0, as header() writes
     pmz::predict_position(coords.data(), pm.u_ring(), pm.ring(), 0, 0, pred);
     std::copy(pred.context, pred.context + 3, c.residual_context);
@@ -171,6 +170,7 @@ struct Replay {
     int32_t cu[3];
     pmz::position_from_residuals(pred, c.residual, cu);
     coords.insert(coords.end(), cu, cu + 3);
+    choice.applied(pm, coords.data(), a != pmz::kNoRank, b != pmz::kNoRank);  // needs u's coordinates
     return true;
   }
 };
@@ -603,7 +603,6 @@ TEST(Hostile, WedgeSymbolsAtUint32MaxAreInvalid) {
     ASSERT_TRUE(pmz::wedge_ranks(rp.coords.data(), rp.choice.degrees(), 0, rp.pm, 0, 0, a, b, rp.scratch));
     codes[0].rank_context = pmz::rank_context(rp.pm.ring_closed(), rp.scratch.confident);
     ASSERT_TRUE(rp.pm.split_gathered(0, a, b));
-    rp.choice.applied(rp.pm, a != pmz::kNoRank, b != pmz::kNoRank);
     pmz::PositionPrediction pred;
     pmz::predict_position(rp.coords.data(), rp.pm.u_ring(), rp.pm.ring(), 0, 0, pred);
     std::copy(pred.context, pred.context + 3, codes[0].residual_context);
@@ -611,6 +610,7 @@ TEST(Hostile, WedgeSymbolsAtUint32MaxAreInvalid) {
     int32_t cu[3];
     pmz::position_from_residuals(pred, codes[0].residual, cu);
     rp.coords.insert(rp.coords.end(), cu, cu + 3);
+    rp.choice.applied(rp.pm, rp.coords.data(), a != pmz::kNoRank, b != pmz::kNoRank);
     groups.push_back(rp.group(6, bits));
     ASSERT_TRUE(rp.pm.gather_ring(6));
     ASSERT_TRUE(rp.pm.ring_closed());
@@ -780,7 +780,7 @@ TEST(Hostile, CoarseningNeedsNoAllocation) {
   std::string error;
   ASSERT_TRUE(pm.build(nv, faces.data(), nf, error)) << error;
   pmz::VertexChoice choice;
-  choice.reset(pm);
+  choice.reset(pm, coords.data(), 14);
   choice.start_group();
   std::vector<uint32_t> bits;
   const uint32_t vs[1] = {apex};

@@ -91,6 +91,40 @@ void round_trip(const pmz::IndexedMesh& input, uint32_t bits, uint64_t base_face
   }
 }
 
+// The vertex choice state (degrees, umbrella sums) describes the first-application frontier:
+// coarsening and refining below it (re-applied splits decode nothing) leave it valid, so a
+// decoder that moves down and up between chunks decodes the later chunks to the same mesh as a
+// straight decode.
+TEST(WriterRoundTrip, LevelMovesBetweenChunksKeepTheChoiceContexts) {
+  pmz::CollapseSequence seq;
+  std::string error;
+  ASSERT_TRUE(pmz::simplify(pmz::make_sample_mesh(3000), {}, seq, error)) << error;
+  pmz::WriteOptions opt;
+  std::vector<uint8_t> bytes;
+  ASSERT_TRUE(pmz::write_pmz(seq, opt, bytes, error)) << error;
+  pmz::Decoder straight;
+  ASSERT_EQ(straight.feed(bytes.data(), bytes.size()), pmz::Status::ok);
+  straight.refine();
+  pmz::Decoder d;
+  size_t moves = 0;
+  for (size_t at = 0; at < bytes.size(); at += 1500) {
+    ASSERT_EQ(d.feed(bytes.data() + at, std::min<size_t>(1500, bytes.size() - at)), pmz::Status::ok) << d.error_message();
+    d.refine(d.splits_available() / 2 + 1);  // part of the new splits first applied
+    const uint64_t top = d.splits_applied();
+    if (top < 8) continue;
+    d.set_split_target(top / 3);
+    d.refine(top / 4);  // below the frontier: re-applied
+    d.set_split_target(top / 5);
+    moves += 2;
+  }
+  ASSERT_GT(moves, 4u);
+  d.refine();
+  ASSERT_EQ(d.status(), pmz::Status::ok) << d.error_message();
+  ASSERT_EQ(d.splits_applied(), straight.splits_applied());
+  ASSERT_TRUE(std::equal(d.indices(), d.indices() + size_t(d.face_count()) * 3, straight.indices()));
+  ASSERT_TRUE(std::equal(d.positions(), d.positions() + size_t(d.vertex_count()) * 3, straight.positions()));
+}
+
 TEST(WriterRoundTrip, SampleMeshQuantized) { round_trip(pmz::make_sample_mesh(3000), 14); }
 TEST(WriterRoundTrip, SampleMeshLossless) { round_trip(pmz::make_sample_mesh(3000), 0); }
 TEST(WriterRoundTrip, SampleMeshFewBits) { round_trip(pmz::make_sample_mesh(2000), 6); }

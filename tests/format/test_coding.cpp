@@ -1092,42 +1092,113 @@ void random_wedge(const ProgressiveMesh& pm, std::mt19937& rng, uint32_t& a, uin
   } while ((a == kNoRank && b == kNoRank) || (a != kNoRank && b != kNoRank && a >= b));
 }
 
-// The spec's context of candidate w: (min(bitlen(floor(rem / left)), 20) * 2 + near) * 13 +
-// min(degree, 12), rem = candidates from w to the end of the list, left = splits still to find.
-uint32_t spec_context(uint64_t rem, uint64_t left, bool near, uint32_t degree) {
+// Random coordinates below 2^bits for n vertices (lossless files: any int32, bits = 32).
+std::vector<int32_t> random_coords(std::mt19937& rng, size_t n, uint32_t bits) {
+  std::vector<int32_t> c(n * 3);
+  for (int32_t& x : c) x = bits >= 32 ? int32_t(rng()) : int32_t(rng() & ((1u << bits) - 1));
+  return c;
+}
+
+// The spec's umbrella class of w from its ring in pm (spec "Vertex choice"), in exact integers:
+// c' = c >> shift, e = c'[x] - c'[w] over the ring, D = sum of e, L = sum of |e_x| + |e_y| +
+// |e_z|, both mod 2^32 (D signed); 0 if 64 |D|^2 < L^2, 1 if 16 |D|^2 < L^2, else 2.
+uint32_t spec_class(ProgressiveMesh& pm, const std::vector<int32_t>& c, uint32_t w, uint32_t shift) {
+  int64_t d[3] = {0, 0, 0};
+  uint64_t l = 0;
+  if (pm.gather_ring(w))
+    for (uint32_t x : pm.ring())
+      for (int a = 0; a < 3; ++a) {
+        const int64_t e = int64_t(c[size_t(x) * 3 + a] >> shift) - int64_t(c[size_t(w) * 3 + a] >> shift);
+        d[a] += e;
+        l += uint64_t(e < 0 ? -e : e);
+      }
+  __extension__ typedef unsigned __int128 U;
+  U d2 = 0;
+  for (int a = 0; a < 3; ++a) {
+    const int64_t x = int32_t(uint32_t(d[a]));
+    d2 += U(x * x);
+  }
+  const U l2 = U(uint32_t(l)) * uint32_t(l);
+  return 64 * d2 < l2 ? 0 : 16 * d2 < l2 ? 1 : 2;
+}
+
+// The spec's context of candidate w: ((min(bitlen(floor(rem / left)), 20) * 2 + near) * 9 +
+// min(degree, 8)) * 3 + umbrella class, rem = candidates from w to the end of the list, left =
+// splits still to find.
+uint32_t spec_context(uint64_t rem, uint64_t left, bool near, uint32_t degree, uint32_t shape) {
   const uint64_t e = rem / left;
   uint32_t bits = 0;
   while (bits < 64 && (e >> bits) != 0) ++bits;
-  return (std::min(bits, 20u) * 2 + (near ? 1 : 0)) * 13 + std::min(degree, 12u);
+  return ((std::min(bits, 20u) * 2 + (near ? 1 : 0)) * 9 + std::min(degree, 8u)) * 3 + shape;
 }
 }  // namespace
 
 // Degrees (base: ring sizes; per split: v gets k - |R| + 2 + [vl] + [vr], u gets |R|, vl and vr
-// one more) stay the ring sizes of a manifold mesh under random splits, closed and open.
-TEST(VertexChoice, DegreesAreTheRingSizes) {
+// one more) stay the ring sizes of a manifold mesh under random splits, closed and open; the
+// umbrella sums stay the sums over the rings and the classes the spec's, for coordinates of 14
+// bits (no shift), 20 bits (shift 4) and lossless patterns (any int32, shift 16).
+TEST(VertexChoice, DegreesAndUmbrellaSumsAreTheRings) {
   std::mt19937 rng(5);
-  for (int open = 0; open < 2; ++open) {
-    ProgressiveMesh pm;
-    build_octahedron(pm, open);
-    VertexChoice choice;
-    choice.reset(pm);
-    for (int step = 0; step < 400; ++step) {
-      const uint32_t v = rng() % pm.vertex_count();
-      ASSERT_TRUE(pm.gather_ring(v));
-      const uint32_t k = uint32_t(pm.ring().size());
-      uint32_t a, b;
-      random_wedge(pm, rng, a, b);
-      choice.reserve(k);
-      ASSERT_TRUE(pm.split_gathered(v, a, b));
-      choice.applied(pm, a != kNoRank, b != kNoRank);
-      const uint32_t r = uint32_t(pm.u_ring().size());
-      EXPECT_EQ(choice.degree(v), k - r + 2 + (a != kNoRank) + (b != kNoRank));
-      for (uint32_t w = 0; w < pm.vertex_count(); ++w) {
-        ASSERT_TRUE(pm.gather_ring(w));
-        ASSERT_EQ(choice.degree(w), pm.ring().size()) << "open " << open << " step " << step << " w " << w;
+  for (uint32_t bits : {14u, 20u, 0u})
+    for (int open = 0; open < 2; ++open) {
+      ProgressiveMesh pm;
+      build_octahedron(pm, open);
+      std::vector<int32_t> coords = random_coords(rng, 6, bits ? bits : 32);
+      const uint32_t shift = umbrella_shift(bits);
+      EXPECT_EQ(shift, bits == 14 ? 0u : bits == 20 ? 4u : 16u);
+      VertexChoice choice;
+      choice.reset(pm, coords.data(), bits);
+      std::vector<uint32_t> seen(3, 0);
+      for (int step = 0; step < 300; ++step) {
+        const uint32_t v = rng() % pm.vertex_count();
+        ASSERT_TRUE(pm.gather_ring(v));
+        const uint32_t k = uint32_t(pm.ring().size());
+        uint32_t a, b;
+        random_wedge(pm, rng, a, b);
+        choice.reserve(k);
+        ASSERT_TRUE(pm.split_gathered(v, a, b));
+        const std::vector<int32_t> cu = random_coords(rng, 1, bits ? bits : 32);
+        coords.insert(coords.end(), cu.begin(), cu.end());
+        choice.applied(pm, coords.data(), a != kNoRank, b != kNoRank);
+        const uint32_t r = uint32_t(pm.u_ring().size());
+        EXPECT_EQ(choice.degree(v), k - r + 2 + (a != kNoRank) + (b != kNoRank));
+        for (uint32_t w = 0; w < pm.vertex_count(); ++w) {
+          const uint32_t want = spec_class(pm, coords, w, shift);
+          ASSERT_TRUE(pm.gather_ring(w));
+          ASSERT_EQ(choice.degree(w), pm.ring().size()) << "open " << open << " step " << step << " w " << w;
+          ASSERT_EQ(choice.shape(w), want) << "bits " << bits << " open " << open << " step " << step << " w " << w;
+          ++seen[want];
+        }
+      }
+      if (bits == 14) {  // every class occurs
+        EXPECT_GT(seen[0], 0u);
+        EXPECT_GT(seen[1], 0u);
+        EXPECT_GT(seen[2], 0u);
       }
     }
-  }
+}
+
+// The class boundaries: strictly below 2^-6 and 2^-4 (64 |D|^2 and 16 |D|^2 against L^2), D
+// signed 32-bit, L unsigned 32-bit, no overflow at the extremes.
+TEST(VertexChoice, UmbrellaClassIsTheSpecFormula) {
+  auto cls = [](int32_t x, int32_t y, int32_t z, uint32_t l) {
+    return umbrella_class(RingSums{{uint32_t(x), uint32_t(y), uint32_t(z)}, l});
+  };
+  EXPECT_EQ(cls(1, 0, 0, 8), 1u);   // 64 = 64: not below 2^-6
+  EXPECT_EQ(cls(1, 0, 0, 9), 0u);   // 64 < 81
+  EXPECT_EQ(cls(0, -1, 0, 4), 2u);  // 16 = 16: not below 2^-4
+  EXPECT_EQ(cls(0, 0, -1, 5), 1u);  // 16 < 25
+  EXPECT_EQ(cls(3, 4, 0, 40), 1u);  // |D|^2 = 25: 1600 = 1600, 400 < 1600
+  EXPECT_EQ(cls(3, 4, 0, 41), 0u);
+  EXPECT_EQ(cls(3, 4, 0, 20), 2u);  // 400 = 400
+  EXPECT_EQ(cls(0, 0, 0, 0), 2u);   // L = 0
+  EXPECT_EQ(cls(0, 0, 0, 1), 0u);
+  EXPECT_EQ(cls(INT32_MIN, INT32_MIN, INT32_MIN, UINT32_MAX), 2u);  // 3 * 2^62: no wrap
+  // L^2 = 2^64 - 2^33 + 1: 64 * 2^58 above it, 64 (2^29 - 1)^2 = 2^64 - 2^36 + 64 below.
+  EXPECT_EQ(cls(1 << 29, 0, 0, UINT32_MAX), 1u);
+  EXPECT_EQ(cls((1 << 29) - 1, 0, 0, UINT32_MAX), 0u);
+  EXPECT_EQ(cls(0, 1 << 30, 0, UINT32_MAX), 2u);  // 16 * 2^60 = 2^64
+  EXPECT_EQ(cls(0, -(1 << 30) + 1, 0, UINT32_MAX), 1u);
 }
 
 // choice_bits() codes exactly the spec's candidates and contexts: every vertex below the
@@ -1137,8 +1208,9 @@ TEST(VertexChoice, CandidatesAndContextsAreTheSpecFormula) {
   std::mt19937 rng(8);
   ProgressiveMesh pm;
   build_octahedron(pm, false);
+  std::vector<int32_t> coords = random_coords(rng, 6, 14);
   VertexChoice choice;
-  choice.reset(pm);
+  choice.reset(pm, coords.data(), 14);
   std::vector<uint32_t> noted;  // the neighbourhood of the group just applied
   size_t skipped_total = 0;     // candidates skipped by exclusion (the test must exercise it)
   for (int group = 0; group < 60; ++group) {
@@ -1199,7 +1271,9 @@ TEST(VertexChoice, CandidatesAndContextsAreTheSpecFormula) {
         continue;
       }
       const bool hit = std::find(vs.begin(), vs.end(), cand[i]) != vs.end();
-      want.push_back(spec_context(cand.size() - i, left, near, choice.degree(cand[i])) << 1 | (hit ? 1u : 0u));
+      want.push_back(spec_context(cand.size() - i, left, near, choice.degree(cand[i]), spec_class(pm, coords, cand[i], 0))
+                         << 1 |
+                     (hit ? 1u : 0u));
       left -= hit;
       if (hit) found.push_back(cand[i]);
     }
@@ -1217,7 +1291,9 @@ TEST(VertexChoice, CandidatesAndContextsAreTheSpecFormula) {
       random_wedge(pm, rng, a, b);
       choice.reserve(pm.ring().size());
       ASSERT_TRUE(pm.split_gathered(v, a, b));
-      choice.applied(pm, a != kNoRank, b != kNoRank);
+      const std::vector<int32_t> cu = random_coords(rng, 1, 14);
+      coords.insert(coords.end(), cu.begin(), cu.end());
+      choice.applied(pm, coords.data(), a != kNoRank, b != kNoRank);
     }
   }
   EXPECT_GT(skipped_total, 0u);
@@ -1229,8 +1305,9 @@ TEST(VertexChoice, CandidatesAndContextsAreTheSpecFormula) {
 TEST(VertexChoice, AdjacentVerticesInAGroupAreRefused) {
   ProgressiveMesh pm;
   build_octahedron(pm, false);
+  const std::vector<int32_t> coords(6 * 3, 0);
   VertexChoice choice;
-  choice.reset(pm);
+  choice.reset(pm, coords.data(), 14);
   for (const std::vector<uint32_t>& vs : {std::vector<uint32_t>{0, 2}, std::vector<uint32_t>{2, 4},
                                           std::vector<uint32_t>{0, 0}}) {
     choice.start_group();
@@ -1272,6 +1349,7 @@ TEST(VertexChoice, ExclusionLagsAndAViolatingStreamIsRefused) {
   std::string error;
   ASSERT_TRUE(pm.build(kN * kN, faces.data(), faces.size() / 3, error)) << error;
   const uint32_t limit = kN * kN;
+  const std::vector<int32_t> coords(limit * 3, 0);
   const std::vector<uint32_t> vs{0, 1, 2, 4, 6, 8, 18, 20, 22, 24};
   ASSERT_TRUE(pm.gather_ring(0));
   ASSERT_NE(std::find(pm.ring().begin(), pm.ring().end(), 80u), pm.ring().end());
@@ -1283,13 +1361,13 @@ TEST(VertexChoice, ExclusionLagsAndAViolatingStreamIsRefused) {
     SplitChunkReader r;
     EXPECT_TRUE(r.open(payload.data(), payload.size(), size, dm, error)) << error;
     VertexChoice dec;
-    dec.reset(pm);
+    dec.reset(pm, coords.data(), 14);
     std::vector<SplitSymbols> out;
     return r.group_symbols(dec, pm, out, [](SplitSymbols&) {}, &got);
   };
   {  // the independent group: coded and decoded back
     VertexChoice enc;
-    enc.reset(pm);
+    enc.reset(pm, coords.data(), 14);
     enc.start_group();
     std::vector<uint32_t> bits, got;
     bool near = true;
@@ -1306,14 +1384,14 @@ TEST(VertexChoice, ExclusionLagsAndAViolatingStreamIsRefused) {
   bad.push_back(80);
   {
     VertexChoice enc;
-    enc.reset(pm);
+    enc.reset(pm, coords.data(), 14);
     enc.start_group();
     std::vector<uint32_t> bits;
     bool near = true;
     EXPECT_FALSE(choice_bits(enc, pm, limit, bad, bits, near));
   }
   VertexChoice naive;
-  naive.reset(pm);
+  naive.reset(pm, coords.data(), 14);
   naive.start_group();
   naive.begin_scan(false, limit, uint32_t(bad.size()));
   std::vector<uint32_t> bits;
@@ -1339,8 +1417,9 @@ TEST(VertexChoice, ModelPriorsAreTheSpecTable) {
   const SplitModels m;
   const uint32_t want[21] = {16384, 10923, 21846, 27307, 30038, 31403, 31744, 31744, 31744, 31744, 31744,
                              31744, 31744, 31744, 31744, 31744, 31744, 31744, 31744, 31744, 31744};
+  ASSERT_EQ(kChoiceContexts, 21u * 2 * 9 * 3);  // density x near x degree x umbrella class
   for (uint32_t c = 0; c < kChoiceContexts; ++c) {
-    const uint32_t d = c / (2 * kChoiceDegrees);
+    const uint32_t d = c / (2 * 9 * 3);
     EXPECT_EQ(m.choice[c] & kProbMask, want[d]) << c;
     EXPECT_EQ(uint32_t(m.choice[c] >> kCountShift), d == 0 ? 0u : 16u) << c;  // primed: count 16
   }
@@ -1538,8 +1617,9 @@ TEST(SplitChunk, HandCodedPayloadIsTheSpecOrder) {
   ASSERT_TRUE(pm.build(kN * kN, faces.data(), faces.size() / 3, error)) << error;
   const std::vector<uint32_t> vs{0, 2, 4, 6, 8, 10, 22, 24, 26, 28, 30, 32};
   const uint32_t size = uint32_t(vs.size());
+  const std::vector<int32_t> coords(kN * kN * 3, 0);  // (umbrella classes: all 2, no splits applied)
   VertexChoice enc;
-  enc.reset(pm);
+  enc.reset(pm, coords.data(), 14);
   enc.start_group();
   std::vector<uint32_t> bits;
   bool near = true;
@@ -1612,7 +1692,7 @@ TEST(SplitChunk, HandCodedPayloadIsTheSpecOrder) {
   SplitChunkReader r;
   ASSERT_TRUE(r.open(payload.data(), payload.size(), size, dm, error)) << error;
   VertexChoice dec;
-  dec.reset(pm);
+  dec.reset(pm, coords.data(), 14);
   std::vector<SplitSymbols> got;
   ASSERT_TRUE(r.group_symbols(dec, pm, got, [&](SplitSymbols& s) {
     const SplitSymbols& c = codes[got.size()];

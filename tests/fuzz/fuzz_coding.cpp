@@ -267,8 +267,10 @@ void fuzz_split_chunk(const uint8_t* data, size_t size) {
       s.mix_context[a] = (h >> (17 + 3 * a)) % (a < 2 ? pmz::kMixTangentContexts : pmz::kMixNormalContexts);
   };
   // No split is applied here, so the vertex count (and every group's limit) stays vertices_before.
+  // No split is applied: coordinates only feed the umbrella classes (all 0 here).
+  const std::vector<int32_t> zero(size_t(vertices_before) * 3, 0);
   pmz::VertexChoice choice;
-  choice.reset(pm);
+  choice.reset(pm, zero.data(), 14);
   std::vector<pmz::SplitSymbols> got;
   std::vector<uint32_t> sizes;
   while (got.size() < count) {
@@ -304,8 +306,8 @@ void fuzz_split_chunk(const uint8_t* data, size_t size) {
   // Re-encode the decoded prefix (its groups, all over every vertex, the last one possibly cut)
   // and decode it again.
   pmz::VertexChoice enc_choice, dec_choice;
-  enc_choice.reset(pm);
-  dec_choice.reset(pm);
+  enc_choice.reset(pm, zero.data(), 14);
+  dec_choice.reset(pm, zero.data(), 14);
   std::vector<pmz::GroupCode> groups;
   std::vector<uint32_t> bits;
   size_t at = 0;

@@ -154,26 +154,33 @@ class FanPrefetcher {
   // vertex, coord_count entries (the ring's coordinates are prefetched for the prediction);
   // degree (optional): one per vertex below coord_count / 3 (the wedge scores' end weights read
   // the ring's degrees: a cache miss per ring vertex on large meshes otherwise).
+  // sums (optional): kSumBytes per vertex below coord_count / 3 (the vertex choice's umbrella
+  // sums, updated for most of the ring).
+  static constexpr size_t kSumBytes = 16;
   void step(const ProgressiveMesh& m, const int32_t* coords, size_t coord_count, uint32_t v_ahead,
-            const uint32_t* degree = nullptr) {
-    const uint32_t slot = advance(m, coords, coord_count, degree);
+            const uint32_t* degree = nullptr, const uint8_t* sums = nullptr) {
+    const uint32_t slot = advance(m, coords, coord_count, degree, sums);
     if (v_ahead >= m.vertex_corner.size()) return;
     // v's own coordinates: the wedge scores and the prediction read them (about 3% on the
     // first refinement of bunny00-loop2, median of 7 alternating runs).
-    if (size_t(v_ahead) * 3 < coord_count) __builtin_prefetch(coords + size_t(v_ahead) * 3);
+    if (size_t(v_ahead) * 3 < coord_count) {
+      __builtin_prefetch(coords + size_t(v_ahead) * 3);
+      if (sums) __builtin_prefetch(sums + size_t(v_ahead) * kSumBytes);
+    }
     const uint32_t c0 = m.vertex_corner[v_ahead];
     if (c0 < m.opposite.size()) start(m, slot, c0 % 3 == 2 ? c0 - 2 : c0 + 1, kNoCorner);
   }
   // The same for a split re-applied from its sector hint (ProgressiveMesh::resplit): the walk
   // follows the `count` rewritten faces and the one across the last (whose link changes).
   void step_sector(const ProgressiveMesh& m, uint32_t hint_ahead, uint32_t count) {
-    const uint32_t slot = advance(m, nullptr, 0, nullptr);
+    const uint32_t slot = advance(m, nullptr, 0, nullptr, nullptr);
     if (hint_ahead < m.opposite.size()) start(m, slot, hint_ahead, count);
   }
 
  private:
   // Advances every walker by one face; returns the slot of the split applied now (free).
-  uint32_t advance(const ProgressiveMesh& m, const int32_t* coords, size_t coord_count, const uint32_t* degree) {
+  uint32_t advance(const ProgressiveMesh& m, const int32_t* coords, size_t coord_count, const uint32_t* degree,
+                   const uint8_t* sums) {
     const uint32_t* opp = m.opposite.data();
     const uint32_t* cv = m.corner_vertex.data();
     const size_t corners = m.opposite.size();
@@ -187,6 +194,7 @@ class FanPrefetcher {
       if (size_t(w) * 3 < coord_count) {
         __builtin_prefetch(coords + size_t(w) * 3);
         if (degree) __builtin_prefetch(degree + w);
+        if (sums) __builtin_prefetch(sums + size_t(w) * kSumBytes);
       }
       uint32_t next = o == kNoCorner ? kNoCorner : (o % 3 == 0 ? o + 2 : o - 1);
       if (next == n0_[k] || left_[k]-- == 0) next = kNoCorner;

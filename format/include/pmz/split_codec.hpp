@@ -18,6 +18,7 @@
 
 #include "pmz/format.hpp"
 #include "pmz/geometry.hpp"
+#include "pmz/progressive_mesh.hpp"
 #include "pmz/range_coder.hpp"
 
 namespace pmz {
@@ -25,9 +26,11 @@ namespace pmz {
 class ProgressiveMesh;
 
 inline constexpr uint32_t kWedgeContexts = 18, kRankContexts = 4;
-// Vertex choice contexts (spec section 2, "Vertex choice"): density x near x degree.
-inline constexpr uint32_t kChoiceDensities = 21, kChoiceDegrees = 13;
-inline constexpr uint32_t kChoiceContexts = kChoiceDensities * 2 * kChoiceDegrees;
+// Vertex choice contexts (spec section 2, "Vertex choice"): density x near x degree x umbrella
+// class.
+inline constexpr uint32_t kChoiceDensities = 21, kChoiceDegrees = 9, kChoiceShapes = 3;
+inline constexpr uint32_t kChoiceKeys = kChoiceDegrees * kChoiceShapes;  // per vertex: degree x class
+inline constexpr uint32_t kChoiceContexts = kChoiceDensities * 2 * kChoiceKeys;
 
 // One split's symbols and the contexts they are coded with (the writer computes the contexts
 // by replaying the decoder's mesh).
@@ -83,6 +86,31 @@ struct GroupCode {
   bool near;
 };
 
+// The umbrella sums of a vertex w (spec "Vertex choice"): over w's ring as the degree rule
+// counts it, with c' = c >> umbrella_shift (per axis) and the spokes e = c'[x] - c'[w], the sum
+// D of the spokes per axis and the sum L of their lengths |e_x| + |e_y| + |e_z|, modulo 2^32
+// (D two's complement).
+struct alignas(16) RingSums {  // (FanPrefetcher::kSumBytes)
+  uint32_t d[3];
+  uint32_t l;
+};
+static_assert(sizeof(RingSums) == FanPrefetcher::kSumBytes);
+// Coordinates of up to 16 bits are summed as they are; wider ones (and lossless float patterns,
+// 32 bits) lose their low bits: spokes below 2^16 per axis keep the sums exact (no wrap) up to
+// degree 2^14.
+inline uint32_t umbrella_shift(uint32_t position_bits) {
+  return position_bits == 0 ? 16 : position_bits > 16 ? position_bits - 16 : 0;
+}
+// The umbrella class of a vertex with sums s: 0 when 64 |D|^2 < L^2 (the ring's centroid offset
+// |D| / n below 1/8 of the mean spoke length L / n, |D| Euclidean, L in the L1 norm), else 1 when
+// 16 |D|^2 < L^2, else 2 (also when L = 0). Exact in 64 bits: |D|^2 < 3 * 2^62, so |D|^2 <
+// ceil(L^2 / 64) = (L^2 + 63) >> 6 is the comparison, without overflow.
+inline uint32_t umbrella_class(const RingSums& s) {
+  const int64_t x = int32_t(s.d[0]), y = int32_t(s.d[1]), z = int32_t(s.d[2]);
+  const uint64_t d2 = uint64_t(x * x + y * y + z * z), l2 = uint64_t(s.l) * s.l;
+  return d2 < ((l2 + 63) >> 6) ? 0 : d2 < ((l2 + 15) >> 4) ? 1 : 2;
+}
+
 // Exclusion lag (spec "Vertex choice"): a group's j-th split excludes its closed one-ring from
 // the group's candidates once kChoiceLag more splits of the group are found, so the decoder
 // can find the group's vertices kChoiceLag + 1 splits ahead of the split it applies (for the
@@ -93,6 +121,8 @@ inline constexpr uint32_t kChoiceLag = 8;
 // keep in step, updated at every first application of a split, in stream order.
 // - degree of every vertex: base vertices their ring size, then per split the rule of
 //   applied() (the ring sizes on a manifold mesh);
+// - umbrella sums (RingSums) of every vertex over the same rings, and from them and the degree
+//   a context key per vertex: min(degree, 8) * 3 + umbrella class;
 // - the neighbourhood of the splits since start_group(): v's ring before the split, v and u;
 // - exclusion: per vertex, the first split of the current group whose closed one-ring holds it.
 // A group's candidates, in order: near: the previous group's neighbourhood (ascending,
@@ -100,7 +130,8 @@ inline constexpr uint32_t kChoiceLag = 8;
 // candidate not excluded says whether it splits, until the group's splits are all found.
 class VertexChoice {
  public:
-  void reset(ProgressiveMesh& base);  // degrees from the base rings (0 without a face)
+  // Degrees and umbrella sums from the base rings (0 without a face); coords: 3 per vertex.
+  void reset(ProgressiveMesh& base, const int32_t* coords, uint32_t position_bits);
   // Starts a group: the neighbourhood noted since the last call becomes the near list (if
   // `near`: a decoder knows the group's flag and skips building a list it does not use).
   void start_group(bool near = true);
@@ -171,21 +202,32 @@ class VertexChoice {
   // start_group() do not allocate. (Inline: once per split, it rarely needs to grow anything.)
   void reserve(size_t k) {
     if (noted_.capacity() - noted_.size() < k + 2 || degree_.capacity() == degree_.size() ||
-        mark_.capacity() == mark_.size() || bits_.size() * 64 <= degree_.size())
+        mark_.capacity() == mark_.size() || sums_.capacity() == sums_.size() || key_.capacity() == key_.size() ||
+        bits_.size() * 64 <= degree_.size())
       grow(k);
   }
-  // Right after pm.split_gathered() (its ring and u_ring still those of the split).
-  void applied(const ProgressiveMesh& pm, bool has_left, bool has_right);
+  // After pm.split_gathered() (its ring and u_ring still those of the split), once u's
+  // coordinates are known: coords holds 3 per vertex, u's included.
+  void applied(const ProgressiveMesh& pm, const int32_t* coords, bool has_left, bool has_right);
   uint32_t degree(uint32_t w) const { return degree_[w]; }
+  const RingSums& sums(uint32_t w) const { return sums_[w]; }
+  const uint8_t* sums_bytes() const { return reinterpret_cast<const uint8_t*>(sums_.data()); }  // (prefetching)
+  uint32_t shape(uint32_t w) const { return key_[w] % kChoiceShapes; }  // umbrella class
   const uint32_t* degrees() const { return degree_.data(); }  // per vertex (the wedge score's end weights)
 
  private:
-  // (min(d, 20) * 2 + near) * 13 + min(degree, 12), d = bitlen(expected gap)
+  // ((min(d, 20) * 2 + near) * 9 + min(degree, 8)) * 3 + umbrella class, d = bitlen(expected
+  // gap); the last two as key_[w].
   uint32_t context(uint32_t w, uint32_t d, bool near) const {
-    const uint32_t deg = degree_[w];
-    return ((d < kChoiceDensities ? d : kChoiceDensities - 1) * 2 + (near ? 1 : 0)) * kChoiceDegrees +
-           (deg < kChoiceDegrees ? deg : kChoiceDegrees - 1);
+    return ((d < kChoiceDensities ? d : kChoiceDensities - 1) * 2 + (near ? 1 : 0)) * kChoiceKeys + key_[w];
   }
+  int64_t coord(const int32_t* coords, uint32_t w, int a) const { return coords[size_t(w) * 3 + a] >> shift_; }
+  static uint8_t key_of(const RingSums& s, uint32_t deg) {
+    return uint8_t((deg < kChoiceDegrees ? deg : kChoiceDegrees - 1) * kChoiceShapes + umbrella_class(s));
+  }
+  void push_vertex(uint32_t degree);
+  void umbrella(const ProgressiveMesh& pm, const int32_t* coords, bool has_left, bool has_right);
+  void update_key(uint32_t w) { key_[w] = key_of(sums_[w], degree_[w]); }
   // A fresh mark value (all of mark_ differs from it).
   uint32_t next_epoch() {
     if (++epoch_ == 0) {
@@ -197,6 +239,9 @@ class VertexChoice {
   void exclude(const ProgressiveMesh& mesh, uint32_t w);
   void grow(size_t k);  // reserve()'s work  // w's closed one-ring in mesh
   std::vector<uint32_t> degree_, near_, noted_;
+  std::vector<RingSums> sums_;  // per vertex
+  std::vector<uint8_t> key_;    // per vertex: min(degree, 8) * 3 + umbrella class
+  uint32_t shift_ = 0;          // umbrella_shift
   std::vector<uint64_t> bits_;  // start_group's bitmap of the noted vertices (all 0 between calls)
   // Per vertex: epoch_ when in the near list being built (start_group), excluded_ when
   // excluded from the group being scanned, another value of epoch_ in independent().
