@@ -799,7 +799,7 @@ TEST(Hostile, CoarseningNeedsNoAllocation) {
   pmz::PositionPrediction pred;
   pmz::predict_position(coords.data(), pm.u_ring(), pm.ring(), 0, 0, pred);
   std::copy(pred.context, pred.context + 3, code.residual_context);
-    std::copy(pred.mix, pred.mix + 3, code.mix_context);
+  std::copy(pred.mix, pred.mix + 3, code.mix_context);
   Bytes splt;
   auto models = std::make_unique<pmz::SplitModels>();
   pmz::encode_split_chunk({group}, bits, &code, 1, *models, splt);
