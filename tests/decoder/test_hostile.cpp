@@ -284,6 +284,54 @@ TEST(Hostile, CurvatureAboveEightIsRefused) {
   }
 }
 
+// HEAD's varint fields (spec section 2): a payload cut anywhere before bbox_max ends, or a
+// flags / count varint of 2^32 or more (or of 11 bytes), is corrupt; bytes after bbox_max are
+// ignored, and a varint written longer than needed reads as its value.
+TEST(Hostile, HeadVarintsCutShortOrBeyondUint32AreCorrupt) {
+  Bytes payload;
+  pmz::write_head_payload(payload, header(6, 8, 0, 8));
+  auto decode = [](const Bytes& p, std::string* message = nullptr) {
+    Bytes f = signature();
+    pmz::append_chunk(f, pmz::kChunkHead, p);
+    pmz::append_chunk(f, pmz::kChunkBase, octa_base_payload());
+    pmz::append_chunk(f, pmz::kChunkEnd, {});
+    pmz::Decoder d;
+    const pmz::Status s = d.feed(f.data(), f.size());
+    if (message) *message = d.error_message();
+    return s == pmz::Status::ok && d.face_count() == 8 ? pmz::Status::ok : s;
+  };
+  ASSERT_EQ(payload.size(), 34u);  // 2 + 1 + 3 + 4 one-byte varints + 24
+  EXPECT_EQ(decode(payload), pmz::Status::ok);
+  for (size_t n = 0; n < payload.size(); ++n) {
+    std::string message;
+    EXPECT_EQ(decode(Bytes(payload.begin(), payload.begin() + ptrdiff_t(n)), &message), pmz::Status::corrupt) << n;
+    EXPECT_NE(message.find("HEAD"), std::string::npos) << message;
+  }
+  Bytes longer = payload;
+  longer.insert(longer.end(), {1, 2, 3});  // fields of a later minor
+  EXPECT_EQ(decode(longer), pmz::Status::ok);
+  // Field k (0 flags, 1 base_vertices, 2 base_faces, 3 total_splits, 4 full_faces) replaced by
+  // the varint bytes v. The fields' offsets in payload: flags at 2, the counts at 6 .. 9.
+  auto with_field = [&](int k, const Bytes& v) {
+    const size_t at = k == 0 ? 2 : size_t(5 + k);
+    Bytes p(payload.begin(), payload.begin() + ptrdiff_t(at));
+    p.insert(p.end(), v.begin(), v.end());
+    p.insert(p.end(), payload.begin() + ptrdiff_t(at + 1), payload.end());
+    return p;
+  };
+  const Bytes two32 = {0x80, 0x80, 0x80, 0x80, 0x10};                                 // 2^32
+  const Bytes eleven = {0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x00};  // 0 in 11 bytes
+  for (int k = 0; k < 5; ++k) {
+    std::string message;
+    EXPECT_EQ(decode(with_field(k, two32), &message), pmz::Status::corrupt) << k;
+    EXPECT_NE(message.find("HEAD malformed"), std::string::npos) << k << ": " << message;
+    EXPECT_EQ(decode(with_field(k, eleven), &message), pmz::Status::corrupt) << k;
+    EXPECT_NE(message.find("HEAD malformed"), std::string::npos) << k << ": " << message;
+  }
+  // base_vertices 6 written in 5 bytes: the same HEAD.
+  EXPECT_EQ(decode(with_field(1, {0x86, 0x80, 0x80, 0x80, 0x00})), pmz::Status::ok);
+}
+
 // ---- counts beyond the limits ----
 
 // Vertex ids are uint32 (0xFFFFFFFF is "none"): base_vertices + total_splits must stay below
