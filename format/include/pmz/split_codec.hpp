@@ -107,7 +107,8 @@ inline uint32_t umbrella_shift(uint32_t position_bits) {
 // ceil(L^2 / 64) = (L^2 + 63) >> 6 is the comparison, without overflow.
 inline uint32_t umbrella_class(const RingSums& s) {
   const int64_t x = int32_t(s.d[0]), y = int32_t(s.d[1]), z = int32_t(s.d[2]);
-  const uint64_t d2 = uint64_t(x * x + y * y + z * z), l2 = uint64_t(s.l) * s.l;
+  // Each square fits int64 (<= 2^62), their sum only uint64: summed unsigned (no signed overflow).
+  const uint64_t d2 = uint64_t(x * x) + uint64_t(y * y) + uint64_t(z * z), l2 = uint64_t(s.l) * s.l;
   return d2 < ((l2 + 63) >> 6) ? 0 : d2 < ((l2 + 15) >> 4) ? 1 : 2;
 }
 
