@@ -129,7 +129,7 @@ struct Decoder::Impl {
   size_t parse(const uint8_t* p, size_t n);
   Status chunk(uint8_t type, const uint8_t* p, size_t n);
   [[gnu::cold]] Status head(const uint8_t* p, size_t n);
-  Status base(const uint8_t* p, size_t n);
+  [[gnu::cold]] Status base(const uint8_t* p, size_t n);  // once per file, like head
   Status split_chunk(const uint8_t* p, size_t n);
   bool apply();
   [[gnu::cold]] bool refuse(Status s, const std::string& what);

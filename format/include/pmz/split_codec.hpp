@@ -284,7 +284,8 @@ void encode_split_chunk(const std::vector<GroupCode>& groups, const std::vector<
 // stream is malformed or exhausted, or a group's candidates run out.
 class SplitChunkReader {
  public:
-  bool open(const uint8_t* p, size_t size, uint64_t max_splits, SplitModels& models, std::string& error);
+  // Once per chunk: cold (optimized for size; the decoder library has a size budget).
+  [[gnu::cold]] bool open(const uint8_t* p, size_t size, uint64_t max_splits, SplitModels& models, std::string& error);
   // The vertex choice, group by group. group_end(): the chunk's splits up to the end of the
   // group begun last (0 before the first). begin_group() starts the next group (after every
   // split of the one before was applied; choice.start_group() is called), limit the vertex
