@@ -135,16 +135,23 @@ void VertexChoice::grow(size_t k) {
   }
 }
 
-// The umbrella sums of a split (see applied()).
+// The umbrella sums of a split (see applied()). Positions of up to 16 bits (shift 0: the usual
+// case) get their own copy without the shifts, which also frees a register in the ring loop.
 void VertexChoice::umbrella(const ProgressiveMesh& pm, const int32_t* coords, bool has_left, bool has_right) {
+  if (shift_ == 0) umbrella_sums<false>(pm, coords, has_left, has_right);
+  else umbrella_sums<true>(pm, coords, has_left, has_right);
+}
+
+template <bool kShift>
+void VertexChoice::umbrella_sums(const ProgressiveMesh& pm, const int32_t* coords, bool has_left, bool has_right) {
   // From e = c'[x] - c'[v] per ring vertex x of u and du = c'[u] - c'[v], modulo 2^32: an
   // interior vertex's spoke -e to v becomes du - e; vl and vr gain the spoke du - e to u; v
   // loses the interior's spokes e and gains du; u's spokes are -du to v and e - du to each x.
   // (Locals: the stores could alias the members.)
   const std::span<const uint32_t> ur = pm.u_ring();
   const uint32_t v = ur[0], u = pm.vertex_count() - 1, r = uint32_t(ur.size());
-  const uint32_t sh = shift_;
-  auto at = [&](uint32_t w, int a) -> int64_t { return coords[size_t(w) * 3 + a] >> sh; };
+  const uint32_t sh = kShift ? shift_ : 0;
+  auto at = [&](uint32_t w, int a) -> int64_t { return kShift ? coords[size_t(w) * 3 + a] >> sh : coords[size_t(w) * 3 + a]; };
   const uint32_t* const deg = degree_.data();
   RingSums* const sums = sums_.data();
   uint8_t* const key = key_.data();

@@ -228,6 +228,8 @@ class VertexChoice {
   }
   void push_vertex(uint32_t degree);
   void umbrella(const ProgressiveMesh& pm, const int32_t* coords, bool has_left, bool has_right);
+  template <bool kShift>
+  void umbrella_sums(const ProgressiveMesh& pm, const int32_t* coords, bool has_left, bool has_right);
   void update_key(uint32_t w) { key_[w] = key_of(sums_[w], degree_[w]); }
   // A fresh mark value (all of mark_ differs from it).
   uint32_t next_epoch() {
