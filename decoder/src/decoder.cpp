@@ -17,6 +17,13 @@
 #include "pmz/progressive_mesh.hpp"
 #include "pmz/split_codec.hpp"
 
+// noclone is GCC's: clang has no such attribute and warns (-Wunknown-attributes).
+#if defined(__clang__)
+#define PMZ_OUT_OF_LINE [[gnu::noinline]]
+#else
+#define PMZ_OUT_OF_LINE [[gnu::noinline, gnu::noclone]]
+#endif
+
 #if defined(__linux__)
 #include <sys/mman.h>
 #endif
@@ -138,8 +145,8 @@ struct Decoder::Impl {
   // have fewer than face_floor.
   // Not inlined: the public refine / coarsen / set_face_target share one copy of each loop
   // (set_face_target inlining both cost ~4.6 KB of the library's size budget).
-  [[gnu::noinline, gnu::noclone]] uint64_t refine(uint64_t max_splits, uint64_t face_target);
-  [[gnu::noinline, gnu::noclone]] uint64_t coarsen(uint64_t max_splits, uint64_t face_floor);
+  PMZ_OUT_OF_LINE uint64_t refine(uint64_t max_splits, uint64_t face_target);
+  PMZ_OUT_OF_LINE uint64_t coarsen(uint64_t max_splits, uint64_t face_floor);
   FanPrefetcher fans;
   // Before applying split `applied`: the fans of the next splits (see FanPrefetcher), and
   // further ahead the vertex_corner entries those walks start from. Splits applied before are
