@@ -11,7 +11,7 @@ packages=(build-essential cmake ninja-build pkg-config git
   libglfw3-dev libepoxy-dev libimgui-dev libstb-dev libcurl4-openssl-dev
   xvfb xauth libgl1-mesa-dri python3
   libmeshoptimizer-dev draco libopenmesh-apps python3-matplotlib
-  clang-14 libclang-rt-14-dev)
+  clang-14 libclang-rt-14-dev clang-format ccache)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

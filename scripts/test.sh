@@ -11,6 +11,7 @@ stages=${PMZ_TEST_STAGES:-release fuzz asan}
 jobs=$(nproc)
 
 bash scripts/setup.sh build
+bash scripts/check_format.sh
 if ! bash scripts/fetch_corpus.sh build; then
   echo "test: corpus unavailable; real-mesh tests will skip" >&2
 fi

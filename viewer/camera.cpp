@@ -69,7 +69,9 @@ void Camera::pan(float dx, float dy, int viewport_height) {
   for (int i = 0; i < 3; ++i) target[i] += (-dx * r[i] + dy * u[i]) * scale;
 }
 
-void Camera::zoom(float steps) { distance = std::clamp(distance * std::pow(0.87f, steps), radius * 0.01f, radius * 100.0f); }
+void Camera::zoom(float steps) {
+  distance = std::clamp(distance * std::pow(0.87f, steps), radius * 0.01f, radius * 100.0f);
+}
 
 void Camera::eye(float out[3]) const {
   out[0] = target[0] + distance * std::cos(pitch) * std::sin(yaw);

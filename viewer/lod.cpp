@@ -6,8 +6,9 @@ namespace pmzview {
 
 uint64_t LodStepper::step(pmz::Decoder& decoder, const LodTarget& target, double budget_seconds) {
   using clock = std::chrono::steady_clock;
-  const auto deadline = clock::now() + std::chrono::duration_cast<clock::duration>(std::chrono::duration<double>(
-                                          budget_seconds < 0 ? 1e6 : budget_seconds));
+  const auto deadline =
+      clock::now() + std::chrono::duration_cast<clock::duration>(
+                         std::chrono::duration<double>(budget_seconds < 0 ? 1e6 : budget_seconds));
   // Splits per batch between clock checks: small enough to stay near the budget.
   constexpr uint64_t kBatch = 256;
   // Within this many faces of the target one exact set_face_target() call is cheap.

@@ -1,15 +1,14 @@
 // Moves the decoder's level of detail toward a target in bounded steps, so a big jump (e.g.
 // base mesh to 1M faces) spreads over frames instead of stalling one.
 #pragma once
-#include <pmz/decoder.hpp>
-
 #include <cstdint>
+#include <pmz/decoder.hpp>
 
 namespace pmzview {
 
 struct LodTarget {
-  bool follow = true;      // finest level available: refine as bytes arrive
-  uint64_t faces = 0;      // otherwise: smallest level with at least this many faces
+  bool follow = true;  // finest level available: refine as bytes arrive
+  uint64_t faces = 0;  // otherwise: smallest level with at least this many faces
 };
 
 class LodStepper {

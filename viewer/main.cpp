@@ -53,10 +53,14 @@ int fail(const std::string& message) {
 }
 
 std::string g_glfw_error;
-void on_glfw_error(int, const char* description) { g_glfw_error = description ? description : "unknown GLFW error"; }
+void on_glfw_error(int, const char* description) {
+  g_glfw_error = description ? description : "unknown GLFW error";
+}
 
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
 
 void read_stats(const pmz::Decoder& decoder, Stats& s, pmz::StreamInfo& info) {
   info = decoder.info();
@@ -72,7 +76,8 @@ void read_stats(const pmz::Decoder& decoder, Stats& s, pmz::StreamInfo& info) {
 }
 
 // Frames the header's bounding box, or the mesh's own when the header has none.
-bool frame_camera(Camera& camera, const pmz::StreamInfo& info, const MeshMirror& mesh, float aspect) {
+bool frame_camera(Camera& camera, const pmz::StreamInfo& info, const MeshMirror& mesh,
+                  float aspect) {
   float lo[3], hi[3];
   bool from_header = info.header_done;
   for (int i = 0; i < 3; ++i) {
@@ -96,13 +101,14 @@ bool frame_camera(Camera& camera, const pmz::StreamInfo& info, const MeshMirror&
 
 void log_line(double t, const Stats& s, const char* note) {
   std::fprintf(stderr,
-               "t=%.3f bytes=%" PRIu64 " total=%" PRIu64 " faces=%u full=%" PRIu64 " vertices=%u splits=%" PRIu64
-               "/%" PRIu64 " fps=%.0f update_ms=%.1f%s%s\n",
-               t, s.bytes, s.bytes_total, s.faces, s.full_faces, s.vertices, s.splits_applied, s.total_splits,
-               s.frames_per_second, s.update_ms, note[0] ? " " : "", note);
+               "t=%.3f bytes=%" PRIu64 " total=%" PRIu64 " faces=%u full=%" PRIu64
+               " vertices=%u splits=%" PRIu64 "/%" PRIu64 " fps=%.0f update_ms=%.1f%s%s\n",
+               t, s.bytes, s.bytes_total, s.faces, s.full_faces, s.vertices, s.splits_applied,
+               s.total_splits, s.frames_per_second, s.update_ms, note[0] ? " " : "", note);
 }
 
-bool write_png(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb, std::string& error) {
+bool write_png(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb,
+               std::string& error) {
   std::string temp = path + ".tmp." + std::to_string(getpid());
   if (!stbi_write_png(temp.c_str(), width, height, 3, rgb.data(), width * 3)) {
     std::remove(temp.c_str());
@@ -119,24 +125,43 @@ bool write_png(const std::string& path, int width, int height, const std::vector
 
 int parse(int argc, char** argv, Options& o) {
   CLI::App app{"pmz-view: stream a .pmz mesh and watch it refine as its bytes arrive.", "pmz-view"};
-  app.add_option("source", o.source, "a .pmz file, - for stdin, or an http:// or https:// URL")->required();
-  app.add_option("--rate", o.rate_kbps, "throttle the source to KBPS kilobytes (1000 B) per second")->type_name("KBPS")->check(CLI::PositiveNumber);
-  app.add_option("--screenshot", o.screenshot, "render one frame off screen to FILE.png and exit")->type_name("FILE.png");
+  app.add_option("source", o.source, "a .pmz file, - for stdin, or an http:// or https:// URL")
+      ->required();
+  app.add_option("--rate", o.rate_kbps, "throttle the source to KBPS kilobytes (1000 B) per second")
+      ->type_name("KBPS")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--screenshot", o.screenshot, "render one frame off screen to FILE.png and exit")
+      ->type_name("FILE.png");
   std::string size;
-  app.add_option("--size", size, "screenshot size WxH (default 1024x768; also the window size)")->type_name("WxH");
-  auto* faces = app.add_option("--faces", o.faces, "level of detail: at least N faces")->type_name("N");
-  auto* ratio = app.add_option("--ratio", o.ratio, "level of detail: this fraction of the full face count")->type_name("R")->check(CLI::Range(0.0, 1.0));
-  auto* bytes = app.add_option("--bytes", o.bytes, "read only the first N bytes, show all they hold")->type_name("N")->check(CLI::PositiveNumber);
+  app.add_option("--size", size, "screenshot size WxH (default 1024x768; also the window size)")
+      ->type_name("WxH");
+  auto* faces =
+      app.add_option("--faces", o.faces, "level of detail: at least N faces")->type_name("N");
+  auto* ratio =
+      app.add_option("--ratio", o.ratio, "level of detail: this fraction of the full face count")
+          ->type_name("R")
+          ->check(CLI::Range(0.0, 1.0));
+  auto* bytes =
+      app.add_option("--bytes", o.bytes, "read only the first N bytes, show all they hold")
+          ->type_name("N")
+          ->check(CLI::PositiveNumber);
   faces->excludes(ratio)->excludes(bytes);
   ratio->excludes(bytes);
-  app.add_flag("--log", o.log, "print 't=... bytes=... faces=...' lines to stderr ten times per second");
-  app.add_flag("--exit-when-complete", o.exit_when_complete, "exit 0 once the whole stream is shown (1 on a stream error)");
+  app.add_flag("--log", o.log,
+               "print 't=... bytes=... faces=...' lines to stderr ten times per second");
+  app.add_flag("--exit-when-complete", o.exit_when_complete,
+               "exit 0 once the whole stream is shown (1 on a stream error)");
   app.add_flag("--flat", o.flat, "start with flat shading");
   app.add_flag("--wireframe", o.wireframe, "start with the wireframe overlay");
   app.add_flag("--no-geomorph", o.no_geomorph, "start with geomorphs off");
   app.add_option("--yaw", o.yaw_degrees, "initial view azimuth in degrees")->type_name("DEG");
-  app.add_option("--pitch", o.pitch_degrees, "initial view elevation in degrees")->type_name("DEG")->check(CLI::Range(-89.0, 89.0));
-  app.add_option("--budget-ms", o.budget_ms, "refinement time per frame in milliseconds (at least 30% of the last frame's)")->type_name("MS")->check(CLI::PositiveNumber);
+  app.add_option("--pitch", o.pitch_degrees, "initial view elevation in degrees")
+      ->type_name("DEG")
+      ->check(CLI::Range(-89.0, 89.0));
+  app.add_option("--budget-ms", o.budget_ms,
+                 "refinement time per frame in milliseconds (at least 30% of the last frame's)")
+      ->type_name("MS")
+      ->check(CLI::PositiveNumber);
   app.footer(kKeyHelp);
   try {
     app.parse(argc, argv);
@@ -149,9 +174,11 @@ int parse(int argc, char** argv, Options& o) {
   if (!size.empty()) {
     char x = 0;
     char extra = 0;
-    if (std::sscanf(size.c_str(), "%d%c%d%c", &o.width, &x, &o.height, &extra) != 3 || (x != 'x' && x != 'X') ||
-        o.width < 16 || o.height < 16 || o.width > 16384 || o.height > 16384) {
-      std::fprintf(stderr, "pmz-view: --size wants WxH, e.g. 800x600 (16..16384), got '%s'\n", size.c_str());
+    if (std::sscanf(size.c_str(), "%d%c%d%c", &o.width, &x, &o.height, &extra) != 3 ||
+        (x != 'x' && x != 'X') || o.width < 16 || o.height < 16 || o.width > 16384 ||
+        o.height > 16384) {
+      std::fprintf(stderr, "pmz-view: --size wants WxH, e.g. 800x600 (16..16384), got '%s'\n",
+                   size.c_str());
       return 2;
     }
   }
@@ -171,9 +198,11 @@ int main(int argc, char** argv) {
   curl_global_init(CURL_GLOBAL_DEFAULT);
 
   if (!std::getenv("DISPLAY") && !std::getenv("WAYLAND_DISPLAY"))
-    return fail("no display: DISPLAY is not set (run in a desktop session, or headless under xvfb-run -a)");
+    return fail(
+        "no display: DISPLAY is not set (run in a desktop session, or headless under xvfb-run -a)");
   glfwSetErrorCallback(on_glfw_error);
-  if (!glfwInit()) return fail("cannot open a window: " + g_glfw_error + " (no usable display? try xvfb-run -a)");
+  if (!glfwInit())
+    return fail("cannot open a window: " + g_glfw_error + " (no usable display? try xvfb-run -a)");
   glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
   glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
   glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
@@ -181,8 +210,10 @@ int main(int argc, char** argv) {
   glfwWindowHint(GLFW_SAMPLES, 4);
   // A screenshot renders into its own framebuffer: the window only carries the context.
   glfwWindowHint(GLFW_VISIBLE, screenshot ? GLFW_FALSE : GLFW_TRUE);
-  GLFWwindow* window = screenshot ? glfwCreateWindow(64, 64, "pmz-view", nullptr, nullptr)
-                                  : glfwCreateWindow(o.width, o.height, ("pmz-view: " + o.source).c_str(), nullptr, nullptr);
+  GLFWwindow* window = screenshot
+                           ? glfwCreateWindow(64, 64, "pmz-view", nullptr, nullptr)
+                           : glfwCreateWindow(o.width, o.height, ("pmz-view: " + o.source).c_str(),
+                                              nullptr, nullptr);
   if (!window) {
     glfwTerminate();
     return fail("cannot create an OpenGL 3.3 core window: " + g_glfw_error);
@@ -230,14 +261,16 @@ int main(int argc, char** argv) {
           std::lock_guard<std::mutex> lock(stream.mutex);
           pmz::Decoder& decoder = stream.decoder;
           if (decoder.info().base_done) {
-            if (ratio_pending) state.lod.faces = uint64_t(std::llround(o.ratio * double(decoder.info().full_faces)));
+            if (ratio_pending)
+              state.lod.faces = uint64_t(std::llround(o.ratio * double(decoder.info().full_faces)));
             stepper.step(decoder, state.lod, -1);
             mirror.sync(decoder, 0, 0);
           }
           read_stats(decoder, stats, info);
         }
         if (!stats.base_done) {
-          rc = fail(o.bytes ? "the first " + std::to_string(o.bytes) + " bytes do not hold the base mesh"
+          rc = fail(o.bytes ? "the first " + std::to_string(o.bytes) +
+                                  " bytes do not hold the base mesh"
                             : o.source + ": the stream ended before its base mesh");
         } else {
           renderer.upload(mirror);
@@ -250,8 +283,10 @@ int main(int argc, char** argv) {
               !write_png(o.screenshot, o.width, o.height, rgb, error))
             rc = fail(error);
           else
-            std::printf("pmz-view: wrote %s (%dx%d): %u faces, %u vertices, %" PRIu64 " bytes read\n",
-                        o.screenshot.c_str(), o.width, o.height, stats.faces, stats.vertices, stream.bytes_received());
+            std::printf("pmz-view: wrote %s (%dx%d): %u faces, %u vertices, %" PRIu64
+                        " bytes read\n",
+                        o.screenshot.c_str(), o.width, o.height, stats.faces, stats.vertices,
+                        stream.bytes_received());
         }
       }
     } else {
@@ -288,7 +323,8 @@ int main(int argc, char** argv) {
           if (decoder.info().base_done) {
             // The budget, or a share of the last frame when frames are slow anyway (software
             // GL, huge meshes): refinement then keeps pace instead of crawling a batch a frame.
-            const double budget = std::min(std::max(o.budget_ms / 1000, 0.3 * last_frame_seconds), 1.0);
+            const double budget =
+                std::min(std::max(o.budget_ms / 1000, 0.3 * last_frame_seconds), 1.0);
             window_splits += stepper.step(decoder, state.lod, budget);
             mirror.sync(decoder, now, morph_seconds);
           }
@@ -311,10 +347,12 @@ int main(int argc, char** argv) {
             rc = fail(o.source + ": " + stats.error);
             break;
           }
-          std::fprintf(stderr, "pmz-view: %s: %s (showing what was decoded)\n", o.source.c_str(), stats.error.c_str());
+          std::fprintf(stderr, "pmz-view: %s: %s (showing what was decoded)\n", o.source.c_str(),
+                       stats.error.c_str());
         }
         if (stream_done && stream.error().empty() && !stats.base_done) {
-          rc = fail(o.bytes ? "the first " + std::to_string(o.bytes) + " bytes do not hold the base mesh"
+          rc = fail(o.bytes ? "the first " + std::to_string(o.bytes) +
+                                  " bytes do not hold the base mesh"
                             : o.source + ": the stream ended before its base mesh");
           break;
         }
@@ -363,13 +401,15 @@ int main(int argc, char** argv) {
         if (finished && o.exit_when_complete) break;
 
         // Idle (nothing arriving, refining or gliding): sleep until input instead of spinning.
-        const bool idle = stream_done && stepper.settled() && now - mirror.last_morph_start > morph_seconds;
+        const bool idle =
+            stream_done && stepper.settled() && now - mirror.last_morph_start > morph_seconds;
         const double frame_seconds = seconds_since(t0) - t;
         if (idle) {
           glfwWaitEventsTimeout(0.25);
         } else {
           // Cap at ~60 fps where swaps do not wait for vblank (e.g. Xvfb).
-          if (frame_seconds < 1.0 / 60) std::this_thread::sleep_for(std::chrono::duration<double>(1.0 / 60 - frame_seconds));
+          if (frame_seconds < 1.0 / 60)
+            std::this_thread::sleep_for(std::chrono::duration<double>(1.0 / 60 - frame_seconds));
           glfwPollEvents();
         }
       }

@@ -82,8 +82,10 @@ void MeshMirror::sync(pmz::Decoder& decoder, float now, float morph_seconds) {
   if (changes.all || vertex_count == 0) {
     // Room for the finest level up front: no reallocation (and copy) while refining.
     const pmz::StreamInfo& info = decoder.info();
-    const size_t full_vertices = std::max<size_t>(nv, size_t(std::min<uint64_t>(info.full_vertices, 1u << 27)));
-    const size_t full_faces = std::max<size_t>(nf, size_t(std::min<uint64_t>(info.full_faces, 1u << 28)));
+    const size_t full_vertices =
+        std::max<size_t>(nv, size_t(std::min<uint64_t>(info.full_vertices, 1u << 27)));
+    const size_t full_faces =
+        std::max<size_t>(nf, size_t(std::min<uint64_t>(info.full_faces, 1u << 28)));
     for (auto* v : {&positions, &morph_from, &normals}) v->reserve(3 * full_vertices);
     morph_start.reserve(full_vertices);
     indices.reserve(3 * full_faces);
@@ -111,7 +113,9 @@ void MeshMirror::sync(pmz::Decoder& decoder, float now, float morph_seconds) {
   std::vector<uint32_t>& modified = modified_;
   modified.clear();
   for (uint32_t f : changes.modified_faces) {
-    if (f >= face_begin || (f >> 6 < seen_faces_.words.size() && (seen_faces_.words[f >> 6] >> (f & 63) & 1))) continue;
+    if (f >= face_begin ||
+        (f >> 6 < seen_faces_.words.size() && (seen_faces_.words[f >> 6] >> (f & 63) & 1)))
+      continue;
     seen_faces_.mark(f);
     modified.push_back(f);
   }
@@ -136,7 +140,8 @@ void MeshMirror::sync(pmz::Decoder& decoder, float now, float morph_seconds) {
       // Start where the parent is drawn right now, even if it is still morphing itself.
       float w = morph_weight(now, morph_start[parent], morph_seconds);
       for (int i = 0; i < 3; ++i)
-        from[i] = morph_from[3 * size_t(parent) + i] + w * (positions[3 * size_t(parent) + i] - morph_from[3 * size_t(parent) + i]);
+        from[i] = morph_from[3 * size_t(parent) + i] +
+                  w * (positions[3 * size_t(parent) + i] - morph_from[3 * size_t(parent) + i]);
       morph_start[v] = now;
       last_morph_start = now;
     } else {

@@ -2,10 +2,9 @@
 // geomorph start positions/times and smooth vertex normals. sync() folds in only what the
 // decoder reports as changed and records which ranges the GPU buffers must re-upload.
 #pragma once
-#include <pmz/decoder.hpp>
-
 #include <algorithm>
 #include <cstdint>
+#include <pmz/decoder.hpp>
 #include <vector>
 
 namespace pmzview {
@@ -32,12 +31,12 @@ struct DirtyBits {
 
 struct MeshMirror {
   uint32_t vertex_count = 0, face_count = 0;
-  std::vector<float> positions;    // xyz per vertex
-  std::vector<float> morph_from;   // xyz: where the vertex's geomorph starts
-  std::vector<float> morph_start;  // seconds: when it starts (far past = not morphing)
-  std::vector<float> normals;      // xyz: sum of the area-weighted normals of its faces
-  std::vector<uint32_t> indices;   // three per face
-  std::vector<float> face_normals; // xyz per face: exactly what was added to its vertices
+  std::vector<float> positions;     // xyz per vertex
+  std::vector<float> morph_from;    // xyz: where the vertex's geomorph starts
+  std::vector<float> morph_start;   // seconds: when it starts (far past = not morphing)
+  std::vector<float> normals;       // xyz: sum of the area-weighted normals of its faces
+  std::vector<uint32_t> indices;    // three per face
+  std::vector<float> face_normals;  // xyz per face: exactly what was added to its vertices
 
   // Upload work since the renderer last took it: everything, or vertices [vertex_begin,
   // vertex_count) (positions and morph data), vertices whose normal changed, rewritten faces.

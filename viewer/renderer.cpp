@@ -120,12 +120,13 @@ bool Renderer::init(std::string& error) {
   return true;
 }
 
-void Renderer::upload_range(GLenum target, GLuint buffer, size_t element_size, const void* base, uint32_t begin,
-                            uint32_t end) {
+void Renderer::upload_range(GLenum target, GLuint buffer, size_t element_size, const void* base,
+                            uint32_t begin, uint32_t end) {
   if (begin >= end) return;
   glBindBuffer(target, buffer);
   size_t bytes = element_size * (end - begin);
-  glBufferSubData(target, GLintptr(element_size * begin), GLsizeiptr(bytes), static_cast<const char*>(base) + element_size * begin);
+  glBufferSubData(target, GLintptr(element_size * begin), GLsizeiptr(bytes),
+                  static_cast<const char*>(base) + element_size * begin);
   bytes_uploaded += bytes;
 }
 
@@ -144,8 +145,8 @@ void Renderer::upload_runs(GLenum target, GLuint buffer, size_t element_size, co
 
 void Renderer::upload(MeshMirror& mesh) {
   const uint32_t nv = mesh.vertex_count, nf = mesh.face_count;
-  const void* vertex_arrays[4] = {mesh.positions.data(), mesh.morph_from.data(), mesh.morph_start.data(),
-                                  mesh.normals.data()};
+  const void* vertex_arrays[4] = {mesh.positions.data(), mesh.morph_from.data(),
+                                  mesh.morph_start.data(), mesh.normals.data()};
   glBindVertexArray(vao_);  // the element buffer binding belongs to the VAO
   bool all_vertices = mesh.dirty_all, all_faces = mesh.dirty_all;
   // Grow geometrically so a stream of small refinements reallocates O(log n) times.
@@ -153,21 +154,23 @@ void Renderer::upload(MeshMirror& mesh) {
     vertex_capacity_ = std::max({nv, vertex_capacity_ * 2, 1024u});
     for (int i = 0; i < 4; ++i) {
       glBindBuffer(GL_ARRAY_BUFFER, vbo_[i]);
-      glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(sizeof(float) * kComponents[i] * size_t(vertex_capacity_)), nullptr,
+      glBufferData(GL_ARRAY_BUFFER,
+                   GLsizeiptr(sizeof(float) * kComponents[i] * size_t(vertex_capacity_)), nullptr,
                    GL_DYNAMIC_DRAW);
     }
     all_vertices = true;
   }
   if (nf > face_capacity_) {
     face_capacity_ = std::max({nf, face_capacity_ * 2, 1024u});
-    glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(sizeof(uint32_t) * 3 * size_t(face_capacity_)), nullptr,
-                 GL_DYNAMIC_DRAW);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(sizeof(uint32_t) * 3 * size_t(face_capacity_)),
+                 nullptr, GL_DYNAMIC_DRAW);
     all_faces = true;
   }
 
   uint32_t vertex_begin = all_vertices ? 0 : std::min(mesh.dirty_vertex_begin, nv);
   for (int i = 0; i < 4; ++i)
-    upload_range(GL_ARRAY_BUFFER, vbo_[i], sizeof(float) * kComponents[i], vertex_arrays[i], vertex_begin, nv);
+    upload_range(GL_ARRAY_BUFFER, vbo_[i], sizeof(float) * kComponents[i], vertex_arrays[i],
+                 vertex_begin, nv);
   if (!all_vertices) {
     // Normals also change on old vertices next to a split.
     mesh.dirty_normals.take_runs(vertex_begin, 16, runs_);

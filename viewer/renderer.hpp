@@ -42,7 +42,8 @@ class Renderer {
  private:
   // Uploads runs_ one by one, or as one span when that copies less than the calls cost.
   void upload_runs(GLenum target, GLuint buffer, size_t element_size, const void* base);
-  void upload_range(GLenum target, GLuint buffer, size_t element_size, const void* base, uint32_t begin, uint32_t end);
+  void upload_range(GLenum target, GLuint buffer, size_t element_size, const void* base,
+                    uint32_t begin, uint32_t end);
 
   GLuint program_ = 0, vao_ = 0, ebo_ = 0;
   GLuint vbo_[4] = {0, 0, 0, 0};  // positions, morph_from, morph_start, normals

@@ -86,7 +86,8 @@ class UrlSource final : public Source {
     auto* c = static_cast<Context*>(user);
     if (c->self->total_ == 0) {
       curl_off_t length = -1;
-      if (curl_easy_getinfo(c->curl, CURLINFO_CONTENT_LENGTH_DOWNLOAD_T, &length) == CURLE_OK && length > 0)
+      if (curl_easy_getinfo(c->curl, CURLINFO_CONTENT_LENGTH_DOWNLOAD_T, &length) == CURLE_OK &&
+          length > 0)
         c->self->total_ = uint64_t(length);
     }
     if (c->stop->load() || !(*c->sink)(reinterpret_cast<const uint8_t*>(data), size)) {
@@ -112,7 +113,8 @@ class UrlSource final : public Source {
 
 std::unique_ptr<Source> open_source(const std::string& spec, std::string& error) {
   if (spec == "-") return std::make_unique<FdSource>(STDIN_FILENO, false, 0);
-  if (spec.rfind("http://", 0) == 0 || spec.rfind("https://", 0) == 0) return std::make_unique<UrlSource>(spec);
+  if (spec.rfind("http://", 0) == 0 || spec.rfind("https://", 0) == 0)
+    return std::make_unique<UrlSource>(spec);
   int fd = open(spec.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) {
     error = "cannot open " + spec + ": " + std::strerror(errno);
@@ -120,7 +122,8 @@ std::unique_ptr<Source> open_source(const std::string& spec, std::string& error)
   }
   struct stat st {};
   if (fstat(fd, &st) != 0 || S_ISDIR(st.st_mode)) {
-    error = "cannot read " + spec + ": " + (S_ISDIR(st.st_mode) ? "is a directory" : std::strerror(errno));
+    error = "cannot read " + spec + ": " +
+            (S_ISDIR(st.st_mode) ? "is a directory" : std::strerror(errno));
     close(fd);
     return nullptr;
   }
@@ -137,14 +140,17 @@ ByteSink throttled(ByteSink sink, double bytes_per_second, const std::atomic<boo
   auto state = std::make_shared<State>();
   // Slices of ~1/30 s of data keep the arrival smooth rather than bursty.
   size_t slice = std::max<size_t>(256, size_t(bytes_per_second / 30));
-  return [sink = std::move(sink), bytes_per_second, &stop, state, slice](const uint8_t* data, size_t size) {
+  return [sink = std::move(sink), bytes_per_second, &stop, state, slice](const uint8_t* data,
+                                                                         size_t size) {
     while (size > 0) {
       size_t n = std::min(slice, size);
-      auto due = state->start + std::chrono::duration_cast<clock::duration>(
-                                    std::chrono::duration<double>(double(state->passed + n) / bytes_per_second));
+      auto due = state->start +
+                 std::chrono::duration_cast<clock::duration>(
+                     std::chrono::duration<double>(double(state->passed + n) / bytes_per_second));
       while (clock::now() < due) {
         if (stop.load()) return false;
-        std::this_thread::sleep_for(std::min<clock::duration>(due - clock::now(), std::chrono::milliseconds(50)));
+        std::this_thread::sleep_for(
+            std::min<clock::duration>(due - clock::now(), std::chrono::milliseconds(50)));
       }
       if (!sink(data, n)) return false;
       state->passed += n;

@@ -60,7 +60,8 @@ void Stream::run() {
       if (decode_error.empty()) decode_error = pmz::status_name(decoder.status());
     }
   }
-  if (error.empty() && !decode_error.empty()) error = "bad stream (" + std::to_string(received_.load()) + " bytes read): " + decode_error;
+  if (error.empty() && !decode_error.empty())
+    error = "bad stream (" + std::to_string(received_.load()) + " bytes read): " + decode_error;
   error_ = error;
   done_ = true;  // publishes error_ (seq_cst store after the write)
 }

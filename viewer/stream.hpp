@@ -3,12 +3,11 @@
 // worker holds it only while feeding one slice (<= 64 KiB), the render thread while it
 // refines within its per-frame budget and copies the changes out.
 #pragma once
-#include <pmz/decoder.hpp>
-
 #include <atomic>
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <pmz/decoder.hpp>
 #include <string>
 #include <thread>
 
@@ -35,7 +34,7 @@ class Stream {
   pmz::Decoder decoder;
 
   uint64_t bytes_received() const { return received_.load(); }
-  uint64_t bytes_total() const;  // 0 when unknown (stdin, no Content-Length)
+  uint64_t bytes_total() const;               // 0 when unknown (stdin, no Content-Length)
   bool done() const { return done_.load(); }  // the worker has finished (any reason)
   // Valid once done(): "" or a one-line error (source failure or a decoder error).
   const std::string& error() const { return error_; }

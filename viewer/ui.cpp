@@ -72,7 +72,8 @@ void on_key(GLFWwindow* window, int key, int, int action, int) {
   const Stats& stats = *g_input.stats;
   auto set_faces = [&](double faces) {
     s.lod.follow = false;
-    s.lod.faces = uint64_t(std::clamp(faces, double(stats.base_faces), double(std::max(stats.full_faces, stats.base_faces))));
+    s.lod.faces = uint64_t(std::clamp(faces, double(stats.base_faces),
+                                      double(std::max(stats.full_faces, stats.base_faces))));
   };
   switch (key) {
     case GLFW_KEY_EQUAL:
@@ -85,17 +86,37 @@ void on_key(GLFWwindow* window, int key, int, int action, int) {
     case GLFW_KEY_PAGE_DOWN:
       set_faces(double(stats.faces) / 1.25);
       break;
-    case GLFW_KEY_HOME: set_faces(0); break;
-    case GLFW_KEY_END: s.lod.follow = true; break;
-    case GLFW_KEY_F: s.lod.follow = !s.lod.follow; s.lod.faces = stats.faces; break;
-    case GLFW_KEY_W: s.wireframe = !s.wireframe; break;
-    case GLFW_KEY_S: s.smooth = !s.smooth; break;
-    case GLFW_KEY_G: s.geomorph = !s.geomorph; break;
-    case GLFW_KEY_R: s.reset_view = true; break;
-    case GLFW_KEY_H: s.overlay = !s.overlay; break;
+    case GLFW_KEY_HOME:
+      set_faces(0);
+      break;
+    case GLFW_KEY_END:
+      s.lod.follow = true;
+      break;
+    case GLFW_KEY_F:
+      s.lod.follow = !s.lod.follow;
+      s.lod.faces = stats.faces;
+      break;
+    case GLFW_KEY_W:
+      s.wireframe = !s.wireframe;
+      break;
+    case GLFW_KEY_S:
+      s.smooth = !s.smooth;
+      break;
+    case GLFW_KEY_G:
+      s.geomorph = !s.geomorph;
+      break;
+    case GLFW_KEY_R:
+      s.reset_view = true;
+      break;
+    case GLFW_KEY_H:
+      s.overlay = !s.overlay;
+      break;
     case GLFW_KEY_Q:
-    case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(window, GLFW_TRUE); break;
-    default: break;
+    case GLFW_KEY_ESCAPE:
+      glfwSetWindowShouldClose(window, GLFW_TRUE);
+      break;
+    default:
+      break;
   }
 }
 
@@ -130,14 +151,15 @@ void draw_overlay(ViewState& s, const Stats& stats) {
   format_bytes(received, sizeof received, stats.bytes);
   if (stats.bytes_total) {
     format_bytes(total, sizeof total, stats.bytes_total);
-    ImGui::Text("bytes     %s / %s (%.0f%%)", received, total, 100.0 * double(stats.bytes) / double(stats.bytes_total));
+    ImGui::Text("bytes     %s / %s (%.0f%%)", received, total,
+                100.0 * double(stats.bytes) / double(stats.bytes_total));
   } else {
     ImGui::Text("bytes     %s", received);
   }
   ImGui::Text("faces     %u / %" PRIu64, stats.faces, stats.full_faces);
   ImGui::Text("vertices  %u", stats.vertices);
-  ImGui::Text("splits    %" PRIu64 " applied, %" PRIu64 " received, %" PRIu64 " total", stats.splits_applied,
-              stats.splits_available, stats.total_splits);
+  ImGui::Text("splits    %" PRIu64 " applied, %" PRIu64 " received, %" PRIu64 " total",
+              stats.splits_applied, stats.splits_available, stats.total_splits);
   ImGui::Text("refine    %.0f splits/s", stats.splits_per_second);
   ImGui::Text("frame     %.0f fps, update %.1f ms", stats.frames_per_second, stats.update_ms);
   if (!stats.base_done)
@@ -148,14 +170,18 @@ void draw_overlay(ViewState& s, const Stats& stats) {
 
   ImGui::Separator();
   if (stats.base_done && stats.full_faces > stats.base_faces) {
-    uint32_t lo = uint32_t(stats.base_faces), hi = uint32_t(std::min<uint64_t>(stats.full_faces, UINT32_MAX));
-    uint32_t value = s.lod.follow ? stats.faces : uint32_t(std::clamp<uint64_t>(s.lod.faces, lo, hi));
-    if (ImGui::SliderScalar("faces", ImGuiDataType_U32, &value, &lo, &hi, "%u", ImGuiSliderFlags_Logarithmic)) {
+    uint32_t lo = uint32_t(stats.base_faces),
+             hi = uint32_t(std::min<uint64_t>(stats.full_faces, UINT32_MAX));
+    uint32_t value =
+        s.lod.follow ? stats.faces : uint32_t(std::clamp<uint64_t>(s.lod.faces, lo, hi));
+    if (ImGui::SliderScalar("faces", ImGuiDataType_U32, &value, &lo, &hi, "%u",
+                            ImGuiSliderFlags_Logarithmic)) {
       s.lod.follow = false;
       s.lod.faces = value;
     }
   }
-  if (ImGui::Checkbox("follow stream (F)", &s.lod.follow) && !s.lod.follow) s.lod.faces = stats.faces;
+  if (ImGui::Checkbox("follow stream (F)", &s.lod.follow) && !s.lod.follow)
+    s.lod.faces = stats.faces;
   ImGui::Checkbox("wireframe (W)", &s.wireframe);
   ImGui::Checkbox("smooth shading (S)", &s.smooth);
   ImGui::Checkbox("geomorphs (G)", &s.geomorph);

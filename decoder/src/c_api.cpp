@@ -28,13 +28,21 @@ PMZ_API int pmz_decoder_feed(pmz_decoder* d, const void* data, size_t size) {
 }
 PMZ_API int pmz_decoder_finish(pmz_decoder* d) { return int(d->dec.finish()); }
 PMZ_API int pmz_decoder_status(const pmz_decoder* d) { return int(d->dec.status()); }
-PMZ_API const char* pmz_decoder_error(const pmz_decoder* d) { return d->dec.error_message().c_str(); }
+PMZ_API const char* pmz_decoder_error(const pmz_decoder* d) {
+  return d->dec.error_message().c_str();
+}
 PMZ_API uint64_t pmz_decoder_refine(pmz_decoder* d, uint64_t n) { return d->dec.refine(n); }
 PMZ_API uint64_t pmz_decoder_coarsen(pmz_decoder* d, uint64_t n) { return d->dec.coarsen(n); }
 PMZ_API void pmz_decoder_set_face_target(pmz_decoder* d, uint64_t f) { d->dec.set_face_target(f); }
-PMZ_API uint64_t pmz_decoder_splits_applied(const pmz_decoder* d) { return d->dec.splits_applied(); }
-PMZ_API uint64_t pmz_decoder_splits_available(const pmz_decoder* d) { return d->dec.splits_available(); }
-PMZ_API uint64_t pmz_decoder_total_splits(const pmz_decoder* d) { return d->dec.info().total_splits; }
+PMZ_API uint64_t pmz_decoder_splits_applied(const pmz_decoder* d) {
+  return d->dec.splits_applied();
+}
+PMZ_API uint64_t pmz_decoder_splits_available(const pmz_decoder* d) {
+  return d->dec.splits_available();
+}
+PMZ_API uint64_t pmz_decoder_total_splits(const pmz_decoder* d) {
+  return d->dec.info().total_splits;
+}
 PMZ_API uint32_t pmz_decoder_vertex_count(const pmz_decoder* d) { return d->dec.vertex_count(); }
 PMZ_API uint32_t pmz_decoder_face_count(const pmz_decoder* d) { return d->dec.face_count(); }
 PMZ_API const float* pmz_decoder_positions(const pmz_decoder* d) { return d->dec.positions(); }

@@ -32,14 +32,22 @@ namespace pmz {
 
 const char* status_name(Status s) {
   switch (s) {
-    case Status::ok: return "ok";
-    case Status::bad_magic: return "bad magic";
-    case Status::bad_version: return "unsupported version";
-    case Status::bad_checksum: return "bad checksum";
-    case Status::corrupt: return "corrupt stream";
-    case Status::limit_exceeded: return "limit exceeded";
-    case Status::truncated: return "truncated stream";
-    case Status::out_of_memory: return "out of memory";
+    case Status::ok:
+      return "ok";
+    case Status::bad_magic:
+      return "bad magic";
+    case Status::bad_version:
+      return "unsupported version";
+    case Status::bad_checksum:
+      return "bad checksum";
+    case Status::corrupt:
+      return "corrupt stream";
+    case Status::limit_exceeded:
+      return "limit exceeded";
+    case Status::truncated:
+      return "truncated stream";
+    case Status::out_of_memory:
+      return "out of memory";
   }
   return "unknown status";
 }
@@ -55,7 +63,8 @@ void advise_huge_pages([[maybe_unused]] const std::vector<T>& v) {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
   constexpr uintptr_t kHuge = uintptr_t(2) << 20;
   const uintptr_t p = reinterpret_cast<uintptr_t>(v.data());
-  const uintptr_t b = (p + kHuge - 1) & ~(kHuge - 1), e = (p + v.capacity() * sizeof(T)) & ~(kHuge - 1);
+  const uintptr_t b = (p + kHuge - 1) & ~(kHuge - 1),
+                  e = (p + v.capacity() * sizeof(T)) & ~(kHuge - 1);
   if (e > b) madvise(reinterpret_cast<void*>(b), e - b, MADV_HUGEPAGE);
 #endif
 }
@@ -76,9 +85,10 @@ struct Decoder::Impl {
   Quantizer quant;
 
   ProgressiveMesh mesh;
-  // Available splits: v once its group was decoded (kNoCorner before). From the first application on (below `decoded`), a
-  // and b are what re-applying needs (ProgressiveMesh::resplit): the sector hint and the
-  // sector count (and sides[i] its sides); before, only transiently, the decoded wedge ranks.
+  // Available splits: v once its group was decoded (kNoCorner before). From the first application
+  // on (below `decoded`), a and b are what re-applying needs (ProgressiveMesh::resplit): the sector
+  // hint and the sector count (and sides[i] its sides); before, only transiently, the decoded wedge
+  // ranks.
   struct Split {
     uint32_t v, a, b;
   };
@@ -104,13 +114,14 @@ struct Decoder::Impl {
     choice_ok = lazy.front().find(choice, nullptr, upto, group_vs);
     for (size_t i = 0; i < group_vs.size(); ++i) splits[group_first + before + i].v = group_vs[i];
   }
-  std::vector<uint8_t> sides;     // per split below `decoded`: kHasLeft | kHasRight
-  uint64_t ring_work = 0;         // sum of ring sizes over first applications
+  std::vector<uint8_t> sides;  // per split below `decoded`: kHasLeft | kHasRight
+  uint64_t ring_work = 0;      // sum of ring sizes over first applications
   static constexpr uint64_t kRingWorkPerSplit = 64, kRingWorkSlack = 1u << 22;
   uint64_t available = 0, applied = 0;
-  std::vector<int32_t> coords;    // 3 per computed vertex (computed >= vertex_count)
+  std::vector<int32_t> coords;  // 3 per computed vertex (computed >= vertex_count)
   // Bounding box of coords, its largest side as wedge_scratch.extent (64-bit scores unchecked).
-  int32_t box_lo[3] = {INT32_MAX, INT32_MAX, INT32_MAX}, box_hi[3] = {INT32_MIN, INT32_MIN, INT32_MIN};
+  int32_t box_lo[3] = {INT32_MAX, INT32_MAX, INT32_MAX},
+          box_hi[3] = {INT32_MIN, INT32_MIN, INT32_MIN};
   void grow_box(const int32_t* c) {
     bool grew = false;
     for (int a = 0; a < 3; ++a) {
@@ -119,7 +130,8 @@ struct Decoder::Impl {
     }
     if (!grew) return;
     uint64_t extent = 0;
-    for (int a = 0; a < 3; ++a) extent = std::max<uint64_t>(extent, uint64_t(int64_t(box_hi[a]) - box_lo[a]));
+    for (int a = 0; a < 3; ++a)
+      extent = std::max<uint64_t>(extent, uint64_t(int64_t(box_hi[a]) - box_lo[a]));
     wedge_scratch.extent = extent;
   }
   std::vector<float> positions;
@@ -181,9 +193,10 @@ struct Decoder::Impl {
     }
     // Ring coordinates matter only where positions are still to be predicted (not when
     // re-refining after coarsening: there they cost about 10% on bunny00-loop2).
-    const bool predicting = coords.size() <= (size_t(mesh.vertex_count()) + FanPrefetcher::kWalkers) * 3;
-    fans.step(mesh, coords.data(), predicting ? coords.size() : 0, near < available ? splits[near].v : kNoCorner,
-              choice.degrees(), choice.sums_bytes());
+    const bool predicting =
+        coords.size() <= (size_t(mesh.vertex_count()) + FanPrefetcher::kWalkers) * 3;
+    fans.step(mesh, coords.data(), predicting ? coords.size() : 0,
+              near < available ? splits[near].v : kNoCorner, choice.degrees(), choice.sums_bytes());
   }
   // Coarsening: undoing a split rewires the faces across its new faces and repoints
   // vertex_corner of v, vl and vr, all anywhere in the buffers. For the split kUnlinkAhead
@@ -194,7 +207,9 @@ struct Decoder::Impl {
     uint64_t top = 0;    // applied when `faces` was last updated (0: not started)
     uint64_t faces = 0;  // new faces of splits top - 1 - kUnlinkAhead .. top - 1
   };
-  static uint32_t new_faces(uint8_t side) { return (side & kHasLeft ? 1u : 0u) + (side & kHasRight ? 1u : 0u); }
+  static uint32_t new_faces(uint8_t side) {
+    return (side & kHasLeft ? 1u : 0u) + (side & kHasRight ? 1u : 0u);
+  }
   void prefetch_unlink(UnlinkWindow& w) {
     if (applied <= kUnlinkAhead) return;
     const uint64_t j = applied - 1 - kUnlinkAhead;
@@ -267,10 +282,12 @@ size_t Decoder::Impl::parse(const uint8_t* p, size_t n) {
     chunk_offset = parse_base + at;
     if (chunk_index == 0 && n - at >= 1 && p[at] != kChunkHead) {  // a 6.x or older file?
       const size_t k = std::min<size_t>(n - at, 14);
-      if (p[at] == kOldHeadType[0] && std::memcmp(p + at, kOldHeadType, std::min<size_t>(k, 4)) == 0) {
+      if (p[at] == kOldHeadType[0] &&
+          std::memcmp(p + at, kOldHeadType, std::min<size_t>(k, 4)) == 0) {
         if (k < 14) break;  // its version bytes (old HEAD payload bytes 0 and 1) are still to come
-        fail(Status::bad_version, "format " + std::to_string(p[at + 12]) + "." + std::to_string(p[at + 13]) +
-                                      " (this decoder reads format " + std::to_string(kVersionMajor) + ")");
+        fail(Status::bad_version, "format " + std::to_string(p[at + 12]) + "." +
+                                      std::to_string(p[at + 13]) + " (this decoder reads format " +
+                                      std::to_string(kVersionMajor) + ")");
         return n;
       }
     }
@@ -303,7 +320,8 @@ size_t Decoder::Impl::parse(const uint8_t* p, size_t n) {
 }
 
 Status Decoder::Impl::chunk(uint8_t type, const uint8_t* p, size_t n) {
-  if (chunk_index == 0 && type != kChunkHead) return fail(Status::corrupt, "first chunk is not HEAD");
+  if (chunk_index == 0 && type != kChunkHead)
+    return fail(Status::corrupt, "first chunk is not HEAD");
   if (type == kChunkHead) {
     if (info.header_done) return fail(Status::corrupt, "second HEAD chunk");
     return head(p, n);
@@ -336,14 +354,15 @@ Status Decoder::Impl::head(const uint8_t* p, size_t n) {
     return fail(Status::corrupt, "curvature above 8");
   if (h.flags & ~kKnownFlags) return fail(Status::corrupt, "unknown HEAD flags");
   for (int a = 0; a < 3; ++a)
-    if (!std::isfinite(h.bbox_min[a]) || !std::isfinite(h.bbox_max[a]) || h.bbox_min[a] > h.bbox_max[a])
+    if (!std::isfinite(h.bbox_min[a]) || !std::isfinite(h.bbox_max[a]) ||
+        h.bbox_min[a] > h.bbox_max[a])
       return fail(Status::corrupt, "bad bounding box");
-  if (h.base_faces > h.full_faces ||
-      h.full_faces > uint64_t(h.base_faces) + 2ull * h.total_splits)
+  if (h.base_faces > h.full_faces || h.full_faces > uint64_t(h.base_faces) + 2ull * h.total_splits)
     return fail(Status::corrupt, "inconsistent counts in HEAD");
   // Vertex ids are uint32 with 0xFFFFFFFF for none, whatever the limits (spec section 2).
   if (h.full_vertices() > 0xFFFFFFFFu)
-    return fail(Status::corrupt, std::to_string(h.full_vertices()) + " vertices in HEAD (2^32 or more)");
+    return fail(Status::corrupt,
+                std::to_string(h.full_vertices()) + " vertices in HEAD (2^32 or more)");
   if (h.full_vertices() > limits.max_vertices || h.full_faces > limits.max_faces)
     return fail(Status::limit_exceeded, std::to_string(h.full_vertices()) + " vertices, " +
                                             std::to_string(h.full_faces) + " faces");
@@ -371,9 +390,12 @@ Status Decoder::Impl::base(const uint8_t* p, size_t n) {
   std::string err;
   BaseMesh bm;
   switch (decode_base(p, n, vn, fn, bm, err)) {
-    case BaseResult::ok: break;
-    case BaseResult::corrupt: return fail(Status::corrupt, err);
-    case BaseResult::limit_exceeded: return fail(Status::limit_exceeded, err);
+    case BaseResult::ok:
+      break;
+    case BaseResult::corrupt:
+      return fail(Status::corrupt, err);
+    case BaseResult::limit_exceeded:
+      return fail(Status::limit_exceeded, err);
   }
   ProgressiveMesh m;
   if (!m.build(vn, bm.faces.data(), fn, err)) return fail(Status::corrupt, "BASE: " + err);
@@ -383,7 +405,8 @@ Status Decoder::Impl::base(const uint8_t* p, size_t n) {
   group_vs.reserve(kChoiceLag + 2);  // find_vertices() adds at most kChoiceLag + 1 at a time
   for (size_t i = 0; i < vn; ++i) grow_box(&coords[i * 3]);
   positions.resize(size_t(vn) * 3);
-  for (size_t i = 0; i < size_t(vn) * 3; ++i) positions[i] = quant.dequantize(coords[i], int(i % 3));
+  for (size_t i = 0; i < size_t(vn) * 3; ++i)
+    positions[i] = quant.dequantize(coords[i], int(i % 3));
   parents.assign(vn, 0xFFFFFFFFu);
   info.base_done = true;
   changes = {};
@@ -395,7 +418,8 @@ Status Decoder::Impl::split_chunk(const uint8_t* p, size_t n) {
   std::string err;
   SplitChunkReader r;
   if (!models) models = std::make_unique<SplitModels>();
-  if (!r.open(p, n, info.total_splits - splits.size(), *models, err)) return fail(Status::corrupt, err);
+  if (!r.open(p, n, info.total_splits - splits.size(), *models, err))
+    return fail(Status::corrupt, err);
   splits.resize(splits.size() + r.split_count(), {kNoCorner, kNoRank, kNoRank});
   lazy.push_back(std::move(r));
   available = splits.size();
@@ -424,14 +448,18 @@ bool Decoder::Impl::apply() {
     ++applied;
     return true;
   }
-  auto invalid = [&] { return refuse(Status::corrupt, "split " + std::to_string(applied) + " has an invalid wedge"); };
+  auto invalid = [&] {
+    return refuse(Status::corrupt, "split " + std::to_string(applied) + " has an invalid wedge");
+  };
   SplitChunkReader& reader = lazy.front();
   if (applied - lazy_first == reader.group_end()) {  // a group's first split: start its scan
     group_first = applied;
     choice_ok = reader.begin_group(choice, mesh.vertex_count());
     find_vertices(kChoiceLag + 1);
   }
-  if (s.v == kNoCorner) return refuse(Status::corrupt, "split " + std::to_string(applied) + ": vertex choice malformed");
+  if (s.v == kNoCorner)
+    return refuse(Status::corrupt,
+                  "split " + std::to_string(applied) + ": vertex choice malformed");
   if (!mesh.gather_ring(s.v)) return invalid();
   {  // first application: the wedge symbols, with contexts from v's ring
     const uint32_t k = uint32_t(mesh.ring().size());
@@ -448,10 +476,15 @@ bool Decoder::Impl::apply() {
     }
     choice.reserve(k);
     uint32_t count, rank;
-    auto malformed = [&] { return refuse(Status::corrupt, "split " + std::to_string(applied) + ": wedge streams malformed"); };
+    auto malformed = [&] {
+      return refuse(Status::corrupt,
+                    "split " + std::to_string(applied) + ": wedge streams malformed");
+    };
     if (!lazy.front().wedge_count(wedge_context(k, mesh.ring_closed()), count)) return malformed();
-    if (!wedge_scores(coords.data(), choice.degrees(), s.v, mesh, count, wedge_scratch)) return invalid();
-    if (!lazy.front().wedge_rank(rank_context(mesh.ring_closed(), wedge_scratch.confident), rank)) return malformed();
+    if (!wedge_scores(coords.data(), choice.degrees(), s.v, mesh, count, wedge_scratch))
+      return invalid();
+    if (!lazy.front().wedge_rank(rank_context(mesh.ring_closed(), wedge_scratch.confident), rank))
+      return malformed();
     if (!wedge_pick(mesh, count, rank, s.a, s.b, wedge_scratch)) return invalid();
   }
   if (!mesh.split_gathered(s.v, s.a, s.b)) return invalid();
@@ -459,10 +492,12 @@ bool Decoder::Impl::apply() {
   {  // the position, then what re-applying the split needs
     PositionPrediction pred;
     int32_t residual[3], c[3];
-    predict_position(coords.data(), mesh.u_ring(), mesh.ring(), info.curvature, info.fine_curvature, pred);
+    predict_position(coords.data(), mesh.u_ring(), mesh.ring(), info.curvature, info.fine_curvature,
+                     pred);
     if (!lazy.front().residuals(pred.context, pred.mix, residual)) {
       mesh.undo_split(s.v, has_l, has_r);
-      return refuse(Status::corrupt, "split " + std::to_string(applied) + ": residual streams malformed");
+      return refuse(Status::corrupt,
+                    "split " + std::to_string(applied) + ": residual streams malformed");
     }
     position_from_residuals(pred, residual, c);
     grow_box(c);
@@ -513,7 +548,8 @@ Status Decoder::feed(const void* data, size_t size) {
     } else {
       d.pending.insert(d.pending.end(), p, p + size);
       size_t used = d.parse(d.pending.data(), d.pending.size());
-      if (d.status == Status::ok) d.pending.erase(d.pending.begin(), d.pending.begin() + ptrdiff_t(used));
+      if (d.status == Status::ok)
+        d.pending.erase(d.pending.begin(), d.pending.begin() + ptrdiff_t(used));
     }
   } catch (const std::bad_alloc&) {
     d.fail(Status::out_of_memory, "allocation failed");
@@ -582,16 +618,21 @@ uint64_t Decoder::Impl::coarsen(uint64_t max_splits, uint64_t face_floor) {
   try {
     for (; n < max_splits && applied > 0; ++n) {
       const uint8_t side = sides[applied - 1];
-      if (mesh.face_count() - (side & kHasLeft ? 1u : 0u) - (side & kHasRight ? 1u : 0u) < face_floor) break;
+      if (mesh.face_count() - (side & kHasLeft ? 1u : 0u) - (side & kHasRight ? 1u : 0u) <
+          face_floor)
+        break;
       // Splits are undone last first: the sector of the one kWalkers further on, and further
       // still what unlinking its new faces touches (see prefetch_unlink).
       constexpr uint32_t kAhead = FanPrefetcher::kWalkers;
-      if (applied > kAhead) fans.step_sector(mesh, splits[applied - 1 - kAhead].a, splits[applied - 1 - kAhead].b);
-      else fans.step_sector(mesh, kNoCorner, 0);
+      if (applied > kAhead)
+        fans.step_sector(mesh, splits[applied - 1 - kAhead].a, splits[applied - 1 - kAhead].b);
+      else
+        fans.step_sector(mesh, kNoCorner, 0);
       prefetch_unlink(window);
       undo();
     }
-  } catch (const std::bad_alloc&) {  // undo_resplit grows no scratch in practice (see its test); kept as a guard
+  } catch (const std::bad_alloc&) {  // undo_resplit grows no scratch in practice (see its test);
+                                     // kept as a guard
     fail(Status::out_of_memory, "allocation failed while coarsening");
   }
   return n;
@@ -608,19 +649,25 @@ void Decoder::set_face_target(uint64_t faces) {
 
 void Decoder::set_split_target(uint64_t splits) {
   Impl& d = *impl_;
-  if (splits < d.applied) coarsen(d.applied - splits);
-  else refine(splits - d.applied);
+  if (splits < d.applied)
+    coarsen(d.applied - splits);
+  else
+    refine(splits - d.applied);
 }
 
 uint64_t Decoder::splits_applied() const { return impl_->applied; }
 uint64_t Decoder::splits_available() const { return impl_->available; }
 uint32_t Decoder::vertex_count() const { return impl_->mesh.vertex_count(); }
 uint32_t Decoder::face_count() const { return impl_->mesh.face_count(); }
-const float* Decoder::positions() const { return impl_->positions.empty() ? nullptr : impl_->positions.data(); }
+const float* Decoder::positions() const {
+  return impl_->positions.empty() ? nullptr : impl_->positions.data();
+}
 const uint32_t* Decoder::indices() const {
   return impl_->mesh.corner_vertex.empty() ? nullptr : impl_->mesh.corner_vertex.data();
 }
-const uint32_t* Decoder::split_parents() const { return impl_->parents.empty() ? nullptr : impl_->parents.data(); }
+const uint32_t* Decoder::split_parents() const {
+  return impl_->parents.empty() ? nullptr : impl_->parents.data();
+}
 const MeshChanges& Decoder::changes() const { return impl_->changes; }
 void Decoder::clear_changes() {
   Impl& d = *impl_;

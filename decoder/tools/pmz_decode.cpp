@@ -2,7 +2,6 @@
 // OBJ/PLY/OFF at a chosen level of detail. Writes each format itself through a 1 MiB buffer,
 // atomically (temporary file + rename). No OpenMesh.
 #include <CLI/CLI.hpp>
-
 #include <algorithm>
 #include <charconv>
 #include <cstdio>
@@ -82,7 +81,9 @@ void write_mesh(const std::string& ext, const pmz::Decoder& d, Out& out) {
     out.put("ply\nformat binary_little_endian 1.0\nelement vertex " + std::to_string(nv) +
             "\nproperty float x\nproperty float y\nproperty float z\nelement face " +
             std::to_string(nf) + "\nproperty list uchar int vertex_indices\nend_header\n");
-    if (nv) out.put(reinterpret_cast<const char*>(p), size_t(nv) * 12);  // little-endian host assumed (x86, ARM)
+    if (nv)
+      out.put(reinterpret_cast<const char*>(p),
+              size_t(nv) * 12);  // little-endian host assumed (x86, ARM)
     // 13 bytes per face, written a buffer's worth at a time (no per-face room check).
     for (uint32_t f = 0; f < nf;) {
       char* o = out.room(13);
@@ -121,14 +122,17 @@ void write_mesh(const std::string& ext, const pmz::Decoder& d, Out& out) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"pmz-decode: decode a .pmz stream (or its first N bytes) to OBJ/PLY/OFF at a chosen level of detail"};
+  CLI::App app{
+      "pmz-decode: decode a .pmz stream (or its first N bytes) to OBJ/PLY/OFF at a chosen level of "
+      "detail"};
   std::string input, output;
   uint64_t faces = 0, vertices = 0, bytes = 0;
   double ratio = -1;
   app.add_option("input", input, "input .pmz")->required();
   app.add_option("-o,--output", output, "output mesh (.obj, .ply or .off)")->required();
   auto* of = app.add_option("--faces", faces, "smallest level with at least N faces");
-  auto* orr = app.add_option("--ratio", ratio, "fraction of the full face count")->check(CLI::Range(0.0, 1.0));
+  auto* orr = app.add_option("--ratio", ratio, "fraction of the full face count")
+                  ->check(CLI::Range(0.0, 1.0));
   auto* ov = app.add_option("--vertices", vertices, "level with N vertices (clamped)");
   app.add_option("--bytes", bytes, "decode only the first N bytes of the file");
   bool salvage = false;
@@ -166,10 +170,14 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "pmz-decode: the first %zu bytes do not hold the base mesh\n", n);
     return 1;
   }
-  if (of->count()) d.set_face_target(faces);
-  else if (orr->count()) d.set_face_target(uint64_t(ratio * double(d.info().full_faces) + 0.5));
-  else if (ov->count()) d.set_split_target(vertices > d.info().base_vertices ? vertices - d.info().base_vertices : 0);
-  else d.refine();
+  if (of->count())
+    d.set_face_target(faces);
+  else if (orr->count())
+    d.set_face_target(uint64_t(ratio * double(d.info().full_faces) + 0.5));
+  else if (ov->count())
+    d.set_split_target(vertices > d.info().base_vertices ? vertices - d.info().base_vertices : 0);
+  else
+    d.refine();
   // Wedge and residual symbols are decoded as splits are first applied: damage there shows
   // only now, and is treated like damage found while reading.
   const bool refine_failed = s == pmz::Status::ok && d.status() != pmz::Status::ok;

@@ -10,7 +10,7 @@ namespace pmz {
 namespace {
 
 constexpr int kBins = 16;
-constexpr unsigned kMaxDepth = 80;   // deeper ranges become leaves; the query stack fits it
+constexpr unsigned kMaxDepth = 80;  // deeper ranges become leaves; the query stack fits it
 constexpr unsigned kStackSize = kMaxDepth + 8;
 constexpr uint32_t kLeafSize = 4;
 
@@ -32,7 +32,9 @@ struct Box {
   }
 };
 
-inline double dot3(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+inline double dot3(const double* a, const double* b) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
 
 inline double ratio(double num, double den) { return den != 0 ? num / den : 0.0; }
 
@@ -56,8 +58,10 @@ inline double box_distance2(const Node& n, const double p[3]) {
 
 }  // namespace
 
-double point_triangle_distance2(const double p[3], const float* fa, const float* fb, const float* fc) {
-  const double a[3] = {fa[0], fa[1], fa[2]}, b[3] = {fb[0], fb[1], fb[2]}, c[3] = {fc[0], fc[1], fc[2]};
+double point_triangle_distance2(const double p[3], const float* fa, const float* fb,
+                                const float* fc) {
+  const double a[3] = {fa[0], fa[1], fa[2]}, b[3] = {fb[0], fb[1], fb[2]},
+               c[3] = {fc[0], fc[1], fc[2]};
   const double ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
   const double ac[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
   const double ap[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]};
@@ -90,10 +94,12 @@ double point_triangle_distance2(const double p[3], const float* fa, const float*
   }
   double sum = va + vb + vc;
   if (!(sum > 0)) {  // degenerate (zero-area) triangle: nearest of its edges
-    return std::min({segment_distance2(p, a, b), segment_distance2(p, b, c), segment_distance2(p, c, a)});
+    return std::min(
+        {segment_distance2(p, a, b), segment_distance2(p, b, c), segment_distance2(p, c, a)});
   }
   double v = vb / sum, w = vc / sum;
-  return dist2_to(a[0] + ab[0] * v + ac[0] * w, a[1] + ab[1] * v + ac[1] * w, a[2] + ab[2] * v + ac[2] * w);
+  return dist2_to(a[0] + ab[0] * v + ac[0] * w, a[1] + ab[1] * v + ac[1] * w,
+                  a[2] + ab[2] * v + ac[2] * w);
 }
 
 void TriangleBvh::build(const float* positions, const uint32_t* indices, size_t face_count) {
@@ -201,8 +207,9 @@ void TriangleBvh::build(const float* positions, const uint32_t* indices, size_t 
     }
     if (mid == r.begin || mid == r.end) {  // no useful SAH split: median by index
       mid = r.begin + count / 2;
-      std::nth_element(prims.begin() + r.begin, prims.begin() + mid, prims.begin() + r.end,
-                       [&](const Prim& x, const Prim& y) { return x.centroid[axis] < y.centroid[axis]; });
+      std::nth_element(
+          prims.begin() + r.begin, prims.begin() + mid, prims.begin() + r.end,
+          [&](const Prim& x, const Prim& y) { return x.centroid[axis] < y.centroid[axis]; });
     }
     const uint32_t left = uint32_t(nodes_.size());
     nodes_[r.node].first = left;
@@ -216,7 +223,8 @@ void TriangleBvh::build(const float* positions, const uint32_t* indices, size_t 
   triangles_.resize(face_count * 9);
   for (size_t i = 0; i < face_count; ++i)
     for (int j = 0; j < 3; ++j)
-      std::copy_n(positions + size_t(indices[size_t(prims[i].face) * 3 + j]) * 3, 3, &triangles_[i * 9 + j * 3]);
+      std::copy_n(positions + size_t(indices[size_t(prims[i].face) * 3 + j]) * 3, 3,
+                  &triangles_[i * 9 + j * 3]);
 }
 
 double TriangleBvh::closest_distance2(const double p[3], uint32_t& hint) const {

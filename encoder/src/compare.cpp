@@ -40,7 +40,8 @@ bool validate(const IndexedMesh& m, const char* name, std::string& error) {
   const uint32_t n = m.vertex_count();
   for (uint32_t i : m.indices)
     if (i >= n) {
-      error = std::string(name) + " mesh has a vertex index out of range (" + std::to_string(i) + ")";
+      error =
+          std::string(name) + " mesh has a vertex index out of range (" + std::to_string(i) + ")";
       return false;
     }
   return true;
@@ -49,7 +50,8 @@ bool validate(const IndexedMesh& m, const char* name, std::string& error) {
 double triangle_area(const float* a, const float* b, const float* c) {
   double u[3], v[3];
   for (int k = 0; k < 3; ++k) u[k] = double(b[k]) - a[k], v[k] = double(c[k]) - a[k];
-  double x = u[1] * v[2] - u[2] * v[1], y = u[2] * v[0] - u[0] * v[2], z = u[0] * v[1] - u[1] * v[0];
+  double x = u[1] * v[2] - u[2] * v[1], y = u[2] * v[0] - u[0] * v[2],
+         z = u[0] * v[1] - u[1] * v[0];
   return 0.5 * std::sqrt(x * x + y * y + z * z);
 }
 
@@ -118,7 +120,8 @@ DistanceStats one_direction(const IndexedMesh& from, const TriangleBvh& to, uint
           const uint64_t n = uint64_t(length(a, b) * edge_density + uniform01(rng));
           for (uint64_t k = 0; k < n; ++k) {
             const double t = (double(k) + uniform01(rng)) / double(n);
-            const double p[3] = {a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])};
+            const double p[3] = {a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]),
+                                 a[2] + t * (b[2] - a[2])};
             measure(p, false);
           }
         } else {
@@ -131,7 +134,8 @@ DistanceStats one_direction(const IndexedMesh& from, const TriangleBvh& to, uint
             // Uniform point in the triangle (square-root warp of two uniforms).
             const double s = std::sqrt(uniform01(rng)), r = uniform01(rng);
             const double wa = 1 - s, wb = s * (1 - r), wc = s * r;
-            const double p[3] = {wa * a[0] + wb * b[0] + wc * c[0], wa * a[1] + wb * b[1] + wc * c[1],
+            const double p[3] = {wa * a[0] + wb * b[0] + wc * c[0],
+                                 wa * a[1] + wb * b[1] + wc * c[1],
                                  wa * a[2] + wb * b[2] + wc * c[2]};
             measure(p, true);
           }
@@ -149,7 +153,8 @@ DistanceStats one_direction(const IndexedMesh& from, const TriangleBvh& to, uint
   Partial total;
   for (const Partial& p : partials) {
     total.max = std::max(total.max, p.max);
-    total.face_sum += p.face_sum, total.face_sum2 += p.face_sum2, total.face_samples += p.face_samples;
+    total.face_sum += p.face_sum, total.face_sum2 += p.face_sum2,
+        total.face_samples += p.face_samples;
     total.all_sum += p.all_sum, total.all_sum2 += p.all_sum2, total.samples += p.samples;
   }
   DistanceStats s;
@@ -179,14 +184,18 @@ bool compare(const IndexedMesh& original, const IndexedMesh& other, const Compar
   for (int k = 0; k < 3; ++k) lo[k] = hi[k] = original.positions[k];
   for (size_t i = 0; i < original.positions.size(); i += 3)
     for (int k = 0; k < 3; ++k)
-      lo[k] = std::min(lo[k], double(original.positions[i + k])), hi[k] = std::max(hi[k], double(original.positions[i + k]));
+      lo[k] = std::min(lo[k], double(original.positions[i + k])),
+      hi[k] = std::max(hi[k], double(original.positions[i + k]));
   result.diag = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
                           (hi[2] - lo[2]) * (hi[2] - lo[2]));
 
-  const uint64_t samples =
-      options.samples ? options.samples : default_compare_samples(original.face_count(), other.face_count());
+  const uint64_t samples = options.samples
+                               ? options.samples
+                               : default_compare_samples(original.face_count(), other.face_count());
   TriangleBvh to_other, to_original;
-  auto build_other = [&] { to_other.build(other.positions.data(), other.indices.data(), other.face_count()); };
+  auto build_other = [&] {
+    to_other.build(other.positions.data(), other.indices.data(), other.face_count());
+  };
   if (options.both_directions && options.threads > 1) {
     std::thread t(build_other);
     to_original.build(original.positions.data(), original.indices.data(), original.face_count());
@@ -199,7 +208,8 @@ bool compare(const IndexedMesh& original, const IndexedMesh& other, const Compar
 
   result.forward = one_direction(original, to_other, samples, options.seed, options.threads);
   if (options.both_directions) {
-    result.backward = one_direction(other, to_original, samples, options.seed ^ 0x5bd1e995ull, options.threads);
+    result.backward =
+        one_direction(other, to_original, samples, options.seed ^ 0x5bd1e995ull, options.threads);
     const DistanceStats &f = result.forward, &b = result.backward;
     result.symmetric.max = std::max(f.max, b.max);
     result.symmetric.mean = 0.5 * (f.mean + b.mean);

@@ -25,7 +25,8 @@ bool build_halfedge(const IndexedMesh& in, HalfEdgeMesh& m, std::string& error) 
   m.pos = in.positions;
   m.vert.assign(size_t(face_count) * 4, kNone);
   for (uint32_t f = 0; f < face_count; ++f)
-    for (uint32_t k = 0; k < 3; ++k) m.vert[HalfEdgeMesh::half_edge(f, k)] = in.indices[size_t(f) * 3 + k];
+    for (uint32_t k = 0; k < 3; ++k)
+      m.vert[HalfEdgeMesh::half_edge(f, k)] = in.indices[size_t(f) * 3 + k];
   const uint32_t slots = m.slot_count();
 
   // Outgoing half-edges grouped by origin (counting sort): twins are found in O(valence).
@@ -58,8 +59,8 @@ bool build_halfedge(const IndexedMesh& in, HalfEdgeMesh& m, std::string& error) 
   });
   for (const uint32_t h : bad_edge)
     if (h != kNone) {
-      error = "non-manifold or inconsistently oriented edge between vertices " + std::to_string(m.vert[h]) +
-              " and " + std::to_string(m.dest(h));
+      error = "non-manifold or inconsistently oriented edge between vertices " +
+              std::to_string(m.vert[h]) + " and " + std::to_string(m.dest(h));
       return false;
     }
   m.out.assign(vertex_count, kNone);

@@ -95,7 +95,8 @@ void for_each_neighbour_interleaved(const HalfEdgeMesh& m, const std::vector<uin
                                     std::vector<uint32_t>& walk, F&& f, P&& prefetch_face) {
   walk.clear();
   for (uint32_t c : centres)
-    if (const uint32_t start = m.out[c]; start != kNone) walk.push_back(start), walk.push_back(start);
+    if (const uint32_t start = m.out[c]; start != kNone)
+      walk.push_back(start), walk.push_back(start);
   while (!walk.empty()) {
     for (size_t i = 0; i < walk.size();) {
       const uint32_t h = walk[i];
@@ -120,12 +121,13 @@ void for_each_neighbour_interleaved(const HalfEdgeMesh& m, const std::vector<uin
 // each face and calling prefetch_neighbour(w) for the neighbours met; a fan's two walks stop
 // where they meet. `walk` is scratch (per centre: forward and backward half-edge).
 template <class P>
-void prefetch_fans(const HalfEdgeMesh& m, const std::vector<uint32_t>& centres, std::vector<uint32_t>& walk,
-                   P&& prefetch_neighbour) {
+void prefetch_fans(const HalfEdgeMesh& m, const std::vector<uint32_t>& centres,
+                   std::vector<uint32_t>& walk, P&& prefetch_neighbour) {
   auto prefetch = [&](uint32_t h) { prefetch_face_links(m, h); };
   walk.clear();
   for (uint32_t c : centres)
-    if (const uint32_t start = m.out[c]; start != kNone) walk.push_back(start), walk.push_back(start);
+    if (const uint32_t start = m.out[c]; start != kNone)
+      walk.push_back(start), walk.push_back(start);
   for (uint32_t round = 0; round < 64 && !walk.empty(); ++round) {
     for (size_t i = 0; i < walk.size();) {
       uint32_t &fwd = walk[i], &back = walk[i + 1];

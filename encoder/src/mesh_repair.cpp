@@ -27,7 +27,6 @@ namespace {
 constexpr uint32_t kNone = 0xFFFFFFFFu;
 constexpr size_t kMaxEarClipCorners = 64;  // beyond this, a fan (ear clipping is quadratic)
 
-
 // Removes cyclically consecutive repeats in place (a b b c a -> a b c).
 void remove_consecutive_repeats(std::vector<uint32_t>& loop) {
   size_t n = 0;

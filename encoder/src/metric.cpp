@@ -25,7 +25,8 @@ void initial_quadrics(const HalfEdgeMesh& m, double boundary_weight, std::vector
     const float *p0 = m.p(c[0]), *p1 = m.p(c[1]), *p2 = m.p(c[2]);
     const double e1[3] = {double(p1[0]) - p0[0], double(p1[1]) - p0[1], double(p1[2]) - p0[2]};
     const double e2[3] = {double(p2[0]) - p0[0], double(p2[1]) - p0[1], double(p2[2]) - p0[2]};
-    double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                   e1[0] * e2[1] - e1[1] * e2[0]};
     const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
     if (len == 0) continue;
     for (double& c : n) c /= len;
@@ -38,7 +39,8 @@ void initial_quadrics(const HalfEdgeMesh& m, double boundary_weight, std::vector
       if (m.twin[h] != kNone) continue;
       const float *a = m.p(m.vert[h]), *b = m.p(m.dest(h));
       const double e[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
-      double bn[3] = {e[1] * n[2] - e[2] * n[1], e[2] * n[0] - e[0] * n[2], e[0] * n[1] - e[1] * n[0]};
+      double bn[3] = {e[1] * n[2] - e[2] * n[1], e[2] * n[0] - e[0] * n[2],
+                      e[0] * n[1] - e[1] * n[0]};
       const double el2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
       const double bl = std::sqrt(bn[0] * bn[0] + bn[1] * bn[1] + bn[2] * bn[2]);
       if (bl == 0) continue;
@@ -51,15 +53,19 @@ void initial_quadrics(const HalfEdgeMesh& m, double boundary_weight, std::vector
   }
 }
 
-void current_quadric(const HalfEdgeMesh& m, const Features& f, uint32_t v, double boundary_weight, Quadric& q) {
+void current_quadric(const HalfEdgeMesh& m, const Features& f, uint32_t v, double boundary_weight,
+                     Quadric& q) {
   q = Quadric{};
   const float* pv = m.p(v);
   // The plane through p_v perpendicular to n, weighted.
-  auto add = [&](const double n[3], double weight) { q.add_plane(n, -(n[0] * pv[0] + n[1] * pv[1] + n[2] * pv[2]), weight); };
+  auto add = [&](const double n[3], double weight) {
+    q.add_plane(n, -(n[0] * pv[0] + n[1] * pv[1] + n[2] * pv[2]), weight);
+  };
   // The boundary plane of edge a -> b of a face with normal fn, as in initial_quadrics.
   auto add_boundary = [&](const float* a, const float* b, const float* fn) {
     const double e[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
-    double bn[3] = {e[1] * fn[2] - e[2] * fn[1], e[2] * fn[0] - e[0] * fn[2], e[0] * fn[1] - e[1] * fn[0]};
+    double bn[3] = {e[1] * fn[2] - e[2] * fn[1], e[2] * fn[0] - e[0] * fn[2],
+                    e[0] * fn[1] - e[1] * fn[0]};
     const double bl = std::sqrt(bn[0] * bn[0] + bn[1] * bn[1] + bn[2] * bn[2]);
     if (bl == 0) return;
     for (double& c : bn) c /= bl;
@@ -86,11 +92,13 @@ void Features::update_face(const HalfEdgeMesh& m, uint32_t f) {
   const float *p0 = m.p(c[0]), *p1 = m.p(c[1]), *p2 = m.p(c[2]);
   const float e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
   const float e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
-  float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+  float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                e1[0] * e2[1] - e1[1] * e2[0]};
   const float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
   const float inv = len > 0 ? 1.f / len : 0.f;
   FaceTerms& out = face[f];
-  out.normal[0] = n[0] * inv, out.normal[1] = n[1] * inv, out.normal[2] = n[2] * inv, out.area = 0.5f * len;
+  out.normal[0] = n[0] * inv, out.normal[1] = n[1] * inv, out.normal[2] = n[2] * inv,
+  out.area = 0.5f * len;
   out.length[0] = std::sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
   out.length[1] = distance(p1, p2);
   out.length[2] = std::sqrt(e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]);

@@ -25,8 +25,8 @@ struct Quadric {
   // Inline: the engine evaluates it tens of millions of times.
   double error(const float pf[3]) const {
     const double x = pf[0], y = pf[1], z = pf[2];
-    return x * (a[0] * x + 2 * (a[1] * y + a[2] * z + a[6])) + y * (a[3] * y + 2 * (a[4] * z + a[7])) +
-           z * (a[5] * z + 2 * a[8]) + a[9];
+    return x * (a[0] * x + 2 * (a[1] * y + a[2] * z + a[6])) +
+           y * (a[3] * y + 2 * (a[4] * z + a[7])) + z * (a[5] * z + 2 * a[8]) + a[9];
   }
 };
 
@@ -38,7 +38,8 @@ void initial_quadrics(const HalfEdgeMesh& m, double boundary_weight, std::vector
 // area-weighted planes of v's faces as they are now, each through p_v, plus the plane of each
 // boundary edge at v as in initial_quadrics. Reads the cached face normals and areas.
 struct Features;
-void current_quadric(const HalfEdgeMesh& m, const Features& f, uint32_t v, double boundary_weight, Quadric& q);
+void current_quadric(const HalfEdgeMesh& m, const Features& f, uint32_t v, double boundary_weight,
+                     Quadric& q);
 
 // Per vertex and per face, the terms a cost evaluation or a torsion update reads together sit
 // in one 32-byte record: a collapse lands somewhere random on the mesh, so the engine's time
@@ -63,7 +64,9 @@ struct Features {
 
   const float* face_normal(uint32_t f) const { return face[f].normal; }
   float face_area(uint32_t f) const { return face[f].area; }
-  float length(uint32_t h) const { return face[HalfEdgeMesh::face(h)].length[HalfEdgeMesh::corner(h)]; }
+  float length(uint32_t h) const {
+    return face[HalfEdgeMesh::face(h)].length[HalfEdgeMesh::corner(h)];
+  }
   const float* normal(uint32_t v) const { return vertex[v].normal; }
   const float* b(uint32_t v) const { return vertex[v].b; }
   float c_norm(uint32_t v) const { return vertex[v].c_norm; }

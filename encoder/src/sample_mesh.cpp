@@ -26,7 +26,7 @@ IndexedMesh make_sample_mesh(uint32_t target_faces) {
   };
   auto radius = [&](double theta, double z) {
     double r = 1.0 + 0.08 * std::sin(6 * theta) * std::sin(3 * pi * z);  // smooth ripples
-    r -= 0.12 * std::max(0.0, 1.0 - std::abs(z) / 0.15);                // sharp V-groove
+    r -= 0.12 * std::max(0.0, 1.0 - std::abs(z) / 0.15);                 // sharp V-groove
     return r;
   };
 

@@ -19,7 +19,9 @@ namespace {
 using namespace detail;
 using Clock = std::chrono::steady_clock;
 
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+double seconds_since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
 
 // A collapse may turn a surviving face by at most ~78 degrees (cos 0.2) ...
 constexpr float kFoldCos = 0.2f;
@@ -197,7 +199,8 @@ class Engine {
   }
   float weighted(const Origin& o, double e, float length_ratio) const;
   float cost(const Origin& o, uint32_t x, uint32_t h) const {
-    return weighted(o, quadric_error(o, x), metric == Metric::qem ? 0.f : edge_length_ratio(m, feat, h));
+    return weighted(o, quadric_error(o, x),
+                    metric == Metric::qem ? 0.f : edge_length_ratio(m, feat, h));
   }
   float cost(uint32_t u, uint32_t x, uint32_t h) const { return cost(origin(u), x, h); }
   bool find_edge(uint32_t u, uint32_t v, uint32_t& ha, uint32_t& hb) const;
@@ -226,7 +229,6 @@ class Engine {
   void fix_out(uint32_t w, uint32_t candidate);
   void update_after(uint32_t u, uint32_t v);
   bool final_boundary_collapse();
-
 };
 
 void Engine::set_key(uint32_t v, Candidate c) {
@@ -287,7 +289,8 @@ bool Engine::legal(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb) {
   if (boundary_edge) {
     // The last triangle of a disc stays.
     const uint32_t h = ha != kNone ? ha : hb;
-    if (m.twin[HalfEdgeMesh::next(h)] == kNone && m.twin[HalfEdgeMesh::prev(h)] == kNone) return false;
+    if (m.twin[HalfEdgeMesh::next(h)] == kNone && m.twin[HalfEdgeMesh::prev(h)] == kNone)
+      return false;
   }
   const uint32_t vl = ha != kNone ? m.vert[HalfEdgeMesh::prev(ha)] : kNone;
   const uint32_t vr = hb != kNone ? m.vert[HalfEdgeMesh::prev(hb)] : kNone;
@@ -304,7 +307,8 @@ bool Engine::legal(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb) {
   if (shared) return false;
   if (!boundary_edge && valence_u == 3 && valence_v == 3) return false;  // a tetrahedron stays
   // Geometry of the faces that survive around u, with u moved onto v.
-  const uint32_t fa = ha != kNone ? HalfEdgeMesh::face(ha) : kNone, fb = hb != kNone ? HalfEdgeMesh::face(hb) : kNone;
+  const uint32_t fa = ha != kNone ? HalfEdgeMesh::face(ha) : kNone,
+                 fb = hb != kNone ? HalfEdgeMesh::face(hb) : kNone;
   const float* pu = m.p(u);
   const float* pv = m.p(v);
   bool ok = true;
@@ -315,8 +319,10 @@ bool Engine::legal(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb) {
     auto normal = [&](const float* a, float n[3]) {
       const float e1[3] = {pb[0] - a[0], pb[1] - a[1], pb[2] - a[2]};
       const float e2[3] = {pc[0] - a[0], pc[1] - a[1], pc[2] - a[2]};
-      n[0] = e1[1] * e2[2] - e1[2] * e2[1], n[1] = e1[2] * e2[0] - e1[0] * e2[2], n[2] = e1[0] * e2[1] - e1[1] * e2[0];
-      return e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2] + e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2];
+      n[0] = e1[1] * e2[2] - e1[2] * e2[1], n[1] = e1[2] * e2[0] - e1[0] * e2[2],
+      n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+      return e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2] + e2[0] * e2[0] + e2[1] * e2[1] +
+             e2[2] * e2[2];
     };
     float n_old[3], n_new[3];
     const float l_old = normal(pu, n_old), l_new = normal(pv, n_new);
@@ -331,8 +337,10 @@ bool Engine::legal(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb) {
       ok = false;
       return;
     }
-    const float bc = (pb[0] - pc[0]) * (pb[0] - pc[0]) + (pb[1] - pc[1]) * (pb[1] - pc[1]) + (pb[2] - pc[2]) * (pb[2] - pc[2]);
-    const float q_old = 3.4641016f * a_old / (l_old + bc), q_new = 3.4641016f * a_new / (l_new + bc);
+    const float bc = (pb[0] - pc[0]) * (pb[0] - pc[0]) + (pb[1] - pc[1]) * (pb[1] - pc[1]) +
+                     (pb[2] - pc[2]) * (pb[2] - pc[2]);
+    const float q_old = 3.4641016f * a_old / (l_old + bc),
+                q_new = 3.4641016f * a_new / (l_new + bc);
     if (q_new < kMinQuality && q_new < q_old && turn < kPlaneCos * a_old * a_new) ok = false;
   });
   return ok;
@@ -363,7 +371,8 @@ Candidate Engine::best_legal_candidate(uint32_t u) {
     ++stats.cost_evaluations;
     candidates.push_back({cost(o, x, h), x});
   });
-  std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) { return a.cost < b.cost; });
+  std::sort(candidates.begin(), candidates.end(),
+            [](const Candidate& a, const Candidate& b) { return a.cost < b.cost; });
   for (const Candidate& c : candidates) {
     uint32_t ha, hb;
     if (find_edge(u, c.target, ha, hb) && legal(u, c.target, ha, hb)) return c;
@@ -401,7 +410,8 @@ void Engine::perform(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb, float c) 
   } else if (!accumulated.empty()) {
     accumulated[v].add(accumulated[u]);  // quad[v] is recomputed in update_after
   }
-  const uint32_t fa = ha != kNone ? HalfEdgeMesh::face(ha) : kNone, fb = hb != kNone ? HalfEdgeMesh::face(hb) : kNone;
+  const uint32_t fa = ha != kNone ? HalfEdgeMesh::face(ha) : kNone,
+                 fb = hb != kNone ? HalfEdgeMesh::face(hb) : kNone;
   corners.clear();
   for_each_outgoing(m, u, [&](uint32_t h) {
     if (HalfEdgeMesh::face(h) != fa && HalfEdgeMesh::face(h) != fb) corners.push_back(h);
@@ -409,7 +419,9 @@ void Engine::perform(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb, float c) 
   // The faces that change are u's surviving ones (u becomes v) and fa, fb (deleted): their
   // other corners are the vertices whose fan changed, besides v.
   fan_changed = new_mark();
-  for (uint32_t h : corners) m.vert[h] = v, mark[m.vert[HalfEdgeMesh::next(h)]] = mark[m.vert[HalfEdgeMesh::prev(h)]] = fan_changed;
+  for (uint32_t h : corners)
+    m.vert[h] = v,
+    mark[m.vert[HalfEdgeMesh::next(h)]] = mark[m.vert[HalfEdgeMesh::prev(h)]] = fan_changed;
   if (vl != kNone) mark[vl] = fan_changed;
   if (vr != kNone) mark[vr] = fan_changed;
   // The two outer edges of each deleted face become one edge: link their outer twins.
@@ -430,7 +442,8 @@ void Engine::perform(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb, float c) 
   }
   for (uint32_t f : {fa, fb}) {
     if (f == kNone) continue;
-    for (uint32_t k = 0; k < 3; ++k) m.vert[HalfEdgeMesh::half_edge(f, k)] = kNone, m.twin[HalfEdgeMesh::half_edge(f, k)] = kNone;
+    for (uint32_t k = 0; k < 3; ++k)
+      m.vert[HalfEdgeMesh::half_edge(f, k)] = kNone, m.twin[HalfEdgeMesh::half_edge(f, k)] = kNone;
     --faces;
   }
   m.out[u] = kNone;
@@ -444,8 +457,10 @@ void Engine::perform(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb, float c) 
     __builtin_prefetch(&m.out[next]);
   }
   fix_out(v, v_vl != kNone ? v_vl : v_vr != kNone ? v_vr : corners.empty() ? kNone : corners[0]);
-  if (vl != kNone) fix_out(vl, vl_v != kNone ? vl_v : v_vl != kNone ? HalfEdgeMesh::next(v_vl) : kNone);
-  if (vr != kNone) fix_out(vr, vr_v != kNone ? vr_v : v_vr != kNone ? HalfEdgeMesh::next(v_vr) : kNone);
+  if (vl != kNone)
+    fix_out(vl, vl_v != kNone ? vl_v : v_vl != kNone ? HalfEdgeMesh::next(v_vl) : kNone);
+  if (vr != kNone)
+    fix_out(vr, vr_v != kNone ? vr_v : v_vr != kNone ? HalfEdgeMesh::next(v_vr) : kNone);
 }
 
 // Recomputes what a collapse onto v changed. Faces around v and the normal terms (n, C_norm,
@@ -481,14 +496,17 @@ void Engine::update_after(uint32_t u, uint32_t v) {
     // go first and interleaved: they load every face the steps below read, overlapping the misses.
     // The flags are set after the walks, their loads started with the others'.
     ring2.clear();
-    for_each_neighbour_interleaved(m, ring1, walk, [&](uint32_t x) {
-      ring2.push_back(x);
-      __builtin_prefetch(&stale[x]);
-      // The 1-ring's keys read B (torsion), p and Q(p) of its neighbours.
-      __builtin_prefetch(&feat.vertex[x]);
-      __builtin_prefetch(m.p(x));
-      __builtin_prefetch(&self_error[x]);
-    }, [&](uint32_t f) { __builtin_prefetch(&feat.face[f]); });
+    for_each_neighbour_interleaved(
+        m, ring1, walk,
+        [&](uint32_t x) {
+          ring2.push_back(x);
+          __builtin_prefetch(&stale[x]);
+          // The 1-ring's keys read B (torsion), p and Q(p) of its neighbours.
+          __builtin_prefetch(&feat.vertex[x]);
+          __builtin_prefetch(m.p(x));
+          __builtin_prefetch(&self_error[x]);
+        },
+        [&](uint32_t f) { __builtin_prefetch(&feat.face[f]); });
     for_each_outgoing(m, v, [&](uint32_t h) { feat.update_face(m, HalfEdgeMesh::face(h)); });
     for (uint32_t x : ring2) stale[x] |= kTorsionStale | kKeyStale;
     for (uint32_t w : ring1) {
@@ -499,7 +517,8 @@ void Engine::update_after(uint32_t u, uint32_t v) {
       // Q of the current mesh (not accumulated): only the 1-ring's faces changed.
       current_quadric(m, feat, w, params.boundary_weight, quad[w]);
       if (!accumulated.empty())
-        for (int i = 0; i < 10; ++i) quad[w].a[i] += double(params.quadric_memory) * accumulated[w].a[i];
+        for (int i = 0; i < 10; ++i)
+          quad[w].a[i] += double(params.quadric_memory) * accumulated[w].a[i];
       self_error[w] = quad[w].error(m.p(w)) * inv_unit4;
     }
   }
@@ -513,7 +532,8 @@ void Engine::update_after(uint32_t u, uint32_t v) {
       const uint32_t t = target[w];
       if (!heap.contains(w) || t == u || t == v || t == kNone) {
         set_key(w, best_candidate(w));
-      } else if (!(m.twin[h] != kNone && m.is_boundary(w))) {  // boundary vertices move along the boundary
+      } else if (!(m.twin[h] != kNone &&
+                   m.is_boundary(w))) {  // boundary vertices move along the boundary
         ++stats.cost_evaluations;
         const float c = cost(w, v, h);
         if (c < heap.key(w)) set_key(w, {c, v});
@@ -591,7 +611,8 @@ void Engine::run(const SimplifyOptions& options) {
     uint64_t evaluations[2] = {0, 0};
     parallel_halves(n, [&](uint32_t begin, uint32_t end) {
       for (uint32_t v = begin; v < end; ++v)
-        initial[v] = m.out[v] == kNone ? Candidate{kInfinity, kNone} : scan(v, evaluations[begin != 0]);
+        initial[v] =
+            m.out[v] == kNone ? Candidate{kInfinity, kNone} : scan(v, evaluations[begin != 0]);
     });
     stats.cost_evaluations += evaluations[0] + evaluations[1];
     for (uint32_t v = 0; v < n; ++v) {
@@ -690,14 +711,16 @@ void reorder_for_locality(const IndexedMesh& in, IndexedMesh& out, std::vector<u
   for (uint32_t i = 0; i < n; ++i) {
     order[i] = keyed[i].second;
     new_id[order[i]] = i;
-    for (int k = 0; k < 3; ++k) out.positions[size_t(i) * 3 + k] = in.positions[size_t(order[i]) * 3 + k];
+    for (int k = 0; k < 3; ++k)
+      out.positions[size_t(i) * 3 + k] = in.positions[size_t(order[i]) * 3 + k];
   }
   // Faces bucketed by their smallest new vertex id (counting sort), winding kept.
   const uint32_t faces = in.face_count();
   std::vector<uint32_t> start(size_t(n) + 1, 0);
   auto first = [&](uint32_t f) {
     const uint32_t* t = &in.indices[size_t(f) * 3];
-    const uint32_t a = t[0] < n ? new_id[t[0]] : 0, b = t[1] < n ? new_id[t[1]] : 0, c = t[2] < n ? new_id[t[2]] : 0;
+    const uint32_t a = t[0] < n ? new_id[t[0]] : 0, b = t[1] < n ? new_id[t[1]] : 0,
+                   c = t[2] < n ? new_id[t[2]] : 0;
     return std::min({a, b, c});
   };
   for (uint32_t f = 0; f < faces; ++f) ++start[first(f) + 1];
@@ -705,13 +728,15 @@ void reorder_for_locality(const IndexedMesh& in, IndexedMesh& out, std::vector<u
   out.indices.resize(in.indices.size());
   for (uint32_t f = 0; f < faces; ++f) {
     const uint32_t slot = start[first(f)]++;
-    for (int k = 0; k < 3; ++k) out.indices[size_t(slot) * 3 + k] = new_id[in.indices[size_t(f) * 3 + k]];
+    for (int k = 0; k < 3; ++k)
+      out.indices[size_t(slot) * 3 + k] = new_id[in.indices[size_t(f) * 3 + k]];
   }
 }
 
 }  // namespace
 
-bool simplify(const IndexedMesh& input, const SimplifyOptions& options, CollapseSequence& out, std::string& error) {
+bool simplify(const IndexedMesh& input, const SimplifyOptions& options, CollapseSequence& out,
+              std::string& error) {
   const auto t0 = Clock::now();
   // Indices out of range are refused by the half-edge build; check first so reordering can
   // index safely.
@@ -743,12 +768,14 @@ bool simplify(const IndexedMesh& input, const SimplifyOptions& options, Collapse
   engine.stats.setup = seconds_since(t0);
   engine.run(options);
   auto input_id = [&](uint32_t v) { return v == kNone ? kNoVertex : order[v]; };
-  for (HalfEdgeCollapse& c : out.collapses) c.u = input_id(c.u), c.v = input_id(c.v), c.vl = input_id(c.vl), c.vr = input_id(c.vr);
+  for (HalfEdgeCollapse& c : out.collapses)
+    c.u = input_id(c.u), c.v = input_id(c.v), c.vl = input_id(c.vl), c.vr = input_id(c.vr);
   out.base_indices.clear();
   out.base_indices.reserve(engine.faces * 3);
   for (uint32_t f = 0; f < engine.m.face_count(); ++f)
     if (engine.m.face_alive(f))
-      for (int k = 0; k < 3; ++k) out.base_indices.push_back(order[engine.m.vert[HalfEdgeMesh::half_edge(f, k)]]);
+      for (int k = 0; k < 3; ++k)
+        out.base_indices.push_back(order[engine.m.vert[HalfEdgeMesh::half_edge(f, k)]]);
   engine.stats.total = seconds_since(t0);
   if (options.stats) *options.stats = engine.stats;
   return true;
@@ -777,10 +804,12 @@ IndexedMesh mesh_after(const CollapseSequence& seq, size_t k) {
   for (uint32_t i = 0; i < n; ++i) {
     if (find(i) != i) continue;
     remap[i] = result.vertex_count();
-    result.positions.insert(result.positions.end(), &seq.mesh.positions[size_t(i) * 3], &seq.mesh.positions[size_t(i) * 3 + 3]);
+    result.positions.insert(result.positions.end(), &seq.mesh.positions[size_t(i) * 3],
+                            &seq.mesh.positions[size_t(i) * 3 + 3]);
   }
   for (size_t f = 0; f < seq.mesh.indices.size(); f += 3) {
-    const uint32_t a = find(seq.mesh.indices[f]), b = find(seq.mesh.indices[f + 1]), c = find(seq.mesh.indices[f + 2]);
+    const uint32_t a = find(seq.mesh.indices[f]), b = find(seq.mesh.indices[f + 1]),
+                   c = find(seq.mesh.indices[f + 2]);
     if (a == b || b == c || c == a) continue;
     result.indices.insert(result.indices.end(), {remap[a], remap[b], remap[c]});
   }

@@ -35,12 +35,12 @@ constexpr Curvatures kCurvatureCandidates[] = {{0, 0}, {0, 4}, {0, 5}, {0, 6}, {
 
 struct Plan {
   uint32_t base_vertices = 0;
-  std::vector<uint32_t> base_faces;        // decoded ids (== greedy ids for base vertices)
-  std::vector<uint32_t> input_of;          // decoded id -> input id
-  std::vector<uint32_t> order;             // final position -> collapse index
-  std::vector<uint32_t> group_sizes;       // batches in final order
-  std::vector<uint32_t> decoded_id;        // input id -> decoded id
-  std::vector<uint8_t> base_stream;        // BASE's range-coded traversal
+  std::vector<uint32_t> base_faces;   // decoded ids (== greedy ids for base vertices)
+  std::vector<uint32_t> input_of;     // decoded id -> input id
+  std::vector<uint32_t> order;        // final position -> collapse index
+  std::vector<uint32_t> group_sizes;  // batches in final order
+  std::vector<uint32_t> decoded_id;   // input id -> decoded id
+  std::vector<uint8_t> base_stream;   // BASE's range-coded traversal
 };
 
 uint32_t find_root(std::vector<uint32_t>& parent, uint32_t x) {
@@ -73,7 +73,8 @@ void file_quantizer(const IndexedMesh& mesh, uint32_t bits, FileHeader& h, Quant
   quant.init(h.position_bits, h.bbox_min, h.bbox_max);
 }
 
-bool make_plan(const CollapseSequence& seq, const WriteOptions& opt, Plan& plan, std::string& error) {
+bool make_plan(const CollapseSequence& seq, const WriteOptions& opt, Plan& plan,
+               std::string& error) {
   const IndexedMesh& mesh = seq.mesh;
   const uint32_t n = mesh.vertex_count();
   const size_t total = seq.collapses.size();
@@ -120,12 +121,14 @@ bool make_plan(const CollapseSequence& seq, const WriteOptions& opt, Plan& plan,
     file_quantizer(mesh, opt.position_bits, h, quant);
     std::vector<int32_t> coords(surviving.size() * 3);
     for (size_t d = 0; d < surviving.size(); ++d)
-      for (int a = 0; a < 3; ++a) coords[d * 3 + a] = quant.quantize(mesh.positions[size_t(surviving[d]) * 3 + a], a);
+      for (int a = 0; a < 3; ++a)
+        coords[d * 3 + a] = quant.quantize(mesh.positions[size_t(surviving[d]) * 3 + a], a);
     base_n = uint32_t(surviving.size());
     std::vector<uint32_t> given_of;
     BaseMesh decoded;
     plan.base_stream.clear();
-    if (!encode_base(coords.data(), base_n, base_faces.data(), base_face_n, plan.base_stream, given_of, decoded, error))
+    if (!encode_base(coords.data(), base_n, base_faces.data(), base_face_n, plan.base_stream,
+                     given_of, decoded, error))
       return error = "base mesh: " + error, false;
     plan.base_faces = std::move(decoded.faces);
     for (uint32_t d = 0; d < base_n; ++d) gid[input_of_gid[d] = surviving[given_of[d]]] = d;
@@ -143,7 +146,8 @@ bool make_plan(const CollapseSequence& seq, const WriteOptions& opt, Plan& plan,
   // Greedy replay: layer each split after every earlier split of its window whose
   // footprint (closed one-ring of v, plus u) it overlaps.
   ProgressiveMesh pm;
-  if (!pm.build(base_n, plan.base_faces.data(), faces, error)) return error = "base mesh: " + error, false;
+  if (!pm.build(base_n, plan.base_faces.data(), faces, error))
+    return error = "base mesh: " + error, false;
   std::vector<int32_t> last_layer(n, -1);
   std::vector<uint32_t> layer(used);
   int32_t window_first = 0, max_layer = -1;
@@ -155,8 +159,10 @@ bool make_plan(const CollapseSequence& seq, const WriteOptions& opt, Plan& plan,
     uint32_t vr = c.vr == kNoVertex ? kNoVertex : gid[c.vr];
     uint32_t rl, rr;
     if (!pm.gather_ring(v) || !find_ranks(pm, vl, vr, rl, rr))
-      return error = "collapse " + std::to_string(used - 1 - j) + " is not a manifold half-edge collapse", false;
-    if (pm.vertex_count() > uint64_t(double(window_start) * kWindowGrowth) ) {
+      return error = "collapse " + std::to_string(used - 1 - j) +
+                     " is not a manifold half-edge collapse",
+             false;
+    if (pm.vertex_count() > uint64_t(double(window_start) * kWindowGrowth)) {
       window_first = max_layer + 1;
       window_start = pm.vertex_count();
     }
@@ -265,8 +271,8 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
       for (size_t k = 0; k < kCandidates; ++k) {
         payload.clear();
         uint64_t sizes[kSplitStreamCount];
-        encode_split_chunk(chunk_groups, chunk_choice, chunk[k].data(), chunk[k].size(), *models[k], payload, sizes,
-                           opt.symbol_stats ? trial_st[k].symbol_bits : nullptr);
+        encode_split_chunk(chunk_groups, chunk_choice, chunk[k].data(), chunk[k].size(), *models[k],
+                           payload, sizes, opt.symbol_stats ? trial_st[k].symbol_bits : nullptr);
         trial_st[k].connectivity_bits += sizes[kStreamConnectivity] * 8;
         trial_st[k].geometry_bits += sizes[kStreamGeometry] * 8;
         const size_t before = trial[k].size();
@@ -286,7 +292,8 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
         if (!chunk[0].empty() && chunk[0].size() + left > chunk_limit) flush();
         const uint32_t n = std::min(left, kMaxGroupPiece);
         vs.clear();
-        for (uint32_t i = at; i < at + n; ++i) vs.push_back(plan.decoded_id[seq.collapses[plan.order[i]].v]);
+        for (uint32_t i = at; i < at + n; ++i)
+          vs.push_back(plan.decoded_id[seq.collapses[plan.order[i]].v]);
         choice.start_group();
         bool near;
         if (!choice_bits(choice, pm, pm.vertex_count(), vs, chunk_choice, near))
@@ -299,12 +306,14 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
           uint32_t vl = c.vl == kNoVertex ? kNoVertex : plan.decoded_id[c.vl];
           uint32_t vr = c.vr == kNoVertex ? kNoVertex : plan.decoded_id[c.vr];
           uint32_t rl, rr;
-          if (!pm.gather_ring(v) || !find_ranks(pm, vl, vr, rl, rr) || plan.decoded_id[c.u] != pm.vertex_count())
+          if (!pm.gather_ring(v) || !find_ranks(pm, vl, vr, rl, rr) ||
+              plan.decoded_id[c.u] != pm.vertex_count())
             return error = "internal: reordered split does not replay", false;
           SplitSymbols code;
           code.v = v;
           code.wedge_context = wedge_context(uint32_t(pm.ring().size()), pm.ring_closed());
-          if (!wedge_symbols(coords.data(), choice.degrees(), v, pm, rl, rr, code.wedge_count, code.wedge_rank, scratch) ||
+          if (!wedge_symbols(coords.data(), choice.degrees(), v, pm, rl, rr, code.wedge_count,
+                             code.wedge_rank, scratch) ||
               !pm.split_gathered(v, rl, rr))
             return error = "internal: split rejected", false;
           code.rank_context = rank_context(pm.ring_closed(), scratch.confident);
@@ -315,9 +324,11 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
           for (size_t k = 0; k < kCandidates; ++k) {
             PositionPrediction pred;
             predict_from_basis(coords.data(), pm.u_ring(), uint32_t(pm.ring().size()), basis,
-                               kCurvatureCandidates[k].curvature, kCurvatureCandidates[k].fine, pred);
+                               kCurvatureCandidates[k].curvature, kCurvatureCandidates[k].fine,
+                               pred);
             position_residuals(pred, &coords[size_t(u) * 3], code.residual);
-            for (int s = 0; s < 3; ++s) code.residual_context[s] = pred.context[s], code.mix_context[s] = pred.mix[s];
+            for (int s = 0; s < 3; ++s)
+              code.residual_context[s] = pred.context[s], code.mix_context[s] = pred.mix[s];
             chunk[k].push_back(code);
           }
         }
@@ -339,7 +350,8 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
   write_head_payload(head, h);
   append_chunk(out, kChunkHead, head);
   st.header_bytes = out.size();
-  append_chunk(out, kChunkBase, plan.base_stream);  // BASE: the stream alone (its counts are HEAD's)
+  append_chunk(out, kChunkBase,
+               plan.base_stream);  // BASE: the stream alone (its counts are HEAD's)
   st.base_bytes = out.size() - st.header_bytes;
   out.insert(out.end(), split_bytes.begin(), split_bytes.end());
   append_chunk(out, kChunkEnd, {});
@@ -347,7 +359,8 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
   // The full decode must reproduce the input's faces (as a set, up to rotation).
   std::vector<Face> want, got;
   for (uint32_t f = 0; f < mesh.face_count(); ++f)
-    want.push_back(canonical_face(mesh.indices[f * 3], mesh.indices[f * 3 + 1], mesh.indices[f * 3 + 2]));
+    want.push_back(
+        canonical_face(mesh.indices[f * 3], mesh.indices[f * 3 + 1], mesh.indices[f * 3 + 2]));
   for (uint32_t f = 0; f < pm.face_count(); ++f) {
     const uint32_t* t = &pm.corner_vertex[f * 3];
     got.push_back(canonical_face(plan.input_of[t[0]], plan.input_of[t[1]], plan.input_of[t[2]]));
@@ -359,7 +372,8 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
   return true;
 }
 
-std::vector<uint32_t> decoded_vertex_order(const CollapseSequence& seq, const WriteOptions& options) {
+std::vector<uint32_t> decoded_vertex_order(const CollapseSequence& seq,
+                                           const WriteOptions& options) {
   Plan plan;
   std::string error;
   if (!make_plan(seq, options, plan, error)) return {};

@@ -1,6 +1,5 @@
 // pmz-compare ORIGINAL OTHER [--samples N] [--json]: Metro-style symmetric Hausdorff distance.
 #include <CLI/CLI.hpp>
-
 #include <cstdio>
 #include <string>
 
@@ -8,15 +7,17 @@
 #include "pmz/mesh.hpp"
 
 int main(int argc, char** argv) {
-  CLI::App app{"pmz-compare: Metro-style surface distance between two meshes (both directions).\n"
-               "Relative values are divided by the bounding-box diagonal of ORIGINAL."};
+  CLI::App app{
+      "pmz-compare: Metro-style surface distance between two meshes (both directions).\n"
+      "Relative values are divided by the bounding-box diagonal of ORIGINAL."};
   std::string original_path, other_path;
   pmz::CompareOptions options;
   bool json = false, one_sided = false;
   app.add_option("ORIGINAL", original_path, "reference mesh (OBJ/OFF/PLY/STL)")->required();
   app.add_option("OTHER", other_path, "mesh to measure against it")->required();
-  app.add_option("--samples", options.samples,
-                 "face samples per direction (default: 10x the larger face count, within [200k, 2M])");
+  app.add_option(
+      "--samples", options.samples,
+      "face samples per direction (default: 10x the larger face count, within [200k, 2M])");
   app.add_option("--seed", options.seed, "sampling seed (fixed by default)");
   app.add_option("--threads", options.threads, "worker threads (result does not depend on it)")
       ->check(CLI::Range(1u, 256u));
@@ -27,7 +28,8 @@ int main(int argc, char** argv) {
 
   pmz::IndexedMesh original, other;
   std::string error;
-  if (!pmz::read_mesh(original_path, original, error) || !pmz::read_mesh(other_path, other, error)) {
+  if (!pmz::read_mesh(original_path, original, error) ||
+      !pmz::read_mesh(other_path, other, error)) {
     std::fprintf(stderr, "pmz-compare: %s\n", error.c_str());
     return 1;
   }
@@ -39,16 +41,19 @@ int main(int argc, char** argv) {
   const double inv = r.diag > 0 ? 1.0 / r.diag : 0.0;
   if (json) {
     auto stats = [&](const pmz::DistanceStats& s) {
-      std::printf("{\"max\": %.9g, \"mean\": %.9g, \"rms\": %.9g, \"max_abs\": %.9g, \"mean_abs\": %.9g, "
-                  "\"rms_abs\": %.9g, \"samples\": %llu}",
-                  s.max * inv, s.mean * inv, s.rms * inv, s.max, s.mean, s.rms, (unsigned long long)s.samples);
+      std::printf(
+          "{\"max\": %.9g, \"mean\": %.9g, \"rms\": %.9g, \"max_abs\": %.9g, \"mean_abs\": %.9g, "
+          "\"rms_abs\": %.9g, \"samples\": %llu}",
+          s.max * inv, s.mean * inv, s.rms * inv, s.max, s.mean, s.rms,
+          (unsigned long long)s.samples);
     };
     const pmz::DistanceStats& s = r.symmetric;
-    std::printf("{\"max\": %.9g, \"mean\": %.9g, \"rms\": %.9g, \"diag\": %.9g, \"max_abs\": %.9g, "
-                "\"mean_abs\": %.9g, \"rms_abs\": %.9g, \"faces_original\": %u, \"faces_other\": %u, "
-                "\"seconds\": %.4f, \"forward\": ",
-                s.max * inv, s.mean * inv, s.rms * inv, r.diag, s.max, s.mean, s.rms, original.face_count(),
-                other.face_count(), r.seconds);
+    std::printf(
+        "{\"max\": %.9g, \"mean\": %.9g, \"rms\": %.9g, \"diag\": %.9g, \"max_abs\": %.9g, "
+        "\"mean_abs\": %.9g, \"rms_abs\": %.9g, \"faces_original\": %u, \"faces_other\": %u, "
+        "\"seconds\": %.4f, \"forward\": ",
+        s.max * inv, s.mean * inv, s.rms * inv, r.diag, s.max, s.mean, s.rms, original.face_count(),
+        other.face_count(), r.seconds);
     stats(r.forward);
     std::printf(", \"backward\": ");
     stats(r.backward);
@@ -56,12 +61,13 @@ int main(int argc, char** argv) {
     return 0;
   }
   std::printf("original: %s (%u faces)\nother:    %s (%u faces)\nbbox diagonal of original: %.9g\n",
-              original_path.c_str(), original.face_count(), other_path.c_str(), other.face_count(), r.diag);
-  std::printf("%-22s %14s %14s %14s %14s %14s %14s %10s\n", "direction", "max", "mean", "rms", "max_abs",
-              "mean_abs", "rms_abs", "samples");
+              original_path.c_str(), original.face_count(), other_path.c_str(), other.face_count(),
+              r.diag);
+  std::printf("%-22s %14s %14s %14s %14s %14s %14s %10s\n", "direction", "max", "mean", "rms",
+              "max_abs", "mean_abs", "rms_abs", "samples");
   auto row = [&](const char* name, const pmz::DistanceStats& s) {
-    std::printf("%-22s %14.6e %14.6e %14.6e %14.6e %14.6e %14.6e %10llu\n", name, s.max * inv, s.mean * inv,
-                s.rms * inv, s.max, s.mean, s.rms, (unsigned long long)s.samples);
+    std::printf("%-22s %14.6e %14.6e %14.6e %14.6e %14.6e %14.6e %10llu\n", name, s.max * inv,
+                s.mean * inv, s.rms * inv, s.max, s.mean, s.rms, (unsigned long long)s.samples);
   };
   row("original -> other", r.forward);
   if (options.both_directions) {

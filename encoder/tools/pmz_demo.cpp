@@ -102,11 +102,11 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "pmz-demo: cannot write %s\n", pmz_path.c_str());
     return 1;
   }
-  std::printf("encoded: %zu collapses in %.2f s, written in %.2f s: %zu bytes (%.2f bits/vertex, "
-              "%d-bit positions) -> %s\n",
-              seq.collapses.size(), t_simplify, t_write, bytes.size(),
-              8.0 * double(bytes.size()) / mesh.vertex_count(), int(wopt.position_bits),
-              pmz_path.c_str());
+  std::printf(
+      "encoded: %zu collapses in %.2f s, written in %.2f s: %zu bytes (%.2f bits/vertex, "
+      "%d-bit positions) -> %s\n",
+      seq.collapses.size(), t_simplify, t_write, bytes.size(),
+      8.0 * double(bytes.size()) / mesh.vertex_count(), int(wopt.position_bits), pmz_path.c_str());
 
   // Stream the file in 4 KiB slices as a download would deliver it, noting after each slice
   // how many splits had become available.
@@ -155,7 +155,8 @@ int main(int argc, char** argv) {
       std::snprintf(name, sizeof name, "base");
     else
       std::snprintf(name, sizeof name, "%g%%", r * 100);
-    std::string file = "lod_" + std::string(r == 0 ? "base" : std::to_string(int(r * 1000 + 0.5))) + ".obj";
+    std::string file =
+        "lod_" + std::string(r == 0 ? "base" : std::to_string(int(r * 1000 + 0.5))) + ".obj";
     if (!pmz::write_mesh((out_dir / file).string(), lod, error)) {
       std::fprintf(stderr, "pmz-demo: %s\n", error.c_str());
       return 1;
@@ -164,8 +165,9 @@ int main(int argc, char** argv) {
                 (unsigned long long)bytes_read, 100.0 * double(bytes_read) / double(bytes.size()),
                 cr.symmetric.mean / cr.diag, cr.symmetric.max / cr.diag);
   }
-  std::printf("\nerrors: Metro-style symmetric Hausdorff distance relative to the bounding-box "
-              "diagonal\n(the last row differs from 0 by the %d-bit position quantization).\n",
-              int(wopt.position_bits));
+  std::printf(
+      "\nerrors: Metro-style symmetric Hausdorff distance relative to the bounding-box "
+      "diagonal\n(the last row differs from 0 by the %d-bit position quantization).\n",
+      int(wopt.position_bits));
   return 0;
 }

@@ -24,12 +24,12 @@ constexpr uint64_t kWorkPerHalfEdge = 16, kWorkSlack = uint64_t(1) << 22;
 inline uint64_t edge_key(uint32_t a, uint32_t b) { return uint64_t(a) << 32 | b; }
 
 struct BaseModels {
-  Prob face = kProbInit;       // a gate has a face beyond it
-  Prob is_new[5];              // 0: a component's first face; 1 + [left] + 2 [right]
-  Prob is_left[2];             // by [right]
+  Prob face = kProbInit;  // a gate has a face beyond it
+  Prob is_new[5];         // 0: a component's first face; 1 + [left] + 2 [right]
+  Prob is_left[2];        // by [right]
   Prob is_right = kProbInit;
-  UIntModel other;             // an earlier vertex: vertices - 1 - id
-  UIntModel residual[2][3];    // [0] parallelogram, [1] from the previous vertex; per axis
+  UIntModel other;           // an earlier vertex: vertices - 1 - id
+  UIntModel residual[2][3];  // [0] parallelogram, [1] from the previous vertex; per axis
   BaseModels() {
     for (Prob& p : is_new) p = kProbInit;
     for (Prob& p : is_left) p = kProbInit;
@@ -114,17 +114,19 @@ class Front {
     }
     return kNone;
   }
-  static void push(std::vector<uint32_t>& head, std::vector<uint32_t>& next, std::vector<uint32_t>& prev,
-                   uint32_t key, uint32_t h) {
+  static void push(std::vector<uint32_t>& head, std::vector<uint32_t>& next,
+                   std::vector<uint32_t>& prev, uint32_t key, uint32_t h) {
     next[h] = head[key];
     prev[h] = kNone;
     if (head[key] != kNone) prev[head[key]] = h;
     head[key] = h;
   }
-  static void remove(std::vector<uint32_t>& head, std::vector<uint32_t>& next, std::vector<uint32_t>& prev,
-                     uint32_t key, uint32_t h) {
-    if (prev[h] != kNone) next[prev[h]] = next[h];
-    else head[key] = next[h];
+  static void remove(std::vector<uint32_t>& head, std::vector<uint32_t>& next,
+                     std::vector<uint32_t>& prev, uint32_t key, uint32_t h) {
+    if (prev[h] != kNone)
+      next[prev[h]] = next[h];
+    else
+      head[key] = next[h];
     if (next[h] != kNone) prev[next[h]] = prev[h];
   }
   void link(uint32_t h) {
@@ -175,8 +177,8 @@ struct DecodeIO {
 // The traversal (spec section 2, "BASE"), coding or decoding each value in turn: IO::kEncode
 // takes the values from the oracle, otherwise from the stream.
 template <class IO>
-BaseResult code_base(IO& io, uint32_t n, uint32_t fn, uint32_t midpoint, Oracle* oracle, BaseMesh& mesh,
-                     std::string& error) {
+BaseResult code_base(IO& io, uint32_t n, uint32_t fn, uint32_t midpoint, Oracle* oracle,
+                     BaseMesh& mesh, std::string& error) {
   constexpr bool kEnc = IO::kEncode;
   io.direct(midpoint);
   auto models = std::make_unique<BaseModels>();
@@ -186,7 +188,9 @@ BaseResult code_base(IO& io, uint32_t n, uint32_t fn, uint32_t midpoint, Oracle*
   mesh.coords.assign(size_t(n) * 3, 0);
   uint32_t vertices = 0;
   const int32_t zero[3] = {0, 0, 0};
-  auto last = [&]() -> const int32_t* { return vertices ? &mesh.coords[size_t(vertices - 1) * 3] : zero; };
+  auto last = [&]() -> const int32_t* {
+    return vertices ? &mesh.coords[size_t(vertices - 1) * 3] : zero;
+  };
   // A new vertex (writer: given id g) with its residuals from pred; kNone if none is left or a
   // residual is malformed.
   auto new_vertex = [&](uint32_t g, const int32_t* pred, UIntModel* res) -> uint32_t {
@@ -199,7 +203,8 @@ BaseResult code_base(IO& io, uint32_t n, uint32_t fn, uint32_t midpoint, Oracle*
     int32_t p[3] = {pred[0], pred[1], pred[2]};  // pred may point into coords
     for (int a = 0; a < 3; ++a) {
       uint32_t z = 0;
-      if constexpr (kEnc) z = zigzag_encode(int32_t(uint32_t(oracle->coords[size_t(g) * 3 + a]) - uint32_t(p[a])));
+      if constexpr (kEnc)
+        z = zigzag_encode(int32_t(uint32_t(oracle->coords[size_t(g) * 3 + a]) - uint32_t(p[a])));
       if (!io.uint(res[a], z)) return kNone;
       mesh.coords[size_t(c) * 3 + a] = int32_t(uint32_t(p[a]) + uint32_t(zigzag_decode(z)));
     }
@@ -230,7 +235,8 @@ BaseResult code_base(IO& io, uint32_t n, uint32_t fn, uint32_t midpoint, Oracle*
   const uint64_t work_limit = kWorkPerHalfEdge * 3 * uint64_t(fn) + kWorkSlack;
   while (front.face_count() < fn) {
     if (!io.ok()) return error = "BASE stream truncated", BaseResult::corrupt;
-    if (front.work > work_limit) return error = "BASE front too tangled", BaseResult::limit_exceeded;
+    if (front.work > work_limit)
+      return error = "BASE front too tangled", BaseResult::limit_exceeded;
     uint32_t h;
     if (!front.pop_gate(h)) {  // a component's first face
       uint32_t g[3] = {0, 0, 0}, v[3];
@@ -242,7 +248,8 @@ BaseResult code_base(IO& io, uint32_t n, uint32_t fn, uint32_t midpoint, Oracle*
       for (int k = 0; k < 3; ++k)
         if ((v[k] = vertex(g[k], kNone, kNone, 0, last(), m.residual[1])) == kNone)
           return error = "BASE vertex malformed", BaseResult::corrupt;
-      if (v[0] == v[1] || v[0] == v[2] || v[1] == v[2]) return error = "BASE face repeats a vertex", BaseResult::corrupt;
+      if (v[0] == v[1] || v[0] == v[2] || v[1] == v[2])
+        return error = "BASE face repeats a vertex", BaseResult::corrupt;
       front.add_face(v[0], v[1], v[2]);
       continue;
     }
@@ -252,7 +259,8 @@ BaseResult code_base(IO& io, uint32_t n, uint32_t fn, uint32_t midpoint, Oracle*
       const auto it = oracle->edge.find(edge_key(oracle->given_of->at(b), oracle->given_of->at(a)));
       if (it != oracle->edge.end()) {
         has = 1;
-        if (oracle->done[it->second / 3]) return error = "BASE face coded twice", BaseResult::corrupt;
+        if (oracle->done[it->second / 3])
+          return error = "BASE face coded twice", BaseResult::corrupt;
         oracle->done[it->second / 3] = 1;
         g = oracle->faces[prev_corner(it->second)];
       }
@@ -265,10 +273,15 @@ BaseResult code_base(IO& io, uint32_t n, uint32_t fn, uint32_t midpoint, Oracle*
     const uint32_t left = front.left(h), r = front.right(h), right = r == left ? kNone : r;
     int32_t pred[3];
     for (int k = 0; k < 3; ++k)
-      pred[k] = midpoint ? int32_t((int64_t(mesh.coords[size_t(a) * 3 + k]) + mesh.coords[size_t(b) * 3 + k]) >> 1)
-                         : int32_t(uint32_t(mesh.coords[size_t(a) * 3 + k]) + uint32_t(mesh.coords[size_t(b) * 3 + k]) -
-                                   uint32_t(mesh.coords[size_t(d) * 3 + k]));
-    const uint32_t c = vertex(g, left, right, 1 + (left != kNone) + 2 * (right != kNone), pred, m.residual[0]);
+      pred[k] =
+          midpoint
+              ? int32_t(
+                    (int64_t(mesh.coords[size_t(a) * 3 + k]) + mesh.coords[size_t(b) * 3 + k]) >> 1)
+              : int32_t(uint32_t(mesh.coords[size_t(a) * 3 + k]) +
+                        uint32_t(mesh.coords[size_t(b) * 3 + k]) -
+                        uint32_t(mesh.coords[size_t(d) * 3 + k]));
+    const uint32_t c =
+        vertex(g, left, right, 1 + (left != kNone) + 2 * (right != kNone), pred, m.residual[0]);
     if (c == kNone) return error = "BASE vertex malformed", BaseResult::corrupt;
     if (c == a || c == b) return error = "BASE face repeats a vertex", BaseResult::corrupt;
     front.add_face(b, a, c);
@@ -279,7 +292,8 @@ BaseResult code_base(IO& io, uint32_t n, uint32_t fn, uint32_t midpoint, Oracle*
       while (oracle->decoded[oracle->next_isolated] != kNone) ++oracle->next_isolated;
       g = oracle->next_isolated;
     }
-    if (new_vertex(g, last(), m.residual[1]) == kNone) return error = "BASE vertex malformed", BaseResult::corrupt;
+    if (new_vertex(g, last(), m.residual[1]) == kNone)
+      return error = "BASE vertex malformed", BaseResult::corrupt;
   }
   if (!io.ok()) return error = "BASE stream truncated", BaseResult::corrupt;
   mesh.faces = std::move(front.faces);
@@ -291,13 +305,17 @@ BaseResult code_base(IO& io, uint32_t n, uint32_t fn, uint32_t midpoint, Oracle*
 bool encode_base(const int32_t* coords, uint32_t n, const uint32_t* faces, uint32_t fn,
                  std::vector<uint8_t>& out, std::vector<uint32_t>& given_of, BaseMesh& decoded,
                  std::string& error) {
-  Oracle oracle{coords, faces, {}, std::vector<uint32_t>(n, kNone), std::vector<uint8_t>(fn, 0), &given_of};
+  Oracle oracle{coords,   faces, {}, std::vector<uint32_t>(n, kNone), std::vector<uint8_t>(fn, 0),
+                &given_of};
   oracle.edge.reserve(size_t(fn) * 3);
   for (uint32_t h = 0; h < fn * 3; ++h) {
     const uint32_t a = faces[h], b = faces[next_corner(h)];
-    if (a >= n || a == b) return error = "face " + std::to_string(h / 3) + " is out of range or degenerate", false;
+    if (a >= n || a == b)
+      return error = "face " + std::to_string(h / 3) + " is out of range or degenerate", false;
     if (!oracle.edge.emplace(edge_key(a, b), h).second)
-      return error = "directed edge " + std::to_string(a) + " -> " + std::to_string(b) + " used twice", false;
+      return error =
+                 "directed edge " + std::to_string(a) + " -> " + std::to_string(b) + " used twice",
+             false;
   }
   // Both predictors (the parallelogram, the gate's midpoint); the smaller stream is kept.
   std::vector<uint8_t> best;

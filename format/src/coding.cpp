@@ -1,8 +1,8 @@
 #include "pmz/coding.hpp"
 
-#include "pmz/range_coder.hpp"
-
 #include <cstring>
+
+#include "pmz/range_coder.hpp"
 
 namespace pmz {
 

@@ -1,6 +1,5 @@
 #include "pmz/format.hpp"
 
-
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -71,7 +70,8 @@ FrameStatus parse_chunk_frame(const uint8_t* p, size_t n, ChunkFrame& f) {
   if (n - at < 4) return FrameStatus::more;
   f.payload_size = v;
   f.header_size = at + 4;
-  f.crc = uint32_t(p[at]) | uint32_t(p[at + 1]) << 8 | uint32_t(p[at + 2]) << 16 | uint32_t(p[at + 3]) << 24;
+  f.crc = uint32_t(p[at]) | uint32_t(p[at + 1]) << 8 | uint32_t(p[at + 2]) << 16 |
+          uint32_t(p[at + 3]) << 24;
   return FrameStatus::ok;
 }
 

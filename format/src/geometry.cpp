@@ -1,8 +1,8 @@
 #include "pmz/geometry.hpp"
 
-#include "pmz/progressive_mesh.hpp"
-
 #include <utility>
+
+#include "pmz/progressive_mesh.hpp"
 
 namespace pmz {
 
@@ -21,7 +21,8 @@ inline uint32_t context_of(UInt128 mean) {
 // sum >= div * 2^j, so its bit length is the largest such j plus one (0 when sum < div).
 inline uint32_t context_of_mean(uint64_t sum, uint64_t div) {
   if (sum < div) return 0;
-  uint32_t j = uint32_t(__builtin_clzll(div)) - uint32_t(__builtin_clzll(sum));  // bitlen(sum) - bitlen(div)
+  uint32_t j =
+      uint32_t(__builtin_clzll(div)) - uint32_t(__builtin_clzll(sum));  // bitlen(sum) - bitlen(div)
   if (sum < (div << j)) --j;  // div << j < 2^bitlen(sum): no overflow
   return j + 1 < kResidualContexts - 1 ? j + 1 : kResidualContexts - 1;
 }
@@ -46,9 +47,10 @@ int64_t round_div_wide(Int128 num, Int128 den) {
 namespace {
 
 // Inlined into predict_position (the decoder's per-split call) and the two exported steps.
-[[gnu::always_inline]] inline void ring_basis_impl(const int32_t* coords, std::span<const uint32_t> u_ring,
-                                                   std::span<const uint32_t> v_ring, bool with_l, bool with_e,
-                                                   RingBasis& basis) {
+[[gnu::always_inline]] inline void ring_basis_impl(const int32_t* coords,
+                                                   std::span<const uint32_t> u_ring,
+                                                   std::span<const uint32_t> v_ring, bool with_l,
+                                                   bool with_e, RingBasis& basis) {
   const uint32_t m = uint32_t(u_ring.size());
   const int32_t* cv = coords + size_t(u_ring[0]) * 3;
   const int64_t vx = cv[0], vy = cv[1], vz = cv[2];
@@ -128,9 +130,9 @@ namespace {
   }
 }
 
-[[gnu::always_inline]] inline void predict_from_basis_impl(const int32_t* coords, std::span<const uint32_t> u_ring,
-                                                           uint32_t v_ring_size, const RingBasis& basis,
-                                                           uint32_t curvature, uint32_t fine, PositionPrediction& out) {
+[[gnu::always_inline]] inline void predict_from_basis_impl(
+    const int32_t* coords, std::span<const uint32_t> u_ring, uint32_t v_ring_size,
+    const RingBasis& basis, uint32_t curvature, uint32_t fine, PositionPrediction& out) {
   const uint32_t m = uint32_t(u_ring.size());
   const int64_t n0 = basis.n[0], n1 = basis.n[1], n2 = basis.n[2];
   for (int a = 0; a < 3; ++a) {
@@ -160,16 +162,19 @@ namespace {
   const int64_t p0 = out.p[0], p1 = out.p[1], p2 = out.p[2];
   const int32_t* cv = coords + size_t(u_ring[0]) * 3;  // v first
   int64_t dx = cv[0] - p0, dy = cv[1] - p1, dz = cv[2] - p2, dot = dx * n0 + dy * n1 + dz * n2;
-  uint64_t spread[3] = {uint64_t(dx < 0 ? -dx : dx), uint64_t(dy < 0 ? -dy : dy), uint64_t(dz < 0 ? -dz : dz)};
+  uint64_t spread[3] = {uint64_t(dx < 0 ? -dx : dx), uint64_t(dy < 0 ? -dy : dy),
+                        uint64_t(dz < 0 ? -dz : dz)};
   uint64_t far[3] = {spread[0], spread[1], spread[2]};
   const uint64_t v_off = uint64_t(dot < 0 ? -dot : dot);
   UInt128 off = v_off;
   for (uint32_t i = 1; i < m; ++i) {
     const int32_t* cw = coords + size_t(u_ring[i]) * 3;
     dx = cw[0] - p0, dy = cw[1] - p1, dz = cw[2] - p2;
-    const uint64_t ex = uint64_t(dx < 0 ? -dx : dx), ey = uint64_t(dy < 0 ? -dy : dy), ez = uint64_t(dz < 0 ? -dz : dz);
+    const uint64_t ex = uint64_t(dx < 0 ? -dx : dx), ey = uint64_t(dy < 0 ? -dy : dy),
+                   ez = uint64_t(dz < 0 ? -dz : dz);
     spread[0] += ex, spread[1] += ey, spread[2] += ez;
-    far[0] = far[0] < ex ? ex : far[0], far[1] = far[1] < ey ? ey : far[1], far[2] = far[2] < ez ? ez : far[2];
+    far[0] = far[0] < ex ? ex : far[0], far[1] = far[1] < ey ? ey : far[1],
+    far[2] = far[2] < ez ? ez : far[2];
     dot = dx * n0 + dy * n1 + dz * n2;
     off += uint64_t(dot < 0 ? -dot : dot);
   }
@@ -181,25 +186,27 @@ namespace {
     out.mix[s] = half_octave_context(far[ax[s]]);
   }
   out.mix[2] = mag[c] ? context_of_mean(v_off, uint64_t(mag[c])) : 0;  // n = 0: no plane
-  if (mag[c] == 0) off = spread[c];  // n = 0: the normal axis' own spread
+  if (mag[c] == 0) off = spread[c];                        // n = 0: the normal axis' own spread
   const uint64_t div = uint64_t(mag[c] ? mag[c] : 1) * m;  // < 2^17 * 2^32
   out.context[2] = off >> 64 ? context_of(off / div) : context_of_mean(uint64_t(off), div);
 }
 
 }  // namespace
 
-void ring_basis(const int32_t* coords, std::span<const uint32_t> u_ring, std::span<const uint32_t> v_ring,
-                bool with_l, bool with_e, RingBasis& basis) {
+void ring_basis(const int32_t* coords, std::span<const uint32_t> u_ring,
+                std::span<const uint32_t> v_ring, bool with_l, bool with_e, RingBasis& basis) {
   ring_basis_impl(coords, u_ring, v_ring, with_l, with_e, basis);
 }
 
-void predict_from_basis(const int32_t* coords, std::span<const uint32_t> u_ring, uint32_t v_ring_size,
-                        const RingBasis& basis, uint32_t curvature, uint32_t fine, PositionPrediction& out) {
+void predict_from_basis(const int32_t* coords, std::span<const uint32_t> u_ring,
+                        uint32_t v_ring_size, const RingBasis& basis, uint32_t curvature,
+                        uint32_t fine, PositionPrediction& out) {
   predict_from_basis_impl(coords, u_ring, v_ring_size, basis, curvature, fine, out);
 }
 
-void predict_position(const int32_t* coords, std::span<const uint32_t> u_ring, std::span<const uint32_t> v_ring,
-                      uint32_t curvature, uint32_t fine, PositionPrediction& out) {
+void predict_position(const int32_t* coords, std::span<const uint32_t> u_ring,
+                      std::span<const uint32_t> v_ring, uint32_t curvature, uint32_t fine,
+                      PositionPrediction& out) {
   RingBasis basis;
   ring_basis_impl(coords, u_ring, v_ring, curvature != 0, fine != 0, basis);
   predict_from_basis_impl(coords, u_ring, uint32_t(v_ring.size()), basis, curvature, fine, out);

@@ -25,7 +25,8 @@ bool ProgressiveMesh::build(uint32_t n, const uint32_t* indices, size_t faces, s
     edges[c] = uint64_t(corner_vertex[next_corner(c)]) << 32 | corner_vertex[prev_corner(c)];
     order[c] = c;
   }
-  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return edges[a] < edges[b]; });
+  std::sort(order.begin(), order.end(),
+            [&](uint32_t a, uint32_t b) { return edges[a] < edges[b]; });
   for (size_t i = 1; i < order.size(); ++i)
     if (edges[order[i]] == edges[order[i - 1]]) return error = "non-manifold edge", false;
   for (uint32_t c = 0; c < faces * 3; ++c) {
@@ -65,7 +66,8 @@ bool ProgressiveMesh::gather_fan(uint32_t v) {
   for (;;) {
     const uint32_t w = cv[n], o = opp[n];
     if (i >= room) [[unlikely]] {
-      if (i > corner_vertex.size()) break;  // a corrupt cycle not through c0: cannot happen on a valid table
+      if (i > corner_vertex.size())
+        break;  // a corrupt cycle not through c0: cannot happen on a valid table
       grow_scratch(scratch_cap_ * 2);
       room = scratch_cap_ - 2;
       fan = fan_.data();
@@ -207,7 +209,8 @@ void ProgressiveMesh::resplit(uint32_t v, uint32_t h, uint32_t count, bool has_l
   uint32_t* cv = corner_vertex.data();
   const uint32_t* opp = opposite.data();
   uint32_t* sec = sector_.data();
-  uint32_t vl = kNoCorner, vr = kNoCorner, pl = kNoCorner, ql = kNoCorner, pr = kNoCorner, qr = kNoCorner;
+  uint32_t vl = kNoCorner, vr = kNoCorner, pl = kNoCorner, ql = kNoCorner, pr = kNoCorner,
+           qr = kNoCorner;
   if (count) {  // h = fan[s]: the same reads as split_gathered(), along the fan from there
     if (has_l) {
       pl = next_corner(h);
@@ -239,8 +242,8 @@ void ProgressiveMesh::resplit(uint32_t v, uint32_t h, uint32_t count, bool has_l
   link_new_faces(v, vl, vr, pl, ql, pr, qr, has_l, has_r);
 }
 
-void ProgressiveMesh::link_new_faces(uint32_t v, uint32_t vl, uint32_t vr, uint32_t pl, uint32_t ql, uint32_t pr,
-                                     uint32_t qr, bool has_l, bool has_r) {
+void ProgressiveMesh::link_new_faces(uint32_t v, uint32_t vl, uint32_t vr, uint32_t pl, uint32_t ql,
+                                     uint32_t pr, uint32_t qr, bool has_l, bool has_r) {
   const uint32_t u = vertex_count(), F = face_count();
   uint32_t* opp = opposite.data();
   const uint32_t f0 = 3 * F, g0 = 3 * (F + (has_l ? 1 : 0));
@@ -337,4 +340,3 @@ void ProgressiveMesh::unlink_new_faces(uint32_t v, bool has_l, bool has_r) {
 }
 
 }  // namespace pmz
-

@@ -15,7 +15,8 @@ inline uint64_t l1(int64_t x, int64_t y, int64_t z) {
 }
 }  // namespace
 
-[[gnu::cold]] void VertexChoice::reset(ProgressiveMesh& base, const int32_t* coords, uint32_t position_bits) {
+[[gnu::cold]] void VertexChoice::reset(ProgressiveMesh& base, const int32_t* coords,
+                                       uint32_t position_bits) {
   shift_ = umbrella_shift(position_bits);
   degree_.assign(base.vertex_count(), 0);
   sums_.assign(base.vertex_count(), RingSums{{0, 0, 0}, 0});
@@ -88,7 +89,8 @@ bool VertexChoice::independent(const ProgressiveMesh& mesh, std::span<const uint
   }
   bool ok = true;
   for (uint32_t v : vs)
-    mesh.for_each_fan_face(v, [&](uint32_t a, uint32_t b) { ok = ok && mark_[a] != epoch && mark_[b] != epoch; });
+    mesh.for_each_fan_face(
+        v, [&](uint32_t a, uint32_t b) { ok = ok && mark_[a] != epoch && mark_[b] != epoch; });
   return ok;
 }
 
@@ -111,8 +113,8 @@ void make_room(std::vector<T>& b, size_t extra) {
 // u's entries, within the capacity reserve() made (no reallocation code: the decoder's library
 // has a size budget).
 void VertexChoice::push_vertex(uint32_t degree) {
-  if (degree_.size() == degree_.capacity() || mark_.size() == mark_.capacity() || key_.size() == key_.capacity() ||
-      sums_.size() == sums_.capacity())
+  if (degree_.size() == degree_.capacity() || mark_.size() == mark_.capacity() ||
+      key_.size() == key_.capacity() || sums_.size() == sums_.capacity())
     __builtin_unreachable();
   degree_.push_back(degree);
   mark_.push_back(0);
@@ -137,13 +139,17 @@ void VertexChoice::grow(size_t k) {
 
 // The umbrella sums of a split (see applied()). Positions of up to 16 bits (shift 0: the usual
 // case) get their own copy without the shifts, which also frees a register in the ring loop.
-void VertexChoice::umbrella(const ProgressiveMesh& pm, const int32_t* coords, bool has_left, bool has_right) {
-  if (shift_ == 0) umbrella_sums<false>(pm, coords, has_left, has_right);
-  else umbrella_sums<true>(pm, coords, has_left, has_right);
+void VertexChoice::umbrella(const ProgressiveMesh& pm, const int32_t* coords, bool has_left,
+                            bool has_right) {
+  if (shift_ == 0)
+    umbrella_sums<false>(pm, coords, has_left, has_right);
+  else
+    umbrella_sums<true>(pm, coords, has_left, has_right);
 }
 
 template <bool kShift>
-void VertexChoice::umbrella_sums(const ProgressiveMesh& pm, const int32_t* coords, bool has_left, bool has_right) {
+void VertexChoice::umbrella_sums(const ProgressiveMesh& pm, const int32_t* coords, bool has_left,
+                                 bool has_right) {
   // From e = c'[x] - c'[v] per ring vertex x of u and du = c'[u] - c'[v], modulo 2^32: an
   // interior vertex's spoke -e to v becomes du - e; vl and vr gain the spoke du - e to u; v
   // loses the interior's spokes e and gains du; u's spokes are -du to v and e - du to each x.
@@ -151,7 +157,9 @@ void VertexChoice::umbrella_sums(const ProgressiveMesh& pm, const int32_t* coord
   const std::span<const uint32_t> ur = pm.u_ring();
   const uint32_t v = ur[0], u = pm.vertex_count() - 1, r = uint32_t(ur.size());
   const uint32_t sh = kShift ? shift_ : 0;
-  auto at = [&](uint32_t w, int a) -> int64_t { return kShift ? coords[size_t(w) * 3 + a] >> sh : coords[size_t(w) * 3 + a]; };
+  auto at = [&](uint32_t w, int a) -> int64_t {
+    return kShift ? coords[size_t(w) * 3 + a] >> sh : coords[size_t(w) * 3 + a];
+  };
   const uint32_t* const deg = degree_.data();
   RingSums* const sums = sums_.data();
   uint8_t* const key = key_.data();
@@ -177,7 +185,7 @@ void VertexChoice::umbrella_sums(const ProgressiveMesh& pm, const int32_t* coord
     key[x] = key_of(sx, deg[x]);
   }
   uint32_t ax = ix, ay = iy, az = iz;  // sums of e over all of u's ring vertices
-  uint32_t ends[2], n_ends = 0;  // vl, vr (a loop: the code once)
+  uint32_t ends[2], n_ends = 0;        // vl, vr (a loop: the code once)
   if (has_left) ends[n_ends++] = ur[1];
   if (has_right) ends[n_ends++] = ur[r - 1];
   for (uint32_t j = 0; j < n_ends; ++j) {
@@ -210,7 +218,8 @@ void VertexChoice::umbrella_sums(const ProgressiveMesh& pm, const int32_t* coord
   key[u] = key_of(su, r);
 }
 
-void VertexChoice::applied(const ProgressiveMesh& pm, const int32_t* coords, bool has_left, bool has_right) {
+void VertexChoice::applied(const ProgressiveMesh& pm, const int32_t* coords, bool has_left,
+                           bool has_right) {
   const std::span<const uint32_t> ring = pm.ring(), ur = pm.u_ring();
   const uint32_t v = ur[0], u = pm.vertex_count() - 1, r = uint32_t(ur.size());
   reserve(ring.size());  // (the decoder did, before the split)
@@ -228,8 +237,8 @@ void VertexChoice::applied(const ProgressiveMesh& pm, const int32_t* coords, boo
   noted_.push_back(u);
 }
 
-bool choice_bits(VertexChoice& choice, const ProgressiveMesh& mesh, uint32_t limit, std::span<const uint32_t> vs,
-                 std::vector<uint32_t>& bits, bool& near) {
+bool choice_bits(VertexChoice& choice, const ProgressiveMesh& mesh, uint32_t limit,
+                 std::span<const uint32_t> vs, std::vector<uint32_t>& bits, bool& near) {
   near = choice.covers(vs);
   if (!choice.independent(mesh, vs)) return false;
   choice.begin_scan(near, limit, uint32_t(vs.size()));
@@ -245,8 +254,9 @@ bool choice_bits(VertexChoice& choice, const ProgressiveMesh& mesh, uint32_t lim
 }
 
 void encode_split_chunk(const std::vector<GroupCode>& groups, const std::vector<uint32_t>& choice,
-                        const SplitSymbols* splits, size_t count, SplitModels& models, std::vector<uint8_t>& payload,
-                        uint64_t* stream_bytes, double* symbol_bits) {
+                        const SplitSymbols* splits, size_t count, SplitModels& models,
+                        std::vector<uint8_t>& payload, uint64_t* stream_bytes,
+                        double* symbol_bits) {
   SplitModels* m = &models;
   std::vector<uint8_t> conn, geom;
   {
@@ -315,7 +325,8 @@ void encode_split_chunk(const std::vector<GroupCode>& groups, const std::vector<
   }
 }
 
-bool split_chunk_stream_sizes(const uint8_t* p, size_t size, uint64_t& count, uint64_t stream_bytes[kSplitStreamCount]) {
+bool split_chunk_stream_sizes(const uint8_t* p, size_t size, uint64_t& count,
+                              uint64_t stream_bytes[kSplitStreamCount]) {
   ByteReader r(p, size);
   count = r.varint();
   stream_bytes[kStreamConnectivity] = r.varint();
@@ -436,15 +447,18 @@ bool SplitChunkReader::wedge_rank(uint32_t context, uint32_t& rank) {
   if (!conn_dec_->ok) return false;
   if (!nonzero) return rank = 0, true;
   uint32_t rest;
-  if (!decode_small(*conn_dec_, models_->wedge_rank[context], rest) || rest == 0xFFFFFFFFu) return false;
+  if (!decode_small(*conn_dec_, models_->wedge_rank[context], rest) || rest == 0xFFFFFFFFu)
+    return false;
   rank = rest + 1;
   return true;
 }
 
-bool SplitChunkReader::residuals(const uint32_t context[3], const uint32_t mix[3], int32_t residual[3]) {
+bool SplitChunkReader::residuals(const uint32_t context[3], const uint32_t mix[3],
+                                 int32_t residual[3]) {
   for (int a = 0; a < 3; ++a) {
     uint32_t z;
-    if (!decode_symbol(*geo_dec_, models_->residual[a][context[a]], models_->mix(a, mix[a]), z) || !geo_dec_->ok)
+    if (!decode_symbol(*geo_dec_, models_->residual[a][context[a]], models_->mix(a, mix[a]), z) ||
+        !geo_dec_->ok)
       return false;
     residual[a] = zigzag_decode(z);
   }
@@ -469,7 +483,8 @@ bool ring_narrow(const int32_t* coords, const ProgressiveMesh& pm, const int32_t
   uint64_t spread = 0;
   for (uint32_t w : ring) {
     const int32_t* cw = coords + size_t(w) * 3;
-    const int64_t dx = int64_t(cw[0]) - cv[0], dy = int64_t(cw[1]) - cv[1], dz = int64_t(cw[2]) - cv[2];
+    const int64_t dx = int64_t(cw[0]) - cv[0], dy = int64_t(cw[1]) - cv[1],
+                  dz = int64_t(cw[2]) - cv[2];
     spread |= uint64_t(dx ^ (dx >> 63)) | uint64_t(dy ^ (dy >> 63)) | uint64_t(dz ^ (dz >> 63));
   }
   return spread < (uint64_t(1) << 26) && (spread + 1) * ring.size() < (uint64_t(1) << 26);
@@ -487,8 +502,9 @@ bool ring_narrow(const int32_t* coords, const ProgressiveMesh& pm, const int32_t
 // times the ends' |e|^2 (0 for a missing end); key = G m_a m_b when G >= 0, else G r_a r_b with
 // r = 12 / m (spec section 4).
 template <class I, class U>
-void score_wedges(const int32_t* coords, const uint32_t* degree, const ProgressiveMesh& pm, uint32_t count,
-                  const int32_t* cv, std::vector<I>& qbuf, std::vector<I>& score, WedgeScratch& s) {
+void score_wedges(const int32_t* coords, const uint32_t* degree, const ProgressiveMesh& pm,
+                  uint32_t count, const int32_t* cv, std::vector<I>& qbuf, std::vector<I>& score,
+                  WedgeScratch& s) {
   const std::span<const uint32_t> ring = pm.ring();
   const uint32_t k = uint32_t(ring.size()), start = pm.ring_start();
   const bool closed = pm.ring_closed();
@@ -529,7 +545,8 @@ void score_wedges(const int32_t* coords, const uint32_t* degree, const Progressi
   for (uint32_t j = start; j < k; ++j) put_vertex(ring[j]);
   for (uint32_t j = 0; j < start; ++j) put_vertex(ring[j]);
   if (closed) {
-    for (uint32_t i = 0; i <= count; ++i) {  // count + 1 < k: no overlap (a few positions: no memcpy call)
+    for (uint32_t i = 0; i <= count;
+         ++i) {  // count + 1 < k: no overlap (a few positions: no memcpy call)
       q[4 * i] = q0[4 * i];
       q[4 * i + 1] = q0[4 * i + 1];
       q[4 * i + 2] = q0[4 * i + 2];
@@ -583,17 +600,18 @@ void score_wedges(const int32_t* coords, const uint32_t* degree, const Progressi
 }
 
 // The two instantiations: 64-bit (every split of a real mesh) and 128-bit (cold, kept small).
-void score_narrow(const int32_t* coords, const uint32_t* degree, const ProgressiveMesh& pm, uint32_t count,
-                  const int32_t* cv, WedgeScratch& s) {
+void score_narrow(const int32_t* coords, const uint32_t* degree, const ProgressiveMesh& pm,
+                  uint32_t count, const int32_t* cv, WedgeScratch& s) {
   score_wedges<int64_t, uint64_t>(coords, degree, pm, count, cv, s.q, s.score64, s);
 }
-[[gnu::cold]] void score_wide(const int32_t* coords, const uint32_t* degree, const ProgressiveMesh& pm, uint32_t count,
-                              const int32_t* cv, WedgeScratch& s) {
+[[gnu::cold]] void score_wide(const int32_t* coords, const uint32_t* degree,
+                              const ProgressiveMesh& pm, uint32_t count, const int32_t* cv,
+                              WedgeScratch& s) {
   score_wedges<WedgeScoreSigned, WedgeScore>(coords, degree, pm, count, cv, s.q128, s.score, s);
 }
 
-uint32_t wedge_candidates(const int32_t* coords, const uint32_t* degree, uint32_t v, const ProgressiveMesh& pm,
-                          uint32_t count, WedgeScratch& s) {
+uint32_t wedge_candidates(const int32_t* coords, const uint32_t* degree, uint32_t v,
+                          const ProgressiveMesh& pm, uint32_t count, WedgeScratch& s) {
   const uint32_t k = uint32_t(pm.ring().size());
   if (k > kMaxScoredRing) {
     const uint32_t n = pm.ring_closed() ? k : k - count + 1;
@@ -604,7 +622,8 @@ uint32_t wedge_candidates(const int32_t* coords, const uint32_t* degree, uint32_
     return s.n = n;
   }
   const int32_t* cv = coords + size_t(v) * 3;
-  if ((s.extent < (uint64_t(1) << 26) && (s.extent + 1) * k < (uint64_t(1) << 26)) || ring_narrow(coords, pm, cv)) {
+  if ((s.extent < (uint64_t(1) << 26) && (s.extent + 1) * k < (uint64_t(1) << 26)) ||
+      ring_narrow(coords, pm, cv)) {
     score_narrow(coords, degree, pm, count, cv, s);
     s.narrow = true;
   } else {
@@ -661,8 +680,9 @@ inline uint32_t max_count(const ProgressiveMesh& pm) {
 
 }  // namespace
 
-bool wedge_symbols(const int32_t* coords, const uint32_t* degree, uint32_t v, const ProgressiveMesh& pm,
-                   uint32_t rank_l, uint32_t rank_r, uint32_t& count, uint32_t& rank, WedgeScratch& s) {
+bool wedge_symbols(const int32_t* coords, const uint32_t* degree, uint32_t v,
+                   const ProgressiveMesh& pm, uint32_t rank_l, uint32_t rank_r, uint32_t& count,
+                   uint32_t& rank, WedgeScratch& s) {
   const uint32_t k = uint32_t(pm.ring().size());
   uint32_t j;
   if (pm.ring_closed()) {
@@ -671,7 +691,8 @@ bool wedge_symbols(const int32_t* coords, const uint32_t* degree, uint32_t v, co
     j = rank_l;
   } else {
     if ((rank_l == kNoRank && rank_r == kNoRank) || (rank_l != kNoRank && rank_l >= k) ||
-        (rank_r != kNoRank && rank_r >= k) || (rank_l != kNoRank && rank_r != kNoRank && rank_l >= rank_r))
+        (rank_r != kNoRank && rank_r >= k) ||
+        (rank_l != kNoRank && rank_r != kNoRank && rank_l >= rank_r))
       return false;
     j = rank_l == kNoRank ? 0 : rank_l + 1;
     count = (rank_r == kNoRank ? k : rank_r) - j;
@@ -681,23 +702,25 @@ bool wedge_symbols(const int32_t* coords, const uint32_t* degree, uint32_t v, co
   return true;
 }
 
-bool wedge_scores(const int32_t* coords, const uint32_t* degree, uint32_t v, const ProgressiveMesh& pm,
-                  uint32_t count, WedgeScratch& s) {
+bool wedge_scores(const int32_t* coords, const uint32_t* degree, uint32_t v,
+                  const ProgressiveMesh& pm, uint32_t count, WedgeScratch& s) {
   if (pm.ring().size() < 2 || count > max_count(pm)) return false;
   wedge_candidates(coords, degree, v, pm, count, s);
   return true;
 }
 
-bool wedge_ranks(const int32_t* coords, const uint32_t* degree, uint32_t v, const ProgressiveMesh& pm,
-                 uint32_t count, uint32_t rank, uint32_t& rank_l, uint32_t& rank_r, WedgeScratch& s) {
-  return wedge_scores(coords, degree, v, pm, count, s) && wedge_pick(pm, count, rank, rank_l, rank_r, s);
+bool wedge_ranks(const int32_t* coords, const uint32_t* degree, uint32_t v,
+                 const ProgressiveMesh& pm, uint32_t count, uint32_t rank, uint32_t& rank_l,
+                 uint32_t& rank_r, WedgeScratch& s) {
+  return wedge_scores(coords, degree, v, pm, count, s) &&
+         wedge_pick(pm, count, rank, rank_l, rank_r, s);
 }
 
-bool wedge_pick(const ProgressiveMesh& pm, uint32_t count, uint32_t rank, uint32_t& rank_l, uint32_t& rank_r,
-                WedgeScratch& s) {
+bool wedge_pick(const ProgressiveMesh& pm, uint32_t count, uint32_t rank, uint32_t& rank_l,
+                uint32_t& rank_r, WedgeScratch& s) {
   const uint32_t k = uint32_t(pm.ring().size()), n = s.n;
   if (rank >= n) return false;
-  const uint32_t j = rank == 0 ? s.best
+  const uint32_t j = rank == 0  ? s.best
                      : s.narrow ? select(s.score64.data(), n, rank, s.order)
                                 : select(s.score.data(), n, rank, s.order);
   if (pm.ring_closed()) {

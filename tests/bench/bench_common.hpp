@@ -10,7 +10,9 @@ namespace pmz_bench {
 
 class Stopwatch {
  public:
-  double seconds() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
+  double seconds() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
 
  private:
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
@@ -18,7 +20,8 @@ class Stopwatch {
 
 // "seconds" is the time of the algorithm alone (no file input/output).
 inline void report(double seconds, unsigned long long faces_in, unsigned long long faces_out) {
-  std::printf("{\"seconds\": %.6f, \"faces_in\": %llu, \"faces_out\": %llu}\n", seconds, faces_in, faces_out);
+  std::printf("{\"seconds\": %.6f, \"faces_in\": %llu, \"faces_out\": %llu}\n", seconds, faces_in,
+              faces_out);
 }
 
 inline int fail(const char* tool, const std::string& message) {

@@ -20,9 +20,9 @@ int main(int argc, char** argv) {
   pmz_bench::Stopwatch clock;
   std::vector<unsigned int> simplified(mesh.indices.size());
   float result_error = 0;
-  size_t count = meshopt_simplify(simplified.data(), mesh.indices.data(), mesh.indices.size(), mesh.positions.data(),
-                                  mesh.vertex_count(), sizeof(float) * 3, size_t(target_faces) * 3, 1.0f, 0,
-                                  &result_error);
+  size_t count = meshopt_simplify(simplified.data(), mesh.indices.data(), mesh.indices.size(),
+                                  mesh.positions.data(), mesh.vertex_count(), sizeof(float) * 3,
+                                  size_t(target_faces) * 3, 1.0f, 0, &result_error);
   simplified.resize(count);
   const double seconds = clock.seconds();
 
@@ -32,7 +32,8 @@ int main(int argc, char** argv) {
   for (unsigned int& i : simplified) {
     if (remap[i] == ~0u) {
       remap[i] = out.vertex_count();
-      out.positions.insert(out.positions.end(), &mesh.positions[size_t(i) * 3], &mesh.positions[size_t(i) * 3 + 3]);
+      out.positions.insert(out.positions.end(), &mesh.positions[size_t(i) * 3],
+                           &mesh.positions[size_t(i) * 3 + 3]);
     }
     i = remap[i];
   }

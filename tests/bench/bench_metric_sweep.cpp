@@ -45,16 +45,26 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const bool has_value = i + 1 < argc;
-    if (a == "--eps" && has_value) params.epsilon = float(parse_number(argv[++i]));
-    else if (a == "--c0" && has_value) params.quadric_floor = float(parse_number(argv[++i]));
-    else if (a == "--wt" && has_value) params.torsion_weight = float(parse_number(argv[++i]));
-    else if (a == "--mem" && has_value) params.quadric_memory = float(parse_number(argv[++i]));
-    else if (a == "--bw" && has_value) params.boundary_weight = float(parse_number(argv[++i]));
-    else if (a == "--ratio" && has_value) ratios.push_back(parse_number(argv[++i]));
+    if (a == "--eps" && has_value)
+      params.epsilon = float(parse_number(argv[++i]));
+    else if (a == "--c0" && has_value)
+      params.quadric_floor = float(parse_number(argv[++i]));
+    else if (a == "--wt" && has_value)
+      params.torsion_weight = float(parse_number(argv[++i]));
+    else if (a == "--mem" && has_value)
+      params.quadric_memory = float(parse_number(argv[++i]));
+    else if (a == "--bw" && has_value)
+      params.boundary_weight = float(parse_number(argv[++i]));
+    else if (a == "--ratio" && has_value)
+      ratios.push_back(parse_number(argv[++i]));
     else if (!a.empty() && a[0] == '-') {
-      std::fprintf(stderr, "usage: %s [--eps E] [--c0 C] [--wt W] [--mem M] [--bw B] [--ratio R]... MESH...\n", kTool);
+      std::fprintf(
+          stderr,
+          "usage: %s [--eps E] [--c0 C] [--wt W] [--mem M] [--bw B] [--ratio R]... MESH...\n",
+          kTool);
       return 2;
-    } else meshes.push_back(a);
+    } else
+      meshes.push_back(a);
   }
   if (ratios.empty()) ratios = {0.1, 0.02};
   std::vector<std::vector<double>> ratio_of(ratios.size());
@@ -62,7 +72,8 @@ int main(int argc, char** argv) {
     pmz::IndexedMesh mesh;
     pmz::MeshRepairStats repairs;
     std::string error;
-    if (!pmz::read_mesh(path, mesh, repairs, error)) return std::fprintf(stderr, "%s: %s\n", kTool, error.c_str()), 1;
+    if (!pmz::read_mesh(path, mesh, repairs, error))
+      return std::fprintf(stderr, "%s: %s\n", kTool, error.c_str()), 1;
     std::string name = path.substr(path.find_last_of('/') + 1);
     name = name.substr(0, name.find_last_of('.'));
     for (size_t r = 0; r < ratios.size(); ++r) {
@@ -72,12 +83,15 @@ int main(int argc, char** argv) {
         pmz::SimplifyOptions options;
         options.metric = k == 0 ? pmz::Metric::multifeature : pmz::Metric::qem;
         options.params = params;
-        options.target_faces = std::max<uint64_t>(4, uint64_t(std::llround(ratios[r] * mesh.face_count())));
+        options.target_faces =
+            std::max<uint64_t>(4, uint64_t(std::llround(ratios[r] * mesh.face_count())));
         pmz::CollapseSequence seq;
-        if (!pmz::simplify(mesh, options, seq, error)) return std::fprintf(stderr, "%s: %s: %s\n", kTool, path.c_str(), error.c_str()), 1;
+        if (!pmz::simplify(mesh, options, seq, error))
+          return std::fprintf(stderr, "%s: %s: %s\n", kTool, path.c_str(), error.c_str()), 1;
         const pmz::IndexedMesh out = pmz::mesh_after(seq, seq.collapses.size());
         pmz::CompareResult cmp;
-        if (!pmz::compare(mesh, out, {}, cmp, error)) return std::fprintf(stderr, "%s: %s\n", kTool, error.c_str()), 1;
+        if (!pmz::compare(mesh, out, {}, cmp, error))
+          return std::fprintf(stderr, "%s: %s\n", kTool, error.c_str()), 1;
         mean[k] = cmp.symmetric.mean / cmp.diag;
         max[k] = cmp.symmetric.max / cmp.diag;
         faces[k] = out.face_count();
@@ -85,13 +99,16 @@ int main(int argc, char** argv) {
       const bool both_exact = mean[0] < 1e-10 && mean[1] < 1e-10;
       const double q = both_exact ? 1.0 : mean[1] > 0 ? mean[0] / mean[1] : INFINITY;
       ratio_of[r].push_back(q);
-      std::printf("%-20s %5.3f  mf %10.5f max %9.4f (%llu faces)  qem %10.5f max %9.4f (%llu faces)  mf/qem %.3f\n",
-                  name.c_str(), ratios[r], mean[0] * 1e4, max[0] * 1e4, (unsigned long long)faces[0], mean[1] * 1e4,
-                  max[1] * 1e4, (unsigned long long)faces[1], q);
+      std::printf(
+          "%-20s %5.3f  mf %10.5f max %9.4f (%llu faces)  qem %10.5f max %9.4f (%llu faces)  "
+          "mf/qem %.3f\n",
+          name.c_str(), ratios[r], mean[0] * 1e4, max[0] * 1e4, (unsigned long long)faces[0],
+          mean[1] * 1e4, max[1] * 1e4, (unsigned long long)faces[1], q);
       std::fflush(stdout);
     }
   }
   for (size_t r = 0; r < ratios.size(); ++r)
-    std::printf("ratio %.3f: median mf/qem %.3f over %zu meshes\n", ratios[r], median(ratio_of[r]), ratio_of[r].size());
+    std::printf("ratio %.3f: median mf/qem %.3f over %zu meshes\n", ratios[r], median(ratio_of[r]),
+                ratio_of[r].size());
   return 0;
 }

@@ -29,7 +29,8 @@ int openmesh_main(const char* tool, int argc, char** argv, Run run) {
   if (argc != 4) return fail(tool, std::string("usage: ") + tool + " IN OUT COUNT");
   const unsigned long long count = parse_count(tool, argv[3]);
   OmMesh mesh;
-  if (!OpenMesh::IO::read_mesh(mesh, argv[1])) return fail(tool, std::string(argv[1]) + ": cannot read mesh");
+  if (!OpenMesh::IO::read_mesh(mesh, argv[1]))
+    return fail(tool, std::string(argv[1]) + ": cannot read mesh");
   const unsigned long long faces_in = mesh.n_faces();
   Stopwatch clock;
   const std::string run_error = run(mesh, count);

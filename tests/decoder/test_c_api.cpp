@@ -59,7 +59,8 @@ TEST(CApi, StatusReportsDamageFoundWhileRefining) {
   // > 32), corrupt at the first split.
   size_t at = 8;
   pmz::ChunkFrame f;
-  while (pmz::parse_chunk_frame(&b[at], b.size() - at, f) == pmz::FrameStatus::ok && f.type != pmz::kChunkSplits)
+  while (pmz::parse_chunk_frame(&b[at], b.size() - at, f) == pmz::FrameStatus::ok &&
+         f.type != pmz::kChunkSplits)
     at += f.header_size + size_t(f.payload_size);
   ASSERT_EQ(f.type, pmz::kChunkSplits);
   const size_t size = size_t(f.payload_size), payload = at + f.header_size;

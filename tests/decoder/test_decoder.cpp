@@ -50,18 +50,22 @@ void expect_valid(const pmz::Decoder& d) {
 // The frame of the chunk at chunk_at (spec section 2: type, varint size, CRC).
 pmz::ChunkFrame frame_at(const std::vector<uint8_t>& b, size_t chunk_at) {
   pmz::ChunkFrame f;
-  EXPECT_EQ(pmz::parse_chunk_frame(b.data() + chunk_at, b.size() - chunk_at, f), pmz::FrameStatus::ok);
+  EXPECT_EQ(pmz::parse_chunk_frame(b.data() + chunk_at, b.size() - chunk_at, f),
+            pmz::FrameStatus::ok);
   return f;
 }
 // Offsets of every chunk of a file.
 std::vector<size_t> chunk_offsets(const std::vector<uint8_t>& b) {
   std::vector<size_t> at;
-  for (size_t c = 8; c < b.size(); c += frame_at(b, c).header_size + frame_at(b, c).payload_size) at.push_back(c);
+  for (size_t c = 8; c < b.size(); c += frame_at(b, c).header_size + frame_at(b, c).payload_size)
+    at.push_back(c);
   return at;
 }
 
 // Rewrites a chunk's CRC so corruption reaches the parser instead of the checksum.
-void fix_crc(std::vector<uint8_t>& b, size_t chunk_at) { pmz::repair_chunk_crc(&b[chunk_at], frame_at(b, chunk_at)); }
+void fix_crc(std::vector<uint8_t>& b, size_t chunk_at) {
+  pmz::repair_chunk_crc(&b[chunk_at], frame_at(b, chunk_at));
+}
 
 // The file with its HEAD replaced by h (the HEAD chunk re-framed: its size may change).
 std::vector<uint8_t> with_head(const std::vector<uint8_t>& file, const pmz::FileHeader& h) {
@@ -119,7 +123,8 @@ TEST_F(DecoderTest, EveryPrefixDecodesAndNeverShrinks) {
   uint32_t last_faces = 0;
   for (size_t n = 0; n <= file.size(); ++n) {
     pmz::Decoder d;
-    ASSERT_EQ(d.feed(file.data(), n), pmz::Status::ok) << "prefix " << n << ": " << d.error_message();
+    ASSERT_EQ(d.feed(file.data(), n), pmz::Status::ok)
+        << "prefix " << n << ": " << d.error_message();
     d.refine();
     expect_valid(d);
     ASSERT_GE(d.face_count(), last_faces) << "prefix " << n;
@@ -198,8 +203,10 @@ TEST_F(DecoderTest, ChangesDescribeEveryDifference) {
   for (int step = 0; step < 100; ++step) {
     d.clear_changes();
     const Snapshot before = snap(d);
-    if (rng() % 3) d.refine(rng() % 6);
-    else d.coarsen(rng() % 6);
+    if (rng() % 3)
+      d.refine(rng() % 6);
+    else
+      d.coarsen(rng() % 6);
     const Snapshot after = snap(d);
     const pmz::MeshChanges& c = d.changes();
     ASSERT_FALSE(c.all);
@@ -208,10 +215,12 @@ TEST_F(DecoderTest, ChangesDescribeEveryDifference) {
     for (uint32_t f = 0; f < c.face_begin; ++f) {
       bool same = std::equal(after.indices.begin() + f * 3, after.indices.begin() + f * 3 + 3,
                              before.indices.begin() + f * 3);
-      bool listed = std::find(c.modified_faces.begin(), c.modified_faces.end(), f) != c.modified_faces.end();
+      bool listed =
+          std::find(c.modified_faces.begin(), c.modified_faces.end(), f) != c.modified_faces.end();
       ASSERT_TRUE(same || listed) << "face " << f << " changed but is not listed";
     }
-    for (uint32_t v = 0; v < c.vertex_begin * 3; ++v) ASSERT_EQ(after.positions[v], before.positions[v]);
+    for (uint32_t v = 0; v < c.vertex_begin * 3; ++v)
+      ASSERT_EQ(after.positions[v], before.positions[v]);
   }
 }
 
@@ -224,7 +233,8 @@ TEST_F(DecoderTest, RejectsWrongMagicAndVersion) {
   EXPECT_EQ(d.face_count(), 0u);
 
   b = file;
-  b[8 + frame_at(b, 8).header_size] = 6;  // HEAD payload: version_major (6: the previous major, before the compact framing)
+  b[8 + frame_at(b, 8).header_size] =
+      6;  // HEAD payload: version_major (6: the previous major, before the compact framing)
   fix_crc(b, 8);
   pmz::Decoder v;
   EXPECT_EQ(v.feed(b.data(), b.size()), pmz::Status::bad_version);
@@ -287,8 +297,10 @@ TEST_F(DecoderTest, AbsurdCountsHitLimitsBeforeAllocating) {
 
   // A chunk claiming a huge payload is refused from its header alone (the size varint, even
   // before the CRC bytes arrive: nothing of the payload is buffered).
-  b.assign(file.begin(), file.begin() + ptrdiff_t(8 + frame_at(file, 8).header_size + frame_at(file, 8).payload_size));
-  const uint8_t huge[] = {pmz::kChunkSplits, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0x01, 0, 0, 0, 0};
+  b.assign(file.begin(), file.begin() + ptrdiff_t(8 + frame_at(file, 8).header_size +
+                                                  frame_at(file, 8).payload_size));
+  const uint8_t huge[] = {
+      pmz::kChunkSplits, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0x01, 0, 0, 0, 0};
   b.insert(b.end(), huge, huge + sizeof huge);
   pmz::DecoderLimits small;
   small.max_chunk_bytes = 1 << 20;
@@ -308,7 +320,22 @@ TEST_F(DecoderTest, AbsurdCountsHitLimitsBeforeAllocating) {
 TEST_F(DecoderTest, ChunkFrameFields) {
   const size_t head_end = 8 + frame_at(file, 8).header_size + frame_at(file, 8).payload_size;
   std::vector<uint8_t> b(file.begin(), file.begin() + ptrdiff_t(head_end));
-  const uint8_t eleven[] = {pmz::kChunkSplits, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x00, 0, 0, 0, 0};
+  const uint8_t eleven[] = {pmz::kChunkSplits,
+                            0x80,
+                            0x80,
+                            0x80,
+                            0x80,
+                            0x80,
+                            0x80,
+                            0x80,
+                            0x80,
+                            0x80,
+                            0x80,
+                            0x00,
+                            0,
+                            0,
+                            0,
+                            0};
   b.insert(b.end(), eleven, eleven + sizeof eleven);
   pmz::Decoder m;
   EXPECT_EQ(m.feed(b.data(), b.size()), pmz::Status::corrupt);
@@ -317,7 +344,7 @@ TEST_F(DecoderTest, ChunkFrameFields) {
   for (size_t at : chunk_offsets(file)) {
     const pmz::ChunkFrame f = frame_at(file, at);
     for (size_t i = 0; i < f.header_size; ++i) {  // each byte of the frame header: type, size, CRC
-      if (i == 0 && at == 8) continue;              // HEAD's type: "first chunk is not HEAD"
+      if (i == 0 && at == 8) continue;            // HEAD's type: "first chunk is not HEAD"
       b = file;
       b[at + i] ^= i == 0 ? 0x40 : 0x01;  // another type, size or CRC (a size 1 off stays a varint)
       pmz::Decoder d;
@@ -353,7 +380,8 @@ TEST_F(DecoderTest, CorruptedPayloadsNeverCrash) {
     const pmz::ChunkFrame f = frame_at(b, c);
     const size_t size = size_t(f.payload_size);
     if (!size) continue;
-    for (int k = 0; k < 1 + int(rng() % 3); ++k) b[c + f.header_size + rng() % size] ^= uint8_t(1 + rng() % 255);
+    for (int k = 0; k < 1 + int(rng() % 3); ++k)
+      b[c + f.header_size + rng() % size] ^= uint8_t(1 + rng() % 255);
     fix_crc(b, c);
     pmz::Decoder d;
     pmz::Status s = d.feed(b.data(), b.size());

@@ -5,10 +5,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <ctime>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <new>
 #include <vector>
 
@@ -100,13 +100,16 @@ void head(Bytes& file, const pmz::FileHeader& h) {
 // A BASE payload coded as the writer codes it. encode_base numbers vertices and faces in its
 // traversal order: coords and faces are replaced by the decoded ones (what the decoder's mesh
 // holds); returns the decoded id of each given vertex.
-std::vector<uint32_t> base_payload(std::vector<int32_t>& coords, std::vector<uint32_t>& faces, Bytes& payload) {
+std::vector<uint32_t> base_payload(std::vector<int32_t>& coords, std::vector<uint32_t>& faces,
+                                   Bytes& payload) {
   const uint32_t n = uint32_t(coords.size() / 3), fn = uint32_t(faces.size() / 3);
   Bytes stream;
   std::vector<uint32_t> given_of, decoded_of(n);
   pmz::BaseMesh decoded;
   std::string error;
-  EXPECT_TRUE(pmz::encode_base(coords.data(), n, faces.data(), fn, stream, given_of, decoded, error)) << error;
+  EXPECT_TRUE(
+      pmz::encode_base(coords.data(), n, faces.data(), fn, stream, given_of, decoded, error))
+      << error;
   payload = stream;  // BASE: the stream alone (the counts are HEAD's)
   for (uint32_t d = 0; d < n; ++d) decoded_of[given_of[d]] = d;
   coords = decoded.coords;
@@ -116,9 +119,10 @@ std::vector<uint32_t> base_payload(std::vector<int32_t>& coords, std::vector<uin
 
 // Octahedron: 6 vertices, 8 faces, closed (every vertex interior, valence 4), as BASE codes it.
 struct Octahedron {
-  std::vector<uint32_t> faces = {0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5};
-  std::vector<int32_t> coords = {16383, 8192, 8192, 0, 8192, 8192, 8192, 16383, 8192,
-                                 8192, 0, 8192, 8192, 8192, 16383, 8192, 8192, 0};
+  std::vector<uint32_t> faces = {0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4,
+                                 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5};
+  std::vector<int32_t> coords = {16383, 8192, 8192, 0,    8192, 8192,  8192, 16383, 8192,
+                                 8192,  0,    8192, 8192, 8192, 16383, 8192, 8192,  0};
   Bytes payload;
   Octahedron() { base_payload(coords, faces, payload); }
 };
@@ -135,7 +139,8 @@ struct Replay {
   pmz::ProgressiveMesh pm;
   std::vector<int32_t> coords;
   pmz::WedgeScratch scratch;
-  std::unique_ptr<pmz::SplitModels> models = std::make_unique<pmz::SplitModels>();  // carried across chunks
+  std::unique_ptr<pmz::SplitModels> models =
+      std::make_unique<pmz::SplitModels>();  // carried across chunks
   pmz::VertexChoice choice;
   uint64_t work = 0, vertices = 6;  // vertices: as the decoder counts them (all splits)
   Replay() {
@@ -160,7 +165,8 @@ struct Replay {
     c.wedge_context = pmz::wedge_context(uint32_t(pm.ring().size()), pm.ring_closed());
     const bool closed = pm.ring_closed();
     uint32_t a, b;
-    if (!pmz::wedge_ranks(coords.data(), choice.degrees(), v, pm, 0, 0, a, b, scratch) || !pm.split_gathered(v, a, b))
+    if (!pmz::wedge_ranks(coords.data(), choice.degrees(), v, pm, 0, 0, a, b, scratch) ||
+        !pm.split_gathered(v, a, b))
       return false;
     c.rank_context = pmz::rank_context(closed, scratch.confident);
     pmz::PositionPrediction pred;  // HEAD curvature 0, as header() writes
@@ -170,7 +176,8 @@ struct Replay {
     int32_t cu[3];
     pmz::position_from_residuals(pred, c.residual, cu);
     coords.insert(coords.end(), cu, cu + 3);
-    choice.applied(pm, coords.data(), a != pmz::kNoRank, b != pmz::kNoRank);  // needs u's coordinates
+    choice.applied(pm, coords.data(), a != pmz::kNoRank,
+                   b != pmz::kNoRank);  // needs u's coordinates
     return true;
   }
 };
@@ -206,7 +213,8 @@ Bytes small_file(uint32_t splits = 12, uint32_t per_chunk = 4) {
   Replay rp;
   for (uint32_t done = 0; done < splits;) {
     std::vector<uint32_t> at;
-    for (uint32_t i = 0; i < per_chunk && done < splits; ++i, ++done) at.push_back((done * 7) % (6 + done));
+    for (uint32_t i = 0; i < per_chunk && done < splits; ++i, ++done)
+      at.push_back((done * 7) % (6 + done));
     pmz::append_chunk(f, pmz::kChunkSplits, split_payload(rp, at, int32_t(done % 5) - 2));
   }
   pmz::append_chunk(f, pmz::kChunkEnd, {});
@@ -238,7 +246,8 @@ void fix_crc(Bytes& b, size_t chunk_at) {
 std::vector<size_t> chunk_offsets(const Bytes& b) {
   std::vector<size_t> at;
   pmz::ChunkFrame f;
-  for (size_t p = 8; frame_at(b, p, f); p += f.header_size + size_t(f.payload_size)) at.push_back(p);
+  for (size_t p = 8; frame_at(b, p, f); p += f.header_size + size_t(f.payload_size))
+    at.push_back(p);
   return at;
 }
 
@@ -304,7 +313,9 @@ TEST(Hostile, HeadVarintsCutShortOrBeyondUint32AreCorrupt) {
   EXPECT_EQ(decode(payload), pmz::Status::ok);
   for (size_t n = 0; n < payload.size(); ++n) {
     std::string message;
-    EXPECT_EQ(decode(Bytes(payload.begin(), payload.begin() + ptrdiff_t(n)), &message), pmz::Status::corrupt) << n;
+    EXPECT_EQ(decode(Bytes(payload.begin(), payload.begin() + ptrdiff_t(n)), &message),
+              pmz::Status::corrupt)
+        << n;
     EXPECT_NE(message.find("HEAD"), std::string::npos) << message;
   }
   Bytes longer = payload;
@@ -319,8 +330,9 @@ TEST(Hostile, HeadVarintsCutShortOrBeyondUint32AreCorrupt) {
     p.insert(p.end(), payload.begin() + ptrdiff_t(at + 1), payload.end());
     return p;
   };
-  const Bytes two32 = {0x80, 0x80, 0x80, 0x80, 0x10};                                 // 2^32
-  const Bytes eleven = {0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x00};  // 0 in 11 bytes
+  const Bytes two32 = {0x80, 0x80, 0x80, 0x80, 0x10};  // 2^32
+  const Bytes eleven = {0x80, 0x80, 0x80, 0x80, 0x80, 0x80,
+                        0x80, 0x80, 0x80, 0x80, 0x00};  // 0 in 11 bytes
   for (int k = 0; k < 5; ++k) {
     std::string message;
     EXPECT_EQ(decode(with_field(k, two32), &message), pmz::Status::corrupt) << k;
@@ -340,7 +352,8 @@ TEST(Hostile, FullVerticesBeyondUint32AreCorruptWhateverTheLimits) {
   pmz::DecoderLimits limits;
   limits.max_vertices = ~uint64_t(0);
   limits.max_faces = ~uint64_t(0);
-  for (const auto& [bv, splits] : {std::pair<uint32_t, uint32_t>{6, 0xFFFFFFFFu - 5}, {0xFFFFFFFFu, 1},
+  for (const auto& [bv, splits] : {std::pair<uint32_t, uint32_t>{6, 0xFFFFFFFFu - 5},
+                                   {0xFFFFFFFFu, 1},
                                    {0x80000000u, 0x80000000u}}) {
     Bytes f = signature();
     head(f, header(bv, 8, splits, 8));
@@ -356,7 +369,6 @@ TEST(Hostile, FullVerticesBeyondUint32AreCorruptWhateverTheLimits) {
   EXPECT_EQ(d.info().full_vertices, 0xFFFFFFFFull);
 }
 
-
 TEST(Hostile, HeaderCountsBeyondLimitsAreRefusedWithoutAllocating) {
   pmz::DecoderLimits limits;
   limits.max_vertices = 1000;
@@ -364,12 +376,12 @@ TEST(Hostile, HeaderCountsBeyondLimitsAreRefusedWithoutAllocating) {
   struct Case {
     uint32_t bv, bf, splits, ff;
   } cases[] = {
-      {1001, 8, 0, 8},                          // base vertices over the limit
-      {6, 1501, 0, 1501},                       // base faces over the limit
-      {6, 8, 995, 8 + 1990},                    // full vertices over the limit
-      {6, 8, 900, 1501},                        // full faces over the limit
-      {0xFFFFFFFFu - 5, 8, 5, 18},              // full vertices near 2^32
-      {6, 8, 0xFFFFFFFFu - 6, 0xFFFFFFFFu},     // billions of splits
+      {1001, 8, 0, 8},                       // base vertices over the limit
+      {6, 1501, 0, 1501},                    // base faces over the limit
+      {6, 8, 995, 8 + 1990},                 // full vertices over the limit
+      {6, 8, 900, 1501},                     // full faces over the limit
+      {0xFFFFFFFFu - 5, 8, 5, 18},           // full vertices near 2^32
+      {6, 8, 0xFFFFFFFFu - 6, 0xFFFFFFFFu},  // billions of splits
   };
   for (const Case& c : cases) {
     Bytes f = signature();
@@ -391,7 +403,8 @@ TEST(Hostile, ChunkClaimingHugePayloadBuffersOnlyWhatArrived) {
   // Within max_chunk_bytes, so the decoder waits for the payload; it must not reserve it.
   Bytes f = signature();
   head(f, header(6, 8, 4, 16));
-  const uint8_t big[] = {pmz::kChunkSplits, 0x80, 0x80, 0x80, 0x78, 0, 0, 0, 0};  // 240 MB (15 << 24)
+  const uint8_t big[] = {
+      pmz::kChunkSplits, 0x80, 0x80, 0x80, 0x78, 0, 0, 0, 0};  // 240 MB (15 << 24)
   f.insert(f.end(), big, big + sizeof big);
   f.resize(f.size() + 1000, 0x55);
   PeakScope scope;
@@ -411,11 +424,14 @@ TEST(Hostile, ChunkOverTheLimitIsRefusedFromItsHeader) {
     std::vector<uint8_t> size;  // the varint
     pmz::Status want;
   } cases[] = {
-      {{0x81, 0x20}, pmz::Status::limit_exceeded},                                                // 4097
-      {{0xFF, 0xFF, 0xFF, 0xFF, 0x0F}, pmz::Status::limit_exceeded},                              // 2^32 - 1
-      {{0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x01}, pmz::Status::limit_exceeded},  // 2^63
-      {{0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0x02}, pmz::Status::corrupt},         // beyond 64 bits
-      {{0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x00}, pmz::Status::corrupt},   // 11 bytes
+      {{0x81, 0x20}, pmz::Status::limit_exceeded},                    // 4097
+      {{0xFF, 0xFF, 0xFF, 0xFF, 0x0F}, pmz::Status::limit_exceeded},  // 2^32 - 1
+      {{0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x01},
+       pmz::Status::limit_exceeded},  // 2^63
+      {{0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0x02},
+       pmz::Status::corrupt},  // beyond 64 bits
+      {{0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x00},
+       pmz::Status::corrupt},  // 11 bytes
   };
   for (const Case& c : cases)
     for (size_t slice : {size_t(1), size_t(1) << 20}) {
@@ -447,7 +463,8 @@ TEST(Hostile, BaseCountsBeyondItsBytesDoNotAllocate) {
     pmz::Decoder d;
     EXPECT_EQ(d.feed(f.data(), f.size()), pmz::Status::corrupt) << nv << " " << nf;
     EXPECT_NE(d.error_message().find("can hold"), std::string::npos) << d.error_message();
-    EXPECT_LE(scope.peak(), size_t(64) << 10) << nv << " " << nf << ": allocation driven by a claimed count";
+    EXPECT_LE(scope.peak(), size_t(64) << 10)
+        << nv << " " << nf << ": allocation driven by a claimed count";
     expect_valid(d);
     EXPECT_EQ(d.face_count(), 0u);
   }
@@ -506,7 +523,9 @@ TEST(Hostile, RandomAndMutatedBaseStreams) {
     pmz::append_chunk(f, pmz::kChunkBase, p);
     pmz::Decoder d;
     const pmz::Status s = d.feed(f.data(), f.size());
-    EXPECT_TRUE(s == pmz::Status::ok || s == pmz::Status::corrupt || s == pmz::Status::limit_exceeded) << int(s);
+    EXPECT_TRUE(s == pmz::Status::ok || s == pmz::Status::corrupt ||
+                s == pmz::Status::limit_exceeded)
+        << int(s);
     if (s == pmz::Status::ok) {
       decoded += mutated;
       EXPECT_EQ(d.face_count(), nf);
@@ -630,7 +649,8 @@ TEST(Hostile, SplitsPilingOnOneVertexStayLinear) {
   };
   const uint32_t small = 4000, large = 16000;
   const double ts = run(make(small), small), tl = run(make(large), large);
-  EXPECT_LT(tl, 8 * ts + 0.02) << ts << " s for " << small << " splits, " << tl << " s for " << large;
+  EXPECT_LT(tl, 8 * ts + 0.02) << ts << " s for " << small << " splits, " << tl << " s for "
+                               << large;
 }
 
 // Wedge symbols at 2^32 - 1 (count or rank): out of range for every ring, so the split is
@@ -645,10 +665,17 @@ TEST(Hostile, WedgeSymbolsAtUint32MaxAreInvalid) {
     std::vector<uint32_t> bits;
     groups.push_back(rp.group(0, bits));
     ASSERT_TRUE(rp.pm.gather_ring(0));
-    codes[0] = {0, pmz::wedge_context(uint32_t(rp.pm.ring().size()), rp.pm.ring_closed()), 0, 0,
-                rp.pm.ring_closed() ? 1u : 0u, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+    codes[0] = {0,
+                pmz::wedge_context(uint32_t(rp.pm.ring().size()), rp.pm.ring_closed()),
+                0,
+                0,
+                rp.pm.ring_closed() ? 1u : 0u,
+                {0, 0, 0},
+                {0, 0, 0},
+                {0, 0, 0}};
     uint32_t a, b;
-    ASSERT_TRUE(pmz::wedge_ranks(rp.coords.data(), rp.choice.degrees(), 0, rp.pm, 0, 0, a, b, rp.scratch));
+    ASSERT_TRUE(
+        pmz::wedge_ranks(rp.coords.data(), rp.choice.degrees(), 0, rp.pm, 0, 0, a, b, rp.scratch));
     codes[0].rank_context = pmz::rank_context(rp.pm.ring_closed(), rp.scratch.confident);
     ASSERT_TRUE(rp.pm.split_gathered(0, a, b));
     pmz::PositionPrediction pred;
@@ -663,10 +690,17 @@ TEST(Hostile, WedgeSymbolsAtUint32MaxAreInvalid) {
     ASSERT_TRUE(rp.pm.gather_ring(6));
     ASSERT_TRUE(rp.pm.ring_closed());
     ASSERT_EQ(rp.pm.ring().size(), 3u);
-    // The rank's context as the decoder computes it for count 0 (which == 1; unused for which == 0).
+    // The rank's context as the decoder computes it for count 0 (which == 1; unused for which ==
+    // 0).
     ASSERT_TRUE(pmz::wedge_scores(rp.coords.data(), rp.choice.degrees(), 6, rp.pm, 0, rp.scratch));
-    codes[1] = {6, pmz::wedge_context(3, true), which == 0 ? 0xFFFFFFFFu : 0u, which == 1 ? 0xFFFFFFFFu : 0u,
-                pmz::rank_context(true, rp.scratch.confident), {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+    codes[1] = {6,
+                pmz::wedge_context(3, true),
+                which == 0 ? 0xFFFFFFFFu : 0u,
+                which == 1 ? 0xFFFFFFFFu : 0u,
+                pmz::rank_context(true, rp.scratch.confident),
+                {0, 0, 0},
+                {0, 0, 0},
+                {0, 0, 0}};
     Bytes f = signature();
     head(f, header(6, 8, 2, 12));
     pmz::append_chunk(f, pmz::kChunkBase, octa_base_payload());
@@ -698,11 +732,13 @@ TEST(Hostile, VertexChoiceAdjacentWithinTheLagDecodesConsistently) {
   std::vector<uint32_t> bits;
   rp.choice.start_group();
   rp.choice.begin_scan(false, rp.pm.vertex_count(), 2);
-  EXPECT_EQ(rp.choice.scan(&rp.pm, 2, [&](uint32_t w, uint32_t ctx) {
-    const bool hit = w == 0 || w == 2;
-    bits.push_back(ctx << 1 | (hit ? 1u : 0u));
-    return hit ? 1 : 0;
-  }), 1);
+  EXPECT_EQ(rp.choice.scan(&rp.pm, 2,
+                           [&](uint32_t w, uint32_t ctx) {
+                             const bool hit = w == 0 || w == 2;
+                             bits.push_back(ctx << 1 | (hit ? 1u : 0u));
+                             return hit ? 1 : 0;
+                           }),
+            1);
   ASSERT_EQ(bits.size(), 3u);  // 0, 1, 2
   // The symbols the decoder reads: wedges (0, 0) with its contexts, residuals 0.
   std::vector<pmz::SplitSymbols> codes;
@@ -739,16 +775,19 @@ TEST(Hostile, VertexChoiceRunningOutOfCandidatesIsRefused) {
     Bytes f = signature();
     head(f, header(6, 8, which == 2 ? 2 : 1, which == 2 ? 12 : 10));
     pmz::append_chunk(f, pmz::kChunkBase, octa_base_payload());
-    if (which == 2) pmz::append_chunk(f, pmz::kChunkSplits, split_payload(rp, {0}));  // a good first group
+    if (which == 2)
+      pmz::append_chunk(f, pmz::kChunkSplits, split_payload(rp, {0}));  // a good first group
     std::vector<uint32_t> bits;
     rp.choice.start_group();
     const bool near = which != 1;
     // Every candidate's bit 0, with the contexts the decoder uses (none for an empty near list).
     rp.choice.begin_scan(near, rp.pm.vertex_count(), 1);
-    EXPECT_EQ(rp.choice.scan(&rp.pm, 1, [&](uint32_t, uint32_t ctx) {
-      bits.push_back(ctx << 1);
-      return 0;
-    }), 0);
+    EXPECT_EQ(rp.choice.scan(&rp.pm, 1,
+                             [&](uint32_t, uint32_t ctx) {
+                               bits.push_back(ctx << 1);
+                               return 0;
+                             }),
+              0);
     EXPECT_EQ(bits.size(), which == 0 ? 0u : 6u);  // all 6 vertices / 0's ring of 4, 0 and u
     const pmz::SplitSymbols code{0, 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
     Bytes p;
@@ -779,7 +818,8 @@ TEST(Hostile, AllocationFailureWhileRefiningKeepsALevel) {
   ASSERT_EQ(ref.feed(f.data(), f.size()), pmz::Status::ok) << ref.error_message();
   ASSERT_EQ(ref.refine(), 24u);
   const std::vector<uint32_t> faces(ref.indices(), ref.indices() + size_t(ref.face_count()) * 3);
-  const std::vector<float> positions(ref.positions(), ref.positions() + size_t(ref.vertex_count()) * 3);
+  const std::vector<float> positions(ref.positions(),
+                                     ref.positions() + size_t(ref.vertex_count()) * 3);
   uint32_t failures = 0;
   for (long n = 0; n < 400; ++n) {
     pmz::Decoder d;
@@ -792,16 +832,21 @@ TEST(Hostile, AllocationFailureWhileRefiningKeepsALevel) {
     if (!failed) break;
     ++failures;
     // Either reported, or absorbed (the change list then says everything changed).
-    if (d.status() != pmz::Status::ok) EXPECT_EQ(d.status(), pmz::Status::out_of_memory) << n;
-    else EXPECT_TRUE(d.changes().all) << n;
+    if (d.status() != pmz::Status::ok)
+      EXPECT_EQ(d.status(), pmz::Status::out_of_memory) << n;
+    else
+      EXPECT_TRUE(d.changes().all) << n;
     expect_valid(d);
     ASSERT_EQ(size_t(d.face_count()), 8 + 2 * d.splits_applied()) << n;
     // Memory is back: the same full mesh as without the failure.
     d.coarsen();
     d.refine();
     ASSERT_EQ(d.splits_applied(), 24u) << n;
-    ASSERT_EQ(std::vector<uint32_t>(d.indices(), d.indices() + size_t(d.face_count()) * 3), faces) << n;
-    ASSERT_EQ(std::vector<float>(d.positions(), d.positions() + size_t(d.vertex_count()) * 3), positions) << n;
+    ASSERT_EQ(std::vector<uint32_t>(d.indices(), d.indices() + size_t(d.face_count()) * 3), faces)
+        << n;
+    ASSERT_EQ(std::vector<float>(d.positions(), d.positions() + size_t(d.vertex_count()) * 3),
+              positions)
+        << n;
   }
   EXPECT_GT(failures, 3u);
 }
@@ -819,7 +864,8 @@ TEST(Hostile, CoarseningNeedsNoAllocation) {
     const uint32_t a = 2 + i, b = 2 + (i + 1) % n;
     faces.insert(faces.end(), {0, a, b, 1, b, a});
     const double t = 2 * 3.14159265358979 * i / n;
-    coords.insert(coords.end(), {int32_t(8192 + 8000 * std::cos(t)), int32_t(8192 + 8000 * std::sin(t)), 8192});
+    coords.insert(coords.end(),
+                  {int32_t(8192 + 8000 * std::cos(t)), int32_t(8192 + 8000 * std::sin(t)), 8192});
   }
   Bytes base;
   const uint32_t apex = base_payload(coords, faces, base)[0];
@@ -838,10 +884,12 @@ TEST(Hostile, CoarseningNeedsNoAllocation) {
   ASSERT_TRUE(pm.gather_ring(apex));
   ASSERT_TRUE(pm.ring_closed());
   ASSERT_EQ(pm.ring().size(), n);
-  pmz::SplitSymbols code{apex, pmz::wedge_context(n, true), n - 2, 0, 1, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+  pmz::SplitSymbols code{apex,     pmz::wedge_context(n, true), n - 2, 0, 1, {0, 0, 0}, {0, 0, 0},
+                         {0, 0, 0}};
   pmz::WedgeScratch scratch;
   uint32_t ra, rb;
-  ASSERT_TRUE(pmz::wedge_ranks(coords.data(), choice.degrees(), apex, pm, n - 2, 0, ra, rb, scratch));
+  ASSERT_TRUE(
+      pmz::wedge_ranks(coords.data(), choice.degrees(), apex, pm, n - 2, 0, ra, rb, scratch));
   code.rank_context = pmz::rank_context(true, scratch.confident);
   ASSERT_TRUE(pm.split_gathered(apex, ra, rb));
   pmz::PositionPrediction pred;
@@ -912,7 +960,8 @@ void corrupt_every_byte(const Bytes& file, bool repair_crc) {
           if (!frame_at(b, c, f)) continue;
           const size_t end = f.header_size + size_t(f.payload_size);
           const bool in_crc = i >= c + f.header_size - 4 && i < c + f.header_size;
-          if (i >= c && f.payload_size <= b.size() - c && end <= b.size() - c && i < c + end && !in_crc)
+          if (i >= c && f.payload_size <= b.size() - c && end <= b.size() - c && i < c + end &&
+              !in_crc)
             fix_crc(b, c);
         }
       }
@@ -937,12 +986,16 @@ void corrupt_every_byte(const Bytes& file, bool repair_crc) {
     }
   }
   // Without repair every change in a checksummed byte is caught.
-  if (!repair_crc) EXPECT_EQ(errors, trials);
-  else EXPECT_GT(errors, trials / 2);
+  if (!repair_crc)
+    EXPECT_EQ(errors, trials);
+  else
+    EXPECT_GT(errors, trials / 2);
 }
 
 TEST(Hostile, EveryByteCorruptedKeepsAValidMesh) { corrupt_every_byte(small_file(), false); }
-TEST(Hostile, EveryByteCorruptedPastTheChecksumKeepsAValidMesh) { corrupt_every_byte(small_file(), true); }
+TEST(Hostile, EveryByteCorruptedPastTheChecksumKeepsAValidMesh) {
+  corrupt_every_byte(small_file(), true);
+}
 
 TEST(Hostile, EveryByteOfTheSampleFile) {
   FILE* fp = std::fopen(PMZ_SOURCE_DIR "/tests/data/sample.pmz", "rb");

@@ -16,7 +16,9 @@ namespace pmz_test {
 inline void add_vertex(pmz::IndexedMesh& m, double x, double y, double z) {
   m.positions.insert(m.positions.end(), {float(x), float(y), float(z)});
 }
-inline void add_face(pmz::IndexedMesh& m, uint32_t a, uint32_t b, uint32_t c) { m.indices.insert(m.indices.end(), {a, b, c}); }
+inline void add_face(pmz::IndexedMesh& m, uint32_t a, uint32_t b, uint32_t c) {
+  m.indices.insert(m.indices.end(), {a, b, c});
+}
 
 // n x n quads in the plane z = 0, spacing `step`, each split along a diagonal; normals +z.
 inline pmz::IndexedMesh grid(uint32_t n, double step = 1.0) {
@@ -36,14 +38,16 @@ inline pmz::IndexedMesh grid(uint32_t n, double step = 1.0) {
 inline pmz::IndexedMesh icosphere(int levels) {
   pmz::IndexedMesh m;
   const double t = (1 + std::sqrt(5.0)) / 2;
-  const double v[12][3] = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                           {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  const double v[12][3] = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0},
+                           {0, -1, t}, {0, 1, t}, {0, -1, -t}, {0, 1, -t},
+                           {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
   for (auto& p : v) {
     const double l = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
     add_vertex(m, p[0] / l, p[1] / l, p[2] / l);
   }
-  m.indices = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7, 6, 7, 1, 8,
-               3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1};
+  m.indices = {0, 11, 5,  0, 5,  1, 0, 1, 7, 0, 7,  10, 0, 10, 11, 1, 5, 9, 5, 11,
+               4, 11, 10, 2, 10, 7, 6, 7, 1, 8, 3,  9,  4, 3,  4,  2, 3, 2, 6, 3,
+               6, 8,  3,  8, 9,  4, 9, 5, 2, 4, 11, 6,  2, 10, 8,  6, 7, 9, 8, 1};
   for (int l = 0; l < levels; ++l) {
     std::map<std::pair<uint32_t, uint32_t>, uint32_t> mid;
     auto midpoint = [&](uint32_t a, uint32_t b) {
@@ -51,7 +55,8 @@ inline pmz::IndexedMesh icosphere(int levels) {
       auto it = mid.find(key);
       if (it != mid.end()) return it->second;
       double p[3], len = 0;
-      for (int k = 0; k < 3; ++k) p[k] = (m.positions[a * 3 + k] + m.positions[b * 3 + k]) / 2, len += p[k] * p[k];
+      for (int k = 0; k < 3; ++k)
+        p[k] = (m.positions[a * 3 + k] + m.positions[b * 3 + k]) / 2, len += p[k] * p[k];
       len = std::sqrt(len);
       add_vertex(m, p[0] / len, p[1] / len, p[2] / len);
       return mid[key] = m.vertex_count() - 1;
@@ -61,7 +66,8 @@ inline pmz::IndexedMesh icosphere(int levels) {
     for (size_t f = 0; f < old.size(); f += 3) {
       const uint32_t a = old[f], b = old[f + 1], c = old[f + 2];
       const uint32_t ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
-      add_face(m, a, ab, ca), add_face(m, b, bc, ab), add_face(m, c, ca, bc), add_face(m, ab, bc, ca);
+      add_face(m, a, ab, ca), add_face(m, b, bc, ab), add_face(m, c, ca, bc),
+          add_face(m, ab, bc, ca);
     }
   }
   return m;
@@ -74,11 +80,13 @@ inline pmz::IndexedMesh torus(uint32_t nu, uint32_t nv, double big = 1.0, double
   for (uint32_t j = 0; j < nv; ++j)
     for (uint32_t i = 0; i < nu; ++i) {
       const double a = pi2 * i / nu, b = pi2 * j / nv;
-      add_vertex(m, (big + small * std::cos(b)) * std::cos(a), (big + small * std::cos(b)) * std::sin(a), small * std::sin(b));
+      add_vertex(m, (big + small * std::cos(b)) * std::cos(a),
+                 (big + small * std::cos(b)) * std::sin(a), small * std::sin(b));
     }
   for (uint32_t j = 0; j < nv; ++j)
     for (uint32_t i = 0; i < nu; ++i) {
-      const uint32_t a = j * nu + i, b = j * nu + (i + 1) % nu, c = ((j + 1) % nv) * nu + i, d = ((j + 1) % nv) * nu + (i + 1) % nu;
+      const uint32_t a = j * nu + i, b = j * nu + (i + 1) % nu, c = ((j + 1) % nv) * nu + i,
+                     d = ((j + 1) % nv) * nu + (i + 1) % nu;
       add_face(m, a, b, d);
       add_face(m, a, d, c);
     }

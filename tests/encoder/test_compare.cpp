@@ -13,7 +13,8 @@ namespace {
 pmz::IndexedMesh square(float z, int n = 1, float size = 1.0f) {
   pmz::IndexedMesh m;
   for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i) m.positions.insert(m.positions.end(), {size * i / n, size * j / n, z});
+    for (int i = 0; i <= n; ++i)
+      m.positions.insert(m.positions.end(), {size * i / n, size * j / n, z});
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i) {
       uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
@@ -27,10 +28,11 @@ pmz::IndexedMesh square(float z, int n = 1, float size = 1.0f) {
 pmz::IndexedMesh icosphere(int levels) {
   const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
   pmz::IndexedMesh m;
-  m.positions = {-1, t, 0, 1, t, 0, -1, -t, 0, 1, -t, 0, 0, -1, t, 0, 1, t,
-                 0, -1, -t, 0, 1, -t, t, 0, -1, t, 0, 1, -t, 0, -1, -t, 0, 1};
-  m.indices = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7, 6, 7, 1, 8,
-               3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1};
+  m.positions = {-1, t,  0,  1, t, 0,  -1, -t, 0,  1, -t, 0, 0,  -1, t,  0,  1, t,
+                 0,  -1, -t, 0, 1, -t, t,  0,  -1, t, 0,  1, -t, 0,  -1, -t, 0, 1};
+  m.indices = {0, 11, 5,  0, 5,  1, 0, 1, 7, 0, 7,  10, 0, 10, 11, 1, 5, 9, 5, 11,
+               4, 11, 10, 2, 10, 7, 6, 7, 1, 8, 3,  9,  4, 3,  4,  2, 3, 2, 6, 3,
+               6, 8,  3,  8, 9,  4, 9, 5, 2, 4, 11, 6,  2, 10, 8,  6, 7, 9, 8, 1};
   auto normalize = [&](uint32_t v) {
     float* p = &m.positions[v * 3];
     float l = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
@@ -44,7 +46,8 @@ pmz::IndexedMesh icosphere(int levels) {
       auto it = midpoints.find(key);
       if (it != midpoints.end()) return it->second;
       uint32_t v = m.vertex_count();
-      for (int k = 0; k < 3; ++k) m.positions.push_back(0.5f * (m.positions[a * 3 + k] + m.positions[b * 3 + k]));
+      for (int k = 0; k < 3; ++k)
+        m.positions.push_back(0.5f * (m.positions[a * 3 + k] + m.positions[b * 3 + k]));
       normalize(v);
       midpoints.emplace(key, v);
       return v;
@@ -75,7 +78,8 @@ Face face(const pmz::IndexedMesh& m, size_t f) {
   t.normal[0] = u[1] * v[2] - u[2] * v[1];
   t.normal[1] = u[2] * v[0] - u[0] * v[2];
   t.normal[2] = u[0] * v[1] - u[1] * v[0];
-  t.area = 0.5 * std::sqrt(t.normal[0] * t.normal[0] + t.normal[1] * t.normal[1] + t.normal[2] * t.normal[2]);
+  t.area = 0.5 * std::sqrt(t.normal[0] * t.normal[0] + t.normal[1] * t.normal[1] +
+                           t.normal[2] * t.normal[2]);
   return t;
 }
 
@@ -120,7 +124,8 @@ double mean_depth_below_sphere(const pmz::IndexedMesh& m) {
   return sum / area_sum;
 }
 
-pmz::CompareResult run(const pmz::IndexedMesh& a, const pmz::IndexedMesh& b, pmz::CompareOptions opt = {}) {
+pmz::CompareResult run(const pmz::IndexedMesh& a, const pmz::IndexedMesh& b,
+                       pmz::CompareOptions opt = {}) {
   pmz::CompareResult r;
   std::string err;
   EXPECT_TRUE(pmz::compare(a, b, opt, r, err)) << err;
@@ -174,7 +179,8 @@ TEST(Compare, SphereAgainstInscribedIcosphereMeetsTheBounds) {
   const double eps = 1.0 - min_face_plane_distance(sphere);
   ASSERT_LT(eps, 5e-4);
   // The icosahedron's inradius for circumradius 1: sqrt((5 + 2 sqrt 5) / 15) = 0.794654...
-  EXPECT_NEAR(min_face_plane_distance(icosphere(0)), std::sqrt((5 + 2 * std::sqrt(5.0)) / 15), 1e-6);
+  EXPECT_NEAR(min_face_plane_distance(icosphere(0)), std::sqrt((5 + 2 * std::sqrt(5.0)) / 15),
+              1e-6);
   for (int level : {0, 1}) {
     const pmz::IndexedMesh coarse = icosphere(level);
     const double h = min_face_plane_distance(coarse);

@@ -117,7 +117,8 @@ TEST(Metric, CurrentQuadricEqualsTheInitialOneOnTheInput) {
       const float* p = m.p(v);
       for (const float d : {0.f, 0.1f, -0.3f}) {
         const float probe[3] = {p[0] + d, p[1] - 0.5f * d, p[2] + 2 * d};
-        EXPECT_NEAR(q.error(probe), initial[v].error(probe), 1e-5 * (1 + initial[v].error(probe))) << "vertex " << v;
+        EXPECT_NEAR(q.error(probe), initial[v].error(probe), 1e-5 * (1 + initial[v].error(probe)))
+            << "vertex " << v;
       }
     }
   }

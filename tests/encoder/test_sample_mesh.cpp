@@ -30,7 +30,8 @@ TEST(SampleMesh, IsClosedOrientedManifoldSphere) {
     const float* b = &m.positions[m.indices[f * 3 + 1] * 3];
     const float* c = &m.positions[m.indices[f * 3 + 2] * 3];
     vol += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
-            a[2] * (b[0] * c[1] - b[1] * c[0])) / 6.0;
+            a[2] * (b[0] * c[1] - b[1] * c[0])) /
+           6.0;
   }
   EXPECT_GT(vol, 4.0);  // about pi * r^2 * h = 2 pi, less the groove
 }

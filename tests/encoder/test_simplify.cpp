@@ -22,7 +22,8 @@ Face canonical(Face f) {
 
 std::vector<Face> sorted_faces(const std::vector<uint32_t>& indices) {
   std::vector<Face> faces;
-  for (size_t i = 0; i < indices.size(); i += 3) faces.push_back(canonical({indices[i], indices[i + 1], indices[i + 2]}));
+  for (size_t i = 0; i < indices.size(); i += 3)
+    faces.push_back(canonical({indices[i], indices[i + 1], indices[i + 2]}));
   std::sort(faces.begin(), faces.end());
   return faces;
 }
@@ -44,7 +45,8 @@ std::vector<uint32_t> replay(const pmz::CollapseSequence& seq, size_t check_ever
     std::vector<uint32_t> kept;
     for (size_t f = 0; f < faces.size(); f += 3) {
       Face t{faces[f], faces[f + 1], faces[f + 2]};
-      const bool has_u = std::count(t.begin(), t.end(), c.u), has_v = std::count(t.begin(), t.end(), c.v);
+      const bool has_u = std::count(t.begin(), t.end(), c.u),
+                 has_v = std::count(t.begin(), t.end(), c.v);
       if (has_u && has_v) {
         deleted.push_back(canonical(t));
         continue;
@@ -73,8 +75,8 @@ std::vector<uint32_t> replay(const pmz::CollapseSequence& seq, size_t check_ever
 
 // target_reachable: the mesh can go down to target (+1 for parity) faces; a mesh with many
 // holes cannot, every hole keeps at least three boundary edges.
-void expect_valid_sequence(const pmz::IndexedMesh& mesh, pmz::Metric metric, uint64_t target, size_t check_every,
-                           bool target_reachable = true) {
+void expect_valid_sequence(const pmz::IndexedMesh& mesh, pmz::Metric metric, uint64_t target,
+                           size_t check_every, bool target_reachable = true) {
   pmz::SimplifyOptions options;
   options.metric = metric;
   options.target_faces = target;
@@ -96,7 +98,8 @@ void expect_valid_sequence(const pmz::IndexedMesh& mesh, pmz::Metric metric, uin
 }  // namespace
 
 TEST(Simplify, ClosedSphereEveryStepValid) {
-  for (auto metric : {pmz::Metric::multifeature, pmz::Metric::qem}) expect_valid_sequence(pmz_test::icosphere(3), metric, 0, 1);
+  for (auto metric : {pmz::Metric::multifeature, pmz::Metric::qem})
+    expect_valid_sequence(pmz_test::icosphere(3), metric, 0, 1);
 }
 
 TEST(Simplify, SphereGoesDownToATetrahedron) {
@@ -108,7 +111,8 @@ TEST(Simplify, SphereGoesDownToATetrahedron) {
 
 TEST(Simplify, TorusKeepsItsHandle) {
   const auto mesh = pmz_test::torus(24, 12);
-  for (auto metric : {pmz::Metric::multifeature, pmz::Metric::qem}) expect_valid_sequence(mesh, metric, 0, 1);
+  for (auto metric : {pmz::Metric::multifeature, pmz::Metric::qem})
+    expect_valid_sequence(mesh, metric, 0, 1);
   pmz::CollapseSequence seq;
   std::string error;
   ASSERT_TRUE(pmz::simplify(mesh, {}, seq, error)) << error;
@@ -116,7 +120,8 @@ TEST(Simplify, TorusKeepsItsHandle) {
 }
 
 TEST(Simplify, GridWithBoundaryEveryStepValid) {
-  for (auto metric : {pmz::Metric::multifeature, pmz::Metric::qem}) expect_valid_sequence(pmz_test::grid(16), metric, 0, 1);
+  for (auto metric : {pmz::Metric::multifeature, pmz::Metric::qem})
+    expect_valid_sequence(pmz_test::grid(16), metric, 0, 1);
   // A flat disc goes down to a single triangle.
   pmz::CollapseSequence seq;
   std::string error;
@@ -163,7 +168,8 @@ TEST(Simplify, BentSheetReachesItsFourExactFaces) {
     pmz::CollapseSequence seq;
     std::string error;
     ASSERT_TRUE(pmz::simplify(mesh, options, seq, error)) << error;
-    ASSERT_EQ(seq.base_indices.size(), 12u) << (metric == pmz::Metric::qem ? "qem" : "multifeature");
+    ASSERT_EQ(seq.base_indices.size(), 12u)
+        << (metric == pmz::Metric::qem ? "qem" : "multifeature");
     for (uint32_t v : seq.base_indices) {
       const float x = mesh.positions[3 * size_t(v)];
       EXPECT_TRUE(x == 0 || x == float(n)) << "vertex " << v << " at x = " << x;
@@ -250,7 +256,8 @@ TEST(Simplify, CorpusMeshesStayManifold) {
     any = true;
     SCOPED_TRACE(name);
     for (auto metric : {pmz::Metric::multifeature, pmz::Metric::qem})
-      expect_valid_sequence(mesh, metric, mesh.face_count() / 50, std::max<size_t>(1, mesh.vertex_count() / 40),
+      expect_valid_sequence(mesh, metric, mesh.face_count() / 50,
+                            std::max<size_t>(1, mesh.vertex_count() / 40),
                             std::string(name) != "elephant-with-holes");
   }
   if (!any) GTEST_SKIP() << "no corpus meshes (set PMZ_CORPUS or run scripts/fetch_corpus.sh)";

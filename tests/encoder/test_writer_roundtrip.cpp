@@ -27,8 +27,8 @@ Face canonical(uint32_t a, uint32_t b, uint32_t c) {
 }
 
 // Returns the HEAD curvature and fine_curvature the writer chose (through `curvature`, `fine`).
-void round_trip(const pmz::IndexedMesh& input, uint32_t bits, uint64_t base_faces = 0, uint32_t* curvature = nullptr,
-                uint32_t* fine = nullptr) {
+void round_trip(const pmz::IndexedMesh& input, uint32_t bits, uint64_t base_faces = 0,
+                uint32_t* curvature = nullptr, uint32_t* fine = nullptr) {
   pmz::CollapseSequence seq;
   std::string error;
   ASSERT_TRUE(pmz::simplify(input, {}, seq, error)) << error;
@@ -87,7 +87,8 @@ void round_trip(const pmz::IndexedMesh& input, uint32_t bits, uint64_t base_face
     d.refine();
     ASSERT_EQ(d.splits_applied(), all);
     ASSERT_TRUE(std::equal(indices.begin(), indices.end(), d.indices())) << "from level " << level;
-    ASSERT_TRUE(std::equal(positions.begin(), positions.end(), d.positions())) << "from level " << level;
+    ASSERT_TRUE(std::equal(positions.begin(), positions.end(), d.positions()))
+        << "from level " << level;
   }
 }
 
@@ -108,7 +109,8 @@ TEST(WriterRoundTrip, LevelMovesBetweenChunksKeepTheChoiceContexts) {
   pmz::Decoder d;
   size_t moves = 0;
   for (size_t at = 0; at < bytes.size(); at += 1500) {
-    ASSERT_EQ(d.feed(bytes.data() + at, std::min<size_t>(1500, bytes.size() - at)), pmz::Status::ok) << d.error_message();
+    ASSERT_EQ(d.feed(bytes.data() + at, std::min<size_t>(1500, bytes.size() - at)), pmz::Status::ok)
+        << d.error_message();
     d.refine(d.splits_available() / 2 + 1);  // part of the new splits first applied
     const uint64_t top = d.splits_applied();
     if (top < 8) continue;
@@ -121,8 +123,10 @@ TEST(WriterRoundTrip, LevelMovesBetweenChunksKeepTheChoiceContexts) {
   d.refine();
   ASSERT_EQ(d.status(), pmz::Status::ok) << d.error_message();
   ASSERT_EQ(d.splits_applied(), straight.splits_applied());
-  ASSERT_TRUE(std::equal(d.indices(), d.indices() + size_t(d.face_count()) * 3, straight.indices()));
-  ASSERT_TRUE(std::equal(d.positions(), d.positions() + size_t(d.vertex_count()) * 3, straight.positions()));
+  ASSERT_TRUE(
+      std::equal(d.indices(), d.indices() + size_t(d.face_count()) * 3, straight.indices()));
+  ASSERT_TRUE(std::equal(d.positions(), d.positions() + size_t(d.vertex_count()) * 3,
+                         straight.positions()));
 }
 
 TEST(WriterRoundTrip, SampleMeshQuantized) { round_trip(pmz::make_sample_mesh(3000), 14); }
@@ -136,7 +140,9 @@ TEST(WriterRoundTrip, OpenMeshWithBoundary) {
   const int n = 24;
   for (int y = 0; y <= n; ++y)
     for (int x = 0; x <= n; ++x) {
-      m.positions.insert(m.positions.end(), std::initializer_list<float>{float(x), float(y), float(std::sin(x * 0.4) * std::cos(y * 0.3))});
+      m.positions.insert(m.positions.end(),
+                         std::initializer_list<float>{
+                             float(x), float(y), float(std::sin(x * 0.4) * std::cos(y * 0.3))});
     }
   for (int y = 0; y < n; ++y)
     for (int x = 0; x < n; ++x) {
@@ -154,14 +160,17 @@ pmz::IndexedMesh components_mesh() {
   for (int k = 0; k < 3; ++k) {
     const pmz::IndexedMesh c = pmz::make_sample_mesh(400 + 100 * k);
     const uint32_t at = m.vertex_count();
-    for (size_t i = 0; i < c.positions.size(); ++i) m.positions.push_back(c.positions[i] + (i % 3 == 0 ? 3.0f * k : 0.0f));
+    for (size_t i = 0; i < c.positions.size(); ++i)
+      m.positions.push_back(c.positions[i] + (i % 3 == 0 ? 3.0f * k : 0.0f));
     for (uint32_t x : c.indices) m.indices.push_back(at + x);
     m.positions.insert(m.positions.end(), {-2.0f - k, 0.5f * k, 1.0f});  // isolated
   }
   const int n = 12;  // grid with a 2x2 hole
   const uint32_t at = m.vertex_count();
   for (int y = 0; y <= n; ++y)
-    for (int x = 0; x <= n; ++x) m.positions.insert(m.positions.end(), {float(x) / n, float(y) / n - 3, 0.1f * float(std::sin(x + y))});
+    for (int x = 0; x <= n; ++x)
+      m.positions.insert(m.positions.end(),
+                         {float(x) / n, float(y) / n - 3, 0.1f * float(std::sin(x + y))});
   for (int y = 0; y < n; ++y)
     for (int x = 0; x < n; ++x) {
       if (x >= 5 && x < 7 && y >= 5 && y < 7) continue;

@@ -10,7 +10,6 @@
 
 #include "pmz/base_codec.hpp"
 #include "pmz/coding.hpp"
-#include "pmz/range_coder.hpp"
 #include "pmz/progressive_mesh.hpp"
 #include "pmz/range_coder.hpp"
 #include "pmz/split_codec.hpp"
@@ -261,7 +260,8 @@ TEST(RangeCoder, MixedValuesAreTheSpecRule) {
   };
   std::mt19937 rng(23);
   constexpr int kFirst = 3, kSecond = 4;
-  auto enc_first = std::make_unique<UIntModel[]>(kFirst), enc_second = std::make_unique<UIntModel[]>(kSecond);
+  auto enc_first = std::make_unique<UIntModel[]>(kFirst),
+       enc_second = std::make_unique<UIntModel[]>(kSecond);
   auto ref_first = std::make_unique<Ref[]>(kFirst), ref_second = std::make_unique<Ref[]>(kSecond);
   std::vector<uint8_t> out;
   std::vector<uint32_t> values, c1, c2;
@@ -269,7 +269,8 @@ TEST(RangeCoder, MixedValuesAreTheSpecRule) {
     RangeEncoder rc(out);
     for (int i = 0; i < 30000; ++i) {
       const uint32_t a = rng() % kFirst, b = rng() % kSecond;
-      const uint32_t x = i % 97 == 0 ? uint32_t(rng()) >> (rng() % 18) : (uint32_t(rng()) >> (24 + a + b)) + (i % 5 == 0 ? 0 : b);
+      const uint32_t x = i % 97 == 0 ? uint32_t(rng()) >> (rng() % 18)
+                                     : (uint32_t(rng()) >> (24 + a + b)) + (i % 5 == 0 ? 0 : b);
       values.push_back(x), c1.push_back(a), c2.push_back(b);
       encode_uint_mixed(rc, enc_first[a], enc_second[b], x);
     }
@@ -316,7 +317,9 @@ TEST(RangeCoder, MixedValuesAreTheSpecRule) {
   EXPECT_TRUE(s.ok);
   // Every model of the coder ends where the reference's does (which bits touched which model).
   auto same = [](const UIntModel& m, const Ref& r) {
-    auto eq = [](Prob x, const SpecModel& y) { return (x & kProbMask) == y.p && (x >> kCountShift) == y.count; };
+    auto eq = [](Prob x, const SpecModel& y) {
+      return (x & kProbMask) == y.p && (x >> kCountShift) == y.count;
+    };
     for (int j = 0; j < 16; ++j)
       if (!eq(m.length[j], r.length[j])) return false;
     for (int j = 0; j < 32; ++j)
@@ -330,7 +333,8 @@ TEST(RangeCoder, MixedValuesAreTheSpecRule) {
   for (int b = 0; b < kSecond; ++b) EXPECT_TRUE(same(enc_second[b], ref_second[b])) << b;
   // And the decoder agrees with both.
   RangeDecoder rd2(out.data(), out.size());
-  auto dec_first = std::make_unique<UIntModel[]>(kFirst), dec_second = std::make_unique<UIntModel[]>(kSecond);
+  auto dec_first = std::make_unique<UIntModel[]>(kFirst),
+       dec_second = std::make_unique<UIntModel[]>(kSecond);
   for (size_t i = 0; i < values.size(); ++i) {
     uint32_t x;
     ASSERT_TRUE(decode_uint_mixed(rd2, dec_first[c1[i]], dec_second[c2[i]], x));
@@ -444,8 +448,16 @@ void for_each_fan(uint32_t max_k, Body body) {
 // below the leading one per n, the rest direct), at the edges of the tree and of the escape;
 // they round-trip; an escape above 17 (n > 32) is corrupt.
 TEST(UIntModel, RoundTripsAndIsTheSpecBinarization) {
-  const uint32_t values[] = {0, 1, 2, 3, 4, 5, 7, 8, 1000, (1u << 13) - 1, 1u << 13, (1u << 14) - 1, 1u << 14,
-                             (1u << 14) + 5, 1u << 15, (1u << 16) + 3, 0x7FFFFFFFu, 0x80000000u, 0xFFFFFFFFu};
+  const uint32_t values[] = {0,           1,
+                             2,           3,
+                             4,           5,
+                             7,           8,
+                             1000,        (1u << 13) - 1,
+                             1u << 13,    (1u << 14) - 1,
+                             1u << 14,    (1u << 14) + 5,
+                             1u << 15,    (1u << 16) + 3,
+                             0x7FFFFFFFu, 0x80000000u,
+                             0xFFFFFFFFu};
   std::vector<uint8_t> bytes, manual;
   {
     RangeEncoder e(bytes), m(manual);
@@ -520,7 +532,8 @@ TEST(UIntModel, RoundTripsAndIsTheSpecBinarization) {
 // bytes of values below 7 equal three tree bits written out by hand (node from 1, most
 // significant first); the escape is the tree's 7 then the uint model.
 TEST(SmallModel, RoundTripsAndIsTheSpecTree) {
-  const uint32_t values[] = {0, 1, 2, 3, 4, 6, 7, 8, 9, 14, 15, 16, 22, 1000, 0xFFFFFFF8u, 0xFFFFFFFEu, 0xFFFFFFFFu};
+  const uint32_t values[] = {0,  1,  2,  3,  4,    6,           7,           8,          9,
+                             14, 15, 16, 22, 1000, 0xFFFFFFF8u, 0xFFFFFFFEu, 0xFFFFFFFFu};
   std::vector<uint8_t> bytes, manual;
   {
     RangeEncoder e(bytes), m(manual);
@@ -563,7 +576,8 @@ TEST(VertexChoiceContext, BitlenQuotientIsBitlenOfTheQuotient) {
     ASSERT_EQ(bitlen_quotient(D, m), bitlen(D / m)) << D << " / " << m;
   }
   for (uint64_t D = 0; D < 300; ++D)
-    for (uint64_t m = 1; m < 300; ++m) ASSERT_EQ(bitlen_quotient(D, m), bitlen(D / m)) << D << " / " << m;
+    for (uint64_t m = 1; m < 300; ++m)
+      ASSERT_EQ(bitlen_quotient(D, m), bitlen(D / m)) << D << " / " << m;
   EXPECT_EQ(bitlen_quotient(UINT64_MAX, 1), 64u);
   EXPECT_EQ(bitlen_quotient(UINT64_MAX, UINT64_MAX), 1u);
 }
@@ -572,35 +586,39 @@ TEST(WedgeSymbols, EveryWedgeRoundTrips) {
   std::mt19937 rng(11);
   WedgeScratch scratch;
   for_each_fan(12, [&](ProgressiveMesh& pm, uint32_t k, int closed) {
-      for (int geometry = 0; geometry < 3; ++geometry) {
-        std::vector<int32_t> coords(size_t(k + 1) * 3, 0);
-        for (auto& c : coords)
-          c = geometry == 0 ? 0 : geometry == 1 ? int32_t(rng() % 16384) : int32_t(rng());
-        std::vector<uint32_t> deg(k + 1);
-        for (auto& d : deg) d = rng() % 9;
-        ASSERT_TRUE(pm.gather_ring(0));
-        ASSERT_EQ(pm.ring().size(), k);
-        ASSERT_EQ(pm.ring_closed(), closed == 1);
-        uint32_t pairs = 0;
-        for (uint32_t a = 0; a <= k; ++a)
-          for (uint32_t b = 0; b <= k; ++b) {
-            const uint32_t ra = a == k ? kNoRank : a, rb = b == k ? kNoRank : b;
-            uint32_t count = 0, rank = 0, ga = 0, gb = 0;
-            const bool valid = closed ? (a < k && b < k && a != b)
-                                      : !(ra == kNoRank && rb == kNoRank) && (ra == kNoRank || rb == kNoRank || ra < rb);
-            ASSERT_EQ(wedge_symbols(coords.data(), deg.data(), 0, pm, ra, rb, count, rank, scratch), valid);
-            if (!valid) continue;
-            ++pairs;
-            ASSERT_TRUE(wedge_ranks(coords.data(), deg.data(), 0, pm, count, rank, ga, gb, scratch))
-                << "k " << k << " closed " << closed << " count " << count << " rank " << rank;
-            EXPECT_EQ(ga, ra);
-            EXPECT_EQ(gb, rb);
-            // Out of range symbols are refused.
-            EXPECT_FALSE(wedge_ranks(coords.data(), deg.data(), 0, pm, closed ? k - 1 : k, 0, ga, gb, scratch));
-            EXPECT_FALSE(wedge_ranks(coords.data(), deg.data(), 0, pm, count, k + 1, ga, gb, scratch));
-          }
-        EXPECT_EQ(pairs, closed ? k * (k - 1) : (k + 1) * k / 2 + k);
-      }
+    for (int geometry = 0; geometry < 3; ++geometry) {
+      std::vector<int32_t> coords(size_t(k + 1) * 3, 0);
+      for (auto& c : coords)
+        c = geometry == 0 ? 0 : geometry == 1 ? int32_t(rng() % 16384) : int32_t(rng());
+      std::vector<uint32_t> deg(k + 1);
+      for (auto& d : deg) d = rng() % 9;
+      ASSERT_TRUE(pm.gather_ring(0));
+      ASSERT_EQ(pm.ring().size(), k);
+      ASSERT_EQ(pm.ring_closed(), closed == 1);
+      uint32_t pairs = 0;
+      for (uint32_t a = 0; a <= k; ++a)
+        for (uint32_t b = 0; b <= k; ++b) {
+          const uint32_t ra = a == k ? kNoRank : a, rb = b == k ? kNoRank : b;
+          uint32_t count = 0, rank = 0, ga = 0, gb = 0;
+          const bool valid = closed ? (a < k && b < k && a != b)
+                                    : !(ra == kNoRank && rb == kNoRank) &&
+                                          (ra == kNoRank || rb == kNoRank || ra < rb);
+          ASSERT_EQ(wedge_symbols(coords.data(), deg.data(), 0, pm, ra, rb, count, rank, scratch),
+                    valid);
+          if (!valid) continue;
+          ++pairs;
+          ASSERT_TRUE(wedge_ranks(coords.data(), deg.data(), 0, pm, count, rank, ga, gb, scratch))
+              << "k " << k << " closed " << closed << " count " << count << " rank " << rank;
+          EXPECT_EQ(ga, ra);
+          EXPECT_EQ(gb, rb);
+          // Out of range symbols are refused.
+          EXPECT_FALSE(wedge_ranks(coords.data(), deg.data(), 0, pm, closed ? k - 1 : k, 0, ga, gb,
+                                   scratch));
+          EXPECT_FALSE(
+              wedge_ranks(coords.data(), deg.data(), 0, pm, count, k + 1, ga, gb, scratch));
+        }
+      EXPECT_EQ(pairs, closed ? k * (k - 1) : (k + 1) * k / 2 + k);
+    }
   });
 }
 
@@ -613,12 +631,17 @@ TEST(WedgeSymbols, EveryWedgeRoundTrips) {
 // multiplication, not by the codec's 12 / m weights), highest first; ties by smaller j.
 // Returns the candidates j in order; confident: the rank's context bit (n < 2, or the second
 // highest score <= 0, or the highest over twice the second; scores G m_a m_b for G >= 0).
-std::vector<uint32_t> spec_wedge_order(const std::vector<int32_t>& coords, const std::vector<uint32_t>& deg,
-                                       const ProgressiveMesh& pm, uint32_t count, bool& confident) {
+std::vector<uint32_t> spec_wedge_order(const std::vector<int32_t>& coords,
+                                       const std::vector<uint32_t>& deg, const ProgressiveMesh& pm,
+                                       uint32_t count, bool& confident) {
   const uint32_t k = uint32_t(pm.ring().size());
   const bool closed = pm.ring_closed();
-  auto vertex = [&](uint32_t r) { return pm.ring()[(r + pm.ring_start()) % k]; };  // canonical rank r
-  auto e = [&](uint32_t r, int a) { return WedgeScoreSigned(coords[size_t(vertex(r)) * 3 + a]) - coords[a]; };
+  auto vertex = [&](uint32_t r) {
+    return pm.ring()[(r + pm.ring_start()) % k];
+  };  // canonical rank r
+  auto e = [&](uint32_t r, int a) {
+    return WedgeScoreSigned(coords[size_t(vertex(r)) * 3 + a]) - coords[a];
+  };
   auto len2 = [&](uint32_t r) { return e(r, 0) * e(r, 0) + e(r, 1) * e(r, 1) + e(r, 2) * e(r, 2); };
   auto weight = [&](bool has, uint32_t r) -> WedgeScoreSigned {
     if (!has) return 2;
@@ -640,7 +663,10 @@ std::vector<uint32_t> spec_wedge_order(const std::vector<int32_t>& coords, const
       if (has_b) E += e(rb, a);
       E2 += E * E;
     }
-    const WedgeScoreSigned T = has_a && has_b ? 2 * (len2(ra) + len2(rb)) : has_a ? 4 * len2(ra) : has_b ? 4 * len2(rb) : 0;
+    const WedgeScoreSigned T = has_a && has_b ? 2 * (len2(ra) + len2(rb))
+                               : has_a        ? 4 * len2(ra)
+                               : has_b        ? 4 * len2(rb)
+                                              : 0;
     const WedgeScoreSigned c = count;
     G[j] = E2 + 4 * c * S - c * c * T;
     M[j] = weight(has_a, ra) * weight(has_b, rb);
@@ -653,7 +679,8 @@ std::vector<uint32_t> spec_wedge_order(const std::vector<int32_t>& coords, const
     if (px) return G[x] * M[x] > G[y] * M[y];
     return G[x] * M[y] > G[y] * M[x];  // G[x] / M[x] > G[y] / M[y], M > 0
   });
-  confident = n < 2 || G[order[1]] <= 0 || G[order[0]] * M[order[0]] > 2 * (G[order[1]] * M[order[1]]);
+  confident =
+      n < 2 || G[order[1]] <= 0 || G[order[0]] * M[order[0]] > 2 * (G[order[1]] * M[order[1]]);
   return order;
 }
 
@@ -666,54 +693,62 @@ TEST(WedgeSymbols, OrderIsTheSpecFormula) {
   uint64_t negative = 0, weighted = 0;
   bool confident_seen[2] = {false, false};
   for_each_fan(10, [&](ProgressiveMesh& pm, uint32_t k, int closed) {
-      ASSERT_TRUE(pm.gather_ring(0));
-      for (int geometry = 0; geometry < 5; ++geometry) {
-        std::vector<int32_t> coords(size_t(k + 1) * 3);
-        for (auto& c : coords)
-          c = geometry == 0   ? int32_t(rng() % 5)  // many ties
-              : geometry == 1 ? int32_t(rng() % 16384)
-              : geometry == 2 ? int32_t(rng())
-              : geometry == 3 ? (rng() & 1 ? INT32_MAX : INT32_MIN)
-                              : int32_t(rng() % 3) + (rng() % 3 == 0 ? 1000 : 0);  // some far, some near
-        std::vector<uint32_t> deg(k + 1);
-        for (auto& d : deg) d = rng() % 9;
-        // The decoder's way: the bounding box's largest side as WedgeScratch::extent (64-bit
-        // scores without the per-ring check when it is small enough): the same order.
-        WedgeScratch bounded;
-        bounded.extent = 0;
-        for (int a = 0; a < 3; ++a) {
-          int64_t lo = INT64_MAX, hi = INT64_MIN;
-          for (size_t i = size_t(a); i < coords.size(); i += 3) lo = std::min<int64_t>(lo, coords[i]), hi = std::max<int64_t>(hi, coords[i]);
-          bounded.extent = std::max<uint64_t>(bounded.extent, uint64_t(hi - lo));
-        }
-        const uint32_t max_count = closed ? k - 2 : k - 1;
-        for (uint32_t count = 0; count <= max_count; ++count) {
-          bool confident;
-          const std::vector<uint32_t> order = spec_wedge_order(coords, deg, pm, count, confident);
-          const uint32_t n = uint32_t(order.size());
-          for (uint32_t rank = 0; rank < n; ++rank) {
-            const uint32_t j = order[rank];
-            const uint32_t ra = closed ? j : (j == 0 ? kNoRank : j - 1);
-            const uint32_t rb = closed ? (j + count + 1) % k : (j + count == k ? kNoRank : j + count);
-            uint32_t ga, gb, gc, gr;
-            ASSERT_TRUE(wedge_ranks(coords.data(), deg.data(), 0, pm, count, rank, ga, gb, scratch));
-            EXPECT_EQ(scratch.confident, confident) << "k " << k << " closed " << closed << " count " << count;
-            confident_seen[confident] = true;
-            EXPECT_EQ(ga, ra) << "k " << k << " closed " << closed << " count " << count << " rank " << rank;
-            EXPECT_EQ(gb, rb) << "k " << k << " closed " << closed << " count " << count << " rank " << rank;
-            uint32_t ba, bb;
-            ASSERT_TRUE(wedge_ranks(coords.data(), deg.data(), 0, pm, count, rank, ba, bb, bounded));
-            EXPECT_EQ(ba, ra);
-            EXPECT_EQ(bb, rb);
-            EXPECT_EQ(bounded.confident, confident);
-            ASSERT_TRUE(wedge_symbols(coords.data(), deg.data(), 0, pm, ra, rb, gc, gr, scratch));
-            EXPECT_EQ(gc, count);
-            EXPECT_EQ(gr, rank);
-          }
-          negative += !scratch.narrow ? 0 : std::count_if(scratch.score64.begin(), scratch.score64.begin() + n, [](int64_t x) { return x < 0; });
-          weighted += n > 1;
-        }
+    ASSERT_TRUE(pm.gather_ring(0));
+    for (int geometry = 0; geometry < 5; ++geometry) {
+      std::vector<int32_t> coords(size_t(k + 1) * 3);
+      for (auto& c : coords)
+        c = geometry == 0   ? int32_t(rng() % 5)  // many ties
+            : geometry == 1 ? int32_t(rng() % 16384)
+            : geometry == 2 ? int32_t(rng())
+            : geometry == 3
+                ? (rng() & 1 ? INT32_MAX : INT32_MIN)
+                : int32_t(rng() % 3) + (rng() % 3 == 0 ? 1000 : 0);  // some far, some near
+      std::vector<uint32_t> deg(k + 1);
+      for (auto& d : deg) d = rng() % 9;
+      // The decoder's way: the bounding box's largest side as WedgeScratch::extent (64-bit
+      // scores without the per-ring check when it is small enough): the same order.
+      WedgeScratch bounded;
+      bounded.extent = 0;
+      for (int a = 0; a < 3; ++a) {
+        int64_t lo = INT64_MAX, hi = INT64_MIN;
+        for (size_t i = size_t(a); i < coords.size(); i += 3)
+          lo = std::min<int64_t>(lo, coords[i]), hi = std::max<int64_t>(hi, coords[i]);
+        bounded.extent = std::max<uint64_t>(bounded.extent, uint64_t(hi - lo));
       }
+      const uint32_t max_count = closed ? k - 2 : k - 1;
+      for (uint32_t count = 0; count <= max_count; ++count) {
+        bool confident;
+        const std::vector<uint32_t> order = spec_wedge_order(coords, deg, pm, count, confident);
+        const uint32_t n = uint32_t(order.size());
+        for (uint32_t rank = 0; rank < n; ++rank) {
+          const uint32_t j = order[rank];
+          const uint32_t ra = closed ? j : (j == 0 ? kNoRank : j - 1);
+          const uint32_t rb = closed ? (j + count + 1) % k : (j + count == k ? kNoRank : j + count);
+          uint32_t ga, gb, gc, gr;
+          ASSERT_TRUE(wedge_ranks(coords.data(), deg.data(), 0, pm, count, rank, ga, gb, scratch));
+          EXPECT_EQ(scratch.confident, confident)
+              << "k " << k << " closed " << closed << " count " << count;
+          confident_seen[confident] = true;
+          EXPECT_EQ(ga, ra) << "k " << k << " closed " << closed << " count " << count << " rank "
+                            << rank;
+          EXPECT_EQ(gb, rb) << "k " << k << " closed " << closed << " count " << count << " rank "
+                            << rank;
+          uint32_t ba, bb;
+          ASSERT_TRUE(wedge_ranks(coords.data(), deg.data(), 0, pm, count, rank, ba, bb, bounded));
+          EXPECT_EQ(ba, ra);
+          EXPECT_EQ(bb, rb);
+          EXPECT_EQ(bounded.confident, confident);
+          ASSERT_TRUE(wedge_symbols(coords.data(), deg.data(), 0, pm, ra, rb, gc, gr, scratch));
+          EXPECT_EQ(gc, count);
+          EXPECT_EQ(gr, rank);
+        }
+        negative += !scratch.narrow
+                        ? 0
+                        : std::count_if(scratch.score64.begin(), scratch.score64.begin() + n,
+                                        [](int64_t x) { return x < 0; });
+        weighted += n > 1;
+      }
+    }
   });
   EXPECT_GT(negative, 100u);  // the negative branch is exercised
   EXPECT_GT(weighted, 100u);
@@ -722,10 +757,11 @@ TEST(WedgeSymbols, OrderIsTheSpecFormula) {
 
 // A hand-computed case pinning each term: closed ring of 4 around v = 0 at e = (10,0,0),
 // (0,1,0), (-3,0,0), (0,-1,0) (ranks 0..3), count 1. Candidate j: a = j, interior j + 1, b = j + 2.
-//  j=0: E = 2 (0,1,0) + (10,0,0) + (-3,0,0) = (7,2,0): |E|^2 53; S 1; T 2 (100 + 9) = 218; G = 53 + 4 - 218 = -161
-//  j=1: E = 2 (-3,0,0) + (0,1,0) + (0,-1,0) = (-6,0,0): 36; S 9; T 2 (1 + 1) = 4; G = 36 + 36 - 4 = 68
-//  j=2: E = 2 (0,-1,0) + (-3,0,0) + (10,0,0) = (7,-2,0): 53; S 1; T 218; G = -161
-//  j=3: E = 2 (10,0,0) + (0,-1,0) + (0,1,0) = (20,0,0): 400; S 100; T 4; G = 400 + 400 - 4 = 796
+//  j=0: E = 2 (0,1,0) + (10,0,0) + (-3,0,0) = (7,2,0): |E|^2 53; S 1; T 2 (100 + 9) = 218; G = 53 +
+//  4 - 218 = -161 j=1: E = 2 (-3,0,0) + (0,1,0) + (0,-1,0) = (-6,0,0): 36; S 9; T 2 (1 + 1) = 4; G
+//  = 36 + 36 - 4 = 68 j=2: E = 2 (0,-1,0) + (-3,0,0) + (10,0,0) = (7,-2,0): 53; S 1; T 218; G =
+//  -161 j=3: E = 2 (10,0,0) + (0,-1,0) + (0,1,0) = (20,0,0): 400; S 100; T 4; G = 400 + 400 - 4 =
+//  796
 // Degrees by rank 5, 4, 6, 4: weights m = 3, 4, 2, 4 (r = 12 / m = 4, 3, 6, 3). Codec keys:
 // j=0 (ends ranks 0, 2): -161 * 4 * 6 = -3864; j=1 (1, 3): 68 * 4 * 4 = 1088; j=2 (2, 0): -3864;
 // j=3 (3, 1): 796 * 4 * 4 = 12736. Order 3, 1, 0, 2 (0 and 2 tie: smaller j first).
@@ -736,7 +772,8 @@ TEST(WedgeSymbols, HandComputedScore) {
   std::vector<int32_t> coords(5 * 3, 0);
   const int32_t e[4][3] = {{10, 0, 0}, {0, 1, 0}, {-3, 0, 0}, {0, -1, 0}};
   for (uint32_t r = 0; r < 4; ++r)
-    for (int a = 0; a < 3; ++a) coords[size_t(pm.ring()[(r + pm.ring_start()) % 4]) * 3 + a] = e[r][a];
+    for (int a = 0; a < 3; ++a)
+      coords[size_t(pm.ring()[(r + pm.ring_start()) % 4]) * 3 + a] = e[r][a];
   std::vector<uint32_t> deg(5, 6);
   const uint32_t want_deg[4] = {5, 4, 6, 4};
   for (uint32_t r = 0; r < 4; ++r) deg[pm.ring()[(r + pm.ring_start()) % 4]] = want_deg[r];
@@ -747,7 +784,8 @@ TEST(WedgeSymbols, HandComputedScore) {
     ASSERT_TRUE(wedge_ranks(coords.data(), deg.data(), 0, pm, 1, rank, ga, gb, scratch));
     EXPECT_EQ(ga, want[rank]) << rank;
   }
-  const int64_t want_keys[4] = {-3864, 1088, -3864, 12736};  // negative G times r_a r_b = 144 / (m_a m_b)
+  const int64_t want_keys[4] = {-3864, 1088, -3864,
+                                12736};  // negative G times r_a r_b = 144 / (m_a m_b)
   for (uint32_t j = 0; j < 4; ++j) EXPECT_EQ(scratch.score64[j], want_keys[j]) << j;
   EXPECT_TRUE(scratch.confident);  // 12736 > 2 * 1088
   // Degrees 5 -> 4 at rank 2 (weight 4): j = 1's key 68 * 4 * 4 unchanged, j = 2's -161 * 144 / 12.
@@ -797,8 +835,8 @@ uint32_t half_octave(UInt128 x) {  // min(2 bitlen(x) + the bit below the leadin
   return std::min(2 * b + h, 41u);
 }
 
-Expected predict(const std::vector<int32_t>& c, const std::vector<uint32_t>& R, const std::vector<uint32_t>& K,
-                 uint32_t curvature, uint32_t fine) {
+Expected predict(const std::vector<int32_t>& c, const std::vector<uint32_t>& R,
+                 const std::vector<uint32_t>& K, uint32_t curvature, uint32_t fine) {
   Expected e;
   const size_t m = R.size();
   const uint32_t v = R[0];
@@ -806,14 +844,16 @@ Expected predict(const std::vector<int32_t>& c, const std::vector<uint32_t>& R, 
   for (int a = 0; a < 3; ++a) {
     I128 S = C(v, a);
     for (uint32_t w : R) S += C(w, a);
-    e.p[a] = int64_t(floor_div(2 * S + I128(m + 1), 2 * I128(m + 1)));  // floor((S + floor(n/2)) / n)
+    e.p[a] =
+        int64_t(floor_div(2 * S + I128(m + 1), 2 * I128(m + 1)));  // floor((S + floor(n/2)) / n)
   }
   I128 N[3] = {0, 0, 0};
   for (size_t i = 0; i < m; ++i) {
     const uint32_t x = R[i], y = R[(i + 1) % m];
     const I128 dx[3] = {C(x, 0) - C(v, 0), C(x, 1) - C(v, 1), C(x, 2) - C(v, 2)};
     const I128 dy[3] = {C(y, 0) - C(v, 0), C(y, 1) - C(v, 1), C(y, 2) - C(v, 2)};
-    for (int a = 0; a < 3; ++a) N[a] += dx[(a + 1) % 3] * dy[(a + 2) % 3] - dx[(a + 2) % 3] * dy[(a + 1) % 3];
+    for (int a = 0; a < 3; ++a)
+      N[a] += dx[(a + 1) % 3] * dy[(a + 2) % 3] - dx[(a + 2) % 3] * dy[(a + 1) % 3];
   }
   uint32_t bits = 0;
   while (bits < 128 && ((mag(N[0]) | mag(N[1]) | mag(N[2])) >> bits) != 0) ++bits;
@@ -879,13 +919,14 @@ TEST(PositionPrediction, IsTheSpecFormula) {
     const int shift = int(rng() % 32);
     const int kind = trial % 7;
     for (auto& c : coords)
-      c = kind == 0 ? (rng() & 1 ? INT32_MAX : INT32_MIN)
+      c = kind == 0   ? (rng() & 1 ? INT32_MAX : INT32_MIN)
           : kind == 1 ? int32_t(rng() % 16384)
           : kind == 2 ? int32_t(rng() % 3)  // ties in |n|, zero normals
                       : int32_t(rng()) >> shift;
     if (kind == 3) {  // on a plane z = x + 2y
       for (uint32_t w = 0; w < nv; ++w)
-        coords[w * 3 + 2] = int32_t(uint32_t(coords[w * 3]) + 2u * uint32_t(coords[w * 3 + 1]));  // modulo 2^32
+        coords[w * 3 + 2] =
+            int32_t(uint32_t(coords[w * 3]) + 2u * uint32_t(coords[w * 3 + 1]));  // modulo 2^32
     }
     std::vector<uint32_t> R(m), K;
     for (uint32_t i = 0; i < m; ++i) R[i] = i;
@@ -918,13 +959,16 @@ TEST(PositionPrediction, IsTheSpecFormula) {
     // Residuals of a vertex near the prediction, then back: the normal axis from the tangent
     // plane through p (rounded half up), everything modulo 2^32.
     int32_t cu[3], r[3], back[3];
-    for (int a = 0; a < 3; ++a) cu[a] = int32_t(uint32_t(e.p[a]) + uint32_t(int32_t(rng()) >> (rng() % 32)));
+    for (int a = 0; a < 3; ++a)
+      cu[a] = int32_t(uint32_t(e.p[a]) + uint32_t(int32_t(rng()) >> (rng() % 32)));
     position_residuals(pp, cu, r);
     const int A = e.axis[0], B = e.axis[1], Z = e.axis[2];
     EXPECT_EQ(r[0], int32_t(uint32_t(cu[A]) - uint32_t(e.p[A])));
     EXPECT_EQ(r[1], int32_t(uint32_t(cu[B]) - uint32_t(e.p[B])));
-    const int64_t pz = e.n[Z] == 0 ? e.p[Z]
-                                   : e.p[Z] - spec::round_half_up(spec::I128(e.n[A]) * r[0] + spec::I128(e.n[B]) * r[1], e.n[Z]);
+    const int64_t pz =
+        e.n[Z] == 0 ? e.p[Z]
+                    : e.p[Z] - spec::round_half_up(
+                                   spec::I128(e.n[A]) * r[0] + spec::I128(e.n[B]) * r[1], e.n[Z]);
     EXPECT_EQ(r[2], int32_t(uint32_t(cu[Z]) - uint32_t(pz))) << trial;
     position_from_residuals(pp, r, back);
     for (int a = 0; a < 3; ++a) EXPECT_EQ(back[a], cu[a]) << trial;
@@ -944,7 +988,7 @@ TEST(PositionPrediction, PlaneStepRoundsHalfUp) {
   EXPECT_EQ(normal_axis_prediction(pp, 2, 0), 29);
   EXPECT_EQ(normal_axis_prediction(pp, -2, 0), 30);
   EXPECT_EQ(normal_axis_prediction(pp, -3, 0), 31);  // -0.75 -> -1
-  pp.n[2] = -4;  // a negative normal component flips the step
+  pp.n[2] = -4;                                      // a negative normal component flips the step
   EXPECT_EQ(normal_axis_prediction(pp, 1, 1), 31);
   EXPECT_EQ(normal_axis_prediction(pp, 2, 0), 30);   // 2 / -4 = -0.5 rounds up to 0
   EXPECT_EQ(normal_axis_prediction(pp, -2, 0), 29);  // -2 / -4 = 0.5 rounds up to 1
@@ -960,7 +1004,8 @@ TEST(PositionPrediction, PlaneStepRoundsHalfUp) {
 // whatever the tangent residuals; with curvature 0 the prediction is the v-twice centroid.
 TEST(PositionPrediction, FlatRingPredictsTheNormalAxisExactly) {
   // Plane z = 3 (normal along z); v = 0 at the origin of the fan, ring around it.
-  std::vector<int32_t> coords = {0, 0, 3, 10, 0, 3, 7, 7, 3, 0, 10, 3, -7, 7, 3, -10, 0, 3, 0, -10, 3};
+  std::vector<int32_t> coords = {0, 0,  3, 10, 0,   3, 7, 7, 3,   0, 10,
+                                 3, -7, 7, 3,  -10, 0, 3, 0, -10, 3};
   std::vector<uint32_t> R = {0, 1, 2, 3, 4}, K = {1, 2, 3, 4, 5, 6};
   PositionPrediction pp;
   predict_position(coords.data(), R, K, 8, 8, pp);
@@ -1039,7 +1084,10 @@ TEST(WedgeSymbols, OrderMatchesSpecReference) {
       for (int geometry = 0; geometry < 4; ++geometry) {
         std::vector<int32_t> coords(size_t(k + 1) * 3, 0);
         for (auto& c : coords)
-          c = geometry == 0 ? 0 : geometry == 1 ? int32_t(rng() % 16384) : geometry == 2 ? int32_t(rng() % 5) : int32_t(rng());
+          c = geometry == 0   ? 0
+              : geometry == 1 ? int32_t(rng() % 16384)
+              : geometry == 2 ? int32_t(rng() % 5)
+                              : int32_t(rng());
         std::vector<uint32_t> deg(k + 1);
         for (auto& d : deg) d = rng() % 9;
         ASSERT_TRUE(pm.gather_ring(0));
@@ -1051,11 +1099,15 @@ TEST(WedgeSymbols, OrderMatchesSpecReference) {
           for (uint32_t rank = 0; rank < n; ++rank) {
             const uint32_t j = order[rank];
             const uint32_t ra = closed ? j : (j == 0 ? kNoRank : j - 1);
-            const uint32_t rb = closed ? (j + count + 1) % k : (j + count == k ? kNoRank : j + count);
+            const uint32_t rb =
+                closed ? (j + count + 1) % k : (j + count == k ? kNoRank : j + count);
             uint32_t ga = 0, gb = 0, gc = 0, gr = 0;
-            ASSERT_TRUE(wedge_ranks(coords.data(), deg.data(), 0, pm, count, rank, ga, gb, scratch));
-            ASSERT_EQ(scratch.confident, confident) << "k " << k << " closed " << closed << " count " << count;
-            ASSERT_EQ(ga, ra) << "k " << k << " closed " << closed << " count " << count << " rank " << rank;
+            ASSERT_TRUE(
+                wedge_ranks(coords.data(), deg.data(), 0, pm, count, rank, ga, gb, scratch));
+            ASSERT_EQ(scratch.confident, confident)
+                << "k " << k << " closed " << closed << " count " << count;
+            ASSERT_EQ(ga, ra) << "k " << k << " closed " << closed << " count " << count << " rank "
+                              << rank;
             ASSERT_EQ(gb, rb);
             ASSERT_TRUE(wedge_symbols(coords.data(), deg.data(), 0, pm, ra, rb, gc, gr, scratch));
             ASSERT_EQ(gc, count);
@@ -1102,13 +1154,15 @@ std::vector<int32_t> random_coords(std::mt19937& rng, size_t n, uint32_t bits) {
 // The spec's umbrella class of w from its ring in pm (spec "Vertex choice"), in exact integers:
 // c' = c >> shift, e = c'[x] - c'[w] over the ring, D = sum of e, L = sum of |e_x| + |e_y| +
 // |e_z|, both mod 2^32 (D signed); 0 if 64 |D|^2 < L^2, 1 if 16 |D|^2 < L^2, else 2.
-uint32_t spec_class(ProgressiveMesh& pm, const std::vector<int32_t>& c, uint32_t w, uint32_t shift) {
+uint32_t spec_class(ProgressiveMesh& pm, const std::vector<int32_t>& c, uint32_t w,
+                    uint32_t shift) {
   int64_t d[3] = {0, 0, 0};
   uint64_t l = 0;
   if (pm.gather_ring(w))
     for (uint32_t x : pm.ring())
       for (int a = 0; a < 3; ++a) {
-        const int64_t e = int64_t(c[size_t(x) * 3 + a] >> shift) - int64_t(c[size_t(w) * 3 + a] >> shift);
+        const int64_t e =
+            int64_t(c[size_t(x) * 3 + a] >> shift) - int64_t(c[size_t(w) * 3 + a] >> shift);
         d[a] += e;
         l += uint64_t(e < 0 ? -e : e);
       }
@@ -1165,8 +1219,10 @@ TEST(VertexChoice, DegreesAndUmbrellaSumsAreTheRings) {
         for (uint32_t w = 0; w < pm.vertex_count(); ++w) {
           const uint32_t want = spec_class(pm, coords, w, shift);
           ASSERT_TRUE(pm.gather_ring(w));
-          ASSERT_EQ(choice.degree(w), pm.ring().size()) << "open " << open << " step " << step << " w " << w;
-          ASSERT_EQ(choice.shape(w), want) << "bits " << bits << " open " << open << " step " << step << " w " << w;
+          ASSERT_EQ(choice.degree(w), pm.ring().size())
+              << "open " << open << " step " << step << " w " << w;
+          ASSERT_EQ(choice.shape(w), want)
+              << "bits " << bits << " open " << open << " step " << step << " w " << w;
           ++seen[want];
         }
       }
@@ -1271,7 +1327,8 @@ TEST(VertexChoice, CandidatesAndContextsAreTheSpecFormula) {
         continue;
       }
       const bool hit = std::find(vs.begin(), vs.end(), cand[i]) != vs.end();
-      want.push_back(spec_context(cand.size() - i, left, near, choice.degree(cand[i]), spec_class(pm, coords, cand[i], 0))
+      want.push_back(spec_context(cand.size() - i, left, near, choice.degree(cand[i]),
+                                  spec_class(pm, coords, cand[i], 0))
                          << 1 |
                      (hit ? 1u : 0u));
       left -= hit;
@@ -1308,12 +1365,13 @@ TEST(VertexChoice, AdjacentVerticesInAGroupAreRefused) {
   const std::vector<int32_t> coords(6 * 3, 0);
   VertexChoice choice;
   choice.reset(pm, coords.data(), 14);
-  for (const std::vector<uint32_t>& vs : {std::vector<uint32_t>{0, 2}, std::vector<uint32_t>{2, 4},
-                                          std::vector<uint32_t>{0, 0}}) {
+  for (const std::vector<uint32_t>& vs :
+       {std::vector<uint32_t>{0, 2}, std::vector<uint32_t>{2, 4}, std::vector<uint32_t>{0, 0}}) {
     choice.start_group();
     std::vector<uint32_t> bits;
     bool near = true;
-    EXPECT_FALSE(choice_bits(choice, pm, pm.vertex_count(), vs, bits, near)) << vs[0] << " " << vs[1];
+    EXPECT_FALSE(choice_bits(choice, pm, pm.vertex_count(), vs, bits, near))
+        << vs[0] << " " << vs[1];
   }
   choice.start_group();
   std::vector<uint32_t> bits;
@@ -1356,14 +1414,16 @@ TEST(VertexChoice, ExclusionLagsAndAViolatingStreamIsRefused) {
   auto decode = [&](const std::vector<uint32_t>& bits, uint32_t size, std::vector<uint32_t>& got) {
     std::vector<uint8_t> payload;
     SplitModels em, dm;
-    std::vector<SplitSymbols> codes(size, SplitSymbols{0, 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}});
+    std::vector<SplitSymbols> codes(size,
+                                    SplitSymbols{0, 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}});
     encode_split_chunk({{size, false}}, bits, codes.data(), codes.size(), em, payload);
     SplitChunkReader r;
     EXPECT_TRUE(r.open(payload.data(), payload.size(), size, dm, error)) << error;
     VertexChoice dec;
     dec.reset(pm, coords.data(), 14);
     std::vector<SplitSymbols> out;
-    return r.group_symbols(dec, pm, out, [](SplitSymbols&) {}, &got);
+    return r.group_symbols(
+        dec, pm, out, [](SplitSymbols&) {}, &got);
   };
   {  // the independent group: coded and decoded back
     VertexChoice enc;
@@ -1396,14 +1456,16 @@ TEST(VertexChoice, ExclusionLagsAndAViolatingStreamIsRefused) {
   naive.begin_scan(false, limit, uint32_t(bad.size()));
   std::vector<uint32_t> bits;
   uint32_t last_ctx = 0;
-  EXPECT_EQ(naive.scan(&pm, uint32_t(bad.size()), [&](uint32_t w, uint32_t ctx) {
-    const bool hit = std::find(bad.begin(), bad.end(), w) != bad.end();
-    EXPECT_NE(w, 80u);  // excluded: never offered
-    bits.push_back(ctx << 1 | (hit ? 1u : 0u));
-    last_ctx = ctx;
-    return hit ? 1 : 0;
-  }), 0);
-  EXPECT_EQ(bits.size(), 77u);  // 0 .. 79 less 70, 71, 79 (in the ring of 1 = (8, 8))
+  EXPECT_EQ(naive.scan(&pm, uint32_t(bad.size()),
+                       [&](uint32_t w, uint32_t ctx) {
+                         const bool hit = std::find(bad.begin(), bad.end(), w) != bad.end();
+                         EXPECT_NE(w, 80u);  // excluded: never offered
+                         bits.push_back(ctx << 1 | (hit ? 1u : 0u));
+                         last_ctx = ctx;
+                         return hit ? 1 : 0;
+                       }),
+            0);
+  EXPECT_EQ(bits.size(), 77u);        // 0 .. 79 less 70, 71, 79 (in the ring of 1 = (8, 8))
   bits.push_back(last_ctx << 1 | 1);  // the naive writer's bit for 80
   std::vector<uint32_t> got;
   EXPECT_FALSE(decode(bits, uint32_t(bad.size()), got));
@@ -1415,8 +1477,9 @@ TEST(VertexChoice, ExclusionLagsAndAViolatingStreamIsRefused) {
 // d = 0.
 TEST(VertexChoice, ModelPriorsAreTheSpecTable) {
   const SplitModels m;
-  const uint32_t want[21] = {16384, 10923, 21846, 27307, 30038, 31403, 31744, 31744, 31744, 31744, 31744,
-                             31744, 31744, 31744, 31744, 31744, 31744, 31744, 31744, 31744, 31744};
+  const uint32_t want[21] = {16384, 10923, 21846, 27307, 30038, 31403, 31744,
+                             31744, 31744, 31744, 31744, 31744, 31744, 31744,
+                             31744, 31744, 31744, 31744, 31744, 31744, 31744};
   ASSERT_EQ(kChoiceContexts, 21u * 2 * 9 * 3);  // density x near x degree x umbrella class
   for (uint32_t c = 0; c < kChoiceContexts; ++c) {
     const uint32_t d = c / (2 * 9 * 3);
@@ -1444,7 +1507,8 @@ void base_round_trip(const std::vector<int32_t>& coords, const std::vector<uint3
   std::vector<uint32_t> given_of;
   BaseMesh enc, dec;
   std::string error;
-  ASSERT_TRUE(encode_base(coords.data(), n, faces.data(), fn, stream, given_of, enc, error)) << error;
+  ASSERT_TRUE(encode_base(coords.data(), n, faces.data(), fn, stream, given_of, enc, error))
+      << error;
   ASSERT_EQ(decode_base(stream.data(), stream.size(), n, fn, dec, error), BaseResult::ok) << error;
   EXPECT_EQ(dec.coords, enc.coords);
   EXPECT_EQ(dec.faces, enc.faces);
@@ -1458,7 +1522,8 @@ void base_round_trip(const std::vector<int32_t>& coords, const std::vector<uint3
   std::vector<Tri> want, got;
   for (uint32_t f = 0; f < fn; ++f) {
     want.push_back(rotated(faces[f * 3], faces[f * 3 + 1], faces[f * 3 + 2]));
-    got.push_back(rotated(given_of[dec.faces[f * 3]], given_of[dec.faces[f * 3 + 1]], given_of[dec.faces[f * 3 + 2]]));
+    got.push_back(rotated(given_of[dec.faces[f * 3]], given_of[dec.faces[f * 3 + 1]],
+                          given_of[dec.faces[f * 3 + 2]]));
   }
   std::sort(want.begin(), want.end());
   std::sort(got.begin(), got.end());
@@ -1576,7 +1641,8 @@ TEST(BaseCodec, HandCodedStreamIsTheSpec) {
       // predicts vertex 3 exactly (so the writer keeps that predictor).
       rc.bit(face, 1);
       rc.bit(is_new[2], 1);
-      for (int a = 0; a < 3; ++a) encode_uint(rc, par[a], zigzag_encode(c[3][a] - (c[0][a] + c[1][a] - c[2][a])));
+      for (int a = 0; a < 3; ++a)
+        encode_uint(rc, par[a], zigzag_encode(c[3][a] - (c[0][a] + c[1][a] - c[2][a])));
     }
     rc.finish();
     return out;
@@ -1586,12 +1652,14 @@ TEST(BaseCodec, HandCodedStreamIsTheSpec) {
   std::string error;
   ASSERT_EQ(decode_base(good.data(), good.size(), 4, 2, m, error), BaseResult::ok) << error;
   EXPECT_EQ(m.faces, (std::vector<uint32_t>{0, 1, 2, 1, 0, 3}));
-  EXPECT_EQ(m.coords, (std::vector<int32_t>{100, 200, 300, 110, 190, 300, 105, 210, 301, 105, 180, 299}));
+  EXPECT_EQ(m.coords,
+            (std::vector<int32_t>{100, 200, 300, 110, 190, 300, 105, 210, 301, 105, 180, 299}));
   // The writer codes these very bytes.
   std::vector<uint8_t> stream;
   std::vector<uint32_t> given_of;
   BaseMesh enc;
-  ASSERT_TRUE(encode_base(m.coords.data(), 4, m.faces.data(), 2, stream, given_of, enc, error)) << error;
+  ASSERT_TRUE(encode_base(m.coords.data(), 4, m.faces.data(), 2, stream, given_of, enc, error))
+      << error;
   EXPECT_EQ(stream, good);
   EXPECT_EQ(decode_base(bad.data(), bad.size(), 4, 2, m, error), BaseResult::corrupt);
   EXPECT_NE(error.find("malformed"), std::string::npos) << error;
@@ -1617,7 +1685,8 @@ TEST(SplitChunk, HandCodedPayloadIsTheSpecOrder) {
   ASSERT_TRUE(pm.build(kN * kN, faces.data(), faces.size() / 3, error)) << error;
   const std::vector<uint32_t> vs{0, 2, 4, 6, 8, 10, 22, 24, 26, 28, 30, 32};
   const uint32_t size = uint32_t(vs.size());
-  const std::vector<int32_t> coords(kN * kN * 3, 0);  // (umbrella classes: all 2, no splits applied)
+  const std::vector<int32_t> coords(kN * kN * 3,
+                                    0);  // (umbrella classes: all 2, no splits applied)
   VertexChoice enc;
   enc.reset(pm, coords.data(), 14);
   enc.start_group();
@@ -1631,10 +1700,15 @@ TEST(SplitChunk, HandCodedPayloadIsTheSpecOrder) {
   ASSERT_EQ(ones.size(), size);
   std::vector<SplitSymbols> codes;
   for (uint32_t i = 0; i < size; ++i)
-    codes.push_back({vs[i], i % kWedgeContexts, i % 5, i % 3 == 2 ? 17u : i % 3, i % kRankContexts,
-                     {i % kResidualContexts, (i + 1) % kResidualContexts, (i + 7) % kResidualContexts},
-                     {int32_t(i) - 6, int32_t(2 * i), -int32_t(i * i)},
-                     {i % kMixTangentContexts, (i + 3) % kMixTangentContexts, (i + 5) % kMixNormalContexts}});
+    codes.push_back(
+        {vs[i],
+         i % kWedgeContexts,
+         i % 5,
+         i % 3 == 2 ? 17u : i % 3,
+         i % kRankContexts,
+         {i % kResidualContexts, (i + 1) % kResidualContexts, (i + 7) % kResidualContexts},
+         {int32_t(i) - 6, int32_t(2 * i), -int32_t(i * i)},
+         {i % kMixTangentContexts, (i + 3) % kMixTangentContexts, (i + 5) % kMixNormalContexts}});
 
   SplitModels hm;
   std::vector<uint8_t> conn, geom;
@@ -1672,14 +1746,16 @@ TEST(SplitChunk, HandCodedPayloadIsTheSpecOrder) {
   std::vector<uint8_t> payload;
   uint64_t sizes[kSplitStreamCount];
   double kind_bits[kSymbolKinds] = {};
-  encode_split_chunk({{size, false}}, bits, codes.data(), codes.size(), em, payload, sizes, kind_bits);
+  encode_split_chunk({{size, false}}, bits, codes.data(), codes.size(), em, payload, sizes,
+                     kind_bits);
   EXPECT_EQ(payload, want);
   EXPECT_EQ(sizes[kStreamConnectivity], conn.size());
   EXPECT_EQ(sizes[kStreamGeometry], geom.size());
   // The code lengths per kind add up to the streams' sizes, within their endings.
-  const double conn_bits =
-      kind_bits[kSymbolGroups] + kind_bits[kSymbolChoice] + kind_bits[kSymbolWedgeCount] + kind_bits[kSymbolWedgeRank];
-  const double geom_bits = kind_bits[kSymbolResidualT0] + kind_bits[kSymbolResidualT1] + kind_bits[kSymbolResidualN];
+  const double conn_bits = kind_bits[kSymbolGroups] + kind_bits[kSymbolChoice] +
+                           kind_bits[kSymbolWedgeCount] + kind_bits[kSymbolWedgeRank];
+  const double geom_bits =
+      kind_bits[kSymbolResidualT0] + kind_bits[kSymbolResidualT1] + kind_bits[kSymbolResidualN];
   for (double b : kind_bits) EXPECT_GT(b, 0.0);
   EXPECT_NEAR(conn_bits, 8.0 * double(conn.size()), 16.0);
   EXPECT_NEAR(geom_bits, 8.0 * double(geom.size()), 16.0);

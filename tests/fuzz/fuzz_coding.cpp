@@ -32,9 +32,15 @@ void fuzz_reader(const uint8_t* data, size_t size) {
     const uint8_t* before = r.p;
     const bool was_ok = r.ok;
     switch (op[i] % 6) {
-      case 0: r.u8(); break;
-      case 1: r.u32le(); break;
-      case 2: r.u64le(); break;
+      case 0:
+        r.u8();
+        break;
+      case 1:
+        r.u32le();
+        break;
+      case 2:
+        r.u64le();
+        break;
       case 3: {
         float f = r.f32le();
         (void)f;
@@ -145,15 +151,19 @@ void fuzz_mesh(const uint8_t* data, size_t size) {
     const uint8_t* s = data + i;
     if (s[0] == 0xFF && !stack.empty()) {
       Applied& a = stack.back();
-      if (s[1] & 1) m.undo_resplit(a.v, a.hint, a.count, a.l, a.r);
-      else m.undo_split(a.v, a.l, a.r);
+      if (s[1] & 1)
+        m.undo_resplit(a.v, a.hint, a.count, a.l, a.r);
+      else
+        m.undo_split(a.v, a.l, a.r);
       restored(m, a);
       stack.pop_back();
       continue;
     }
     const uint32_t v = s[0] % (m.vertex_count() + 1);
-    const uint32_t l = s[1] == 0xFF ? pmz::kNoRank : s[1] % 16, r = s[2] == 0xFF ? pmz::kNoRank : s[2] % 16;
-    Applied a{v, l != pmz::kNoRank, r != pmz::kNoRank, m.corner_vertex, m.opposite, m.vertex_corner};
+    const uint32_t l = s[1] == 0xFF ? pmz::kNoRank : s[1] % 16,
+                   r = s[2] == 0xFF ? pmz::kNoRank : s[2] % 16;
+    Applied a{v,          l != pmz::kNoRank, r != pmz::kNoRank, m.corner_vertex,
+              m.opposite, m.vertex_corner};
     const uint32_t faces = m.face_count();
     if (!m.split(v, l, r)) {
       restored(m, a);
@@ -171,7 +181,8 @@ void fuzz_mesh(const uint8_t* data, size_t size) {
     auto redone = [&] {
       PMZ_FUZZ_CHECK(m.corner_vertex == cv && m.opposite == op && m.vertex_count() == u + 1);
       PMZ_FUZZ_CHECK(m.vertex_corner[u] == cu && m.vertex_corner[v] == cvv);
-      PMZ_FUZZ_CHECK(std::equal(sector.begin(), sector.end(), m.sector_faces().begin(), m.sector_faces().end()));
+      PMZ_FUZZ_CHECK(std::equal(sector.begin(), sector.end(), m.sector_faces().begin(),
+                                m.sector_faces().end()));
     };
     m.undo_split(v, a.l, a.r);
     restored(m, a);
@@ -180,7 +191,8 @@ void fuzz_mesh(const uint8_t* data, size_t size) {
     redone();
     m.undo_resplit(v, a.hint, a.count, a.l, a.r);
     restored(m, a);
-    PMZ_FUZZ_CHECK(std::equal(undone.begin(), undone.end(), m.sector_faces().begin(), m.sector_faces().end()));
+    PMZ_FUZZ_CHECK(
+        std::equal(undone.begin(), undone.end(), m.sector_faces().begin(), m.sector_faces().end()));
     m.resplit(v, a.hint, a.count, a.l, a.r);
     redone();
     stack.push_back(std::move(a));
@@ -264,7 +276,8 @@ void fuzz_split_chunk(const uint8_t* data, size_t size) {
     s.rank_context = pmz::rank_context(closed, (h >> 5) & 1);
     for (int a = 0; a < 3; ++a) s.residual_context[a] = (h >> (8 + 3 * a)) % pmz::kResidualContexts;
     for (int a = 0; a < 3; ++a)
-      s.mix_context[a] = (h >> (17 + 3 * a)) % (a < 2 ? pmz::kMixTangentContexts : pmz::kMixNormalContexts);
+      s.mix_context[a] =
+          (h >> (17 + 3 * a)) % (a < 2 ? pmz::kMixTangentContexts : pmz::kMixNormalContexts);
   };
   // No split is applied here, so the vertex count (and every group's limit) stays vertices_before.
   // No split is applied: coordinates only feed the umbrella classes (all 0 here).
@@ -277,12 +290,14 @@ void fuzz_split_chunk(const uint8_t* data, size_t size) {
     const uint32_t limit = vertices_before;
     const size_t first = got.size();
     const uint64_t end_before = reader.group_end();
-    const bool whole = reader.group_symbols(choice, pm, got, [&](pmz::SplitSymbols& s) { contexts(got.size(), s); });
+    const bool whole = reader.group_symbols(choice, pm, got,
+                                            [&](pmz::SplitSymbols& s) { contexts(got.size(), s); });
     if (reader.group_end() == end_before) break;  // no group left
     std::vector<uint32_t> vs;
     for (size_t i = first; i < got.size(); ++i) vs.push_back(got[i].v);
     if (whole) PMZ_FUZZ_CHECK(reader.group_end() == got.size());
-    for (size_t j = 0; j < vs.size(); ++j) PMZ_FUZZ_CHECK(vs[j] < limit && (j == 0 || vs[j - 1] < vs[j]));
+    for (size_t j = 0; j < vs.size(); ++j)
+      PMZ_FUZZ_CHECK(vs[j] < limit && (j == 0 || vs[j - 1] < vs[j]));
     // Exclusion: no vertex in the one-ring of one found kChoiceLag + 1 or more before it.
     bool independent = true;
     for (size_t j = 0; j < vs.size(); ++j)
@@ -322,14 +337,16 @@ void fuzz_split_chunk(const uint8_t* data, size_t size) {
     at += g;
   }
   std::vector<uint8_t> payload;
-  auto enc_models = std::make_unique<pmz::SplitModels>(), dec_models = std::make_unique<pmz::SplitModels>();
+  auto enc_models = std::make_unique<pmz::SplitModels>(),
+       dec_models = std::make_unique<pmz::SplitModels>();
   pmz::encode_split_chunk(groups, bits, got.data(), got.size(), *enc_models, payload);
   pmz::SplitChunkReader r2;
   PMZ_FUZZ_CHECK(r2.open(payload.data(), payload.size(), got.size(), *dec_models, error));
   PMZ_FUZZ_CHECK(r2.split_count() == got.size());
   std::vector<pmz::SplitSymbols> again;
   while (again.size() < got.size())
-    PMZ_FUZZ_CHECK(r2.group_symbols(dec_choice, pm, again, [&](pmz::SplitSymbols& s) { contexts(again.size(), s); }));
+    PMZ_FUZZ_CHECK(r2.group_symbols(dec_choice, pm, again,
+                                    [&](pmz::SplitSymbols& s) { contexts(again.size(), s); }));
   PMZ_FUZZ_CHECK(again.size() == got.size());
   for (size_t i = 0; i < got.size(); ++i) {
     PMZ_FUZZ_CHECK(again[i].v == got[i].v && again[i].wedge_count == got[i].wedge_count &&
@@ -348,7 +365,8 @@ void fuzz_base(const uint8_t* data, size_t size) {
   if (!r.ok || n > 4096 || fn > 8192) return;
   pmz::BaseMesh m;
   std::string error;
-  const pmz::BaseResult res = pmz::decode_base(r.p, r.remaining(), uint32_t(n), uint32_t(fn), m, error);
+  const pmz::BaseResult res =
+      pmz::decode_base(r.p, r.remaining(), uint32_t(n), uint32_t(fn), m, error);
   if (res != pmz::BaseResult::ok) {
     PMZ_FUZZ_CHECK(!error.empty());
     return;
@@ -360,11 +378,14 @@ void fuzz_base(const uint8_t* data, size_t size) {
   std::vector<uint8_t> stream;
   std::vector<uint32_t> given_of;
   pmz::BaseMesh enc, dec;
-  PMZ_FUZZ_CHECK(pmz::encode_base(m.coords.data(), uint32_t(n), m.faces.data(), uint32_t(fn), stream, given_of, enc, error));
-  PMZ_FUZZ_CHECK(pmz::decode_base(stream.data(), stream.size(), uint32_t(n), uint32_t(fn), dec, error) == pmz::BaseResult::ok);
+  PMZ_FUZZ_CHECK(pmz::encode_base(m.coords.data(), uint32_t(n), m.faces.data(), uint32_t(fn),
+                                  stream, given_of, enc, error));
+  PMZ_FUZZ_CHECK(pmz::decode_base(stream.data(), stream.size(), uint32_t(n), uint32_t(fn), dec,
+                                  error) == pmz::BaseResult::ok);
   PMZ_FUZZ_CHECK(dec.faces == enc.faces && dec.coords == enc.coords && given_of.size() == n);
   for (uint32_t d = 0; d < n; ++d)
-    for (int a = 0; a < 3; ++a) PMZ_FUZZ_CHECK(dec.coords[d * 3 + a] == m.coords[size_t(given_of[d]) * 3 + a]);
+    for (int a = 0; a < 3; ++a)
+      PMZ_FUZZ_CHECK(dec.coords[d * 3 + a] == m.coords[size_t(given_of[d]) * 3 + a]);
   std::vector<std::array<uint32_t, 3>> want, got;
   auto rotated = [](uint32_t a, uint32_t b, uint32_t c) {
     if (b < a && b < c) return std::array<uint32_t, 3>{b, c, a};
@@ -373,7 +394,8 @@ void fuzz_base(const uint8_t* data, size_t size) {
   };
   for (size_t f = 0; f < fn; ++f) {
     want.push_back(rotated(m.faces[f * 3], m.faces[f * 3 + 1], m.faces[f * 3 + 2]));
-    got.push_back(rotated(given_of[dec.faces[f * 3]], given_of[dec.faces[f * 3 + 1]], given_of[dec.faces[f * 3 + 2]]));
+    got.push_back(rotated(given_of[dec.faces[f * 3]], given_of[dec.faces[f * 3 + 1]],
+                          given_of[dec.faces[f * 3 + 2]]));
   }
   std::sort(want.begin(), want.end());
   std::sort(got.begin(), got.end());
@@ -387,14 +409,30 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const uint8_t* p = data + 1;
   const size_t n = size - 1;
   switch (data[0] % 8) {
-    case 0: fuzz_reader(p, n); break;
-    case 1: fuzz_round_trip(p, n); break;
-    case 2: fuzz_reader(p, n); break;  // was the zstd stream reader (format 5)
-    case 3: fuzz_quantizer(p, n); break;
-    case 4: fuzz_mesh(p, n); break;
-    case 5: fuzz_range_round_trip(p, n); break;
-    case 6: fuzz_split_chunk(p, n); break;
-    case 7: fuzz_base(p, n); break;
+    case 0:
+      fuzz_reader(p, n);
+      break;
+    case 1:
+      fuzz_round_trip(p, n);
+      break;
+    case 2:
+      fuzz_reader(p, n);
+      break;  // was the zstd stream reader (format 5)
+    case 3:
+      fuzz_quantizer(p, n);
+      break;
+    case 4:
+      fuzz_mesh(p, n);
+      break;
+    case 5:
+      fuzz_range_round_trip(p, n);
+      break;
+    case 6:
+      fuzz_split_chunk(p, n);
+      break;
+    case 7:
+      fuzz_base(p, n);
+      break;
   }
   return 0;
 }

@@ -1,8 +1,8 @@
 // Shared by the fuzz targets: mesh invariants that must hold after every decoder call.
 #pragma once
 #include <cstdint>
-#include <cstdlib>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <vector>
 
@@ -14,8 +14,8 @@ namespace pmz_fuzz {
   std::fprintf(stderr, "fuzz invariant violated: %s\n", what);
   std::abort();
 }
-#define PMZ_FUZZ_CHECK(cond) \
-  do {                       \
+#define PMZ_FUZZ_CHECK(cond)              \
+  do {                                    \
     if (!(cond)) ::pmz_fuzz::fail(#cond); \
   } while (0)
 
@@ -25,14 +25,15 @@ struct Snapshot {
   bool operator==(const Snapshot& o) const {
     // Bitwise on positions: NaN payloads from lossless streams must round-trip too.
     return indices == o.indices && positions.size() == o.positions.size() &&
-           (positions.empty() ||
-            std::memcmp(positions.data(), o.positions.data(), positions.size() * sizeof(float)) == 0);
+           (positions.empty() || std::memcmp(positions.data(), o.positions.data(),
+                                             positions.size() * sizeof(float)) == 0);
   }
 };
 
 inline Snapshot snapshot(const pmz::Decoder& d) {
   Snapshot s;
-  if (d.vertex_count()) s.positions.assign(d.positions(), d.positions() + size_t(d.vertex_count()) * 3);
+  if (d.vertex_count())
+    s.positions.assign(d.positions(), d.positions() + size_t(d.vertex_count()) * 3);
   if (d.face_count()) s.indices.assign(d.indices(), d.indices() + size_t(d.face_count()) * 3);
   return s;
 }

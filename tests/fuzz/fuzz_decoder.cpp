@@ -110,7 +110,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   PMZ_FUZZ_CHECK(sliced.error_message() == whole.error_message());
   PMZ_FUZZ_CHECK(sliced.splits_available() == whole.splits_available());
   // After an error the count depends on where the failing slice ended; before, it may not.
-  if (whole.status() == pmz::Status::ok) PMZ_FUZZ_CHECK(sliced.bytes_consumed() == whole.bytes_consumed());
+  if (whole.status() == pmz::Status::ok)
+    PMZ_FUZZ_CHECK(sliced.bytes_consumed() == whole.bytes_consumed());
   PMZ_FUZZ_CHECK(pmz_fuzz::same_info(sliced.info(), whole.info()));
   PMZ_FUZZ_CHECK(snapshot(sliced) == snapshot(whole));
 

@@ -25,7 +25,8 @@ const std::vector<uint8_t>& sample_stream() {
     pmz::CollapseSequence seq;
     std::string error;
     std::vector<uint8_t> out;
-    if (!pmz::simplify(pmz::make_sample_mesh(6000), {}, seq, error) || !pmz::write_pmz(seq, {}, out, error))
+    if (!pmz::simplify(pmz::make_sample_mesh(6000), {}, seq, error) ||
+        !pmz::write_pmz(seq, {}, out, error))
       ADD_FAILURE() << error;
     return out;
   }();
@@ -43,7 +44,8 @@ struct Shadow {
     normals.resize(m.normals.size());
     indices.resize(m.indices.size());
     auto copy = [](auto& dst, const auto& src, size_t width, uint32_t begin, uint32_t end) {
-      std::copy(src.begin() + width * begin, src.begin() + width * end, dst.begin() + width * begin);
+      std::copy(src.begin() + width * begin, src.begin() + width * end,
+                dst.begin() + width * begin);
     };
     if (m.dirty_all) {
       positions = m.positions;
@@ -87,9 +89,17 @@ TEST(MeshMirror, IncrementalSyncEqualsFullRebuild) {
       if (!decoder.info().base_done) continue;
       uint64_t n = rng() % 2000;
       switch (rng() % 5) {
-        case 0: case 1: decoder.refine(n); break;
-        case 2: case 3: decoder.coarsen(n); break;
-        default: decoder.set_face_target(rng() % (decoder.info().full_faces + 1)); break;
+        case 0:
+        case 1:
+          decoder.refine(n);
+          break;
+        case 2:
+        case 3:
+          decoder.coarsen(n);
+          break;
+        default:
+          decoder.set_face_target(rng() % (decoder.info().full_faces + 1));
+          break;
       }
       mirror.sync(decoder, float(step), 0.5f);
       shadow.apply(mirror);
@@ -112,8 +122,10 @@ TEST(MeshMirror, IncrementalSyncEqualsFullRebuild) {
     }
     for (size_t v = 0; v < fresh.vertex_count; ++v) {
       // Float sums updated by subtract/add drift only at rounding level.
-      ASSERT_LT(normal_mismatch(&mirror.normals[3 * v], &fresh.normals[3 * v]), 1e-4) << "vertex " << v;
-      ASSERT_LT(normal_mismatch(&shadow.normals[3 * v], &fresh.normals[3 * v]), 1e-4) << "uploaded vertex " << v;
+      ASSERT_LT(normal_mismatch(&mirror.normals[3 * v], &fresh.normals[3 * v]), 1e-4)
+          << "vertex " << v;
+      ASSERT_LT(normal_mismatch(&shadow.normals[3 * v], &fresh.normals[3 * v]), 1e-4)
+          << "uploaded vertex " << v;
     }
   }
 }
@@ -125,14 +137,16 @@ TEST(MeshMirror, NewVerticesMorphFromTheirParent) {
   MeshMirror mirror;
   mirror.sync(decoder, 0, 1);
   const uint32_t base_vertices = mirror.vertex_count;
-  for (uint32_t v = 0; v < base_vertices; ++v) EXPECT_LT(mirror.morph_start[v], -1e20f);  // base: static
+  for (uint32_t v = 0; v < base_vertices; ++v)
+    EXPECT_LT(mirror.morph_start[v], -1e20f);  // base: static
   ASSERT_GT(decoder.refine(1), 0u);
   mirror.sync(decoder, 5, 1);
   ASSERT_EQ(mirror.vertex_count, base_vertices + 1);
   const uint32_t v = base_vertices, parent = decoder.split_parents()[v];
   ASSERT_LT(parent, v);
   EXPECT_EQ(mirror.morph_start[v], 5.0f);
-  for (int i = 0; i < 3; ++i) EXPECT_EQ(mirror.morph_from[3 * v + i], mirror.positions[3 * parent + i]);
+  for (int i = 0; i < 3; ++i)
+    EXPECT_EQ(mirror.morph_from[3 * v + i], mirror.positions[3 * parent + i]);
 }
 
 TEST(DirtyBits, RunsAreSortedMergedAndCleared) {

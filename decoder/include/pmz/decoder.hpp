@@ -39,9 +39,9 @@ struct DecoderLimits {
 };
 
 struct StreamInfo {
-  bool header_done = false;   // header parsed: the fields below are valid
-  bool base_done = false;     // base mesh decoded: the mesh is drawable
-  bool complete = false;      // end marker seen: every split is available
+  bool header_done = false;  // header parsed: the fields below are valid
+  bool base_done = false;    // base mesh decoded: the mesh is drawable
+  bool complete = false;     // end marker seen: every split is available
   uint32_t version_major = 0, version_minor = 0;
   uint32_t flags = 0;
   uint32_t position_bits = 0;  // 0 = lossless float32
@@ -85,7 +85,7 @@ class Decoder {
   uint64_t bytes_consumed() const;
 
   // Level of detail. Each returns the number of splits applied/undone.
-  uint64_t refine(uint64_t max_splits = UINT64_MAX);  // apply up to N available splits
+  uint64_t refine(uint64_t max_splits = UINT64_MAX);   // apply up to N available splits
   uint64_t coarsen(uint64_t max_splits = UINT64_MAX);  // undo up to N applied splits
   // Go to the smallest level whose face count >= faces (clamped to what is available).
   void set_face_target(uint64_t faces);

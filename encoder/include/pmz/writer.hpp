@@ -25,11 +25,12 @@ struct WriteStats {
   double symbol_bits[kSymbolKinds] = {};
 };
 
-bool write_pmz(const CollapseSequence& seq, const WriteOptions& options,
-               std::vector<uint8_t>& out, std::string& error, WriteStats* stats = nullptr);
+bool write_pmz(const CollapseSequence& seq, const WriteOptions& options, std::vector<uint8_t>& out,
+               std::string& error, WriteStats* stats = nullptr);
 
 // Vertex and face order of a full decode, relative to seq.mesh: decoded vertex i is input
 // vertex vertex_order[i]. The round-trip tests use it.
-std::vector<uint32_t> decoded_vertex_order(const CollapseSequence& seq, const WriteOptions& options);
+std::vector<uint32_t> decoded_vertex_order(const CollapseSequence& seq,
+                                           const WriteOptions& options);
 
 }  // namespace pmz

@@ -20,14 +20,13 @@ struct ByteReader {
   const uint8_t* p;
   const uint8_t* end;
   bool ok = true;
-  ByteReader(const void* data, size_t size)
-      : p(static_cast<const uint8_t*>(data)), end(p + size) {}
+  ByteReader(const void* data, size_t size) : p(static_cast<const uint8_t*>(data)), end(p + size) {}
   size_t remaining() const { return size_t(end - p); }
   uint8_t u8();
   uint32_t u32le();
   uint64_t u64le();
   float f32le();
-  uint64_t varint();  // LEB128, at most 10 bytes
+  uint64_t varint();               // LEB128, at most 10 bytes
   const uint8_t* bytes(size_t n);  // nullptr (and ok=false) if fewer remain
 };
 

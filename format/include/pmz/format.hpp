@@ -21,7 +21,7 @@ inline constexpr size_t kMaxChunkHeader = 1 + 10 + 4;  // a varint has at most 1
 
 struct ChunkFrame {
   uint8_t type = 0;
-  size_t header_size = 0;     // type, size varint and CRC: where the payload starts
+  size_t header_size = 0;  // type, size varint and CRC: where the payload starts
   uint64_t payload_size = 0;
   uint32_t crc = 0;
 };
@@ -40,19 +40,20 @@ inline constexpr uint8_t kOldHeadType[4] = {'H', 'E', 'A', 'D'};
 
 // Streams of one SPLT chunk, in payload order (spec section 2, "SPLT").
 enum SplitStream : int {
-  kStreamConnectivity = 0,  // the groups, then vertex choice and wedge symbols in the decoder's order
-  kStreamGeometry,          // the position residuals, three slots per split
+  kStreamConnectivity =
+      0,            // the groups, then vertex choice and wedge symbols in the decoder's order
+  kStreamGeometry,  // the position residuals, three slots per split
   kSplitStreamCount
 };
 // Kinds of SPLT symbols, for the writer's accounting of ideal code lengths (pmz-encode).
 enum SymbolKind : int {
-  kSymbolGroups = 0,   // per group: splits - 1, near flag
-  kSymbolChoice,       // per candidate vertex of a group: whether it splits
-  kSymbolWedgeCount,   // wedge: interior count (spec, section 4)
-  kSymbolWedgeRank,    // wedge: rank among the candidates of that count
-  kSymbolResidualT0,   // position residual slot 0 (first tangent axis; spec section 5)
-  kSymbolResidualT1,   // slot 1 (second tangent axis)
-  kSymbolResidualN,    // slot 2 (normal axis, predicted from the tangent plane)
+  kSymbolGroups = 0,  // per group: splits - 1, near flag
+  kSymbolChoice,      // per candidate vertex of a group: whether it splits
+  kSymbolWedgeCount,  // wedge: interior count (spec, section 4)
+  kSymbolWedgeRank,   // wedge: rank among the candidates of that count
+  kSymbolResidualT0,  // position residual slot 0 (first tangent axis; spec section 5)
+  kSymbolResidualT1,  // slot 1 (second tangent axis)
+  kSymbolResidualN,   // slot 2 (normal axis, predicted from the tangent plane)
   kSymbolKinds
 };
 
@@ -63,7 +64,7 @@ struct FileHeader {
   uint32_t version_major = kVersionMajor, version_minor = kVersionMinor;
   uint32_t flags = 0;
   uint32_t position_bits = 14;  // 0 = lossless float32
-  uint32_t curvature = 0;       // prediction offset weights, 0..kMaxCurvature (eighths; spec section 5)
+  uint32_t curvature = 0;  // prediction offset weights, 0..kMaxCurvature (eighths; spec section 5)
   uint32_t fine_curvature = 0;
   uint32_t base_vertices = 0, base_faces = 0, full_faces = 0;
   uint32_t total_splits = 0;
@@ -88,16 +89,15 @@ float ordered_to_float(int32_t i);
 
 struct Quantizer {
   float min[3] = {0, 0, 0};
-  float scale = 0;      // dequantization step: range / max_q
-  double inv = 0;       // quantization: max_q / range
+  float scale = 0;  // dequantization step: range / max_q
+  double inv = 0;   // quantization: max_q / range
   uint32_t max_q = 0;
-  uint32_t bits = 0;    // 0 = lossless: coordinates are the order-preserving float bit patterns
+  uint32_t bits = 0;  // 0 = lossless: coordinates are the order-preserving float bit patterns
   void init(uint32_t position_bits, const float bbox_min[3], const float bbox_max[3]);
   int32_t quantize(float x, int axis) const;
   float dequantize(int32_t q, int axis) const {
     return bits ? min[axis] + float(q) * scale : ordered_to_float(q);
   }
 };
-
 
 }  // namespace pmz

@@ -10,10 +10,12 @@ namespace pmz {
 
 inline constexpr uint32_t kResidualContexts = 21;  // per residual slot
 // Second contexts of the residual slots (spec section 5, "Contexts"): the ring's largest offset
-// from p at half-octave resolution for the tangent slots, v's distance from the plane for the normal.
+// from p at half-octave resolution for the tangent slots, v's distance from the plane for the
+// normal.
 inline constexpr uint32_t kMixTangentContexts = 42, kMixNormalContexts = 21;
-inline constexpr uint32_t kMaxCurvature = 8;       // HEAD curvature and fine_curvature: weights in eighths
-inline constexpr uint32_t kNormalBits = 16;        // |n[a]| <= 2^16 after scaling
+inline constexpr uint32_t kMaxCurvature =
+    8;  // HEAD curvature and fine_curvature: weights in eighths
+inline constexpr uint32_t kNormalBits = 16;  // |n[a]| <= 2^16 after scaling
 
 __extension__ typedef __int128 Int128;
 __extension__ typedef unsigned __int128 UInt128;
@@ -55,15 +57,17 @@ struct RingBasis {
 
 // u_ring: v, then u's other neighbours in order (ProgressiveMesh::u_ring()); v_ring: v's ring
 // before the split (ProgressiveMesh::ring(), any order); curvature and fine: HEAD fields, 0..8.
-void predict_position(const int32_t* coords, std::span<const uint32_t> u_ring, std::span<const uint32_t> v_ring,
-                      uint32_t curvature, uint32_t fine, PositionPrediction& out);
+void predict_position(const int32_t* coords, std::span<const uint32_t> u_ring,
+                      std::span<const uint32_t> v_ring, uint32_t curvature, uint32_t fine,
+                      PositionPrediction& out);
 // The same in two steps, for a writer trying several curvature pairs on one split: the ring
 // part once, then per pair the offset and the contexts (results identical to predict_position).
 // with_l / with_e: whether l_dot_n / e_dot_n are wanted (some pair has curvature / fine > 0).
-void ring_basis(const int32_t* coords, std::span<const uint32_t> u_ring, std::span<const uint32_t> v_ring,
-                bool with_l, bool with_e, RingBasis& basis);
-void predict_from_basis(const int32_t* coords, std::span<const uint32_t> u_ring, uint32_t v_ring_size,
-                        const RingBasis& basis, uint32_t curvature, uint32_t fine, PositionPrediction& out);
+void ring_basis(const int32_t* coords, std::span<const uint32_t> u_ring,
+                std::span<const uint32_t> v_ring, bool with_l, bool with_e, RingBasis& basis);
+void predict_from_basis(const int32_t* coords, std::span<const uint32_t> u_ring,
+                        uint32_t v_ring_size, const RingBasis& basis, uint32_t curvature,
+                        uint32_t fine, PositionPrediction& out);
 
 // Prediction of the normal axis (slot 2) once the tangent residuals r0, r1 (slots 0, 1) are
 // known: the plane through p with normal n.
@@ -80,7 +84,8 @@ inline void position_residuals(const PositionPrediction& pp, const int32_t cu[3]
 }
 
 // Decoder: coordinates from the residuals per slot.
-inline void position_from_residuals(const PositionPrediction& pp, const int32_t r[3], int32_t cu[3]) {
+inline void position_from_residuals(const PositionPrediction& pp, const int32_t r[3],
+                                    int32_t cu[3]) {
   for (int s = 0; s < 2; ++s) cu[pp.axis[s]] = int32_t(uint32_t(pp.p[pp.axis[s]]) + uint32_t(r[s]));
   cu[pp.axis[2]] = int32_t(uint32_t(normal_axis_prediction(pp, r[0], r[1])) + uint32_t(r[2]));
 }

@@ -3,7 +3,6 @@
 // and predictions, so what it writes is what the decoder does (spec/format.md, "Vertex split").
 #pragma once
 
-
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -14,7 +13,8 @@ namespace pmz {
 
 inline constexpr uint32_t kNoCorner = 0xFFFFFFFFu;
 inline constexpr uint32_t kNoRank = 0xFFFFFFFFu;  // wedge side on the boundary
-// Corner c = 3 * face + k: the face's next and previous corners, counter-clockwise (spec section 4).
+// Corner c = 3 * face + k: the face's next and previous corners, counter-clockwise (spec section
+// 4).
 inline uint32_t next_corner(uint32_t c) { return c % 3 == 2 ? c - 2 : c + 1; }
 inline uint32_t prev_corner(uint32_t c) { return c % 3 == 0 ? c + 2 : c - 1; }
 
@@ -116,8 +116,8 @@ class ProgressiveMesh {
   bool gather_fan(uint32_t v);  // fan_ (per face ccw: next of the corner at v), ring_, closed_
   // The part split_gathered() and resplit() share once the old links are read: the new faces,
   // their links and vertex_corner.
-  void link_new_faces(uint32_t v, uint32_t vl, uint32_t vr, uint32_t pl, uint32_t ql, uint32_t pr, uint32_t qr,
-                      bool has_l, bool has_r);
+  void link_new_faces(uint32_t v, uint32_t vl, uint32_t vr, uint32_t pl, uint32_t ql, uint32_t pr,
+                      uint32_t qr, bool has_l, bool has_r);
   // The rest of an undo once the sector's corners are back to v: links, buffers, vertex_corner.
   void unlink_new_faces(uint32_t v, bool has_l, bool has_r);
   void grow_scratch(size_t need);
@@ -179,8 +179,8 @@ class FanPrefetcher {
 
  private:
   // Advances every walker by one face; returns the slot of the split applied now (free).
-  uint32_t advance(const ProgressiveMesh& m, const int32_t* coords, size_t coord_count, const uint32_t* degree,
-                   const uint8_t* sums) {
+  uint32_t advance(const ProgressiveMesh& m, const int32_t* coords, size_t coord_count,
+                   const uint32_t* degree, const uint8_t* sums) {
     const uint32_t* opp = m.opposite.data();
     const uint32_t* cv = m.corner_vertex.data();
     const size_t corners = m.opposite.size();

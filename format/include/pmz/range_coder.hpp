@@ -1,5 +1,5 @@
-// Adaptive binary range coder (LZMA's, 15-bit probabilities, adaptation shift 2 growing to 6) and the
-// binarization of unsigned integers used by SPLT streams (spec/format.md, "Range coding").
+// Adaptive binary range coder (LZMA's, 15-bit probabilities, adaptation shift 2 growing to 6) and
+// the binarization of unsigned integers used by SPLT streams (spec/format.md, "Range coding").
 // Header-only so the per-bit work inlines into the stream loops.
 #pragma once
 #include <cmath>
@@ -50,7 +50,9 @@ inline Prob adapt(uint32_t model, uint32_t b) {
 
 // The probability of a bit coded with two models: the mean of theirs, rounded down. Both stay
 // within [kProbMin, kProbMax], so the mean does too (the coders' one-shift normalization holds).
-inline uint32_t mix_probability(uint32_t p, uint32_t q) { return ((p & kProbMask) + (q & kProbMask)) >> 1; }
+inline uint32_t mix_probability(uint32_t p, uint32_t q) {
+  return ((p & kProbMask) + (q & kProbMask)) >> 1;
+}
 
 inline uint32_t bit_length(uint32_t x) { return x ? 32u - uint32_t(__builtin_clz(x)) : 0u; }
 
@@ -95,7 +97,8 @@ class RangeEncoder {
     }
     for (int i = 0; i < 5; ++i) shift_low();
     out_.erase(out_.begin() + std::ptrdiff_t(start_));
-    for (uint32_t i = 0; i < kStreamPad && out_.size() > start_ && out_.back() == 0; ++i) out_.pop_back();
+    for (uint32_t i = 0; i < kStreamPad && out_.size() > start_ && out_.back() == 0; ++i)
+      out_.pop_back();
   }
 
  private:
@@ -271,11 +274,13 @@ template <class Bit>
 [[gnu::always_inline]] inline bool decode_uint_with(RangeState& s, uint32_t& x, Bit&& bit) {
   uint32_t node = 1;
 #pragma GCC unroll 4
-  for (int i = 0; i < 4; ++i) node = node * 2 + bit([node](UIntModel& m) -> Prob& { return m.length[node]; });
+  for (int i = 0; i < 4; ++i)
+    node = node * 2 + bit([node](UIntModel& m) -> Prob& { return m.length[node]; });
   uint32_t n = node - 16;
   if (n == kLengthEscape) [[unlikely]] {
     node = 1;
-    for (int i = 0; i < 5; ++i) node = node * 2 + bit([node](UIntModel& m) -> Prob& { return m.escape[node]; });
+    for (int i = 0; i < 5; ++i)
+      node = node * 2 + bit([node](UIntModel& m) -> Prob& { return m.escape[node]; });
     n = node - 32 + kLengthEscape;
     if (n > 32) return false;
   }
@@ -316,11 +321,13 @@ inline void encode_uint_mixed(RangeEncoder& rc, UIntModel& m, UIntModel& m2, uin
 }
 
 // Returns false for a bit length above 32 (corrupt input).
-[[gnu::always_inline]] inline bool decode_uint_mixed(RangeState& s, UIntModel& m, UIntModel& m2, uint32_t& x) {
+[[gnu::always_inline]] inline bool decode_uint_mixed(RangeState& s, UIntModel& m, UIntModel& m2,
+                                                     uint32_t& x) {
   return decode_uint_with(s, x, [&](auto at) { return s.bit2(at(m), at(m2)); });
 }
 
-[[gnu::always_inline]] inline bool decode_uint_mixed(RangeDecoder& rc, UIntModel& m, UIntModel& m2, uint32_t& x) {
+[[gnu::always_inline]] inline bool decode_uint_mixed(RangeDecoder& rc, UIntModel& m, UIntModel& m2,
+                                                     uint32_t& x) {
   RangeState s = rc.state();
   const bool ok = decode_uint_mixed(s, m, m2, x);
   rc.set_state(s);

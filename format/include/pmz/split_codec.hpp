@@ -8,8 +8,8 @@
 // prediction), so they are decoded as the splits are first applied: a group's vertices when
 // its first split is, the other symbols split by split.
 #pragma once
-#include <cstddef>
 #include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -29,14 +29,15 @@ inline constexpr uint32_t kWedgeContexts = 18, kRankContexts = 4;
 // Vertex choice contexts (spec section 2, "Vertex choice"): density x near x degree x umbrella
 // class.
 inline constexpr uint32_t kChoiceDensities = 21, kChoiceDegrees = 9, kChoiceShapes = 3;
-inline constexpr uint32_t kChoiceKeys = kChoiceDegrees * kChoiceShapes;  // per vertex: degree x class
+inline constexpr uint32_t kChoiceKeys =
+    kChoiceDegrees * kChoiceShapes;  // per vertex: degree x class
 inline constexpr uint32_t kChoiceContexts = kChoiceDensities * 2 * kChoiceKeys;
 
 // One split's symbols and the contexts they are coded with (the writer computes the contexts
 // by replaying the decoder's mesh).
 struct SplitSymbols {
-  uint32_t v;                    // vertex that splits (coded by the group's choice bits)
-  uint32_t wedge_context;        // wedge_context(k, closed) of v's ring
+  uint32_t v;              // vertex that splits (coded by the group's choice bits)
+  uint32_t wedge_context;  // wedge_context(k, closed) of v's ring
   uint32_t wedge_count, wedge_rank;
   uint32_t rank_context;         // rank_context(closed, confident)
   uint32_t residual_context[3];  // PositionPrediction::context, per slot
@@ -56,11 +57,13 @@ struct SplitModels {
   Prob rank_zero[kRankContexts] = {kProbInit, kProbInit, kProbInit, kProbInit};  // rank > 0
   SmallModel wedge_rank[kRankContexts];  // rank - 1 when rank > 0
   UIntModel residual[3][kResidualContexts];
-  // The second model of each residual bit (spec section 5): tangent slots by PositionPrediction::mix
-  // (kMixTangentContexts), the normal slot likewise (kMixNormalContexts).
+  // The second model of each residual bit (spec section 5): tangent slots by
+  // PositionPrediction::mix (kMixTangentContexts), the normal slot likewise (kMixNormalContexts).
   UIntModel mix_tangent[2][kMixTangentContexts];
   UIntModel mix_normal[kMixNormalContexts];
-  UIntModel& mix(int slot, uint32_t context) { return slot < 2 ? mix_tangent[slot][context] : mix_normal[context]; }
+  UIntModel& mix(int slot, uint32_t context) {
+    return slot < 2 ? mix_tangent[slot][context] : mix_normal[context];
+  }
 };
 
 // bitlen(floor(D / m)) for m >= 1 without dividing (a division per vertex choice bit costs more
@@ -203,8 +206,8 @@ class VertexChoice {
   // start_group() do not allocate. (Inline: once per split, it rarely needs to grow anything.)
   void reserve(size_t k) {
     if (noted_.capacity() - noted_.size() < k + 2 || degree_.capacity() == degree_.size() ||
-        mark_.capacity() == mark_.size() || sums_.capacity() == sums_.size() || key_.capacity() == key_.size() ||
-        bits_.size() * 64 <= degree_.size())
+        mark_.capacity() == mark_.size() || sums_.capacity() == sums_.size() ||
+        key_.capacity() == key_.size() || bits_.size() * 64 <= degree_.size())
       grow(k);
   }
   // After pm.split_gathered() (its ring and u_ring still those of the split), once u's
@@ -212,24 +215,33 @@ class VertexChoice {
   void applied(const ProgressiveMesh& pm, const int32_t* coords, bool has_left, bool has_right);
   uint32_t degree(uint32_t w) const { return degree_[w]; }
   const RingSums& sums(uint32_t w) const { return sums_[w]; }
-  const uint8_t* sums_bytes() const { return reinterpret_cast<const uint8_t*>(sums_.data()); }  // (prefetching)
+  const uint8_t* sums_bytes() const {
+    return reinterpret_cast<const uint8_t*>(sums_.data());
+  }                                                                     // (prefetching)
   uint32_t shape(uint32_t w) const { return key_[w] % kChoiceShapes; }  // umbrella class
-  const uint32_t* degrees() const { return degree_.data(); }  // per vertex (the wedge score's end weights)
+  const uint32_t* degrees() const {
+    return degree_.data();
+  }  // per vertex (the wedge score's end weights)
 
  private:
   // ((min(d, 20) * 2 + near) * 9 + min(degree, 8)) * 3 + umbrella class, d = bitlen(expected
   // gap); the last two as key_[w].
   uint32_t context(uint32_t w, uint32_t d, bool near) const {
-    return ((d < kChoiceDensities ? d : kChoiceDensities - 1) * 2 + (near ? 1 : 0)) * kChoiceKeys + key_[w];
+    return ((d < kChoiceDensities ? d : kChoiceDensities - 1) * 2 + (near ? 1 : 0)) * kChoiceKeys +
+           key_[w];
   }
-  int64_t coord(const int32_t* coords, uint32_t w, int a) const { return coords[size_t(w) * 3 + a] >> shift_; }
+  int64_t coord(const int32_t* coords, uint32_t w, int a) const {
+    return coords[size_t(w) * 3 + a] >> shift_;
+  }
   static uint8_t key_of(const RingSums& s, uint32_t deg) {
-    return uint8_t((deg < kChoiceDegrees ? deg : kChoiceDegrees - 1) * kChoiceShapes + umbrella_class(s));
+    return uint8_t((deg < kChoiceDegrees ? deg : kChoiceDegrees - 1) * kChoiceShapes +
+                   umbrella_class(s));
   }
   void push_vertex(uint32_t degree);
   void umbrella(const ProgressiveMesh& pm, const int32_t* coords, bool has_left, bool has_right);
   template <bool kShift>
-  void umbrella_sums(const ProgressiveMesh& pm, const int32_t* coords, bool has_left, bool has_right);
+  void umbrella_sums(const ProgressiveMesh& pm, const int32_t* coords, bool has_left,
+                     bool has_right);
   void update_key(uint32_t w) { key_[w] = key_of(sums_[w], degree_[w]); }
   // A fresh mark value (all of mark_ differs from it).
   uint32_t next_epoch() {
@@ -264,8 +276,8 @@ class VertexChoice {
 // near: the flag it chose (near whenever the near list holds every vertex of the group). False
 // if the group cannot be coded: a vertex of vs in the closed one-ring of another (the rings the
 // decoder notes when it applies the splits would then differ from mesh's), or excluded.
-bool choice_bits(VertexChoice& choice, const ProgressiveMesh& mesh, uint32_t limit, std::span<const uint32_t> vs,
-                 std::vector<uint32_t>& bits, bool& near);
+bool choice_bits(VertexChoice& choice, const ProgressiveMesh& mesh, uint32_t limit,
+                 std::span<const uint32_t> vs, std::vector<uint32_t>& bits, bool& near);
 
 // Appends the SPLT payload for the given groups (sizes sum to count) and choice bits (the
 // concatenation of choice_bits() of the groups), every symbol in the order the decoder reads it;
@@ -274,8 +286,9 @@ bool choice_bits(VertexChoice& choice, const ProgressiveMesh& mesh, uint32_t lim
 // symbols of each kind added (RangeEncoder::position differences; the writer's accounting,
 // pmz-encode --symbol-stats).
 void encode_split_chunk(const std::vector<GroupCode>& groups, const std::vector<uint32_t>& choice,
-                        const SplitSymbols* splits, size_t count, SplitModels& models, std::vector<uint8_t>& payload,
-                        uint64_t* stream_bytes = nullptr, double* symbol_bits = nullptr);
+                        const SplitSymbols* splits, size_t count, SplitModels& models,
+                        std::vector<uint8_t>& payload, uint64_t* stream_bytes = nullptr,
+                        double* symbol_bits = nullptr);
 
 // Decoder side of one SPLT chunk. open() copies the payload, decodes the groups (sizes summing
 // to the split count, at most max_splits) and validates them. models (the file's, see
@@ -287,23 +300,26 @@ void encode_split_chunk(const std::vector<GroupCode>& groups, const std::vector<
 class SplitChunkReader {
  public:
   // Once per chunk: cold (optimized for size; the decoder library has a size budget).
-  [[gnu::cold]] bool open(const uint8_t* p, size_t size, uint64_t max_splits, SplitModels& models, std::string& error);
+  [[gnu::cold]] bool open(const uint8_t* p, size_t size, uint64_t max_splits, SplitModels& models,
+                          std::string& error);
   // The vertex choice, group by group. group_end(): the chunk's splits up to the end of the
   // group begun last (0 before the first). begin_group() starts the next group (after every
   // split of the one before was applied; choice.start_group() is called), limit the vertex
-  // count; false if there is none. find() then continues the group's scan (VertexChoice::scan, mesh as there) until
-  // `upto` of its vertices are found, appending the new ones to vs; false if the choice stream
-  // is malformed or exhausted, or the candidates ran out.
+  // count; false if there is none. find() then continues the group's scan (VertexChoice::scan, mesh
+  // as there) until `upto` of its vertices are found, appending the new ones to vs; false if the
+  // choice stream is malformed or exhausted, or the candidates ran out.
   uint64_t group_end() const { return group_end_; }
   bool begin_group(VertexChoice& choice, uint32_t limit);
-  bool find(VertexChoice& choice, const ProgressiveMesh* mesh, uint32_t upto, std::vector<uint32_t>& vs);
+  bool find(VertexChoice& choice, const ProgressiveMesh* mesh, uint32_t upto,
+            std::vector<uint32_t>& vs);
   // Tests, fuzzing: the next group with every symbol in the decoder's schedule (its vertices
   // kChoiceLag + 1 ahead of the split being read, exclusion from the rings in mesh, the mesh at
   // the group's start); contexts(s) sets the contexts in s (s.v known) before its symbols are
   // read. Appends the group's splits to out; false where a decoder would refuse (the splits
   // before that point appended). found (optional) receives the group's vertices found.
   template <class F>
-  bool group_symbols(VertexChoice& choice, const ProgressiveMesh& mesh, std::vector<SplitSymbols>& out, F&& contexts,
+  bool group_symbols(VertexChoice& choice, const ProgressiveMesh& mesh,
+                     std::vector<SplitSymbols>& out, F&& contexts,
                      std::vector<uint32_t>* found = nullptr);
   // The wedge symbols, each when its context is known: count (wedge_context of v's ring), then
   // rank (rank_context, from the scores).
@@ -320,14 +336,16 @@ class SplitChunkReader {
   size_t next_group_ = 0, largest_ = 0;
   uint64_t group_end_ = 0;
   uint32_t group_size_ = 0;  // of the group begun last
-  static uint32_t vertex_count(const ProgressiveMesh& mesh);  // (ProgressiveMesh is incomplete here)
+  static uint32_t vertex_count(
+      const ProgressiveMesh& mesh);                   // (ProgressiveMesh is incomplete here)
   std::unique_ptr<RangeDecoder> conn_dec_, geo_dec_;  // connectivity and geometry streams
   uint64_t count_ = 0;
 };
 
 template <class F>
-bool SplitChunkReader::group_symbols(VertexChoice& choice, const ProgressiveMesh& mesh, std::vector<SplitSymbols>& out,
-                                     F&& contexts, std::vector<uint32_t>* found) {
+bool SplitChunkReader::group_symbols(VertexChoice& choice, const ProgressiveMesh& mesh,
+                                     std::vector<SplitSymbols>& out, F&& contexts,
+                                     std::vector<uint32_t>* found) {
   if (!begin_group(choice, vertex_count(mesh))) return false;
   const uint32_t size = group_size_;
   std::vector<uint32_t> local;
@@ -338,7 +356,8 @@ bool SplitChunkReader::group_symbols(VertexChoice& choice, const ProgressiveMesh
     if (j >= vs.size()) return false;
     SplitSymbols s{vs[j], 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
     contexts(s);
-    if (!wedge_count(s.wedge_context, s.wedge_count) || !wedge_rank(s.rank_context, s.wedge_rank)) return false;
+    if (!wedge_count(s.wedge_context, s.wedge_count) || !wedge_rank(s.rank_context, s.wedge_rank))
+      return false;
     if (more) more = find(choice, &mesh, j + 2 + kChoiceLag, vs);
     if (!residuals(s.residual_context, s.mix_context, s.residual)) return false;
     out.push_back(s);
@@ -347,7 +366,8 @@ bool SplitChunkReader::group_symbols(VertexChoice& choice, const ProgressiveMesh
 }
 
 // Coded stream sizes of a SPLT payload without decoding it (for pmz-info).
-bool split_chunk_stream_sizes(const uint8_t* p, size_t size, uint64_t& count, uint64_t stream_bytes[kSplitStreamCount]);
+bool split_chunk_stream_sizes(const uint8_t* p, size_t size, uint64_t& count,
+                              uint64_t stream_bytes[kSplitStreamCount]);
 
 // ---- Mesh-dependent symbols (spec/format.md, sections 4 and 5) ----
 
@@ -356,16 +376,16 @@ __extension__ typedef __int128 WedgeScoreSigned;
 
 // Reusable buffers for the wedge scores (no allocation per split once grown).
 struct WedgeScratch {
-  std::vector<uint8_t> w;                 // end weights m, 12 / m per ring position (extended canonical order)
-  std::vector<int64_t> q;                 // e (3 axes) and |e|^2 per ring position, when narrow
-  std::vector<WedgeScoreSigned> q128;     // the same otherwise
-  std::vector<int64_t> score64;           // per candidate, when narrow (the same values, in 64 bits)
-  std::vector<WedgeScoreSigned> score;    // per candidate, otherwise
+  std::vector<uint8_t> w;  // end weights m, 12 / m per ring position (extended canonical order)
+  std::vector<int64_t> q;  // e (3 axes) and |e|^2 per ring position, when narrow
+  std::vector<WedgeScoreSigned> q128;   // the same otherwise
+  std::vector<int64_t> score64;         // per candidate, when narrow (the same values, in 64 bits)
+  std::vector<WedgeScoreSigned> score;  // per candidate, otherwise
   std::vector<uint32_t> order;
   bool narrow = true;
-  uint32_t n = 0;          // candidates scored last
-  bool confident = true;   // their best score is over twice the second (spec section 4)
-  uint32_t best = 0;       // the candidate at rank 0
+  uint32_t n = 0;         // candidates scored last
+  bool confident = true;  // their best score is over twice the second (spec section 4)
+  uint32_t best = 0;      // the candidate at rank 0
   // Optional, set by the caller: a bound on |c[w] - c[v]| (per axis) over all vertex pairs, e.g.
   // the largest side of the coordinates' bounding box. When k (extent + 1) < 2^26 the scores
   // are computed in 64 bits without checking each ring offset. Unknown: UINT64_MAX.
@@ -383,26 +403,32 @@ struct WedgeScratch {
 };
 
 // wedge_count context: ring size (clamped to 8) and whether the fan is closed.
-inline uint32_t wedge_context(uint32_t k, bool closed) { return 2 * (k < 8 ? k : 8) + (closed ? 1 : 0); }
+inline uint32_t wedge_context(uint32_t k, bool closed) {
+  return 2 * (k < 8 ? k : 8) + (closed ? 1 : 0);
+}
 // wedge_rank context: whether the fan is closed, and whether the best candidate's score is over
 // twice the second's (WedgeScratch::confident).
-inline uint32_t rank_context(bool closed, bool confident) { return (closed ? 2u : 0u) + (confident ? 1u : 0u); }
+inline uint32_t rank_context(bool closed, bool confident) {
+  return (closed ? 2u : 0u) + (confident ? 1u : 0u);
+}
 
 // degree: VertexChoice::degrees() (the end weights of the score).
 // Writer: the wedge (canonical ranks, kNoRank for a boundary side) of the ring gathered last in
 // pm as symbols (interior count, rank among the candidates of that count); s.confident then
 // gives the rank's context. False if the ranks are not a valid wedge.
-bool wedge_symbols(const int32_t* coords, const uint32_t* degree, uint32_t v, const ProgressiveMesh& pm,
-                   uint32_t rank_l, uint32_t rank_r, uint32_t& count, uint32_t& rank, WedgeScratch& s);
+bool wedge_symbols(const int32_t* coords, const uint32_t* degree, uint32_t v,
+                   const ProgressiveMesh& pm, uint32_t rank_l, uint32_t rank_r, uint32_t& count,
+                   uint32_t& rank, WedgeScratch& s);
 // Decoder, in two steps around the rank's decoding: the scores of the candidates with `count`
 // interior vertices (s.n of them; s.confident: the rank's context); false if count is out of
 // range for the ring. Then the ranks of the candidate at position `rank`; false if rank >= s.n.
-bool wedge_scores(const int32_t* coords, const uint32_t* degree, uint32_t v, const ProgressiveMesh& pm,
-                  uint32_t count, WedgeScratch& s);
-bool wedge_pick(const ProgressiveMesh& pm, uint32_t count, uint32_t rank, uint32_t& rank_l, uint32_t& rank_r,
-                WedgeScratch& s);
+bool wedge_scores(const int32_t* coords, const uint32_t* degree, uint32_t v,
+                  const ProgressiveMesh& pm, uint32_t count, WedgeScratch& s);
+bool wedge_pick(const ProgressiveMesh& pm, uint32_t count, uint32_t rank, uint32_t& rank_l,
+                uint32_t& rank_r, WedgeScratch& s);
 // Both steps.
-bool wedge_ranks(const int32_t* coords, const uint32_t* degree, uint32_t v, const ProgressiveMesh& pm,
-                 uint32_t count, uint32_t rank, uint32_t& rank_l, uint32_t& rank_r, WedgeScratch& s);
+bool wedge_ranks(const int32_t* coords, const uint32_t* degree, uint32_t v,
+                 const ProgressiveMesh& pm, uint32_t count, uint32_t rank, uint32_t& rank_l,
+                 uint32_t& rank_r, WedgeScratch& s);
 
 }  // namespace pmz

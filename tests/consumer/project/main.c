@@ -29,7 +29,8 @@ int main(int argc, char** argv) {
   for (uint32_t i = 0; ok && i < nf * 3; ++i) ok = idx[i] < nv;
   const char junk[] = "not a pmz stream";
   pmz_decoder* bad = pmz_decoder_create(0, 0);
-  ok = ok && pmz_decoder_feed(bad, junk, sizeof junk) != PMZ_OK && strlen(pmz_decoder_error(bad)) > 0;
+  ok = ok && pmz_decoder_feed(bad, junk, sizeof junk) != PMZ_OK &&
+       strlen(pmz_decoder_error(bad)) > 0;
   printf("consumer: %u vertices, %u faces after %llu splits; junk -> %s\n", nv, nf,
          (unsigned long long)applied, pmz_decoder_error(bad));
   pmz_decoder_destroy(bad);
