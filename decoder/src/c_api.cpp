@@ -47,5 +47,51 @@ PMZ_API uint32_t pmz_decoder_vertex_count(const pmz_decoder* d) { return d->dec.
 PMZ_API uint32_t pmz_decoder_face_count(const pmz_decoder* d) { return d->dec.face_count(); }
 PMZ_API const float* pmz_decoder_positions(const pmz_decoder* d) { return d->dec.positions(); }
 PMZ_API const uint32_t* pmz_decoder_indices(const pmz_decoder* d) { return d->dec.indices(); }
+PMZ_API const uint32_t* pmz_decoder_split_parents(const pmz_decoder* d) {
+  return d->dec.split_parents();
+}
+
+PMZ_API const char* pmz_status_name(int status) {
+  if (status < PMZ_OK || status > PMZ_ERR_MEMORY) return "unknown";
+  return pmz::status_name(pmz::Status(status));
+}
+PMZ_API uint64_t pmz_decoder_bytes_consumed(const pmz_decoder* d) {
+  return d->dec.bytes_consumed();
+}
+PMZ_API void pmz_decoder_set_split_target(pmz_decoder* d, uint64_t splits) {
+  d->dec.set_split_target(splits);
+}
+
+PMZ_API void pmz_decoder_info(const pmz_decoder* d, pmz_stream_info* out) {
+  const pmz::StreamInfo& i = d->dec.info();
+  out->base_vertices = i.base_vertices;
+  out->base_faces = i.base_faces;
+  out->full_vertices = i.full_vertices;
+  out->full_faces = i.full_faces;
+  out->total_splits = i.total_splits;
+  out->header_done = i.header_done;
+  out->base_done = i.base_done;
+  out->complete = i.complete;
+  out->version_major = i.version_major;
+  out->version_minor = i.version_minor;
+  out->flags = i.flags;
+  out->position_bits = i.position_bits;
+  out->curvature = i.curvature;
+  out->fine_curvature = i.fine_curvature;
+  for (int k = 0; k < 3; ++k) {
+    out->bbox_min[k] = i.bbox_min[k];
+    out->bbox_max[k] = i.bbox_max[k];
+  }
+}
+
+PMZ_API void pmz_decoder_changes(const pmz_decoder* d, pmz_changes* out) {
+  const pmz::MeshChanges& c = d->dec.changes();
+  out->vertex_begin = c.vertex_begin;
+  out->face_begin = c.face_begin;
+  out->modified_faces = c.modified_faces.data();
+  out->modified_count = c.modified_faces.size();
+  out->all = c.all;
+}
+PMZ_API void pmz_decoder_clear_changes(pmz_decoder* d) { d->dec.clear_changes(); }
 
 }  // extern "C"

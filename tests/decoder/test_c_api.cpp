@@ -83,3 +83,70 @@ TEST(CApi, StatusReportsDamageFoundWhileRefining) {
   EXPECT_EQ(pmz_decoder_splits_applied(d), applied);
   pmz_decoder_destroy(d);
 }
+
+TEST(CApi, InfoProgressAndStatusNames) {
+  std::vector<unsigned char> bytes = read_sample();
+  ASSERT_FALSE(bytes.empty());
+  pmz_decoder* d = pmz_decoder_create(0, 0);
+  pmz_stream_info info;
+  pmz_decoder_info(d, &info);
+  EXPECT_EQ(info.header_done, 0u);
+  ASSERT_EQ(pmz_decoder_feed(d, bytes.data(), bytes.size()), PMZ_OK);
+  EXPECT_EQ(pmz_decoder_bytes_consumed(d), bytes.size());
+  pmz_decoder_info(d, &info);
+  EXPECT_EQ(info.header_done, 1u);
+  EXPECT_EQ(info.base_done, 1u);
+  EXPECT_EQ(info.complete, 1u);
+  EXPECT_EQ(info.full_faces, 128u);
+  EXPECT_EQ(info.total_splits, pmz_decoder_total_splits(d));
+  EXPECT_EQ(info.full_vertices, info.base_vertices + info.total_splits);
+  EXPECT_LE(info.bbox_min[0], info.bbox_max[0]);
+  pmz_decoder_set_split_target(d, info.total_splits);
+  EXPECT_EQ(pmz_decoder_splits_applied(d), info.total_splits);
+  const uint32_t* parents = pmz_decoder_split_parents(d);
+  const uint32_t base = uint32_t(info.base_vertices), n = pmz_decoder_vertex_count(d);
+  for (uint32_t v = 0; v < n; ++v) EXPECT_EQ(parents[v] == UINT32_MAX, v < base) << v;
+  EXPECT_STREQ(pmz_status_name(PMZ_OK), "ok");
+  EXPECT_STREQ(pmz_status_name(PMZ_ERR_TRUNCATED), "truncated stream");
+  EXPECT_STREQ(pmz_status_name(99), "unknown");
+  EXPECT_STREQ(pmz_status_name(-1), "unknown");
+  pmz_decoder_destroy(d);
+}
+
+// The change report after each refinement step names exactly what differs from the mesh
+// before it: applying it to a copy of the old buffers reproduces the new ones.
+TEST(CApi, ChangeReportCoversEveryDifference) {
+  std::vector<unsigned char> bytes = read_sample();
+  ASSERT_FALSE(bytes.empty());
+  pmz_decoder* d = pmz_decoder_create(0, 0);
+  ASSERT_EQ(pmz_decoder_feed(d, bytes.data(), bytes.size()), PMZ_OK);
+  pmz_changes c;
+  pmz_decoder_changes(d, &c);
+  EXPECT_EQ(c.all, 1u);
+  pmz_decoder_clear_changes(d);
+  std::vector<float> pos(pmz_decoder_positions(d),
+                         pmz_decoder_positions(d) + 3 * pmz_decoder_vertex_count(d));
+  std::vector<uint32_t> idx(pmz_decoder_indices(d),
+                            pmz_decoder_indices(d) + 3 * pmz_decoder_face_count(d));
+  while (pmz_decoder_refine(d, 3) > 0) {
+    pmz_decoder_changes(d, &c);
+    ASSERT_EQ(c.all, 0u);
+    const uint32_t nv = pmz_decoder_vertex_count(d), nf = pmz_decoder_face_count(d);
+    ASSERT_LE(c.vertex_begin, nv);
+    ASSERT_LE(c.face_begin, nf);
+    pos.resize(3 * size_t(nv));
+    idx.resize(3 * size_t(nf));
+    const float* p = pmz_decoder_positions(d);
+    const uint32_t* f = pmz_decoder_indices(d);
+    for (size_t k = 3 * size_t(c.vertex_begin); k < pos.size(); ++k) pos[k] = p[k];
+    for (size_t k = 3 * size_t(c.face_begin); k < idx.size(); ++k) idx[k] = f[k];
+    for (size_t m = 0; m < c.modified_count; ++m)
+      for (size_t k = 0; k < 3; ++k)
+        idx[3 * size_t(c.modified_faces[m]) + k] = f[3 * size_t(c.modified_faces[m]) + k];
+    EXPECT_EQ(std::memcmp(pos.data(), p, pos.size() * sizeof(float)), 0);
+    EXPECT_EQ(std::memcmp(idx.data(), f, idx.size() * sizeof(uint32_t)), 0);
+    pmz_decoder_clear_changes(d);
+  }
+  EXPECT_EQ(pmz_decoder_face_count(d), 128u);
+  pmz_decoder_destroy(d);
+}

@@ -45,6 +45,44 @@ uint32_t pmz_decoder_vertex_count(const pmz_decoder* d);
 uint32_t pmz_decoder_face_count(const pmz_decoder* d);
 const float* pmz_decoder_positions(const pmz_decoder* d);  /* 3 floats per vertex */
 const uint32_t* pmz_decoder_indices(const pmz_decoder* d); /* 3 indices per face */
+/* For geomorphs: the vertex each vertex was split from (UINT32_MAX for base vertices). */
+const uint32_t* pmz_decoder_split_parents(const pmz_decoder* d);
+
+/* "ok", "bad magic", ...: the names the one-line errors use; "unknown" for other values. */
+const char* pmz_status_name(int status);
+uint64_t pmz_decoder_bytes_consumed(const pmz_decoder* d);
+void pmz_decoder_set_split_target(pmz_decoder* d, uint64_t splits);
+
+/* The stream's header fields (valid once header_done) and progress. */
+typedef struct pmz_stream_info {
+  uint64_t base_vertices, base_faces;
+  uint64_t full_vertices, full_faces;
+  uint64_t total_splits;
+  uint32_t header_done; /* header parsed: the fields are valid */
+  uint32_t base_done;   /* base mesh decoded: the mesh is drawable */
+  uint32_t complete;    /* end marker seen: every split is available */
+  uint32_t version_major, version_minor;
+  uint32_t flags;
+  uint32_t position_bits; /* 0 = lossless float32 */
+  uint32_t curvature, fine_curvature;
+  float bbox_min[3], bbox_max[3];
+} pmz_stream_info;
+void pmz_decoder_info(const pmz_decoder* d, pmz_stream_info* out);
+
+/* What changed in the mesh since the last pmz_decoder_clear_changes(), for partial uploads:
+   vertices [vertex_begin, vertex_count) and faces [face_begin, face_count) are new or
+   rewritten; modified_faces lists faces below face_begin whose indices were rewritten (may
+   repeat, unsorted; valid until the next call that changes the mesh); all asks for a full
+   re-upload. */
+typedef struct pmz_changes {
+  uint32_t vertex_begin;
+  uint32_t face_begin;
+  const uint32_t* modified_faces;
+  size_t modified_count;
+  uint32_t all;
+} pmz_changes;
+void pmz_decoder_changes(const pmz_decoder* d, pmz_changes* out);
+void pmz_decoder_clear_changes(pmz_decoder* d);
 
 #ifdef __cplusplus
 }
