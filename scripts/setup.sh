@@ -11,21 +11,9 @@ packages=(build-essential cmake ninja-build pkg-config git
   libglfw3-dev libepoxy-dev libimgui-dev libstb-dev libcurl4-openssl-dev
   xvfb xauth libgl1-mesa-dri python3
   libmeshoptimizer-dev draco libopenmesh-apps python3-matplotlib
-  clang-14 libclang-rt-14-dev clang-format ccache)
-missing=()
-for p in "${packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-if [ ${#missing[@]} -gt 0 ]; then
-  echo "setup: installing ${missing[*]}" >&2
-  if [ "$(id -u)" -ne 0 ]; then
-    echo "setup: need root to install packages (run as root or install: ${missing[*]})" >&2
-    exit 1
-  fi
-  export DEBIAN_FRONTEND=noninteractive
-  apt-get update -qq
-  apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
-fi
+  clang-14 libclang-rt-14-dev clang-format ccache
+  emscripten chromium)
+bash scripts/install_packages.sh setup "${packages[@]}"
 
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null
 cmake --build "$build" -j "$(nproc)"

@@ -3,11 +3,12 @@
 #   1. Release build + ctest (with the real-mesh corpus from libcgal-demo when it can be fetched;
 #      tests that need it skip cleanly otherwise),
 #   2. the same suite under AddressSanitizer + UndefinedBehaviorSanitizer,
-#   3. each libFuzzer target for a short fixed time (PMZ_FUZZ_SECONDS, default 30).
-# PMZ_TEST_STAGES selects stages (default "release fuzz asan": ctest's summary comes last).
+#   3. each libFuzzer target for a short fixed time (PMZ_FUZZ_SECONDS, default 30),
+#   web: the WebAssembly decoder, npm package and viewer (scripts/web.sh test: node + Chromium).
+# PMZ_TEST_STAGES selects stages (default "release web fuzz asan": ctest's summary comes last).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-stages=${PMZ_TEST_STAGES:-release fuzz asan}
+stages=${PMZ_TEST_STAGES:-release web fuzz asan}
 jobs=$(nproc)
 
 bash scripts/setup.sh build
@@ -22,6 +23,10 @@ for stage in $stages; do
     release)
       echo "== stage: release"
       (cd build && ctest --output-on-failure -j "$jobs" --timeout 900)
+      ;;
+    web)
+      echo "== stage: web"
+      bash scripts/web.sh test
       ;;
     asan)
       echo "== stage: address,undefined sanitizers"

@@ -1,0 +1,80 @@
+#!/usr/bin/env bash
+# pmz in the browser: builds the WebAssembly decoder (Debian's emscripten), the npm package
+# pmz-decoder (ES module + TypeScript declarations + three.js loader) and the web viewer.
+# Installs what is missing first (apt: emscripten, chromium; npm: web/'s devDependencies).
+#
+#   bash scripts/web.sh          build: web/dist/pmz-decoder-VERSION.tgz (npm pack) and
+#                                web/dist/viewer/index.html (static files, ?src=URL)
+#   bash scripts/web.sh test     build, then the node API tests and the headless Chromium tests
+#
+# PMZ_WASM_OPT overrides the optimization flags (default -O3: see tests/bench/RESULTS.md).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+root=$PWD
+mode=${1:-build}
+
+packages=(emscripten chromium)
+command -v npm >/dev/null || packages+=(nodejs npm)
+bash scripts/install_packages.sh web "${packages[@]}"
+# Debian's emscripten takes acorn and friends from /usr/share/nodejs (node-acorn), which a node
+# that is not Debian's own does not search.
+export NODE_PATH=/usr/share/nodejs${NODE_PATH:+:$NODE_PATH}
+
+if [ ! -d web/node_modules/three ] || [ ! -d web/node_modules/puppeteer-core ]; then
+  echo "web: npm install (web/)" >&2
+  (cd web && PUPPETEER_SKIP_DOWNLOAD=1 npm ci --no-audit --no-fund --loglevel=error)
+fi
+
+# The decoder library's sources: standard C++ only. Everything is one translation unit list
+# linked with LTO, so the writer-side code in format/ is dropped.
+sources=(decoder/src/decoder.cpp decoder/src/c_api.cpp format/src/*.cpp)
+exports=$(sed -n 's/^[a-zA-Z][^(]* \**\(pmz_[a-z_]*\)(.*/"_\1"/p' decoder/include/pmz/pmz.h | paste -sd,)
+opt=${PMZ_WASM_OPT:--O3}
+out=web/build
+pkg=web/dist/pkg
+mkdir -p "$out" "$pkg"
+# -sFILESYSTEM=0: no file I/O; exceptions stay disabled (the default: a throw aborts, which the
+# JS wrapper reports as out_of_memory, the only exception the decoder can meet).
+em++ -std=c++20 $opt -flto -Wall -Wextra -Idecoder/include -Iformat/include "${sources[@]}" \
+  -o "$out/pmz_wasm.mjs" -sMODULARIZE=1 -sEXPORT_ES6=1 -sENVIRONMENT=web,worker \
+  -sFILESYSTEM=0 -sALLOW_MEMORY_GROWTH=1 -sWASM_BIGINT=1 -sEXPORTED_RUNTIME_METHODS='[]' \
+  -sEXPORTED_FUNCTIONS="[$exports,\"_malloc\",\"_free\"]" -sINCOMING_MODULE_JS_API='[wasmBinary]'
+
+rm -rf "$pkg" && mkdir -p "$pkg"
+cp web/pkg/package.json web/pkg/README.md "$pkg/"
+cp web/src/*.js web/src/*.d.ts "$out/pmz_wasm.mjs" "$out/pmz_wasm.wasm" "$pkg/"
+rm -f web/dist/*.tgz
+(cd "$pkg" && npm pack --silent --pack-destination "$root/web/dist" >/dev/null)
+
+# The viewer: static files; three and the package resolved by an import map.
+viewer=web/dist/viewer
+rm -rf "$viewer"
+if [ -f web/viewer/index.html ]; then  # the viewer lands in a following step
+  mkdir -p "$viewer/vendor"
+  cp web/viewer/* "$viewer/"
+  cp -r "$pkg" "$viewer/pmz"
+  cp web/node_modules/three/build/three.module.js "$viewer/vendor/"
+  cp web/node_modules/three/examples/jsm/controls/OrbitControls.js "$viewer/vendor/"
+fi
+
+wasm_bytes=$(stat -c %s "$out/pmz_wasm.wasm")
+glue_bytes=$(stat -c %s "$out/pmz_wasm.mjs")
+gz_bytes=$(cat "$out/pmz_wasm.wasm" "$out/pmz_wasm.mjs" | gzip -9 | wc -c)
+echo "web: $(ls web/dist/*.tgz); wasm $wasm_bytes + glue $glue_bytes bytes" \
+  "($gz_bytes gzip -9)" >&2
+
+if [ "$mode" = test ]; then
+  bin=${PMZ_BIN:-$root/build/bin}
+  if [ ! -x "$bin/pmz-decode" ] || [ ! -x "$bin/pmz-demo" ]; then
+    cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+    cmake --build build -j "$(nproc)" --target pmz-decode pmz-demo
+  fi
+  sample=web/build/demo/sample.pmz
+  if [ ! -f "$sample" ] || [ "$bin/pmz-demo" -nt "$sample" ]; then
+    "$bin/pmz-demo" web/build/demo >/dev/null
+  fi
+  PMZ_BIN=$bin PMZ_WEB_SAMPLE=$PWD/$sample node --test web/test/*.test.mjs
+elif [ "$mode" != build ]; then
+  echo "web: unknown mode $mode (build or test)" >&2
+  exit 2
+fi

@@ -1,0 +1,107 @@
+/** Status names: 'ok' or the error (pmz.h's PMZ_OK ... PMZ_ERR_MEMORY). */
+export type PmzStatus =
+  | 'ok'
+  | 'bad_magic'
+  | 'bad_version'
+  | 'bad_checksum'
+  | 'corrupt'
+  | 'limit_exceeded'
+  | 'truncated'
+  | 'out_of_memory';
+
+export declare const STATUS_NAMES: readonly PmzStatus[];
+
+export interface StreamInfo {
+  /** The header has been parsed: the counts and bounding box are valid. */
+  headerDone: boolean;
+  /** The base mesh has been decoded: the mesh is drawable. */
+  baseDone: boolean;
+  /** The end marker has been seen: every split is available. */
+  complete: boolean;
+  baseVertices: number;
+  baseFaces: number;
+  fullVertices: number;
+  fullFaces: number;
+  totalSplits: number;
+  versionMajor: number;
+  versionMinor: number;
+  flags: number;
+  /** 0 = lossless float32. */
+  positionBits: number;
+  bboxMin: [number, number, number];
+  bboxMax: [number, number, number];
+}
+
+export interface MeshChanges {
+  /** Vertices [vertexBegin, vertexCount) are new or rewritten. */
+  vertexBegin: number;
+  /** Faces [faceBegin, faceCount) are new or rewritten. */
+  faceBegin: number;
+  /** Rewritten faces below faceBegin (may repeat, unsorted); a view into the heap. */
+  modifiedFaces: Uint32Array;
+  /** Everything should be uploaded (e.g. the first base mesh). */
+  all: boolean;
+}
+
+export interface DecoderOptions {
+  /** Hard caps checked against the header before allocating; 0 or absent: the defaults. */
+  maxVertices?: number;
+  maxFaces?: number;
+  /** The .wasm bytes, when the file beside the module cannot be fetched or read. */
+  wasmBinary?: ArrayBuffer | Uint8Array;
+}
+
+export declare class Decoder {
+  /** Consumes a slice of the stream (any slicing gives the same mesh). */
+  feed(bytes: Uint8Array | ArrayBuffer): PmzStatus;
+  /** End of input: 'truncated' when the end marker was not seen. */
+  finish(): PmzStatus;
+  /** The sticky status: refine() can find damage too (a split is decoded when first applied). */
+  readonly status: PmzStatus;
+  /** One line, '' when ok. */
+  readonly error: string;
+  /** Applies up to maxSplits available splits (all when absent); returns how many. */
+  refine(maxSplits?: number): number;
+  /** Undoes up to maxSplits applied splits (all when absent); returns how many. */
+  coarsen(maxSplits?: number): number;
+  /** Refines for at most budgetMs milliseconds (default 8); returns the splits applied. */
+  refineFor(budgetMs?: number): number;
+  /** The smallest level with at least `faces` faces, clamped to what is available. */
+  setFaceTarget(faces: number): void;
+  setSplitTarget(splits: number): void;
+  readonly faceCount: number;
+  readonly vertexCount: number;
+  readonly splitsApplied: number;
+  readonly splitsAvailable: number;
+  readonly bytesConsumed: number;
+  readonly complete: boolean;
+  info(): StreamInfo;
+  /** xyz per vertex: a view into the heap, valid until the next feed or level change. */
+  positions(): Float32Array;
+  /** Three indices per counter-clockwise face: a view into the heap, valid like positions(). */
+  indices(): Uint32Array;
+  /** The vertex each vertex was split from (0xFFFFFFFF for base vertices), for geomorphs. */
+  splitParents(): Uint32Array;
+  /** What changed since the last clearChanges(). */
+  changes(): MeshChanges;
+  clearChanges(): void;
+  /** Frees the decoder's WebAssembly memory; the decoder is unusable afterwards. */
+  dispose(): void;
+}
+
+export declare function createDecoder(options?: DecoderOptions): Promise<Decoder>;
+
+/** Feeds a stream into the decoder as it arrives, then finish(); resolves to the status. */
+export declare function feedStream(
+  decoder: Decoder,
+  stream: ReadableStream<Uint8Array>,
+  onData?: (bytesSoFar: number) => void,
+): Promise<PmzStatus>;
+
+/** fetch(url) streamed into the decoder; totalBytes from Content-Length (0 when unknown). */
+export declare function fetchInto(
+  decoder: Decoder,
+  url: string | URL,
+  onData?: (bytesSoFar: number, totalBytes: number) => void,
+  init?: RequestInit,
+): Promise<PmzStatus>;

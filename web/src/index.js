@@ -1,0 +1,267 @@
+// pmz-decoder: the pmz streaming decoder compiled to WebAssembly, wrapping its C API
+// (decoder/include/pmz/pmz.h). Push model: feed() slices of a .pmz stream in any size, then
+// refine() / setFaceTarget() move the mesh between the base mesh and what has arrived.
+import createModule from './pmz_wasm.mjs';
+
+// Status codes of pmz.h (PMZ_OK ... PMZ_ERR_MEMORY), as the names the API returns.
+export const STATUS_NAMES = Object.freeze([
+  'ok',
+  'bad_magic',
+  'bad_version',
+  'bad_checksum',
+  'corrupt',
+  'limit_exceeded',
+  'truncated',
+  'out_of_memory',
+]);
+const ALL = 0xffffffffffffffffn;
+const FEED_SLICE = 1 << 20;  // input copied into the heap at most this much at a time
+
+let modulePromise = null;
+
+// One WebAssembly instance serves every decoder. In node the .wasm beside this file is read
+// with fs (emscripten's ES module output locates it with fetch, which node cannot use for
+// file: URLs); in browsers and workers it is fetched relative to this module.
+async function instantiate(options) {
+  const moduleOptions = {};
+  if (options.wasmBinary) {
+    moduleOptions.wasmBinary = options.wasmBinary;
+  } else if (typeof process === 'object' && process.versions && process.versions.node &&
+             typeof window === 'undefined') {
+    const { readFile } = await import('node:fs/promises');
+    moduleOptions.wasmBinary = await readFile(new URL('./pmz_wasm.wasm', import.meta.url));
+  }
+  return createModule(moduleOptions);
+}
+
+function loadModule(options) {
+  if (options.wasmBinary) return instantiate(options);
+  if (!modulePromise) {
+    modulePromise = instantiate(options);
+    modulePromise.catch(() => { modulePromise = null; });
+  }
+  return modulePromise;
+}
+
+function toU64(n) {
+  if (n === undefined || n === Infinity) return ALL;
+  if (typeof n === 'bigint') return n < 0n ? 0n : n & ALL;
+  if (!(n > 0)) return 0n;  // also NaN
+  return BigInt(Math.min(Math.floor(n), Number.MAX_SAFE_INTEGER));
+}
+
+function cString(m, ptr) {
+  const heap = m.HEAPU8;
+  let end = ptr;
+  while (heap[end] !== 0) ++end;
+  return new TextDecoder().decode(heap.subarray(ptr, end));
+}
+
+export class Decoder {
+  constructor(module, options = {}) {
+    this._m = module;
+    this._dead = null;  // the error line once the WebAssembly instance aborted
+    this._ptr = module._pmz_decoder_create(toU64(options.maxVertices ?? 0),
+                                           toU64(options.maxFaces ?? 0));
+    // Scratch for pmz_stream_info (104 bytes) and pmz_changes (20 bytes).
+    this._scratch = module._malloc(128);
+    this._input = 0;
+    this._inputSize = 0;
+    if (!this._ptr || !this._scratch) throw new Error('pmz: out of memory creating a decoder');
+  }
+
+  // Runs a call into the instance; an abort there (a failed allocation: exceptions are not
+  // compiled in) leaves the instance unusable, so it becomes out_of_memory from then on.
+  _call(fn, fallback) {
+    if (this._dead) return fallback;
+    if (!this._ptr) throw new Error('pmz: decoder used after dispose()');
+    try {
+      return fn(this._m);
+    } catch (e) {
+      this._dead = 'pmz: out of memory: ' + String(e && e.message ? e.message : e).split('\n')[0];
+      modulePromise = null;  // the next createDecoder() gets a fresh instance
+      return fallback;
+    }
+  }
+
+  feed(bytes) {
+    if (!(bytes instanceof Uint8Array)) bytes = new Uint8Array(bytes);
+    let status = this._call((m) => m._pmz_decoder_status(this._ptr), 7);
+    for (let at = 0; status === 0 && at < bytes.length; at += FEED_SLICE) {
+      const piece = bytes.subarray(at, Math.min(bytes.length, at + FEED_SLICE));
+      status = this._call((m) => {
+        if (this._inputSize < piece.length) {
+          m._free(this._input);
+          this._inputSize = Math.max(piece.length, 4096);
+          this._input = m._malloc(this._inputSize);
+          if (!this._input) { this._inputSize = 0; return 7; }
+        }
+        m.HEAPU8.set(piece, this._input);
+        return m._pmz_decoder_feed(this._ptr, this._input, piece.length);
+      }, 7);
+    }
+    return STATUS_NAMES[status] ?? 'corrupt';
+  }
+
+  finish() {
+    return STATUS_NAMES[this._call((m) => m._pmz_decoder_finish(this._ptr), 7)] ?? 'corrupt';
+  }
+  get status() {
+    return STATUS_NAMES[this._call((m) => m._pmz_decoder_status(this._ptr), 7)] ?? 'corrupt';
+  }
+  get error() {
+    if (this._dead) return this._dead;
+    return this._call((m) => cString(m, m._pmz_decoder_error(this._ptr)), this._dead);
+  }
+
+  refine(maxSplits) {
+    return Number(this._call((m) => m._pmz_decoder_refine(this._ptr, toU64(maxSplits)), 0n));
+  }
+  coarsen(maxSplits) {
+    return Number(this._call((m) => m._pmz_decoder_coarsen(this._ptr, toU64(maxSplits)), 0n));
+  }
+  setFaceTarget(faces) {
+    this._call((m) => m._pmz_decoder_set_face_target(this._ptr, toU64(faces)));
+  }
+  setSplitTarget(splits) {
+    this._call((m) => m._pmz_decoder_set_split_target(this._ptr, toU64(splits)));
+  }
+
+  get faceCount() { return this._call((m) => m._pmz_decoder_face_count(this._ptr) >>> 0, 0); }
+  get vertexCount() {
+    return this._call((m) => m._pmz_decoder_vertex_count(this._ptr) >>> 0, 0);
+  }
+  get splitsApplied() {
+    return Number(this._call((m) => m._pmz_decoder_splits_applied(this._ptr), 0n));
+  }
+  get splitsAvailable() {
+    return Number(this._call((m) => m._pmz_decoder_splits_available(this._ptr), 0n));
+  }
+  get bytesConsumed() {
+    return Number(this._call((m) => m._pmz_decoder_bytes_consumed(this._ptr), 0n));
+  }
+  get complete() { return this.info().complete; }
+
+  // The header's fields (valid once headerDone) and progress: pmz_stream_info.
+  info() {
+    return this._call((m) => {
+      const s = this._scratch;
+      m._pmz_decoder_info(this._ptr, s);
+      const v = new DataView(m.HEAPU8.buffer, s, 104);
+      const u64 = (o) => Number(v.getBigUint64(o, true));
+      const u32 = (o) => v.getUint32(o, true);
+      const f32 = (o) => v.getFloat32(o, true);
+      return {
+        baseVertices: u64(0), baseFaces: u64(8), fullVertices: u64(16), fullFaces: u64(24),
+        totalSplits: u64(32), headerDone: u32(40) !== 0, baseDone: u32(44) !== 0,
+        complete: u32(48) !== 0, versionMajor: u32(52), versionMinor: u32(56), flags: u32(60),
+        positionBits: u32(64), bboxMin: [f32(76), f32(80), f32(84)],
+        bboxMax: [f32(88), f32(92), f32(96)],
+      };
+    }, { headerDone: false, baseDone: false, complete: false });
+  }
+
+  // Zero-copy views into the WebAssembly heap: valid until the next call that changes the
+  // mesh or feeds bytes (the heap may grow and the decoder's buffers move). Copy to keep.
+  positions() {
+    return this._call((m) => new Float32Array(m.HEAPU8.buffer,
+      m._pmz_decoder_positions(this._ptr), 3 * this.vertexCount), new Float32Array(0));
+  }
+  indices() {
+    return this._call((m) => new Uint32Array(m.HEAPU8.buffer,
+      m._pmz_decoder_indices(this._ptr), 3 * this.faceCount), new Uint32Array(0));
+  }
+  // For geomorphs: the vertex each vertex was split from (0xFFFFFFFF for base vertices).
+  splitParents() {
+    return this._call((m) => new Uint32Array(m.HEAPU8.buffer,
+      m._pmz_decoder_split_parents(this._ptr), this.vertexCount), new Uint32Array(0));
+  }
+
+  // What changed since the last clearChanges(), for partial GPU uploads: vertices
+  // [vertexBegin, vertexCount) and faces [faceBegin, faceCount) are new or rewritten,
+  // modifiedFaces (a heap view, may repeat) lists rewritten faces below faceBegin; all asks
+  // for a full upload.
+  changes() {
+    return this._call((m) => {
+      const s = this._scratch;
+      m._pmz_decoder_changes(this._ptr, s);
+      const v = new DataView(m.HEAPU8.buffer, s, 20);
+      return {
+        vertexBegin: v.getUint32(0, true),
+        faceBegin: v.getUint32(4, true),
+        modifiedFaces: new Uint32Array(m.HEAPU8.buffer, v.getUint32(8, true), v.getUint32(12, true)),
+        all: v.getUint32(16, true) !== 0,
+      };
+    }, { vertexBegin: 0, faceBegin: 0, modifiedFaces: new Uint32Array(0), all: true });
+  }
+  clearChanges() { this._call((m) => m._pmz_decoder_clear_changes(this._ptr)); }
+
+  // Applies available splits for at most budgetMs (in batches that adapt to the rate seen).
+  // Returns the splits applied.
+  refineFor(budgetMs = 8) {
+    const start = performance.now();
+    let total = 0, batch = this._batch || 256;
+    for (;;) {
+      const t0 = performance.now();
+      const n = this.refine(batch);
+      total += n;
+      const now = performance.now();
+      if (n < batch || this.status !== 'ok') break;
+      const per = (now - t0) / n;
+      // Aim each batch at a quarter of the budget left.
+      batch = Math.max(16, Math.min(1 << 20, Math.floor((budgetMs - (now - start)) / 4 / (per || 1e-4))));
+      this._batch = batch;
+      if (now - start >= budgetMs) break;
+    }
+    return total;
+  }
+
+  dispose() {
+    if (!this._ptr) return;
+    if (!this._dead) {
+      try {
+        this._m._pmz_decoder_destroy(this._ptr);
+        this._m._free(this._input);
+        this._m._free(this._scratch);
+      } catch (e) { /* the instance aborted meanwhile: nothing left to free */ }
+    }
+    this._ptr = 0;
+  }
+}
+
+// A new decoder. options: maxVertices, maxFaces (0: the library's defaults), wasmBinary (the
+// .wasm bytes, when the default location cannot be fetched).
+export async function createDecoder(options = {}) {
+  return new Decoder(await loadModule(options), options);
+}
+
+// Feeds a ReadableStream (e.g. fetch()'s response.body) into the decoder as it arrives, then
+// finish(). onData(bytesSoFar) runs after each slice; the caller refines (e.g. refineFor() per
+// animation frame). Resolves to 'ok' or the error name; stops reading at the first error.
+export async function feedStream(decoder, stream, onData) {
+  const reader = stream.getReader();
+  let bytes = 0;
+  try {
+    for (;;) {
+      const { done, value } = await reader.read();
+      if (done) break;
+      bytes += value.length;
+      const status = decoder.feed(value);
+      if (onData) onData(bytes);
+      if (status !== 'ok') return status;
+    }
+  } finally {
+    reader.releaseLock();
+  }
+  return decoder.finish();
+}
+
+// fetch(url) streamed into the decoder: onData(bytes, totalBytes) with totalBytes from
+// Content-Length (0 when unknown). Resolves to 'ok' or the error name; rejects when the
+// request itself fails (network error, HTTP status other than 2xx).
+export async function fetchInto(decoder, url, onData, init) {
+  const response = await fetch(url, init);
+  if (!response.ok) throw new Error(`pmz: ${url}: HTTP ${response.status}`);
+  const total = Number(response.headers.get('content-length')) || 0;
+  return feedStream(decoder, response.body, (bytes) => onData && onData(bytes, total));
+}
