@@ -581,9 +581,17 @@ uint64_t Decoder::Impl::refine(uint64_t max_splits, uint64_t face_target) {
     want = std::min(want, face_target - std::min<uint64_t>(face_target, mesh.face_count()));
     uint64_t target = applied + want;
     if (target > applied) {
-      // Rounded up to a power of two: reserving exactly `target` reallocates (and copies
-      // everything) on every small call, e.g. a viewer refining a few hundred per frame.
-      uint64_t room = std::max(target, std::min(available, std::bit_ceil(target)));
+      // Grown geometrically: at least to the next power of two and at least doubled. Reserving
+      // exactly `target`, or all that is available, reallocates (and copies everything) on every
+      // small call or every chunk that arrives (a viewer refining a few hundred per frame; a
+      // stream refined as it arrives: 1.2M faces in 47 chunks took 3.3x the CPU time). Below
+      // twice `target`, so still bounded by the decoded input.
+      const uint64_t capacity = sides.capacity();
+      uint64_t room =
+          target <= capacity
+              ? target
+              : std::max(target, std::min<uint64_t>(info.total_splits,
+                                                    std::max(std::bit_ceil(target), 2 * capacity)));
       uint64_t nv = info.base_vertices + room;
       const uint32_t* before = mesh.opposite.data();
       mesh.reserve(nv, mesh.face_count() + 2 * (room - applied));
