@@ -277,6 +277,7 @@ size_t Decoder::Impl::parse(const uint8_t* p, size_t n) {
     at = 8;
   }
   while (status == Status::ok) {
+    if (info.complete) return n;  // bytes after END are ignored, framed or not (spec)
     ChunkFrame f;
     const FrameStatus fs = parse_chunk_frame(p + at, n - at, f);
     chunk_offset = parse_base + at;
@@ -307,10 +308,6 @@ size_t Decoder::Impl::parse(const uint8_t* p, size_t n) {
     if (chunk_crc(p + at, f, payload) != f.crc) {
       fail(Status::bad_checksum, "chunk checksum mismatch");
       return n;
-    }
-    if (info.complete) {
-      at += f.header_size + size;  // bytes after the end marker are ignored
-      continue;
     }
     if (chunk(f.type, payload, size) != Status::ok) return n;
     at += f.header_size + size;

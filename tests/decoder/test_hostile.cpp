@@ -269,6 +269,28 @@ TEST(Hostile, SmallFileDecodes) {
   expect_valid(d);
 }
 
+// Bytes after END are ignored, whatever they are: a frame with a wrong CRC, a size varint of
+// 11 bytes, a chunk over max_chunk_bytes (each refused before END), fed whole or byte by byte.
+TEST(Hostile, BytesAfterEndAreIgnoredEvenMalformed) {
+  const Bytes tails[] = {
+      {pmz::kChunkSplits, 1, 0, 0, 0, 0, 0x5a},
+      {pmz::kChunkHead, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0},
+      {pmz::kChunkBase, 0xFF, 0xFF, 0xFF, 0xFF, 0x0F, 0, 0, 0, 0},
+  };
+  for (const Bytes& tail : tails) {
+    Bytes f = small_file();
+    f.insert(f.end(), tail.begin(), tail.end());
+    for (size_t slice : {f.size(), size_t(1)}) {
+      pmz::Decoder d(pmz::DecoderLimits{1 << 20, 1 << 20, 1 << 20});
+      for (size_t at = 0; at < f.size(); at += slice)
+        ASSERT_EQ(d.feed(f.data() + at, std::min(slice, f.size() - at)), pmz::Status::ok)
+            << d.error_message();
+      EXPECT_EQ(d.finish(), pmz::Status::ok);
+      EXPECT_EQ(d.refine(), 12u);
+    }
+  }
+}
+
 // HEAD curvature and fine_curvature (spec section 5): 0..8; 9 and above are refused, 8 decodes.
 TEST(Hostile, CurvatureAboveEightIsRefused) {
   for (uint32_t value : {8u, 9u, 255u, 8u | 0x100u, 9u | 0x100u, 255u | 0x100u}) {
@@ -493,6 +515,42 @@ TEST(Hostile, BaseTruncatedOrMiscountedIsCorrupt) {
     const auto [s, done] = feed_base(full, nv, nf);
     EXPECT_EQ(s, pmz::Status::corrupt) << nv << " vertices, " << nf << " faces";
     EXPECT_FALSE(done);
+  }
+}
+
+// A BASE vertex whose faces form several fans (two triangles meeting at a vertex, two
+// octahedron halves meeting at their apex) is refused: the spec defines splits only at a
+// vertex with one fan. The writer never emits one (mesh repair gives each fan its own vertex).
+TEST(Hostile, BaseVertexInSeveralFansIsRefused) {
+  struct Case {
+    std::vector<uint32_t> faces;
+    uint32_t vertices;
+  };
+  const Case cases[] = {
+      {{0, 1, 2, 0, 3, 4}, 5},  // open fans: a bow tie
+      // closed fans: two square pyramids (apex 0, rims 1-4 and 5-8) glued at the apex, each
+      // closed by its base
+      {{0, 1, 2, 0, 2, 3, 0, 3, 4, 0, 4, 1, 2, 1, 4, 2, 4, 3,  //
+        0, 6, 5, 0, 7, 6, 0, 8, 7, 0, 5, 8, 5, 6, 8, 6, 7, 8},
+       9},
+  };
+  for (const Case& c : cases) {
+    std::vector<int32_t> coords;
+    for (uint32_t v = 0; v < c.vertices; ++v)
+      for (int a = 0; a < 3; ++a) coords.push_back(int32_t((v * 37 + uint32_t(a) * 11) % 97));
+    std::vector<uint32_t> faces = c.faces;
+    Bytes payload;
+    base_payload(coords, faces, payload);
+    const uint32_t fn = uint32_t(faces.size() / 3);
+    Bytes f = signature();
+    head(f, header(c.vertices, fn, 0, fn));
+    pmz::append_chunk(f, pmz::kChunkBase, payload);
+    pmz::append_chunk(f, pmz::kChunkEnd, {});
+    pmz::Decoder d;
+    EXPECT_EQ(d.feed(f.data(), f.size()), pmz::Status::corrupt) << c.vertices << " vertices";
+    EXPECT_NE(d.error_message().find("several fans"), std::string::npos) << d.error_message();
+    EXPECT_FALSE(d.info().base_done);
+    expect_valid(d);
   }
 }
 

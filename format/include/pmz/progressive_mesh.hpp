@@ -35,7 +35,8 @@ class ProgressiveMesh {
   uint32_t face_count() const { return uint32_t(corner_vertex.size() / 3); }
 
   // Resets to the given mesh. Fails (false + message) on out-of-range indices, degenerate
-  // faces, an edge used twice in the same direction or by more than two faces.
+  // faces, an edge used twice in the same direction or by more than two faces, a vertex whose
+  // faces form several fans.
   bool build(uint32_t vertex_count, const uint32_t* indices, size_t face_count, std::string& error);
 
   // Canonical ordered one-ring of v (history-independent): counter-clockwise;
