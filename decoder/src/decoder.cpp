@@ -96,7 +96,8 @@ struct Decoder::Impl {
   // Chunks whose wedge and residual symbols are not all decoded yet, oldest first; the front
   // one starts at split lazy_first. Splits below `decoded` have their symbols decoded.
   std::deque<SplitChunkReader> lazy;
-  std::unique_ptr<SplitModels> models;  // the file's context models (spec: carried across chunks)
+  std::unique_ptr<SplitModels>
+      models;  // the file's context models (spec section 8: carried across chunks)
   uint64_t lazy_first = 0, decoded = 0;
   WedgeScratch wedge_scratch;
   uint32_t wedge_scratch_ring = 0;  // wedge_scratch has room for rings up to this size
@@ -277,7 +278,7 @@ size_t Decoder::Impl::parse(const uint8_t* p, size_t n) {
     at = 8;
   }
   while (status == Status::ok) {
-    if (info.complete) return n;  // bytes after END are ignored, framed or not (spec)
+    if (info.complete) return n;  // bytes after END are ignored, framed or not (spec section 3)
     ChunkFrame f;
     const FrameStatus fs = parse_chunk_frame(p + at, n - at, f);
     chunk_offset = parse_base + at;
@@ -356,7 +357,7 @@ Status Decoder::Impl::head(const uint8_t* p, size_t n) {
       return fail(Status::corrupt, "bad bounding box");
   if (h.base_faces > h.full_faces || h.full_faces > uint64_t(h.base_faces) + 2ull * h.total_splits)
     return fail(Status::corrupt, "inconsistent counts in HEAD");
-  // Vertex ids are uint32 with 0xFFFFFFFF for none, whatever the limits (spec section 2).
+  // Vertex ids are uint32 with 0xFFFFFFFF for none, whatever the limits (spec section 4).
   if (h.full_vertices() > 0xFFFFFFFFu)
     return fail(Status::corrupt,
                 std::to_string(h.full_vertices()) + " vertices in HEAD (2^32 or more)");

@@ -280,7 +280,7 @@ void encode_split_chunk(const std::vector<GroupCode>& groups, const std::vector<
       encode_uint(cn, m->groups, g.size - 1);
       cn.bit(m->near, g.near ? 1 : 0);
     }
-    // Then each group in the decoder's order of reads (spec "SPLT"): its choice bits up to its
+    // Then each group in the decoder's order of reads (spec section 9.3): its choice bits up to its
     // (kChoiceLag + 1)-th vertex, then per split j the wedge symbols and the choice bits up to
     // the group's (j + kChoiceLag + 2)-th vertex (those the decoder finds once split j is
     // applied); the residuals in their own stream.
@@ -465,14 +465,14 @@ bool SplitChunkReader::residuals(const uint32_t context[3], const uint32_t mix[3
   return true;
 }
 
-// ---- Wedge candidates (spec section 4, "Wedge symbols") ----
+// ---- Wedge candidates (spec section 9.4) ----
 
 namespace {
 
 constexpr uint32_t kMaxScoredRing = 1u << 24;  // larger rings: all scores 0 (order by index)
 constexpr uint32_t kTopSelect = 16;            // ranks below: insertion into the best rank + 1
 
-// End weights (spec section 4): m = 4, 3, 2 for degree <= 4, 5, more, and r = 12 / m (a
+// End weights (spec section 9.4): m = 4, 3, 2 for degree <= 4, 5, more, and r = 12 / m (a
 // negative G is ordered by G / (m_a m_b)), by degree clamped to 7; a missing end as degree 7.
 constexpr uint8_t kWeight[8][2] = {{4, 3}, {4, 3}, {4, 3}, {4, 3}, {4, 3}, {3, 4}, {2, 6}, {2, 6}};
 
@@ -500,7 +500,7 @@ bool ring_narrow(const int32_t* coords, const ProgressiveMesh& pm, const int32_t
 // tracking the best two scores (s.confident) and the first best candidate (s.best, rank 0).
 // G = |E|^2 + c (4 S - c T) with E = 2 * interior + both ends, S the interior's |e|^2, T = 2 or 4
 // times the ends' |e|^2 (0 for a missing end); key = G m_a m_b when G >= 0, else G r_a r_b with
-// r = 12 / m (spec section 4).
+// r = 12 / m (spec section 9.4).
 template <class I, class U>
 void score_wedges(const int32_t* coords, const uint32_t* degree, const ProgressiveMesh& pm,
                   uint32_t count, const int32_t* cv, std::vector<I>& qbuf, std::vector<I>& score,

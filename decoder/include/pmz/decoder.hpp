@@ -45,7 +45,7 @@ struct StreamInfo {
   uint32_t version_major = 0, version_minor = 0;
   uint32_t flags = 0;
   uint32_t position_bits = 0;  // 0 = lossless float32
-  uint32_t curvature = 0;      // position prediction offset weights in eighths (spec section 5)
+  uint32_t curvature = 0;      // position prediction offset weights in eighths (spec section 9.6)
   uint32_t fine_curvature = 0;
   uint64_t base_vertices = 0, base_faces = 0;
   uint64_t full_vertices = 0, full_faces = 0;

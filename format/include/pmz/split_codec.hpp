@@ -1,6 +1,6 @@
 // Coding of one SPLT chunk: groups of vertex splits into two range-coded streams with adaptive
-// context models (spec/format.md, "SPLT"): connectivity (groups, vertex choice, wedges) and
-// geometry (position residuals). Writer and decoder share this code.
+// context models (spec/format.md, sections 8 and 9): connectivity (groups, vertex choice, wedges)
+// and geometry (position residuals). Writer and decoder share this code.
 //
 // Groups (sizes and near flags) are decoded when the chunk arrives. Which vertices split (the
 // choice stream), wedge and residual symbols use contexts from the mesh the decoder already has
@@ -26,7 +26,7 @@ namespace pmz {
 class ProgressiveMesh;
 
 inline constexpr uint32_t kWedgeContexts = 18, kRankContexts = 4;
-// Vertex choice contexts (spec section 2, "Vertex choice"): density x near x degree x umbrella
+// Vertex choice contexts (spec section 9.2): density x near x degree x umbrella
 // class.
 inline constexpr uint32_t kChoiceDensities = 21, kChoiceDegrees = 9, kChoiceShapes = 3;
 inline constexpr uint32_t kChoiceKeys =
@@ -57,7 +57,7 @@ struct SplitModels {
   Prob rank_zero[kRankContexts] = {kProbInit, kProbInit, kProbInit, kProbInit};  // rank > 0
   SmallModel wedge_rank[kRankContexts];  // rank - 1 when rank > 0
   UIntModel residual[3][kResidualContexts];
-  // The second model of each residual bit (spec section 5): tangent slots by
+  // The second model of each residual bit (spec section 9.6): tangent slots by
   // PositionPrediction::mix (kMixTangentContexts), the normal slot likewise (kMixNormalContexts).
   UIntModel mix_tangent[2][kMixTangentContexts];
   UIntModel mix_normal[kMixNormalContexts];
@@ -76,8 +76,8 @@ inline uint32_t bitlen_quotient(uint64_t D, uint64_t m) {
 }
 
 // Initial probability of a 0 (scaled to 32768) of the choice models of expected-gap class d
-// (spec "Vertex choice"): a 1 has probability about 1 / (1.5 * 2^(d - 1)) there. Models with
-// d >= 1 start at count kPriorCount (primed_model, spec section 8).
+// (spec section 9.2 and Appendix A): a 1 has probability about 1 / (1.5 * 2^(d - 1)) there. Models
+// with d >= 1 start at count kPriorCount (primed_model, spec section 11.1).
 inline uint32_t choice_prior(uint32_t d) {
   return d == 0 ? kProbInit : std::min(32768u - 131072u / (3u << d), 31744u);
 }
@@ -89,7 +89,7 @@ struct GroupCode {
   bool near;
 };
 
-// The umbrella sums of a vertex w (spec "Vertex choice"): over w's ring as the degree rule
+// The umbrella sums of a vertex w (spec section 9.1): over w's ring as the degree rule
 // counts it, with c' = c >> umbrella_shift (per axis) and the spokes e = c'[x] - c'[w], the sum
 // D of the spokes per axis and the sum L of their lengths |e_x| + |e_y| + |e_z|, modulo 2^32
 // (D two's complement).
@@ -115,13 +115,13 @@ inline uint32_t umbrella_class(const RingSums& s) {
   return d2 < ((l2 + 63) >> 6) ? 0 : d2 < ((l2 + 15) >> 4) ? 1 : 2;
 }
 
-// Exclusion lag (spec "Vertex choice"): a group's j-th split excludes its closed one-ring from
+// Exclusion lag (spec section 9.2): a group's j-th split excludes its closed one-ring from
 // the group's candidates once kChoiceLag more splits of the group are found, so the decoder
 // can find the group's vertices kChoiceLag + 1 splits ahead of the split it applies (for the
 // fan prefetching) and take each ring from that split's own ring walk.
 inline constexpr uint32_t kChoiceLag = 8;
 
-// Which vertices split (spec/format.md, "Vertex choice"): the state the writer and the decoder
+// Which vertices split (spec/format.md, sections 9.1 and 9.2): the state the writer and the decoder
 // keep in step, updated at every first application of a split, in stream order.
 // - degree of every vertex: base vertices their ring size, then per split the rule of
 //   applied() (the ring sizes on a manifold mesh);
@@ -293,7 +293,7 @@ void encode_split_chunk(const std::vector<GroupCode>& groups, const std::vector<
 // Decoder side of one SPLT chunk. open() copies the payload, decodes the groups (sizes summing
 // to the split count, at most max_splits) and validates them. models (the file's, see
 // SplitModels) must outlive the reader. Then, in stream order and in the decoder's schedule
-// (spec "SPLT": the choice, wedge_count and wedge_rank calls read one stream): begin_group()
+// (spec section 9.3: the choice, wedge_count and wedge_rank calls read one stream): begin_group()
 // and find() the vertices of each group, wedge_count(), wedge_rank() and residuals() the
 // symbols of each split, with the contexts the caller computes from its mesh; false when a
 // stream is malformed or exhausted, or a group's candidates run out.
@@ -369,7 +369,7 @@ bool SplitChunkReader::group_symbols(VertexChoice& choice, const ProgressiveMesh
 bool split_chunk_stream_sizes(const uint8_t* p, size_t size, uint64_t& count,
                               uint64_t stream_bytes[kSplitStreamCount]);
 
-// ---- Mesh-dependent symbols (spec/format.md, sections 4 and 5) ----
+// ---- Mesh-dependent symbols (spec/format.md, sections 9.4 to 9.6) ----
 
 __extension__ typedef unsigned __int128 WedgeScore;  // exact squared lengths (GCC/Clang)
 __extension__ typedef __int128 WedgeScoreSigned;
@@ -384,7 +384,7 @@ struct WedgeScratch {
   std::vector<uint32_t> order;
   bool narrow = true;
   uint32_t n = 0;         // candidates scored last
-  bool confident = true;  // their best score is over twice the second (spec section 4)
+  bool confident = true;  // their best score is over twice the second (spec section 9.4)
   uint32_t best = 0;      // the candidate at rank 0
   // Optional, set by the caller: a bound on |c[w] - c[v]| (per axis) over all vertex pairs, e.g.
   // the largest side of the coordinates' bounding box. When k (extent + 1) < 2^26 the scores
