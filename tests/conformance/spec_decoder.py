@@ -1,0 +1,802 @@
+#!/usr/bin/env python3
+"""A second .pmz decoder, in Python, written by following spec/format.md's text (sections 2
+to 11: container, HEAD, BASE, SPLT group tables, the choice scan, wedge symbols and scores, the
+split, the position prediction, the per-vertex state, range coding), checked against the
+conformance vectors: for every .expected, the stream status after feeding the whole file, the
+status and split count after applying every split, and every level's vertex count, face count
+and SHA-256 must be the expected ones. Slow (pure Python) but small vectors take seconds.
+
+    python3 tests/conformance/spec_decoder.py tests/conformance [MAX_SPLITS]
+"""
+import hashlib
+import math
+import struct
+import sys
+import zlib
+from pathlib import Path
+
+SIGNATURE = bytes([0x89, 0x50, 0x4D, 0x5A, 0x0D, 0x0A, 0x1A, 0x0A])
+
+
+class Refused(Exception):
+    pass
+
+
+def varint(b, at):  # section 2
+    v = 0
+    for i in range(10):
+        if at + i >= len(b):
+            raise Refused("corrupt")
+        x = b[at + i]
+        if i == 9 and x > 1:
+            raise Refused("corrupt")
+        v |= (x & 0x7F) << (7 * i)
+        if not x & 0x80:
+            return v, at + i + 1
+    raise Refused("corrupt")
+
+
+def unzigzag(y):
+    return y // 2 if y % 2 == 0 else -(y + 1) // 2
+
+
+def s32(x):  # modulo 2^32, signed
+    x &= 0xFFFFFFFF
+    return x - (1 << 32) if x >= 1 << 31 else x
+
+
+class Model:  # section 11.1
+    def __init__(self):
+        self.p, self.cnt = 16384, 0
+
+    def adapt(self, b):
+        c = self.cnt
+        shift = 2 if c < 8 else 3 if c < 16 else 4 if c < 48 else 5 if c < 127 else 6
+        if b == 0:
+            self.p += (32528 - self.p) >> shift
+        else:
+            self.p -= (self.p - 240) >> shift
+        self.cnt = min(c + 1, 127)
+
+
+class UIntModel:  # section 11.3
+    def __init__(self):
+        self.length = [Model() for _ in range(16)]
+        self.escape = [Model() for _ in range(32)]
+        self.high = [[Model() for _ in range(4)] for _ in range(33)]
+
+
+class RangeDecoder:  # section 11.2
+    def __init__(self, s):
+        self.s, self.at, self.past = s, 0, False
+        self.range = 0xFFFFFFFF
+        self.code = 0
+        for _ in range(4):
+            self.code = (self.code << 8) | self.next()
+
+    def next(self):
+        if self.at < len(self.s):
+            v = self.s[self.at]
+        else:
+            v = 0
+            if self.at >= len(self.s) + 4:
+                self.past = True
+        self.at += 1
+        return v
+
+    def normalise(self):
+        if self.range < 1 << 24:
+            self.range = (self.range << 8) & 0xFFFFFFFF
+            self.code = ((self.code << 8) | self.next()) & 0xFFFFFFFF
+
+    def bit_p(self, p):
+        bound = (self.range >> 15) * p
+        if self.code < bound:
+            self.range, b = bound, 0
+        else:
+            self.code -= bound
+            self.range -= bound
+            b = 1
+        self.normalise()
+        return b
+
+    def bit(self, m):
+        b = self.bit_p(m.p)
+        m.adapt(b)
+        return b
+
+    def direct(self):
+        self.range >>= 1
+        if self.code >= self.range:
+            self.code -= self.range
+            b = 1
+        else:
+            b = 0
+        self.normalise()
+        return b
+
+    def uint(self, m):
+        node = 1
+        for _ in range(4):
+            node = 2 * node + self.bit(m.length[node])
+        bl = node - 16
+        if bl == 15:
+            node = 1
+            for _ in range(5):
+                node = 2 * node + self.bit(m.escape[node])
+            bl = 15 + node - 32
+            if bl > 32:
+                raise Refused("corrupt")
+        if bl < 2:
+            return bl
+        x, node, rest = 1, 1, bl - 1
+        for _ in range(min(2, rest)):
+            b = self.bit(m.high[bl][node])
+            node, x, rest = 2 * node + b, 2 * x + b, rest - 1
+        for _ in range(rest):
+            x = 2 * x + self.direct()
+        return x
+
+
+class SmallModel:  # section 11.3
+    def __init__(self):
+        self.tree = [Model() for _ in range(8)]
+        self.rest = UIntModel()
+
+
+def decode_small(rc, m):
+    node = 1
+    for _ in range(3):
+        node = 2 * node + rc.bit(m.tree[node])
+    x = node - 8
+    if x == 7:
+        y = rc.uint(m.rest)
+        if y > (1 << 32) - 8:
+            raise Refused("corrupt")
+        x = 7 + y
+    return x
+
+
+def decode_mixed(rc, m, m2):  # section 11.3, mixed: the uint procedure with two models
+    def bit(a, b):
+        x = rc.bit_p((a.p + b.p) // 2)
+        a.adapt(x)
+        b.adapt(x)
+        return x
+
+    node = 1
+    for _ in range(4):
+        node = 2 * node + bit(m.length[node], m2.length[node])
+    bl = node - 16
+    if bl == 15:
+        node = 1
+        for _ in range(5):
+            node = 2 * node + bit(m.escape[node], m2.escape[node])
+        bl = 15 + node - 32
+        if bl > 32:
+            raise Refused("corrupt")
+    if bl < 2:
+        return bl
+    x, node, rest = 1, 1, bl - 1
+    for _ in range(min(2, rest)):
+        b = bit(m.high[bl][node], m2.high[bl][node])
+        node, x, rest = 2 * node + b, 2 * x + b, rest - 1
+    for _ in range(rest):
+        x = 2 * x + rc.direct()
+    return x
+
+
+def read_head(p):  # section 4
+    if len(p) < 2:
+        raise Refused("corrupt")
+    h = {"major": p[0], "minor": p[1]}
+    at = 2
+    h["flags"], at = varint(p, at)
+    if at + 3 > len(p):
+        raise Refused("corrupt")
+    h["position_bits"], h["curvature"], h["fine_curvature"] = p[at], p[at + 1], p[at + 2]
+    at += 3
+    for name in ("base_vertices", "base_faces", "total_splits", "full_faces"):
+        h[name], at = varint(p, at)
+    if at + 24 > len(p):
+        raise Refused("corrupt")
+    h["bbox_min"] = struct.unpack_from("<3f", p, at)
+    h["bbox_max"] = struct.unpack_from("<3f", p, at + 12)
+    if any(h[n] >= 1 << 32 for n in ("flags", "base_vertices", "base_faces", "total_splits",
+                                     "full_faces")):
+        raise Refused("corrupt")
+    if h["major"] != 7:
+        raise Refused("bad_version")
+    if h["flags"] != 0 or h["position_bits"] > 30 or h["curvature"] > 8 or h["fine_curvature"] > 8:
+        raise Refused("corrupt")
+    for a in range(3):
+        lo, hi = h["bbox_min"][a], h["bbox_max"][a]
+        if not (math.isfinite(lo) and math.isfinite(hi)) or hi < lo:
+            raise Refused("corrupt")
+    if h["base_faces"] > h["full_faces"] or h["full_faces"] > h["base_faces"] + 2 * h["total_splits"]:
+        raise Refused("corrupt")
+    if h["base_vertices"] + h["total_splits"] >= 1 << 32:
+        raise Refused("corrupt")
+    return h
+
+
+def nxt(h):
+    return h + 1 if h % 3 < 2 else h - 2
+
+
+def prv(h):
+    return h - 1 if h % 3 > 0 else h + 2
+
+
+def decode_base(payload, nv, nf):  # section 7
+    if nf > 384 * (len(payload) + 1) or nv > 64 * (len(payload) + 1):
+        raise Refused("corrupt")
+    rc = RangeDecoder(payload)
+    face, is_right = Model(), Model()
+    is_new = [Model() for _ in range(5)]
+    is_left = [Model() for _ in range(2)]
+    other = UIntModel()
+    par = [UIntModel() for _ in range(3)]
+    jump = [UIntModel() for _ in range(3)]
+    F, c = [], []
+    state = []  # per half-edge: "open", "glued", "boundary"
+    out_l, in_l = {}, {}  # vertex -> list of open half-edges, most recent first
+    gates, gate_at = [], 0
+
+    def last():
+        return c[-1] if c else (0, 0, 0)
+
+    def new_vertex(pred, models):
+        if len(c) >= nv:
+            raise Refused("corrupt")
+        c.append(tuple(s32(pred[a] + unzigzag(rc.uint(models[a]))) for a in range(3)))
+        return len(c) - 1
+
+    def vertex_symbol(fl, fr, context, pred, models):
+        if rc.bit(is_new[context]) == 1:
+            return new_vertex(pred, models)
+        if fl is not None and rc.bit(is_left[1 if fr is not None else 0]) == 1:
+            return fl
+        if fr is not None and rc.bit(is_right) == 1:
+            return fr
+        back = rc.uint(other)
+        if back >= len(c):
+            raise Refused("corrupt")
+        return len(c) - 1 - back
+
+    def leave_open(h):
+        out_l[F[h]].remove(h)
+        in_l[F[nxt(h)]].remove(h)
+
+    def add_face(x, y, z):
+        h0 = len(F)
+        F.extend((x, y, z))
+        state.extend(("open", "open", "open"))
+        for h in range(h0, h0 + 3):
+            s, t = F[h], F[nxt(h)]
+            g = next((e for e in out_l.get(t, []) if F[nxt(e)] == s), None)
+            if g is not None:
+                leave_open(g)
+                state[g] = state[h] = "glued"
+            else:
+                out_l.setdefault(s, []).insert(0, h)
+                in_l.setdefault(t, []).insert(0, h)
+                gates.append(h)
+
+    midpoint = rc.direct()
+    while len(F) < 3 * nf:
+        if rc.past:
+            raise Refused("corrupt")
+        h = None
+        while gate_at < len(gates):
+            g = gates[gate_at]
+            gate_at += 1
+            if state[g] == "open":
+                h = g
+                break
+        if h is None:
+            w = [vertex_symbol(None, None, 0, last(), jump) for _ in range(3)]
+            if len(set(w)) != 3:
+                raise Refused("corrupt")
+            add_face(*w)
+            continue
+        ga, gb, gc = F[h], F[nxt(h)], F[prv(h)]
+        if rc.bit(face) == 0:
+            leave_open(h)
+            state[h] = "boundary"
+            continue
+        fl = F[in_l[ga][0]] if in_l.get(ga) else None
+        fr = F[nxt(out_l[gb][0])] if out_l.get(gb) else None
+        if fr == fl:
+            fr = None
+        if midpoint == 0:
+            pred = tuple(s32(c[ga][a] + c[gb][a] - c[gc][a]) for a in range(3))
+        else:
+            pred = tuple((c[ga][a] + c[gb][a]) >> 1 for a in range(3))
+        w = vertex_symbol(fl, fr, 1 + (fl is not None) + 2 * (fr is not None), pred, par)
+        if w in (ga, gb):
+            raise Refused("corrupt")
+        add_face(gb, ga, w)
+    while len(c) < nv:
+        new_vertex(last(), jump)
+    if rc.past:
+        raise Refused("corrupt")
+    # Validity (section 6): no repeated directed edge, one fan per vertex.
+    edges = {}
+    for h in range(len(F)):
+        e = (F[h], F[nxt(h)])
+        if e in edges:
+            raise Refused("corrupt")
+        edges[e] = h
+    corners = {}
+    for h, x in enumerate(F):
+        corners.setdefault(x, []).append(h)
+    for x, hs in corners.items():
+        seen, todo = {hs[0]}, [hs[0]]
+        while todo:  # faces around x joined across their edges at x
+            h = todo.pop()
+            for e in ((x, F[nxt(h)]), (F[prv(h)], x)):
+                o = edges.get((e[1], e[0]))
+                if o is not None:
+                    k = o if F[o] == x else nxt(o) if F[nxt(o)] == x else prv(o)
+                    if k not in seen:
+                        seen.add(k)
+                        todo.append(k)
+        if len(seen) != len(hs):
+            raise Refused("corrupt")
+    return c, F
+
+
+def f32(x):
+    return struct.unpack("<f", struct.pack("<f", x))[0]
+
+
+def positions(c, h):  # section 5
+    out = []
+    bits = h["position_bits"]
+    if bits == 0:
+        for x in c:
+            for v in x:
+                out.append(struct.pack("<i", v ^ 0x7FFFFFFF if v < 0 else v))
+        return b"".join(out)
+    size = max(f32(h["bbox_max"][a] - h["bbox_min"][a]) for a in range(3))
+    scale = f32(size / f32(float((1 << bits) - 1))) if size > 0 else 0.0
+    for x in c:
+        for a in range(3):
+            out.append(struct.pack("<f", f32(h["bbox_min"][a] + f32(f32(float(x[a])) * scale))))
+    return b"".join(out)
+
+
+def level0(data):
+    """(stream status, HEAD, level-0 mesh, SPLT chunks) for the whole input (sections 3, 4, 7,
+    8); HEAD and the mesh are None when not decoded."""
+    if data[:8] != SIGNATURE[: len(data[:8])]:
+        return "bad_magic", None, None, []
+    if len(data) < 8:
+        return "truncated", None, None, []
+    at, head, base, splits, done, first = 8, None, None, 0, False, True
+    group_size, group_near = UIntModel(), Model()  # created once per stream (section 8)
+    chunks = []  # per SPLT chunk: connectivity and geometry decoders, group table
+    try:
+        while at < len(data) and not done:
+            if first and data[at : at + 4] == b"HEAD":
+                raise Refused("bad_version")
+            typ = data[at]
+            size, p = varint(data, at + 1)
+            if p + 4 + size > len(data):
+                break  # incomplete: truncated
+            crc = struct.unpack_from("<I", data, p)[0]
+            payload = data[p + 4 : p + 4 + size]
+            if zlib.crc32(data[at:p] + payload) != crc:
+                raise Refused("bad_checksum")
+            if first and typ != 1:
+                raise Refused("corrupt")
+            if typ == 1:
+                if head is not None:
+                    raise Refused("corrupt")
+                head = read_head(payload)
+            elif typ == 2:
+                if base is not None:
+                    raise Refused("corrupt")
+                base = decode_base(payload, head["base_vertices"], head["base_faces"])
+            elif typ == 3:
+                if base is None:
+                    raise Refused("corrupt")
+                count, q = varint(payload, 0)
+                if count == 0 or count > head["total_splits"] - splits:
+                    raise Refused("corrupt")
+                conn_size, q = varint(payload, q)
+                if conn_size > len(payload) - q or count > 64 * len(payload):
+                    raise Refused("corrupt")
+                # The group table (section 8), with the stream's two group models.
+                rc, total, groups = RangeDecoder(payload[q : q + conn_size]), 0, []
+                while total < count:
+                    group = rc.uint(group_size) + 1
+                    if group > count - total:
+                        raise Refused("corrupt")
+                    groups.append((group, rc.bit(group_near)))
+                    total += group
+                if rc.past:
+                    raise Refused("corrupt")
+                chunks.append((rc, RangeDecoder(payload[q + conn_size :]), groups))
+                splits += count
+            elif typ == 4:
+                if base is None or splits != head["total_splits"]:
+                    raise Refused("corrupt")
+                done = True
+            first = False
+            at = p + 4 + size
+    except Refused as e:
+        return str(e), head, base, chunks
+    return ("ok" if done else "truncated"), head, base, chunks
+
+
+def bitlen(x):
+    return x.bit_length()
+
+
+def ctx(x):
+    return min(bitlen(x), 20)
+
+
+def rnd(x, y):  # round(x / y), section 1
+    if y < 0:
+        x, y = -x, -y
+    return (2 * x + y) // (2 * y)
+
+
+class Splits:
+    """Section 9 on the mesh of section 6: vertices c, faces F, directed edges E."""
+
+    def __init__(self, head, base, chunks):
+        self.head = head
+        self.c = [tuple(x) for x in base[0]]
+        self.F = list(base[1])
+        self.E = {(self.F[h], self.F[nxt(h)]): h for h in range(len(self.F))}
+        self.corner = {}
+        for h, x in enumerate(self.F):
+            self.corner[x] = h
+        self.chunks = chunks
+        bits = head["position_bits"]
+        self.ushift = 16 if bits == 0 else bits - 16 if bits > 16 else 0
+        n = len(self.c)
+        self.degree, self.SD, self.SL = [0] * n, [(0, 0, 0)] * n, [0] * n
+        for x in range(n):  # 9.1
+            fan = self.fan(x)
+            if fan is None:
+                continue
+            ring = fan[0]
+            self.degree[x] = len(ring)
+            self.SD[x] = tuple(sum(self.spoke(x, y)[a] for y in ring) % (1 << 32) for a in range(3))
+            self.SL[x] = sum(sum(abs(e) for e in self.spoke(x, y)) for y in ring) % (1 << 32)
+        self.noted = []
+        # Appendix A
+        self.choice = []
+        for cx in range(21 * 2 * 27):
+            m, gap = Model(), cx // 54
+            if gap >= 1:
+                m.p, m.cnt = min(32768 - 131072 // (3 << gap), 31744), 16
+            self.choice.append(m)
+        self.wedge_count = [SmallModel() for _ in range(18)]
+        self.rank_nonzero = [Model() for _ in range(4)]
+        self.rank_minus_one = [SmallModel() for _ in range(4)]
+        self.residual = [[UIntModel() for _ in range(21)] for _ in range(3)]
+        self.mix = [[UIntModel() for _ in range(42)], [UIntModel() for _ in range(42)],
+                    [UIntModel() for _ in range(21)]]
+
+    def cs(self, x):
+        return tuple(v >> self.ushift for v in self.c[x])
+
+    def spoke(self, x, y):
+        a, b = self.cs(x), self.cs(y)
+        return tuple(b[i] - a[i] for i in range(3))
+
+    def klass(self, x):
+        d = [v - (1 << 32) if v >= 1 << 31 else v for v in self.SD[x]]
+        d2, l2 = sum(v * v for v in d), self.SL[x] ** 2
+        return 0 if 64 * d2 < l2 else 1 if 16 * d2 < l2 else 2
+
+    def fan(self, x):
+        """(canonical ring, fan corners at x in canonical order, closed) or None (section 6)."""
+        if x not in self.corner:
+            return None
+        F, E = self.F, self.E
+        h0 = h = self.corner[x]
+        closed = False
+        while True:  # back to the first face of the sequence
+            g = E.get((F[nxt(h)], x))  # the face before (x, a, b) holds a -> x
+            if g is None:
+                break
+            h = nxt(g)
+            if h == h0:
+                closed = True
+                break
+        corners = [h]
+        while True:
+            g = E.get((x, F[prv(h)]))  # the face after holds x -> b
+            if g is None or g == corners[0]:
+                break
+            corners.append(g)
+            h = g
+        ring = [F[nxt(h)] for h in corners]
+        if closed:
+            r = ring.index(min(ring))
+            ring, corners = ring[r:] + ring[:r], corners[r:] + corners[:r]
+        else:
+            ring.append(F[prv(corners[-1])])
+        return ring, corners, closed
+
+    def set_corner(self, h, x):
+        F, E = self.F, self.E
+        for e in ((F[h], F[nxt(h)]), (F[prv(h)], F[h])):
+            del E[e]
+        F[h] = x
+        E[(F[h], F[nxt(h)])] = h
+        E[(F[prv(h)], F[h])] = prv(h)
+
+    def add_face(self, a, b, c):
+        h0 = len(self.F)
+        self.F.extend((a, b, c))
+        for h in range(h0, h0 + 3):
+            self.E[(self.F[h], self.F[nxt(h)])] = h
+            self.corner[self.F[h]] = h
+
+    def apply(self, v, conn, geom):
+        """9.4 to 9.8; raises Refused("corrupt") for an invalid split."""
+        fan = self.fan(v)
+        if fan is None or len(fan[0]) < 2:
+            raise Refused("corrupt")
+        ring, corners, closed = fan
+        k, m = len(ring), len(corners)
+        count = decode_small(conn, self.wedge_count[2 * min(k, 8) + closed])
+        if count > (k - 2 if closed else k - 1):
+            raise Refused("corrupt")
+        W = k if closed else k - count + 1
+        cv = self.c[v]
+        o = [tuple(self.c[y][a] - cv[a] for a in range(3)) for y in ring]
+        zero = (0, 0, 0)
+
+        def wt(e):
+            if e is None:
+                return 2
+            d = self.degree[ring[e]]
+            return 4 if d <= 4 else 3 if d == 5 else 2
+
+        cands = []
+        for j in range(W):
+            if closed:
+                rl, rr, interior = j, (j + count + 1) % k, [(j + 1 + i) % k for i in range(count)]
+            else:
+                rl = j - 1 if j > 0 else None
+                rr = j + count if j + count != k else None
+                interior = list(range(j, j + count))
+            if k > 1 << 24:
+                cands.append((0, j, rl, rr))
+                continue
+            ol = o[rl] if rl is not None else zero
+            orr = o[rr] if rr is not None else zero
+            Ew = [2 * sum(o[i][a] for i in interior) + ol[a] + orr[a] for a in range(3)]
+            Sq = sum(sum(t * t for t in o[i]) for i in interior)
+            sq = lambda t: sum(x * x for x in t)
+            if rl is not None and rr is not None:
+                Tq = 2 * (sq(ol) + sq(orr))
+            elif rl is not None:
+                Tq = 4 * sq(ol)
+            elif rr is not None:
+                Tq = 4 * sq(orr)
+            else:
+                Tq = 0
+            G = sq(Ew) + 4 * count * Sq - count * count * Tq
+            wl, wr = wt(rl), wt(rr)
+            score = G * wl * wr if G >= 0 else G * (12 // wl) * (12 // wr)
+            cands.append((score, j, rl, rr))
+        order = sorted(cands, key=lambda t: (-t[0], t[1]))
+        s1 = order[0][0]
+        s2 = order[1][0] if len(order) > 1 else None
+        confident = 1 if W < 2 or s2 <= 0 or s1 > 2 * s2 else 0
+        rc = 2 * closed + confident
+        if conn.bit(self.rank_nonzero[rc]) == 0:
+            rank = 0
+        else:
+            r1 = decode_small(conn, self.rank_minus_one[rc])
+            if r1 == (1 << 32) - 1:
+                raise Refused("corrupt")
+            rank = 1 + r1
+        if rank >= W:
+            raise Refused("corrupt")
+        _, _, rl, rr = order[rank]
+        if conn.past:
+            raise Refused("corrupt")
+        vl = ring[rl] if rl is not None else None
+        vr = ring[rr] if rr is not None else None
+        # 9.5
+        if closed:
+            start, sf = rl, count + 1
+        else:
+            start = rl if rl is not None else 0
+            sf = (rr if rr is not None else m) - start
+        sector = [corners[(start + i) % m] for i in range(sf)]
+        R = [v] + [ring[(start + i) % k] for i in range(sf + 1)]
+        u = len(self.c)
+        for h in sector:
+            self.set_corner(h, u)
+        if vl is not None:
+            self.add_face(u, v, vl)
+        if vr is not None:
+            self.add_face(v, u, vr)
+        # 9.6
+        nr = len(R)
+        sumc = [cv[a] + sum(self.c[x][a] for x in R) for a in range(3)]
+        pred0 = [(sumc[a] + (nr + 1) // 2) // (nr + 1) for a in range(3)]
+        d = [tuple(self.c[x][a] - cv[a] for a in range(3)) for x in R]
+        nw = [0, 0, 0]
+        for i in range(1, nr - 1):
+            p_, q_ = d[i], d[i + 1]
+            nw[0] += p_[1] * q_[2] - p_[2] * q_[1]
+            nw[1] += p_[2] * q_[0] - p_[0] * q_[2]
+            nw[2] += p_[0] * q_[1] - p_[1] * q_[0]
+        sh = max(0, bitlen(max(abs(t) for t in nw)) - 16)
+        n = [t >> sh for t in nw]
+        axes = sorted(range(3), key=lambda a: (abs(n[a]), a))
+        t0, t1, tn = axes
+        q = sum(t * t for t in n)
+        C, B = self.head["curvature"], self.head["fine_curvature"]
+        use_old, use_new = C > 0 and 1 <= k <= 1 << 24, B > 0 and 2 <= nr <= 1 << 24
+        pred = list(pred0)
+        if q > 0 and (use_old or use_new):
+            kk = k if use_old else 1
+            Uold = [k * cv[a] - sum(self.c[x][a] for x in ring) for a in range(3)]
+            Unew = [(nr - 1) * cv[a] - sum(self.c[R[i]][a] for i in range(1, nr)) for a in range(3)]
+            dot = lambda a_, b_: sum(a_[i] * b_[i] for i in range(3))
+            T = (C * dot(Uold, n) * (nr - 1) if use_old else 0) + (B * dot(Unew, n) * kk if use_new else 0)
+            pred = [pred0[a] + rnd(T * n[a], 8 * kk * (nr - 1) * q) for a in range(3)]
+        dev = lambda x, a: abs(self.c[x][a] - pred[a])
+        ctx_t = [ctx(sum(dev(x, a) for x in R) // nr) for a in (t0, t1)]
+        if any(n):
+            Pn = sum(abs(sum(n[a] * (self.c[x][a] - pred[a]) for a in range(3))) for x in R)
+            ctx_n = ctx(Pn // (abs(n[tn]) * nr))
+            mix_n = ctx(abs(sum(n[a] * (cv[a] - pred[a]) for a in range(3))) // abs(n[tn]))
+        else:
+            ctx_n = ctx(sum(dev(x, tn) for x in R) // nr)
+            mix_n = 0
+        mix_t = []
+        for a in (t0, t1):
+            X = max(dev(x, a) for x in R)
+            hb = (X >> (bitlen(X) - 2)) & 1 if bitlen(X) >= 2 else 0
+            mix_t.append(min(2 * bitlen(X) + hb, 41))
+        r = []
+        for slot, (cx, mx) in enumerate(zip(ctx_t + [ctx_n], mix_t + [mix_n])):
+            r.append(s32(unzigzag(decode_mixed(geom, self.residual[slot][cx], self.mix[slot][mx]))))
+        if geom.past:
+            raise Refused("corrupt")
+        cu = [0, 0, 0]
+        cu[t0] = s32(pred[t0] + r[0])
+        cu[t1] = s32(pred[t1] + r[1])
+        pn = pred[tn] - rnd(n[t0] * r[0] + n[t1] * r[1], n[tn]) if n[tn] != 0 else pred[tn]
+        cu[tn] = s32(pn + r[2])
+        self.c.append(tuple(cu))
+        # 9.8
+        self.degree[v] = k - nr + 2 + (vl is not None) + (vr is not None)
+        self.degree.append(nr)
+        if vl is not None:
+            self.degree[vl] += 1
+        if vr is not None:
+            self.degree[vr] += 1
+        M32 = 1 << 32
+        add = lambda t, e, sign=1: tuple((t[i] + sign * e[i]) % M32 for i in range(3))
+        l1 = lambda e: sum(abs(t) for t in e)
+        self.SD.append((0, 0, 0))
+        self.SL.append(0)
+        sdu, slu = (0, 0, 0), 0
+        for x in R:
+            sdu, slu = add(sdu, self.spoke(u, x)), (slu + l1(self.spoke(u, x))) % M32
+        self.SD[u], self.SL[u] = sdu, slu
+        interior = [x for i, x in enumerate(R) if i > 0 and not (i == 1 and vl is not None)
+                    and not (i == nr - 1 and vr is not None)]
+        sdv, slv = add(self.SD[v], self.spoke(v, u)), self.SL[v] + l1(self.spoke(v, u))
+        for x in interior:
+            sdv, slv = add(sdv, self.spoke(v, x), -1), slv - l1(self.spoke(v, x))
+        self.SD[v], self.SL[v] = sdv, slv % M32
+        for e in (vl, vr):
+            if e is not None:
+                self.SD[e] = add(self.SD[e], self.spoke(e, u))
+                self.SL[e] = (self.SL[e] + l1(self.spoke(e, u))) % M32
+        for x in interior:
+            self.SD[x] = add(add(self.SD[x], self.spoke(x, v), -1), self.spoke(x, u))
+            self.SL[x] = (self.SL[x] - l1(self.spoke(x, v)) + l1(self.spoke(x, u))) % M32
+        self.noted += [v] + ring + [u]
+        return ring
+
+    def run(self, levels, hashes):
+        """Applies every split (9.2, 9.3); hashes[L] for each L in levels; returns (status,
+        splits applied)."""
+        applied = 0
+        if 0 in levels:
+            hashes[0] = self.hash()
+        try:
+            for conn, geom, groups in self.chunks:
+                for size, near in groups:
+                    previous, self.noted = self.noted, []
+                    nv = len(self.c)
+                    cand = sorted(set(previous)) if near else list(range(nv))
+                    st = {"i": 0, "vs": [], "excluded": set(), "stop": False}
+
+                    def scan_until(target):
+                        while len(st["vs"]) < min(target, size) and not st["stop"]:
+                            if st["i"] == len(cand):
+                                st["stop"] = True
+                                return
+                            w = cand[st["i"]]
+                            rem = len(cand) - st["i"]
+                            st["i"] += 1
+                            if w in st["excluded"]:
+                                continue
+                            gap = min(bitlen(rem // (size - len(st["vs"]))), 20)
+                            cx = ((gap * 2 + near) * 9 + min(self.degree[w], 8)) * 3 + self.klass(w)
+                            b = conn.bit(self.choice[cx])
+                            if conn.past:
+                                st["stop"] = True
+                                return
+                            if b:
+                                st["vs"].append(w)
+
+                    scan_until(9)
+                    for j in range(size):
+                        if j >= len(st["vs"]):
+                            raise Refused("corrupt")
+                        v = st["vs"][j]
+                        ring = self.apply(v, conn, geom)
+                        st["excluded"].update([v] + ring)
+                        applied += 1
+                        if applied in levels:
+                            hashes[applied] = self.hash()
+                        scan_until(j + 10)
+        except Refused as e:
+            return str(e), applied
+        return "ok", applied
+
+    def hash(self):
+        blob = positions(self.c, self.head) + b"".join(struct.pack("<I", x) for x in self.F)
+        return (len(self.c), len(self.F) // 3, hashlib.sha256(blob).hexdigest())
+
+
+def main():
+    root = Path(sys.argv[1])
+    limit = int(sys.argv[2]) if len(sys.argv) > 2 else 1 << 62
+    checked = failed = meshes = skipped = 0
+    for exp in sorted(root.rglob("*.expected")):
+        want, levels = {}, []
+        for line in exp.read_text().splitlines():
+            w = line.split()
+            if w and w[0] in ("stream", "refined"):
+                want[w[0]] = " ".join(w[1:])
+            if w and w[0] == "level":
+                levels.append(int(w[1]))
+                want["level " + w[1]] = (int(w[3]), int(w[5]), w[7])
+        status, head, base, chunks = level0(exp.with_suffix(".pmz").read_bytes())
+        got = {"stream": status}
+        if base is not None:
+            total = sum(g[0] for ch in chunks for g in ch[2])
+            if total > limit:
+                skipped += 1
+                continue
+            hashes = {}
+            split_status, applied = Splits(head, base, chunks).run(set(levels), hashes)
+            got["refined"] = f"{status if status != 'ok' else split_status} {applied}"
+            for level, h in hashes.items():
+                got[f"level {level}"] = h
+            meshes += len(hashes)
+        checked += 1
+        if got != want:
+            failed += 1
+            print(f"FAIL {exp}:")
+            for key in sorted(set(want) | set(got)):
+                if want.get(key) != got.get(key):
+                    print(f"  {key}: expected {want.get(key)}, got {got.get(key)}")
+    print(f"{checked} files checked against spec/format.md ({meshes} level hashes), "
+          f"{skipped} skipped (more than {limit} splits), {failed} failed")
+    return 1 if failed or not checked else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
