@@ -48,19 +48,16 @@ rm -f web/dist/*.tgz
 
 # The viewer: static files; three and the package resolved by an import map.
 viewer=web/dist/viewer
-rm -rf "$viewer"
-if [ -f web/viewer/index.html ]; then  # the viewer lands in a following step
-  mkdir -p "$viewer/vendor"
-  cp web/viewer/* "$viewer/"
-  cp -r "$pkg" "$viewer/pmz"
-  cp web/node_modules/three/build/three.module.js "$viewer/vendor/"
-  cp web/node_modules/three/examples/jsm/controls/OrbitControls.js "$viewer/vendor/"
-fi
+rm -rf "$viewer" && mkdir -p "$viewer/vendor"
+cp web/viewer/* "$viewer/"
+cp -r "$pkg" "$viewer/pmz"
+cp web/node_modules/three/build/three.module.js "$viewer/vendor/"
+cp web/node_modules/three/examples/jsm/controls/OrbitControls.js "$viewer/vendor/"
 
 wasm_bytes=$(stat -c %s "$out/pmz_wasm.wasm")
 glue_bytes=$(stat -c %s "$out/pmz_wasm.mjs")
 gz_bytes=$(cat "$out/pmz_wasm.wasm" "$out/pmz_wasm.mjs" | gzip -9 | wc -c)
-echo "web: $(ls web/dist/*.tgz); wasm $wasm_bytes + glue $glue_bytes bytes" \
+echo "web: $(ls web/dist/*.tgz), $viewer/index.html; wasm $wasm_bytes + glue $glue_bytes bytes" \
   "($gz_bytes gzip -9)" >&2
 
 if [ "$mode" = test ]; then

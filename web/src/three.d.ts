@@ -20,7 +20,7 @@ export declare class PMZStream {
   bytes: number;
   totalBytes: number;
   status: PmzStatus;
-  /** Every byte fed, finish() ok and the finest level shown. */
+  /** Every byte fed, finish() ok and (when following the stream) the finest level shown. */
   complete: boolean;
   readonly error: string;
   readonly faceCount: number;

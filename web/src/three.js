@@ -16,7 +16,7 @@ export class PMZStream {
     this.bytes = 0;
     this.totalBytes = 0;
     this.status = 'ok';
-    this.complete = false;  // every byte fed, finish() ok and the finest level shown
+    this.complete = false;  // see update()
     this._finished = false;
     this._vertexCap = 0;
     this._faceCap = 0;
@@ -50,7 +50,9 @@ export class PMZStream {
       d.setFaceTarget(this.faceTarget);
     }
     if (this.status === 'ok' && d.status !== 'ok') this.status = d.status;
-    this.complete = this._finished && this.status === 'ok' && d.splitsApplied === d.info().totalSplits;
+    // Complete: every byte decoded and, when following the stream, the finest level shown.
+    this.complete = this._finished && this.status === 'ok' &&
+      (this.faceTarget !== null || d.splitsApplied === d.info().totalSplits);
     return this._sync();
   }
 
@@ -71,7 +73,7 @@ export class PMZStream {
       this._vertexCap = vcap;
     }
     if (faces > this._faceCap) {
-      g.setIndex(grow(null, g.getIndex(), fcap, 3, Uint32Array));
+      g.setIndex(grow(null, g.getIndex(), 3 * fcap, 1, Uint32Array));  // itemSize 1: three counts indices
       this._faceCap = fcap;
     }
     const box = new Box3(new Vector3(...info.bboxMin), new Vector3(...info.bboxMax));

@@ -1,0 +1,110 @@
+// The viewer in headless Chromium (Debian's, via puppeteer-core) over a throttled local HTTP
+// stream: the face count rises while bytes arrive and reaches the full mesh; a coarse and the
+// final level both show the object and differ.
+import assert from 'node:assert/strict';
+import { mkdtempSync, rmSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import path from 'node:path';
+import { after, before, test } from 'node:test';
+import puppeteer from 'puppeteer-core';
+
+import { demoPmz, nativeDecode, webDir } from './common.mjs';
+import { CHROMIUM_ARGS, serveViewer } from './serve.mjs';
+
+const RATE = 10 * 1024;  // bytes per second: the 80 KB sample takes about 8 s (frames are slow on a loaded machine)
+let server, browser, profile;
+
+before(async () => {
+  server = await serveViewer(path.join(webDir, 'dist', 'viewer'), { 'sample.pmz': demoPmz() }, RATE);
+  profile = mkdtempSync(path.join(tmpdir(), 'pmz-chromium-'));
+  browser = await puppeteer.launch({ executablePath: process.env.PMZ_CHROMIUM || '/usr/bin/chromium',
+    headless: true, args: [...CHROMIUM_ARGS, `--user-data-dir=${profile}`] });
+});
+after(async () => {
+  if (browser) await browser.close();
+  if (server) server.close();
+  if (profile) rmSync(profile, { recursive: true, force: true });
+});
+
+// Share of pixels that differ between two pmzSnapshot()s.
+function differingShare(a, b) {
+  let differing = 0;
+  for (let i = 0; i < a.pixels.length; i += 4) {
+    const d = Math.abs(a.pixels[i] - b.pixels[i]) + Math.abs(a.pixels[i + 1] - b.pixels[i + 1]) +
+      Math.abs(a.pixels[i + 2] - b.pixels[i + 2]);
+    if (d > 24) ++differing;
+  }
+  return differing / (a.pixels.length / 4);
+}
+const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+
+test('the viewer refines while the stream arrives and shows the object', async () => {
+  const page = await browser.newPage();
+  const messages = [];
+  page.on('console', (m) => messages.push(m.text()));
+  page.on('pageerror', (e) => messages.push(String(e)));
+  await page.setViewport({ width: 640, height: 480 });
+  const { port } = server.address();
+  await page.goto(`http://127.0.0.1:${port}/index.html?src=/stream/sample.pmz`);
+  const fullFaces = nativeDecode(demoPmz()).indices.length / 3;
+
+  const samples = [];
+  const deadline = Date.now() + 60000;
+  for (;;) {
+    const s = await page.evaluate(() => window.pmzStatus && { ...window.pmzStatus });
+    if (s) samples.push(s);
+    if (s && (s.complete || s.error)) break;
+    assert.ok(Date.now() < deadline, `not complete after 60 s: ${JSON.stringify(s)} ${messages}`);
+    await sleep(25);
+  }
+  const last = samples[samples.length - 1];
+  assert.equal(last.error, '', messages.join('\n'));
+  assert.equal(last.complete, true);
+  assert.equal(last.faces, fullFaces);
+  assert.equal(last.bytes, last.totalBytes);
+  // While bytes were still arriving the mesh was drawn and grew, step by step.
+  const arriving = samples.filter((s) => s.bytes < s.totalBytes && s.faces > 0);
+  const levels = [...new Set(arriving.map((s) => s.faces))];
+  assert.ok(levels.length >= 3, `faces while arriving: ${levels}`);
+  for (let i = 1; i < arriving.length; ++i) assert.ok(arriving[i].faces >= arriving[i - 1].faces);
+  assert.ok(levels[0] < fullFaces / 2, `first level ${levels[0]} of ${fullFaces}`);
+
+  const shot = async (faces, name) => {
+    await page.evaluate((f) => window.pmzSetFaces(f), faces);
+    await page.waitForFunction((f) => f === null ? window.pmzStatus.faces === window.pmzStatus.faces
+      : window.pmzStatus.faces < f * 1.5 + 10, {}, faces);
+    await sleep(800);  // geomorphs settle (0.4 s)
+    if (process.env.PMZ_WEB_SCREENSHOTS)
+      await page.screenshot({ path: path.join(process.env.PMZ_WEB_SCREENSHOTS, name) });
+    // Geomorphs off: the reference below draws the same positions without them.
+    await page.evaluate(() => { document.getElementById('morph').checked = false; });
+    await sleep(300);
+    const shot = await page.evaluate(() => window.pmzSnapshot());
+    // The geometry updated in place draws exactly what a fresh one from the decoder draws.
+    const reference = await page.evaluate(() => window.pmzReferenceSnapshot());
+    assert.ok(differingShare(shot, reference) < 0.002, `${name}: in-place geometry differs from a fresh one`);
+    await page.evaluate(() => { document.getElementById('morph').checked = true; });
+    return shot;
+  };
+  const coarse = await shot(Math.round(fullFaces / 100), 'web-coarse.png');
+  const coarseFaces = await page.evaluate(() => window.pmzStatus.faces);
+  const fine = await shot(null, 'web-final.png');
+  assert.equal(await page.evaluate(() => window.pmzStatus.faces), fullFaces);
+  assert.ok(coarseFaces < fullFaces / 50, `coarse level has ${coarseFaces} faces`);
+  assert.ok(coarse.coverage > 0.05, `coarse coverage ${coarse.coverage}`);
+  assert.ok(fine.coverage > 0.05, `final coverage ${fine.coverage}`);
+  assert.ok(differingShare(coarse, fine) > 0.01, 'coarse and final views do not differ');
+  await page.close();
+});
+
+test('the viewer reports a bad stream as a one-line error', async () => {
+  const page = await browser.newPage();
+  const { port } = server.address();
+  await page.goto(`http://127.0.0.1:${port}/index.html?src=/index.html`);
+  await page.waitForFunction(() => window.pmzStatus && window.pmzStatus.error !== '', { timeout: 20000 });
+  const s = await page.evaluate(() => ({ ...window.pmzStatus }));
+  assert.match(s.error, /bad magic/);
+  assert.ok(!s.error.includes('\n'));
+  assert.equal(s.complete, false);
+  await page.close();
+});

@@ -1,0 +1,46 @@
+// A static server for web/dist/viewer on 127.0.0.1 whose /stream/NAME.pmz responses are
+// throttled to `bytesPerSecond` (chunks every 10 ms), with Content-Length.
+import { createReadStream, readFileSync, statSync } from 'node:fs';
+import http from 'node:http';
+import path from 'node:path';
+
+const TYPES = { '.html': 'text/html', '.js': 'text/javascript', '.mjs': 'text/javascript',
+  '.wasm': 'application/wasm', '.json': 'application/json' };
+
+export function serveViewer(viewerDir, streams, bytesPerSecond) {
+  const server = http.createServer((req, res) => {
+    const url = new URL(req.url, 'http://127.0.0.1');
+    const name = decodeURIComponent(url.pathname);
+    if (name.startsWith('/stream/') && streams[name.slice(8)]) {
+      const bytes = readFileSync(streams[name.slice(8)]);
+      res.writeHead(200, { 'content-type': 'application/octet-stream',
+        'content-length': bytes.length, 'cache-control': 'no-store' });
+      const tick = 10;
+      let at = 0;
+      const start = Date.now();
+      const send = () => {
+        // Paced by the clock, not by timer counts: late timers send what is due.
+        const due = Math.min(bytes.length, Math.round((Date.now() - start + tick) * bytesPerSecond / 1000));
+        if (due > at) { res.write(bytes.subarray(at, due)); at = due; }
+        if (at < bytes.length) setTimeout(send, tick); else res.end();
+      };
+      send();
+      return;
+    }
+    const file = path.join(viewerDir, path.normalize(name === '/' ? '/index.html' : name));
+    if (!file.startsWith(viewerDir)) { res.writeHead(403).end(); return; }
+    try {
+      const size = statSync(file).size;
+      res.writeHead(200, { 'content-type': TYPES[path.extname(file)] || 'application/octet-stream',
+        'content-length': size });
+      createReadStream(file).pipe(res);
+    } catch {
+      res.writeHead(404).end();
+    }
+  });
+  return new Promise((resolve) => server.listen(0, '127.0.0.1', () => resolve(server)));
+}
+
+export const CHROMIUM_ARGS = ['--headless', '--no-sandbox', '--use-gl=swiftshader',
+  '--enable-unsafe-swiftshader', '--disable-background-networking', '--disable-component-update',
+  '--disable-sync', '--no-first-run'];

@@ -1,0 +1,192 @@
+// pmz web viewer: streams a .pmz (?src=URL, the URL box, or a dropped file) into a three.js
+// scene and refines it while the bytes arrive, within a per-frame time budget.
+import * as THREE from 'three';
+import { OrbitControls } from './vendor/OrbitControls.js';
+import { PMZLoader, geomorphMaterial } from 'pmz-decoder/three';
+
+const REFINE_BUDGET_MS = 8;  // of a 16.7 ms frame: rendering and feeding keep the rest
+const BACKGROUND = 0x20242a;
+
+const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+renderer.setPixelRatio(window.devicePixelRatio);
+renderer.setSize(window.innerWidth, window.innerHeight);
+renderer.setClearColor(BACKGROUND);
+document.body.prepend(renderer.domElement);
+const scene = new THREE.Scene();
+const camera = new THREE.PerspectiveCamera(40, window.innerWidth / window.innerHeight, 0.01, 100);
+camera.position.set(0, 0, 3);
+scene.add(camera);
+scene.add(new THREE.HemisphereLight(0xffffff, 0x404050, 1.2));
+const light = new THREE.DirectionalLight(0xffffff, 2.0);
+light.position.set(1, 1.5, 2);
+camera.add(light);
+const controls = new OrbitControls(camera, renderer.domElement);
+
+const material = new THREE.MeshStandardMaterial({ color: 0xd8c8a8, flatShading: true,
+  side: THREE.DoubleSide, roughness: 0.7 });
+const morphClock = geomorphMaterial(material);
+const plainMaterial = new THREE.MeshStandardMaterial({ color: 0xd8c8a8, flatShading: true,
+  side: THREE.DoubleSide, roughness: 0.7 });
+
+const overlay = document.getElementById('overlay');
+const lod = document.getElementById('lod');
+const morph = document.getElementById('morph');
+
+// State for tests and scripts: window.pmzStatus, plus timings (performance.now() ms) and one
+// entry per animation frame.
+const status = { faces: 0, vertices: 0, bytes: 0, totalBytes: 0, complete: false, error: '' };
+window.pmzStatus = status;
+window.pmzTiming = { firstBytes: null, firstObjectFrame: null };
+window.pmzFrames = [];
+
+let current = null;  // { stream, mesh, fitted }
+let faceTarget = null;  // null: follow the stream; else the LOD slider's face count
+lod.addEventListener('input', () => {
+  const v = Number(lod.value);
+  const full = current ? current.stream.decoder.info().fullFaces : 0;
+  faceTarget = v >= 1000 ? null : Math.max(1, Math.round(full * (v / 1000) ** 2));
+});
+let rate = { t: performance.now(), splits: 0, perSecond: 0 };
+
+function setError(message) {
+  status.error = String(message).split('\n')[0];
+}
+
+async function open(source) {
+  if (current) {
+    scene.remove(current.mesh);
+    current.stream.dispose();
+    current = null;
+  }
+  Object.assign(status, { faces: 0, vertices: 0, bytes: 0, totalBytes: 0, complete: false, error: '' });
+  window.pmzTiming = { firstBytes: null, firstObjectFrame: null };
+  window.pmzFrames = [];
+  const loader = new PMZLoader(undefined, { geomorph: true, autoUpdate: false });
+  try {
+    const stream = await loader.stream(source, (s) => {
+      if (window.pmzTiming.firstBytes === null && s.bytes > 0) window.pmzTiming.firstBytes = performance.now();
+      status.bytes = s.bytes;
+      status.totalBytes = s.totalBytes;
+    });
+    const mesh = new THREE.Mesh(stream.geometry, morph.checked ? material : plainMaterial);
+    mesh.frustumCulled = false;
+    scene.add(mesh);
+    current = { stream, mesh, fitted: false };
+    const result = await stream.done;
+    if (result !== 'ok') setError(stream.error || result);
+  } catch (e) {
+    setError(e && e.message ? e.message : e);
+  }
+}
+
+function fit(info) {
+  const min = new THREE.Vector3(...info.bboxMin), max = new THREE.Vector3(...info.bboxMax);
+  const center = min.clone().add(max).multiplyScalar(0.5);
+  const radius = Math.max(1e-6, max.distanceTo(min) / 2);
+  const distance = radius / Math.sin(THREE.MathUtils.degToRad(camera.fov / 2)) * 1.05;
+  controls.target.copy(center);
+  camera.position.copy(center).add(new THREE.Vector3(0.35, 0.3, 1).normalize().multiplyScalar(distance));
+  camera.near = distance / 100;
+  camera.far = distance * 10;
+  camera.updateProjectionMatrix();
+  controls.update();
+}
+
+function frame(t) {
+  requestAnimationFrame(frame);
+  if (current) {
+    const s = current.stream, d = s.decoder;
+    const info = d.info();
+    if (info.baseDone && !current.fitted) {
+      fit(info);
+      current.fitted = true;
+    }
+    const before = d.splitsApplied;
+    s.faceTarget = faceTarget;
+    s.update(REFINE_BUDGET_MS);
+    rate.splits += Math.max(0, d.splitsApplied - before);
+    Object.assign(status, { faces: s.faceCount, vertices: s.vertexCount, complete: s.complete });
+    if (s.status !== 'ok') setError(s.error);
+    current.mesh.material = morph.checked ? material : plainMaterial;
+  }
+  morphClock();
+  controls.update();
+  renderer.render(scene, camera);
+  const now = performance.now();
+  if (status.faces > 0 && window.pmzTiming.firstObjectFrame === null) window.pmzTiming.firstObjectFrame = now;
+  if (window.pmzFrames.length < 100000) window.pmzFrames.push({ t, faces: status.faces, bytes: status.bytes });
+  if (now - rate.t >= 500) {
+    rate = { t: now, splits: 0, perSecond: rate.splits / ((now - rate.t) / 1000) };
+  }
+  const kb = (n) => (n / 1024).toFixed(1) + ' KiB';
+  overlay.textContent = current
+    ? `faces     ${status.faces.toLocaleString()}\nvertices  ${status.vertices.toLocaleString()}\n` +
+      `bytes     ${kb(status.bytes)} / ${status.totalBytes ? kb(status.totalBytes) : '?'}\n` +
+      `refine    ${Math.round(rate.perSecond).toLocaleString()} splits/s\n` +
+      (status.error ? `error     ${status.error}` : status.complete ? 'complete' : 'streaming')
+    : overlay.textContent;
+}
+requestAnimationFrame(frame);
+
+window.addEventListener('resize', () => {
+  camera.aspect = window.innerWidth / window.innerHeight;
+  camera.updateProjectionMatrix();
+  renderer.setSize(window.innerWidth, window.innerHeight);
+});
+
+// Tests: hold a face count (null follows the stream), and the canvas's coverage (share of
+// pixels not the background) with a downsampled copy for comparing two frames.
+window.pmzSetFaces = (faces) => {
+  faceTarget = faces;
+  const full = current ? current.stream.decoder.info().fullFaces : 0;
+  lod.value = faces === null ? 1000 : Math.min(999, Math.round(1000 * Math.sqrt(faces / Math.max(1, full))));
+};
+function snapshot() {
+  const w = 200, h = Math.round(200 * renderer.domElement.height / renderer.domElement.width);
+  const c = document.createElement('canvas');
+  c.width = w; c.height = h;
+  const g = c.getContext('2d');
+  g.drawImage(renderer.domElement, 0, 0, w, h);
+  const px = g.getImageData(0, 0, w, h).data;
+  const bg = new THREE.Color(BACKGROUND);
+  const br = Math.round(bg.r * 255), bgg = Math.round(bg.g * 255), bb = Math.round(bg.b * 255);
+  let covered = 0;
+  for (let i = 0; i < px.length; i += 4)
+    if (Math.abs(px[i] - br) + Math.abs(px[i + 1] - bgg) + Math.abs(px[i + 2] - bb) > 24) ++covered;
+  return { coverage: covered / (w * h), pixels: Array.from(px) };
+}
+window.pmzSnapshot = () => {
+  renderer.render(scene, camera);
+  return snapshot();
+};
+// The same view drawn from a geometry built afresh from the decoder's current buffers: what
+// the in-place updated geometry must look like.
+window.pmzReferenceSnapshot = () => {
+  const d = current.stream.decoder, streamed = current.mesh.geometry;
+  const fresh = new THREE.BufferGeometry();
+  fresh.setAttribute('position', new THREE.BufferAttribute(d.positions().slice(), 3));
+  fresh.setIndex(new THREE.BufferAttribute(d.indices().slice(), 1));
+  current.mesh.geometry = fresh;
+  current.mesh.material = plainMaterial;
+  renderer.render(scene, camera);
+  const shot = snapshot();
+  current.mesh.geometry = streamed;
+  fresh.dispose();
+  return shot;
+};
+
+const params = new URLSearchParams(location.search);
+if (params.get('src')) {
+  document.getElementById('url').value = params.get('src');
+  open(params.get('src'));
+}
+document.getElementById('open').onclick = () => open(document.getElementById('url').value);
+document.getElementById('file').onchange = (e) => e.target.files[0] && open(e.target.files[0]);
+const drop = document.getElementById('drop');
+window.addEventListener('dragover', (e) => { e.preventDefault(); drop.style.display = 'flex'; });
+window.addEventListener('dragleave', () => { drop.style.display = 'none'; });
+window.addEventListener('drop', (e) => {
+  e.preventDefault();
+  drop.style.display = 'none';
+  if (e.dataTransfer.files[0]) open(e.dataTransfer.files[0]);
+});
