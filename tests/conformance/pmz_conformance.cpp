@@ -349,6 +349,18 @@ Mesh cone(uint32_t n) {
   return m;
 }
 
+// A flat disc: a centre joined to `n` rim vertices. The centre collapses onto a rim vertex
+// first (it moves no surface), so splits there have rings of n - 1 and wedge counts of n - 3:
+// beyond the small-value escape and the context clamps, on an open fan.
+Mesh disc(uint32_t n) {
+  Mesh m;
+  const double pi = 3.14159265358979323846;
+  const uint32_t centre = m.add(0, 0, 0);
+  for (uint32_t i = 0; i < n; ++i) m.add(std::cos(2 * pi * i / n), std::sin(2 * pi * i / n), 0);
+  for (uint32_t i = 0; i < n; ++i) m.tri(centre, 1 + i, 1 + (i + 1) % n);
+  return m;
+}
+
 std::string obj_text(const Mesh& m, const std::string& what) {
   std::string s = "# " + what + "\n";
   char buf[128];
@@ -386,7 +398,8 @@ bool meshes(const fs::path& dir) {
     put("pieces.obj", pieces, "three connected components: an icosphere, a cube and a tetrahedron");
   }
   put("terrain.obj", terrain(24), "height field 24 x 24 with two holes: open fans, boundaries");
-  put("cone.obj", cone(160), "closed cone with 160 rim vertices: rings of 160");
+  put("cone.obj", cone(160), "closed cone with 160 rim vertices");
+  put("disc.obj", disc(200), "flat disc, a centre and 200 rim vertices: rings of 199");
   {
     Mesh spiky = icosphere(2);
     for (uint32_t i = 0; i < spiky.v.size() / 3; i += 17)
