@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <string>
 
+#include "pmz/format.hpp"
 #include "pmz/mesh.hpp"
 #include "pmz/simplify.hpp"
 #include "pmz/writer.hpp"

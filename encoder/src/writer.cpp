@@ -18,6 +18,8 @@
 
 namespace pmz {
 
+static_assert(kWriteSymbolKinds == kSymbolKinds, "WriteStats::symbol_bits has a slot per kind");
+
 namespace {
 
 constexpr double kWindowGrowth = 1.5;  // a window grows the vertex count by at most 50%

@@ -8,13 +8,15 @@
 // decoded when it is first applied, so refine()/set_face_target() can also find damage
 // (status() becomes corrupt; the mesh stays at the split before): check status() after them.
 //
-// Depends on the standard library and zstd only. Not thread-safe: one thread per Decoder.
+// Depends on the standard library only. Not thread-safe: one thread per Decoder.
 #pragma once
 #include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
+
+#include "pmz/export.h"
 
 namespace pmz {
 
@@ -29,7 +31,7 @@ enum class Status : int {
   out_of_memory = 7,
 };
 
-const char* status_name(Status s);
+PMZ_API const char* status_name(Status s);
 
 struct DecoderLimits {
   // Hard caps, checked against header counts before any allocation.
@@ -65,7 +67,7 @@ struct MeshChanges {
   bool all = false;  // everything should be re-uploaded (e.g. first base mesh)
 };
 
-class Decoder {
+class PMZ_API Decoder {
  public:
   explicit Decoder(const DecoderLimits& limits = {});
   ~Decoder();
@@ -106,7 +108,7 @@ class Decoder {
   void clear_changes();
 
  private:
-  struct Impl;
+  struct PMZ_LOCAL Impl;
   std::unique_ptr<Impl> impl_;
 };
 

@@ -4,6 +4,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "pmz/export.h"
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -22,36 +24,36 @@ enum {
 };
 
 /* Limits of 0 take the defaults. Returns NULL only when out of memory. */
-pmz_decoder* pmz_decoder_create(uint64_t max_vertices, uint64_t max_faces);
-void pmz_decoder_destroy(pmz_decoder* d);
+PMZ_API pmz_decoder* pmz_decoder_create(uint64_t max_vertices, uint64_t max_faces);
+PMZ_API void pmz_decoder_destroy(pmz_decoder* d);
 
-int pmz_decoder_feed(pmz_decoder* d, const void* data, size_t size);
-int pmz_decoder_finish(pmz_decoder* d);
-const char* pmz_decoder_error(const pmz_decoder* d); /* one line; "" when ok */
+PMZ_API int pmz_decoder_feed(pmz_decoder* d, const void* data, size_t size);
+PMZ_API int pmz_decoder_finish(pmz_decoder* d);
+PMZ_API const char* pmz_decoder_error(const pmz_decoder* d); /* one line; "" when ok */
 /* The sticky status (PMZ_OK or the error). refine, coarsen and set_face_target can set it
    too: each split's wedge and position are decoded when it is first applied, so damage there
    (PMZ_ERR_CORRUPT) or an allocation failure (PMZ_ERR_MEMORY) shows only then; the mesh stays
    at the level reached. */
-int pmz_decoder_status(const pmz_decoder* d);
+PMZ_API int pmz_decoder_status(const pmz_decoder* d);
 
-uint64_t pmz_decoder_refine(pmz_decoder* d, uint64_t max_splits);
-uint64_t pmz_decoder_coarsen(pmz_decoder* d, uint64_t max_splits);
-void pmz_decoder_set_face_target(pmz_decoder* d, uint64_t faces);
-uint64_t pmz_decoder_splits_applied(const pmz_decoder* d);
-uint64_t pmz_decoder_splits_available(const pmz_decoder* d);
-uint64_t pmz_decoder_total_splits(const pmz_decoder* d); /* 0 until the header is in */
+PMZ_API uint64_t pmz_decoder_refine(pmz_decoder* d, uint64_t max_splits);
+PMZ_API uint64_t pmz_decoder_coarsen(pmz_decoder* d, uint64_t max_splits);
+PMZ_API void pmz_decoder_set_face_target(pmz_decoder* d, uint64_t faces);
+PMZ_API uint64_t pmz_decoder_splits_applied(const pmz_decoder* d);
+PMZ_API uint64_t pmz_decoder_splits_available(const pmz_decoder* d);
+PMZ_API uint64_t pmz_decoder_total_splits(const pmz_decoder* d); /* 0 until the header is in */
 
-uint32_t pmz_decoder_vertex_count(const pmz_decoder* d);
-uint32_t pmz_decoder_face_count(const pmz_decoder* d);
-const float* pmz_decoder_positions(const pmz_decoder* d);  /* 3 floats per vertex */
-const uint32_t* pmz_decoder_indices(const pmz_decoder* d); /* 3 indices per face */
+PMZ_API uint32_t pmz_decoder_vertex_count(const pmz_decoder* d);
+PMZ_API uint32_t pmz_decoder_face_count(const pmz_decoder* d);
+PMZ_API const float* pmz_decoder_positions(const pmz_decoder* d);  /* 3 floats per vertex */
+PMZ_API const uint32_t* pmz_decoder_indices(const pmz_decoder* d); /* 3 indices per face */
 /* For geomorphs: the vertex each vertex was split from (UINT32_MAX for base vertices). */
-const uint32_t* pmz_decoder_split_parents(const pmz_decoder* d);
+PMZ_API const uint32_t* pmz_decoder_split_parents(const pmz_decoder* d);
 
 /* "ok", "bad magic", ...: the names the one-line errors use; "unknown" for other values. */
-const char* pmz_status_name(int status);
-uint64_t pmz_decoder_bytes_consumed(const pmz_decoder* d);
-void pmz_decoder_set_split_target(pmz_decoder* d, uint64_t splits);
+PMZ_API const char* pmz_status_name(int status);
+PMZ_API uint64_t pmz_decoder_bytes_consumed(const pmz_decoder* d);
+PMZ_API void pmz_decoder_set_split_target(pmz_decoder* d, uint64_t splits);
 
 /* The stream's header fields (valid once header_done) and progress. */
 typedef struct pmz_stream_info {
@@ -67,7 +69,7 @@ typedef struct pmz_stream_info {
   uint32_t curvature, fine_curvature;
   float bbox_min[3], bbox_max[3];
 } pmz_stream_info;
-void pmz_decoder_info(const pmz_decoder* d, pmz_stream_info* out);
+PMZ_API void pmz_decoder_info(const pmz_decoder* d, pmz_stream_info* out);
 
 /* What changed in the mesh since the last pmz_decoder_clear_changes(), for partial uploads:
    vertices [vertex_begin, vertex_count) and faces [face_begin, face_count) are new or
@@ -81,8 +83,8 @@ typedef struct pmz_changes {
   size_t modified_count;
   uint32_t all;
 } pmz_changes;
-void pmz_decoder_changes(const pmz_decoder* d, pmz_changes* out);
-void pmz_decoder_clear_changes(pmz_decoder* d);
+PMZ_API void pmz_decoder_changes(const pmz_decoder* d, pmz_changes* out);
+PMZ_API void pmz_decoder_clear_changes(pmz_decoder* d);
 
 #ifdef __cplusplus
 }

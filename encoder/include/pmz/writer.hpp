@@ -4,7 +4,6 @@
 #include <string>
 #include <vector>
 
-#include "pmz/format.hpp"
 #include "pmz/simplify.hpp"
 
 namespace pmz {
@@ -15,6 +14,10 @@ struct WriteOptions {
   bool symbol_stats = false;    // fill WriteStats::symbol_bits
 };
 
+// The kinds of SPLT symbols (pmz::SymbolKind, format.hpp: groups, choice, wedge count, wedge
+// rank, three residual slots), counted here so that this installed header needs no codec one.
+inline constexpr int kWriteSymbolKinds = 7;
+
 struct WriteStats {
   uint64_t header_bytes = 0, base_bytes = 0, split_bytes = 0;
   // Coded size of the SPLT streams over all splits: groups, vertex choice and wedges
@@ -22,7 +25,7 @@ struct WriteStats {
   uint64_t connectivity_bits = 0, geometry_bits = 0;
   // With WriteOptions::symbol_stats: the code length of the SPLT symbols by kind (SymbolKind),
   // in bits: what each kind takes of its stream (the streams' endings add a few bits each).
-  double symbol_bits[kSymbolKinds] = {};
+  double symbol_bits[kWriteSymbolKinds] = {};
 };
 
 bool write_pmz(const CollapseSequence& seq, const WriteOptions& options, std::vector<uint8_t>& out,
