@@ -597,6 +597,10 @@ uint64_t Decoder::Impl::refine(uint64_t max_splits, uint64_t face_target) {
       positions.reserve(nv * 3);
       parents.reserve(nv);
       sides.reserve(room);
+      const uint32_t* degrees_before = choice.degrees();
+      choice.reserve_vertices(nv, [&](const auto& v) {
+        if (choice.degrees() != degrees_before) advise_huge_pages(v);
+      });
       if (mesh.opposite.data() != before) {  // reallocated: the new capacity is untouched
         advise_huge_pages(mesh.corner_vertex);
         advise_huge_pages(mesh.opposite);

@@ -210,6 +210,18 @@ class VertexChoice {
         key_.capacity() == key_.size() || bits_.size() * 64 <= degree_.size())
       grow(k);
   }
+  // Decoder: room for n vertices in the per-vertex arrays at once (refine() knows how many it
+  // may add): growing them by doubling one vertex at a time copied them and faulted their
+  // pages in twice. f(vector) is called on each, for memory hints.
+  template <class F>
+  void reserve_vertices(size_t n, F&& f) {
+    degree_.reserve(n);
+    mark_.reserve(n);
+    key_.reserve(n);
+    sums_.reserve(n);
+    bits_.reserve(n / 64 + 2);
+    f(degree_), f(mark_), f(key_), f(sums_);
+  }
   // After pm.split_gathered() (its ring and u_ring still those of the split), once u's
   // coordinates are known: coords holds 3 per vertex, u's included.
   void applied(const ProgressiveMesh& pm, const int32_t* coords, bool has_left, bool has_right);
