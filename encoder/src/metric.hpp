@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "halfedge.hpp"
+#include "pmz/simplify.hpp"
 
 namespace pmz::detail {
 
@@ -109,5 +110,10 @@ inline float edge_length_ratio(const HalfEdgeMesh& m, const Features& f, uint32_
 
 // Mean length of the mesh's edges (each edge once); the metric's unit of length.
 double mean_edge_length(const HalfEdgeMesh& m);
+
+// The engine's own cost of the collapse u -> v on `mesh` before any collapse (simplify.cpp; the
+// tests check it against the formula of spec/algorithm.md). NaN if (u, v) is not an edge.
+float initial_collapse_cost(const IndexedMesh& mesh, const SimplifyOptions& options, uint32_t u,
+                            uint32_t v);
 
 }  // namespace pmz::detail

@@ -151,6 +151,14 @@ class Engine {
 
   bool init(const IndexedMesh& input, const SimplifyOptions& options, std::string& error);
   void run(const SimplifyOptions& options);
+  // The cost of u -> v as the heap would key it now; NaN if (u, v) is not an edge.
+  float edge_cost(uint32_t u, uint32_t v) const {
+    float c = std::numeric_limits<float>::quiet_NaN();
+    for_each_neighbour(m, u, [&](uint32_t x, uint32_t h) {
+      if (x == v) c = cost(u, x, h);
+    });
+    return c;
+  }
 
  private:
   VertexHeap heap;
@@ -780,6 +788,18 @@ bool simplify(const IndexedMesh& input, const SimplifyOptions& options, Collapse
   if (options.stats) *options.stats = engine.stats;
   return true;
 }
+
+namespace detail {
+
+float initial_collapse_cost(const IndexedMesh& mesh, const SimplifyOptions& options, uint32_t u,
+                            uint32_t v) {
+  Engine engine;
+  std::string error;
+  if (!engine.init(mesh, options, error)) return std::numeric_limits<float>::quiet_NaN();
+  return engine.edge_cost(u, v);
+}
+
+}  // namespace detail
 
 IndexedMesh mesh_after(const CollapseSequence& seq, size_t k) {
   const uint32_t n = seq.mesh.vertex_count();

@@ -1,5 +1,6 @@
 // Small procedural meshes and a topology summary for the metric and engine tests.
 #pragma once
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -12,6 +13,15 @@
 #include "pmz/mesh.hpp"
 
 namespace pmz_test {
+
+// A triangle by its corners, rotated to start at the smallest id (orientation kept), so that
+// face sets from different numberings compare as sorted vectors.
+using Face = std::array<uint32_t, 3>;
+inline Face canonical(uint32_t a, uint32_t b, uint32_t c) {
+  if (b < a && b < c) return {b, c, a};
+  if (c < a && c < b) return {c, a, b};
+  return {a, b, c};
+}
 
 inline void add_vertex(pmz::IndexedMesh& m, double x, double y, double z) {
   m.positions.insert(m.positions.end(), {float(x), float(y), float(z)});
@@ -125,6 +135,13 @@ inline Topology topology(const pmz::IndexedMesh& mesh) {
   t.faces = mesh.face_count();
   t.euler = v - e + long(t.faces);
   return t;
+}
+
+// Set by scripts/test.sh once the corpus was fetched: a corpus mesh a test asks for and does
+// not find is then a failure, not a skip.
+inline bool corpus_required() {
+  const char* env = std::getenv("PMZ_REQUIRE_CORPUS");
+  return env && *env && std::string(env) != "0";
 }
 
 // Meshes of the corpus ($PMZ_CORPUS or <source>/corpus) by name, empty when absent.

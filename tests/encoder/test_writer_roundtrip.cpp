@@ -16,15 +16,12 @@
 #include "pmz/sample_mesh.hpp"
 #include "pmz/simplify.hpp"
 #include "pmz/writer.hpp"
+#include "simplify_test_meshes.hpp"
 
 namespace {
 
-using Face = std::array<uint32_t, 3>;
-Face canonical(uint32_t a, uint32_t b, uint32_t c) {
-  if (b < a && b < c) return {b, c, a};
-  if (c < a && c < b) return {c, a, b};
-  return {a, b, c};
-}
+using pmz_test::canonical;
+using pmz_test::Face;
 
 // Returns the HEAD curvature and fine_curvature the writer chose (through `curvature`, `fine`).
 void round_trip(const pmz::IndexedMesh& input, uint32_t bits, uint64_t base_faces = 0,
@@ -219,7 +216,10 @@ TEST(WriterRoundTrip, CorpusMeshes) {
   int done = 0;
   for (const char* name : {"fandisk.off", "bunny00.off", "elephant-with-holes.off", "cheese.off"}) {
     std::filesystem::path p = dir / name;
-    if (!std::filesystem::exists(p)) continue;
+    if (!std::filesystem::exists(p)) {
+      if (pmz_test::corpus_required()) ADD_FAILURE() << p << " missing";
+      continue;
+    }
     pmz::IndexedMesh m;
     std::string error;
     ASSERT_TRUE(pmz::read_mesh(p.string(), m, error)) << error;
