@@ -1804,3 +1804,27 @@ TEST(SplitChunk, HandCodedPayloadIsTheSpecOrder) {
   EXPECT_FALSE(cr.open(bad.data(), bad.size(), size, cm, error));
   EXPECT_NE(error.find("groups"), std::string::npos) << error;
 }
+
+// The wedge symbols' contexts, table against spec section 2 ("SPLT" streams table): wedge_count
+// by `2 min(k, 8) + closed` (18 models), wedge_rank by `2 closed + confident` (4 of each). A
+// clamp moved on both writer and decoder changes no round trip, only these values.
+TEST(WedgeSymbols, ContextsAreTheSpecTable) {
+  EXPECT_EQ(kWedgeContexts, 18u);
+  EXPECT_EQ(kRankContexts, 4u);
+  EXPECT_EQ(sizeof(SplitModels::wedge_count) / sizeof(SmallModel), 18u);
+  EXPECT_EQ(sizeof(SplitModels::wedge_rank) / sizeof(SmallModel), 4u);
+  for (uint32_t k : {0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 12u, 31u, 1000u, 0xFFFFFFFFu})
+    for (bool closed : {false, true}) {
+      const uint32_t want = 2 * (k < 8 ? k : 8) + (closed ? 1 : 0);
+      EXPECT_EQ(wedge_context(k, closed), want) << "k " << k << " closed " << closed;
+    }
+  // Spelled out where the clamp bites: k = 7, 8, 9 on both fans.
+  EXPECT_EQ(wedge_context(7, false), 14u);
+  EXPECT_EQ(wedge_context(7, true), 15u);
+  EXPECT_EQ(wedge_context(8, false), 16u);
+  EXPECT_EQ(wedge_context(9, true), 17u);
+  EXPECT_EQ(rank_context(false, false), 0u);
+  EXPECT_EQ(rank_context(false, true), 1u);
+  EXPECT_EQ(rank_context(true, false), 2u);
+  EXPECT_EQ(rank_context(true, true), 3u);
+}

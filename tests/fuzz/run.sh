@@ -6,7 +6,8 @@
 #          PMZ_FUZZ_TARGETS  subset, e.g. "fuzz_decoder"
 # The corpus grows in $PMZ_FUZZ_BUILD/fuzz/corpus/<target> across runs; crashes land in
 # $PMZ_FUZZ_BUILD/fuzz/artifacts/ and make the script fail. Each crash deserves a regression
-# test in tests/decoder/test_fuzz_regressions.cpp.
+# test in tests/decoder/test_hostile.cpp (the hostile-input suite: the input, as bytes or as the
+# construction that makes it, and what the decoder must answer).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 seconds=${1:-60}
