@@ -1,0 +1,47 @@
+// Streaming in headless Chromium over a throttled link: the viewer (web/dist/viewer) loads
+// MESH.pmz from a node HTTP server on 127.0.0.1 paced to RATE bytes/s. From the page's own
+// requestAnimationFrame timestamps: the first frame drawn with the object after the first body
+// bytes arrived, and the gaps between frames until the stream is complete.
+//
+//   node web/bench/stream_chromium.mjs MESH.pmz [RATE=2000000] [RUNS=3] [WIDTHxHEIGHT=640x480]
+import { mkdtempSync, rmSync } from 'node:fs';
+import { loadavg, tmpdir } from 'node:os';
+import path from 'node:path';
+import { fileURLToPath } from 'node:url';
+import puppeteer from 'puppeteer-core';
+
+import { CHROMIUM_ARGS, serveViewer } from '../test/serve.mjs';
+
+const here = path.dirname(fileURLToPath(import.meta.url));
+const [file, rateArg, runsArg, sizeArg] = process.argv.slice(2);
+const rate = Number(rateArg || 2e6), runs = Number(runsArg || 3);
+const [width, height] = (sizeArg || '640x480').split('x').map(Number);
+const server = await serveViewer(path.join(here, '..', 'dist', 'viewer'), { 'mesh.pmz': path.resolve(file) }, rate);
+const results = [];
+for (let r = 0; r < runs; ++r) {
+  const profile = mkdtempSync(path.join(tmpdir(), 'pmz-bench-chromium-'));
+  const browser = await puppeteer.launch({ executablePath: '/usr/bin/chromium', headless: true, protocolTimeout: 900000,
+    args: [...CHROMIUM_ARGS, `--user-data-dir=${profile}`] });
+  const page = await browser.newPage();
+  await page.setViewport({ width, height });
+  await page.goto(`http://127.0.0.1:${server.address().port}/index.html?src=/stream/mesh.pmz`);
+  await page.waitForFunction(() => window.pmzStatus.complete || window.pmzStatus.error,
+    { timeout: 600000, polling: 200 });
+  const s = await page.evaluate(() => ({ status: window.pmzStatus, timing: window.pmzTiming,
+    frames: window.pmzFrames }));
+  await browser.close();
+  rmSync(profile, { recursive: true, force: true });
+  const { firstBytes, firstObjectFrame } = s.timing;
+  const done = s.frames.find((f) => f.faces === s.status.faces && f.bytes === s.status.totalBytes);
+  const during = s.frames.filter((f) => f.t >= firstBytes && (!done || f.t <= done.t));
+  const gaps = during.slice(1).map((f, i) => f.t - during[i].t).sort((a, b) => a - b);
+  const q = (p) => gaps.length ? +gaps[Math.min(gaps.length - 1, Math.floor(p * gaps.length))].toFixed(1) : null;
+  results.push({ faces: s.status.faces, error: s.status.error,
+    first_object_ms: +(firstObjectFrame - firstBytes).toFixed(1),
+    complete_ms: done ? +(done.t - firstBytes).toFixed(1) : null, frames: during.length,
+    gap_median_ms: q(0.5), gap_p95_ms: q(0.95), gap_max_ms: gaps.length ? +gaps[gaps.length - 1].toFixed(1) : null,
+    gaps_over_50ms: gaps.filter((g) => g > 50).length });
+}
+server.close();
+console.log(JSON.stringify({ file: path.basename(file), rate, width, height,
+  loadavg: loadavg().map((x) => +x.toFixed(1)), runs: results }, null, 1));
