@@ -12,7 +12,7 @@ packages=(build-essential cmake ninja-build pkg-config git
   xvfb xauth libgl1-mesa-dri python3
   libmeshoptimizer-dev draco libopenmesh-apps python3-matplotlib
   clang-14 libclang-rt-14-dev clang-format ccache
-  emscripten chromium)
+  emscripten chromium libtinygltf-dev nlohmann-json3-dev npm)
 bash scripts/install_packages.sh setup "${packages[@]}"
 
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null

@@ -24,6 +24,13 @@ else
   echo "test: corpus unavailable; real-mesh tests will skip" >&2
 fi
 export PMZ_CORPUS=$PWD/corpus
+if ! bash scripts/fetch_assimp_models.sh; then
+  echo "test: assimp-testmodels unavailable; its tests will skip" >&2
+fi
+if ! bash scripts/install_gltf_validator.sh build; then
+  echo "test: gltf-validator unavailable; the .glb validation test will skip (fails under CI)" >&2
+fi
+export PMZ_GLTF_VALIDATOR=$PWD/build/gltf-validator
 
 for stage in $stages; do
   case $stage in

@@ -53,6 +53,11 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "pmz-encode: %s\n", error.c_str());
     return 1;
   }
+  if (!mesh.attributes.empty())  // never a silent loss: the format codes geometry only so far
+    std::fprintf(stderr,
+                 "pmz-encode: %s: attributes not encoded yet (%s): the .pmz holds positions "
+                 "and triangles only\n",
+                 input.c_str(), mesh.attributes.describe().c_str());
   pmz::SimplifyOptions sopt;
   sopt.metric = metric == "qem" ? pmz::Metric::qem : pmz::Metric::multifeature;
   // A progress line only on a terminal: redirected stderr (logs, CI) gets no carriage returns.

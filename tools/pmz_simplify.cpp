@@ -63,6 +63,11 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "pmz-simplify: %s\n", error.c_str());
     return 1;
   }
+  if (!mesh.attributes.empty())  // never a silent loss: the simplifier keeps geometry only so far
+    std::fprintf(stderr,
+                 "pmz-simplify: %s: attributes not kept yet (%s): the output holds positions "
+                 "and triangles only\n",
+                 input.c_str(), mesh.attributes.describe().c_str());
   const uint64_t in_faces = mesh.face_count();
   options.target_faces =
       faces_opt->count() ? faces

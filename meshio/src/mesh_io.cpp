@@ -12,9 +12,11 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <string_view>
 #include <unordered_map>
 
+#include "mesh_gltf.hpp"
 #include "pmz/mesh.hpp"
 
 namespace pmz {
@@ -160,59 +162,343 @@ size_t plausible(uint64_t declared, size_t available, size_t min_bytes) {
   return size_t(std::min<uint64_t>(declared, available / min_bytes));
 }
 
+}  // namespace
+
+// Merges vertices with bitwise-equal positions (-0 == +0) into the first of them: formats that
+// store attributes per vertex (PLY, glTF) split vertices at seams, pmz keeps them as wedges.
+// Attribute indices keep pointing at the file's entries; only the corners' vertex ids change.
+void weld_vertices(PolygonSoup& soup) {
+  std::unordered_map<uint64_t, std::vector<uint32_t>> buckets;
+  std::vector<uint32_t> map(soup.vertex_count());
+  std::vector<float> kept;
+  kept.reserve(soup.positions.size());
+  for (uint32_t v = 0; v < soup.vertex_count(); ++v) {
+    float p[3];
+    uint64_t h = 1469598103934665603ull;
+    for (int k = 0; k < 3; ++k) {
+      p[k] = soup.positions[size_t(v) * 3 + k];
+      if (p[k] == 0) p[k] = 0;  // -0 -> +0
+      h = (h ^ std::bit_cast<uint32_t>(p[k])) * 1099511628211ull;
+    }
+    std::vector<uint32_t>& bucket = buckets[h];
+    map[v] = kNoAttribute;
+    for (uint32_t w : bucket)
+      if (std::memcmp(&kept[size_t(w) * 3], p, sizeof p) == 0) map[v] = w;
+    if (map[v] == kNoAttribute) {
+      map[v] = uint32_t(kept.size() / 3);
+      bucket.push_back(map[v]);
+      kept.insert(kept.end(), p, p + 3);
+    }
+  }
+  soup.welded_vertices += soup.vertex_count() - kept.size() / 3;
+  soup.positions = std::move(kept);
+  for (uint32_t& c : soup.corners) c = map[c];
+}
+
+namespace {
+
 // ---- OBJ ----
 
-bool read_obj(const std::string& path, const std::string& data, PolygonSoup& out,
+Material named_material(std::string name) {
+  Material m;
+  m.name = std::move(name);
+  return m;
+}
+
+// Texture file of an MTL map statement: what follows the options (-bm 1, -s 1 1 1, -clamp on,
+// each a dash word and its numeric or on/off arguments); file names may hold spaces.
+std::string_view map_file(std::string_view rest) {
+  for (;;) {
+    std::string_view probe = rest, t = next_token(probe);
+    float ignored;
+    if (t.empty() || !(t[0] == '-' || parse_float(t, ignored) || t == "on" || t == "off")) break;
+    rest = probe;
+  }
+  size_t begin = rest.find_first_not_of(" \t"), end = rest.find_last_not_of(" \t\r");
+  return begin == std::string_view::npos ? std::string_view() : rest.substr(begin, end - begin + 1);
+}
+
+// Fills the named materials from an MTL file beside the OBJ. A missing or unreadable MTL keeps
+// the names only: the geometry does not depend on it (and OBJ files often ship without theirs).
+void read_mtl(const std::string& obj_path, const std::string& library,
+              std::vector<Material>& materials) {
+  std::string data, ignored;
+  std::filesystem::path mtl = std::filesystem::path(obj_path).parent_path() / library;
+  if (!read_file(mtl.string(), data, ignored)) return;
+  Lines lines{data, 0, '#'};
+  std::string_view line;
+  Material* m = nullptr;
+  while (lines.next(line)) {
+    std::string_view key = next_token(line);
+    if (key == "newmtl") {
+      std::string_view name = next_token(line);
+      m = nullptr;
+      for (Material& x : materials)
+        if (x.name == name) m = &x;
+    } else if (!m) {
+      continue;
+    } else if (key == "Kd") {
+      for (int k = 0; k < 3; ++k) {
+        float v;
+        if (parse_float(next_token(line), v) && std::isfinite(v)) m->base_color[k] = v;
+      }
+    } else if (key == "d") {
+      float v;
+      if (parse_float(next_token(line), v) && std::isfinite(v)) m->base_color[3] = v;
+    } else if (key == "map_Kd") {
+      m->base_color_texture = map_file(line);
+    } else if (key == "norm" || key == "map_Bump" || key == "map_bump" || key == "bump") {
+      m->normal_texture = map_file(line);
+    }
+  }
+}
+
+// Parses `count` floats of an OBJ record; false when one is missing or malformed.
+bool parse_floats(std::string_view& line, float* v, int count) {
+  for (int k = 0; k < count; ++k)
+    if (!parse_float(next_token(line), v[k])) return false;
+  return true;
+}
+
+bool all_finite(const float* v, int count) {
+  for (int k = 0; k < count; ++k)
+    if (!std::isfinite(v[k])) return false;
+  return true;
+}
+
+bool read_obj(const std::string& path, std::string_view data, PolygonSoup& out,
               std::string& error) {
   Lines lines{data, 0, '#'};
   std::string_view line;
   // Positive indices are checked once all vertices are known; remember where faces came from.
   std::vector<uint64_t> face_lines;
+  std::vector<float> texcoords, normals, colors;  // pools; colours per vertex (v x y z r g b)
+  std::vector<uint32_t> corner_texcoords, corner_normals, face_materials;
+  bool any_texcoord = false, any_normal = false, any_material = false;
+  uint32_t material = kNoAttribute;
+  SoupAttributes& attrs = out.attributes;
+  auto fail = [&](const std::string& what) {
+    error = line_error(path, lines.number, what);
+    return false;
+  };
   while (lines.next(line)) {
     std::string_view key = next_token(line);
     if (key == "v") {
       float p[3];
-      for (float& c : p)
-        if (!parse_float(next_token(line), c)) {
-          error = line_error(path, lines.number, "vertex needs three numeric coordinates");
-          return false;
-        }
+      if (!parse_floats(line, p, 3)) return fail("vertex needs three numeric coordinates");
       if (!push_vertex(out, p, path, lines.number, error)) return false;
+      float c[3];
+      std::string_view probe = line;
+      if (!next_token(probe).empty()) {  // vertex colour extension: v x y z r g b
+        if (!parse_floats(line, c, 3)) return fail("vertex colour needs three numbers");
+        if (!all_finite(c, 3))
+          return fail("vertex " + std::to_string(out.vertex_count() - 1) +
+                      " has a NaN or infinite colour");
+        colors.resize(size_t(out.vertex_count() - 1) * 3, 0.0f);
+        colors.insert(colors.end(), c, c + 3);
+      }
+    } else if (key == "vt") {
+      float t[2] = {0, 0};
+      if (!parse_float(next_token(line), t[0])) return fail("texture coordinate needs a numeric u");
+      std::string_view probe = line;
+      if (!next_token(probe).empty() && !parse_float(next_token(line), t[1]))
+        return fail("texture coordinate has a malformed v");
+      if (!all_finite(t, 2))
+        return fail("texture coordinate " + std::to_string(texcoords.size() / 2) +
+                    " is NaN or infinite");
+      texcoords.insert(texcoords.end(), t, t + 2);
+    } else if (key == "vn") {
+      float n[3];
+      if (!parse_floats(line, n, 3)) return fail("normal needs three numeric coordinates");
+      if (!all_finite(n, 3))
+        return fail("normal " + std::to_string(normals.size() / 3) + " is NaN or infinite");
+      normals.insert(normals.end(), n, n + 3);
+    } else if (key == "usemtl") {
+      std::string_view name = next_token(line);
+      material = uint32_t(attrs.materials.size());
+      for (uint32_t m = 0; m < attrs.materials.size(); ++m)
+        if (attrs.materials[m].name == name) material = m;
+      if (material == attrs.materials.size())
+        attrs.materials.push_back(named_material(std::string(name)));
+    } else if (key == "mtllib") {
+      if (attrs.material_library.empty()) attrs.material_library = next_token(line);
     } else if (key == "f" || key == "fo") {
       uint64_t face = face_lines.size();
       for (std::string_view t = next_token(line); !t.empty(); t = next_token(line)) {
-        int64_t i;
-        if (!parse_int(t.substr(0, t.find('/')), i) || i == 0) {
-          error = line_error(
-              path, lines.number,
-              "face " + std::to_string(face) + " has a malformed index '" + std::string(t) + "'");
-          return false;
+        // v, v/vt, v//vn or v/vt/vn; negative indices count back from the last entry so far.
+        int64_t ids[3] = {0, 0, 0};
+        const uint64_t pools[3] = {out.vertex_count(), texcoords.size() / 2, normals.size() / 3};
+        std::string_view rest = t;
+        for (int k = 0; k < 3 && !rest.empty(); ++k) {
+          size_t slash = rest.find('/');
+          std::string_view part = rest.substr(0, slash);
+          rest = slash == std::string_view::npos ? std::string_view() : rest.substr(slash + 1);
+          if (k > 0 && part.empty()) continue;  // v//vn: no texture coordinate
+          if (!parse_int(part, ids[k]) || ids[k] == 0)
+            return fail("face " + std::to_string(face) + " has a malformed index '" +
+                        std::string(t) + "'");
+          if (ids[k] < 0) ids[k] += int64_t(pools[k]) + 1;
+          if (ids[k] <= 0 || ids[k] > int64_t(kMaxVertices)) {
+            if (k == 0) {
+              error = range_error(path, face, lines.number, ids[0] - 1, out.vertex_count());
+              return false;
+            }
+            return fail("face " + std::to_string(face) + " references a " +
+                        (k == 1 ? "texture coordinate" : "normal") + " before the first");
+          }
         }
-        // Negative indices count back from the last vertex read so far.
-        int64_t id = i < 0 ? int64_t(out.vertex_count()) + i : i - 1;
-        if (id < 0 || id >= int64_t(kMaxVertices)) {
-          error = range_error(path, face, lines.number, id, out.vertex_count());
-          return false;
-        }
-        out.corners.push_back(uint32_t(id));
+        out.corners.push_back(uint32_t(ids[0] - 1));
+        corner_texcoords.push_back(ids[1] ? uint32_t(ids[1] - 1) : kNoAttribute);
+        corner_normals.push_back(ids[2] ? uint32_t(ids[2] - 1) : kNoAttribute);
+        any_texcoord |= ids[1] != 0, any_normal |= ids[2] != 0;
       }
       end_face(out);
       face_lines.push_back(lines.number);
+      face_materials.push_back(material);
+      any_material |= material != kNoAttribute;
     }
-    // Other records (vt, vn, l, p, g, o, s, usemtl, mtllib, ...) do not describe triangles.
+    // Other records (l, p, g, o, s, ...) do not describe triangles or their attributes.
   }
   for (uint32_t f = 0; f < out.face_count(); ++f)
-    for (uint32_t c = out.face_offsets[f]; c < out.face_offsets[f + 1]; ++c)
+    for (uint32_t c = out.face_offsets[f]; c < out.face_offsets[f + 1]; ++c) {
       if (out.corners[c] >= out.vertex_count()) {
         error = range_error(path, f, face_lines[f], out.corners[c], out.vertex_count());
         return false;
       }
+      if ((corner_texcoords[c] != kNoAttribute && corner_texcoords[c] >= texcoords.size() / 2) ||
+          (corner_normals[c] != kNoAttribute && corner_normals[c] >= normals.size() / 3)) {
+        error = line_error(
+            path, face_lines[f],
+            "face " + std::to_string(f) + " references a " +
+                (corner_normals[c] == kNoAttribute || corner_normals[c] < normals.size() / 3
+                     ? "texture coordinate"
+                     : "normal") +
+                " the file does not have");
+        return false;
+      }
+    }
+  if (any_texcoord) {
+    attrs.texcoords.push_back(std::move(texcoords));
+    attrs.corner_texcoords.push_back(std::move(corner_texcoords));
+  }
+  if (any_normal) {
+    attrs.normals = std::move(normals);
+    attrs.corner_normals = std::move(corner_normals);
+  }
+  if (!colors.empty()) {
+    colors.resize(size_t(out.vertex_count()) * 3, 0.0f);
+    attrs.colors = std::move(colors);
+    attrs.color_components = 3;
+    attrs.corner_colors = out.corners;
+  }
+  if (any_material) {
+    // Faces before the first usemtl get a material of their own.
+    uint32_t fallback = kNoAttribute;
+    for (uint32_t& m : face_materials)
+      if (m == kNoAttribute) {
+        if (fallback == kNoAttribute) {
+          fallback = uint32_t(attrs.materials.size());
+          attrs.materials.push_back(named_material("default"));
+        }
+        m = fallback;
+      }
+    attrs.face_materials = std::move(face_materials);
+  }
+  if (!attrs.material_library.empty()) read_mtl(path, attrs.material_library, attrs.materials);
   return true;
 }
 
 // ---- OFF ----
 
-bool read_off(const std::string& path, const std::string& data, PolygonSoup& out,
+uint32_t load_u32(const char* p, bool big_endian) {
+  const auto* b = reinterpret_cast<const unsigned char*>(p);
+  return big_endian
+             ? uint32_t(b[3]) | uint32_t(b[2]) << 8 | uint32_t(b[1]) << 16 | uint32_t(b[0]) << 24
+             : uint32_t(b[0]) | uint32_t(b[1]) << 8 | uint32_t(b[2]) << 16 | uint32_t(b[3]) << 24;
+}
+
+// Binary OFF after its header line: counts (vertices, faces, edges) as int32, then per vertex
+// 3 + extra float32 (normals, colours, texture coordinates, ignored), per face an int32 corner
+// count and the int32 indices. Geomview's definition is big endian with a colour count (and that
+// many floats) after each face; OpenMesh writes little endian without it. The first layout that
+// reads the whole data is taken.
+bool read_off_binary_layout(const std::string& path, std::string_view data, uint32_t extra,
+                            bool big_endian, bool face_colors, PolygonSoup& out,
+                            std::string& error) {
+  out.positions.clear(), out.corners.clear(), out.face_offsets.assign(1, 0);
+  size_t pos = 0;
+  auto u32 = [&](uint32_t& v) {
+    if (data.size() - pos < 4) return false;
+    v = load_u32(data.data() + pos, big_endian);
+    pos += 4;
+    return true;
+  };
+  uint32_t nv, nf, ne;
+  if (!u32(nv) || !u32(nf) || !u32(ne)) {
+    error = path + ": binary OFF ends inside its counts";
+    return false;
+  }
+  const uint64_t vertex_bytes = uint64_t(3 + extra) * 4;
+  if (nv >= kMaxVertices || uint64_t(nv) * vertex_bytes > data.size() - pos ||
+      uint64_t(nf) * 8 > data.size() - pos - uint64_t(nv) * vertex_bytes) {
+    error = path + ": binary OFF declares " + std::to_string(nv) + " vertices and " +
+            std::to_string(nf) + " faces, more than the file holds";
+    return false;
+  }
+  out.positions.reserve(size_t(nv) * 3);
+  for (uint32_t v = 0; v < nv; ++v) {
+    float p[3];
+    for (int k = 0; k < 3; ++k)
+      p[k] = std::bit_cast<float>(load_u32(data.data() + pos + size_t(k) * 4, big_endian));
+    pos += size_t(vertex_bytes);
+    if (!push_vertex(out, p, path, 0, error)) return false;
+  }
+  for (uint32_t f = 0; f < nf; ++f) {
+    uint32_t n, ix = 0, colors = 0;
+    if (!u32(n) || n > (data.size() - pos) / 4) {
+      error = path + ": binary OFF ends or is malformed in face " + std::to_string(f);
+      return false;
+    }
+    for (uint32_t c = 0; c < n; ++c) {
+      u32(ix);
+      if (ix >= nv) {
+        error = range_error(path, f, 0, int64_t(int32_t(ix)), nv);
+        return false;
+      }
+      out.corners.push_back(ix);
+    }
+    if (face_colors && (!u32(colors) || colors > 4 || colors * 4 > data.size() - pos)) {
+      error = path + ": binary OFF ends or is malformed in face " + std::to_string(f);
+      return false;
+    }
+    pos += colors * 4;
+    end_face(out);
+  }
+  if (pos != data.size()) {
+    error = path + ": binary OFF has " + std::to_string(data.size() - pos) +
+            " bytes after its last face";
+    return false;
+  }
+  return true;
+}
+
+bool read_off_binary(const std::string& path, std::string_view data, uint32_t extra,
+                     PolygonSoup& out, std::string& error) {
+  // The reported failure: the first layout whose counts fit the file (else the first one's).
+  std::string reported;
+  bool counts_fit = false;
+  for (int layout = 0; layout < 4; ++layout) {
+    bool big_endian = layout == 1 || layout == 2, face_colors = layout == 1 || layout == 3;
+    if (read_off_binary_layout(path, data, extra, big_endian, face_colors, out, error)) return true;
+    bool fit = error.find("more than the file holds") == std::string::npos &&
+               error.find("inside its counts") == std::string::npos;
+    if (reported.empty() || (fit && !counts_fit)) reported = error, counts_fit = fit;
+  }
+  error = reported;
+  return false;
+}
+
+bool read_off(const std::string& path, std::string_view data, PolygonSoup& out,
               std::string& error) {
   Lines lines{data, 0, '#'};
   std::string_view line;
@@ -234,8 +520,12 @@ bool read_off(const std::string& path, const std::string& data, PolygonSoup& out
   std::string_view counts = line;
   std::string_view probe = counts;
   if (next_token(probe) == "BINARY") {
-    error = path + ": binary OFF is not supported (convert to ascii OFF, PLY or OBJ)";
-    return false;
+    uint32_t extra = 0;
+    std::string_view flags = key.substr(0, key.size() - 3);
+    if (flags.starts_with("ST")) extra += 2, flags.remove_prefix(2);
+    if (flags.starts_with("C")) extra += 4, flags.remove_prefix(1);
+    if (flags.starts_with("N")) extra += 3;
+    return read_off_binary(path, lines.rest, extra, out, error);
   }
   if (probe = counts, next_token(probe).empty() && !lines.next_nonblank(counts)) {
     error = path + ": OFF header has no vertex and face counts";
@@ -416,7 +706,12 @@ struct PlyBody {
   size_t remaining() const { return data.size() - pos; }
 };
 
-bool read_ply(const std::string& path, const std::string& data, PolygonSoup& out,
+// Scale of an integer colour channel (uchar 0..255, ushort 0..65535); floats are 0..1 already.
+double color_scale(PlyType t) {
+  return t == PlyType::f32 || t == PlyType::f64 ? 1.0 : t == PlyType::u16 ? 1.0 / 65535 : 1.0 / 255;
+}
+
+bool read_ply(const std::string& path, std::string_view data, PolygonSoup& out,
               std::string& error) {
   Lines lines{data, 0, 0};
   std::string_view line;
@@ -476,6 +771,13 @@ bool read_ply(const std::string& path, const std::string& data, PolygonSoup& out
       elements.back().properties.push_back(std::move(p));
     } else if (key == "end_header") {
       ended = true;
+    } else if (key == "comment" && next_token(line) == "TextureFile") {
+      // MeshLab's texture reference; the face property texnumber picks one.
+      std::string_view file = line.substr(std::min(line.find_first_not_of(" \t"), line.size()));
+      while (!file.empty() && is_space(file.back())) file.remove_suffix(1);
+      Material m = named_material("texture" + std::to_string(out.attributes.materials.size()));
+      m.base_color_texture = file;
+      out.attributes.materials.push_back(std::move(m));
     } else if (key != "comment" && key != "obj_info" && !key.empty()) {
       error =
           line_error(path, lines.number, "unexpected PLY header line '" + std::string(key) + "'");
@@ -491,16 +793,47 @@ bool read_ply(const std::string& path, const std::string& data, PolygonSoup& out
   for (const PlyElement& e : elements) {
     if (e.properties.empty()) continue;  // holds no bytes; its count must not drive a loop
     bool is_vertex = e.name == "vertex", is_face = e.name == "face";
-    int xyz[3] = {-1, -1, -1}, list = -1;
+    // Which property feeds which value: xyz, normal, colour (rgba), uv; per face the corner list,
+    // per-corner uvs (MeshLab's texcoord list) and the texture number.
+    int xyz[3] = {-1, -1, -1}, normal[3] = {-1, -1, -1}, rgba[4] = {-1, -1, -1, -1},
+        uv[2] = {-1, -1}, list = -1, face_uv = -1, texnumber = -1;
     size_t min_bytes = 0;  // bytes an instance takes at least (binary)
     for (size_t i = 0; i < e.properties.size(); ++i) {
       const PlyProperty& p = e.properties[i];
       bool scalar = p.count_type == PlyType::invalid;
       min_bytes += scalar ? ply_size(p.type) : ply_size(p.count_type);
-      if (is_vertex && scalar && (p.name == "x" || p.name == "y" || p.name == "z"))
-        xyz[p.name[0] - 'x'] = int(i);
-      if (is_face && !scalar && (p.name == "vertex_indices" || p.name == "vertex_index"))
-        list = int(i);
+      const std::string& n = p.name;
+      if (is_vertex && scalar) {
+        if (n == "x" || n == "y" || n == "z") xyz[n[0] - 'x'] = int(i);
+        if (n == "nx" || n == "ny" || n == "nz") normal[n[1] - 'x'] = int(i);
+        static const char* const color_names[2][4] = {
+            {"red", "green", "blue", "alpha"},
+            {"diffuse_red", "diffuse_green", "diffuse_blue", "diffuse_alpha"}};
+        static const char* const uv_names[4][2] = {
+            {"u", "v"}, {"s", "t"}, {"texture_u", "texture_v"}, {"texture_s", "texture_t"}};
+        for (int k = 0; k < 4; ++k)
+          if (n == color_names[0][k] || n == color_names[1][k]) rgba[k] = int(i);
+        for (int k = 0; k < 2; ++k)
+          for (const auto& names : uv_names)
+            if (n == names[k]) uv[k] = int(i);
+      }
+      if (is_face && !scalar && (n == "vertex_indices" || n == "vertex_index")) list = int(i);
+      if (is_face && !scalar && n == "texcoord") face_uv = int(i);
+      if (is_face && scalar && n == "texnumber") texnumber = int(i);
+    }
+    SoupAttributes& attrs = out.attributes;
+    const bool has_normals = is_vertex && normal[0] >= 0 && normal[1] >= 0 && normal[2] >= 0;
+    const bool has_uv = is_vertex && uv[0] >= 0 && uv[1] >= 0;
+    const uint32_t color_components =
+        is_vertex && rgba[0] >= 0 && rgba[1] >= 0 && rgba[2] >= 0 ? (rgba[3] >= 0 ? 4 : 3) : 0;
+    if (is_vertex) {
+      if (has_normals) attrs.normals.reserve(size_t(e.count) * 3);
+      if (has_uv) attrs.texcoords.assign(1, {});
+      attrs.color_components = color_components;
+    }
+    if (is_face && face_uv >= 0) {
+      attrs.texcoords.assign(1, {});
+      attrs.corner_texcoords.assign(1, {});
     }
     if (is_vertex && (xyz[0] < 0 || xyz[1] < 0 || xyz[2] < 0)) {
       error = path + ": PLY vertex element lacks x, y or z";
@@ -526,7 +859,9 @@ bool read_ply(const std::string& path, const std::string& data, PolygonSoup& out
     if (is_face)
       out.face_offsets.reserve(reserve + 1), out.corners.reserve(reserve * 3), have_faces = true;
     for (uint64_t n = 0; n < e.count; ++n) {
-      float p[3] = {0, 0, 0};
+      float p[3] = {0, 0, 0}, nrm[3] = {0, 0, 0}, color[4] = {0, 0, 0, 1}, t[2] = {0, 0};
+      uint32_t face_texture = kNoAttribute;
+      const size_t uv_before = face_uv >= 0 ? attrs.texcoords[0].size() : 0;
       for (size_t i = 0; i < e.properties.size(); ++i) {
         const PlyProperty& prop = e.properties[i];
         double v;
@@ -535,8 +870,23 @@ bool read_ply(const std::string& path, const std::string& data, PolygonSoup& out
             error = path + ": PLY data ends or is malformed in " + e.name + " " + std::to_string(n);
             return false;
           }
-          for (int k = 0; k < 3; ++k)
+          for (int k = 0; k < 3; ++k) {
             if (int(i) == xyz[k]) p[k] = float(v);
+            if (int(i) == normal[k]) nrm[k] = float(v);
+          }
+          for (int k = 0; k < 4; ++k)
+            if (int(i) == rgba[k]) color[k] = float(v * color_scale(prop.type));
+          for (int k = 0; k < 2; ++k)
+            if (int(i) == uv[k]) t[k] = float(v);
+          if (int(i) == texnumber) {
+            if (!(v >= 0 && v < double(attrs.materials.size()))) {
+              error = path + ": PLY face " + std::to_string(n) + " has texture number " +
+                      std::to_string(v) + " but the header names " +
+                      std::to_string(attrs.materials.size()) + " texture files";
+              return false;
+            }
+            face_texture = uint32_t(v);
+          }
           continue;
         }
         double count;
@@ -550,6 +900,14 @@ bool read_ply(const std::string& path, const std::string& data, PolygonSoup& out
             error = path + ": PLY data ends or is malformed in " + e.name + " " + std::to_string(n);
             return false;
           }
+          if (int(i) == face_uv) {
+            if (!std::isfinite(v)) {
+              error = path + ": PLY face " + std::to_string(n) +
+                      " has a NaN or infinite texture coordinate";
+              return false;
+            }
+            attrs.texcoords[0].push_back(float(v));
+          }
           if (int(i) != list) continue;
           if (v < 0 || v >= double(kMaxVertices) || v != std::floor(v)) {
             error = range_error(path, n, 0, int64_t(v), out.vertex_count());
@@ -558,10 +916,42 @@ bool read_ply(const std::string& path, const std::string& data, PolygonSoup& out
           out.corners.push_back(uint32_t(v));
         }
       }
-      if (is_vertex && !push_vertex(out, p, path, 0, error)) return false;
-      if (is_face) end_face(out);
+      if (is_vertex) {
+        if (!push_vertex(out, p, path, 0, error)) return false;
+        if (!all_finite(nrm, 3) || !all_finite(color, 4) || !all_finite(t, 2)) {
+          error = path + ": vertex " + std::to_string(out.vertex_count() - 1) +
+                  " has a NaN or infinite attribute";
+          return false;
+        }
+        if (has_normals) attrs.normals.insert(attrs.normals.end(), nrm, nrm + 3);
+        if (has_uv) attrs.texcoords[0].insert(attrs.texcoords[0].end(), t, t + 2);
+        attrs.colors.insert(attrs.colors.end(), color, color + color_components);
+      }
+      if (is_face) {
+        end_face(out);
+        if (face_uv >= 0) {
+          // One u v pair per corner, in corner order; a face with another count has none.
+          std::vector<float>& pool = attrs.texcoords[0];
+          std::vector<uint32_t>& ids = attrs.corner_texcoords[0];
+          size_t corners = out.corners.size() - ids.size();
+          bool matches = pool.size() - uv_before == corners * 2;
+          if (!matches) pool.resize(uv_before);
+          for (size_t c = 0; c < corners; ++c)
+            ids.push_back(matches ? uint32_t(uv_before / 2 + c) : kNoAttribute);
+        }
+        if (texnumber >= 0) attrs.face_materials.push_back(face_texture);
+      }
     }
   }
+  SoupAttributes& attrs = out.attributes;
+  const bool per_vertex = !attrs.normals.empty() || attrs.color_components ||
+                          (!attrs.texcoords.empty() && attrs.corner_texcoords.empty());
+  if (!attrs.normals.empty()) attrs.corner_normals = out.corners;
+  if (attrs.color_components) attrs.corner_colors = out.corners;
+  if (!attrs.texcoords.empty() && attrs.corner_texcoords.empty())
+    attrs.corner_texcoords.assign(1, out.corners);
+  if (attrs.face_materials.size() != out.face_count()) attrs.face_materials.clear();
+  if (attrs.face_materials.empty()) attrs.materials.clear();
   if (!have_vertices || !have_faces) {
     error =
         path + ": PLY file has no " + std::string(have_vertices ? "face" : "vertex") + " element";
@@ -574,6 +964,7 @@ bool read_ply(const std::string& path, const std::string& data, PolygonSoup& out
         error = range_error(path, f, 0, out.corners[c], out.vertex_count());
         return false;
       }
+  if (per_vertex) weld_vertices(out);
   return true;
 }
 
@@ -612,7 +1003,7 @@ bool add_stl_corner(PolygonSoup& out, std::unordered_map<uint64_t, std::vector<u
   return true;
 }
 
-bool read_stl(const std::string& path, const std::string& data, PolygonSoup& out,
+bool read_stl(const std::string& path, std::string_view data, PolygonSoup& out,
               std::string& error) {
   std::unordered_map<uint64_t, std::vector<uint32_t>> buckets;
   uint32_t declared = data.size() >= 84 ? load_le32(data.data() + 80) : 0;
@@ -693,17 +1084,118 @@ struct Writer {
   void f32le(float v) { u32le(std::bit_cast<uint32_t>(v)); }
 };
 
-void write_body(Writer& w, const std::string& ext, const IndexedMesh& m) {
+void write_mtl(Writer& w, const std::vector<Material>& materials) {
+  w.printed(std::fprintf(w.f, "# written by pmz\n"));
+  for (const Material& m : materials) {
+    w.printed(std::fprintf(w.f, "newmtl %s\nKd %.9g %.9g %.9g\n",
+                           m.name.empty() ? "unnamed" : m.name.c_str(), m.base_color[0],
+                           m.base_color[1], m.base_color[2]));
+    if (m.base_color[3] != 1) w.printed(std::fprintf(w.f, "d %.9g\n", m.base_color[3]));
+    if (!m.base_color_texture.empty())
+      w.printed(std::fprintf(w.f, "map_Kd %s\n", m.base_color_texture.c_str()));
+    if (!m.normal_texture.empty())
+      w.printed(std::fprintf(w.f, "norm %s\n", m.normal_texture.c_str()));
+  }
+}
+
+// OBJ: positions per vertex (with the colour of the vertex's first wedge: OBJ colours are per
+// vertex), texture coordinates (set 0) and normals per wedge, usemtl where the material changes.
+void write_obj(Writer& w, const IndexedMesh& m, const std::string& mtl) {
+  const MeshAttributes& a = m.attributes;
   const uint32_t nv = m.vertex_count(), nf = m.face_count();
   const float* p = m.positions.data();
   const uint32_t* ix = m.indices.data();
+  if (!mtl.empty()) w.printed(std::fprintf(w.f, "mtllib %s\n", mtl.c_str()));
+  std::vector<uint32_t> vertex_wedge;
+  if (a.color_components) {
+    vertex_wedge.assign(nv, kNoAttribute);
+    for (uint32_t wd = a.wedge_count(); wd-- > 0;) vertex_wedge[a.wedge_vertices[wd]] = wd;
+  }
   // %.9g prints every float exactly enough to read back bit-identical.
-  if (ext == ".obj") {
-    for (uint32_t v = 0; v < nv; ++v)
-      w.printed(std::fprintf(w.f, "v %.9g %.9g %.9g\n", p[v * 3], p[v * 3 + 1], p[v * 3 + 2]));
-    for (uint32_t f = 0; f < nf; ++f)
+  for (uint32_t v = 0; v < nv; ++v) {
+    w.printed(std::fprintf(w.f, "v %.9g %.9g %.9g", p[v * 3], p[v * 3 + 1], p[v * 3 + 2]));
+    if (a.color_components) {
+      const float* c = vertex_wedge[v] == kNoAttribute
+                           ? nullptr
+                           : &a.colors[size_t(vertex_wedge[v]) * a.color_components];
       w.printed(
-          std::fprintf(w.f, "f %u %u %u\n", ix[f * 3] + 1, ix[f * 3 + 1] + 1, ix[f * 3 + 2] + 1));
+          std::fprintf(w.f, " %.9g %.9g %.9g", c ? c[0] : 0.0f, c ? c[1] : 0.0f, c ? c[2] : 0.0f));
+    }
+    w.printed(std::fprintf(w.f, "\n"));
+  }
+  const bool uv = !a.texcoords.empty(), normals = !a.normals.empty();
+  for (uint32_t wd = 0; uv && wd < a.wedge_count(); ++wd)
+    w.printed(
+        std::fprintf(w.f, "vt %.9g %.9g\n", a.texcoords[0][wd * 2], a.texcoords[0][wd * 2 + 1]));
+  for (uint32_t wd = 0; normals && wd < a.wedge_count(); ++wd)
+    w.printed(std::fprintf(w.f, "vn %.9g %.9g %.9g\n", a.normals[wd * 3], a.normals[wd * 3 + 1],
+                           a.normals[wd * 3 + 2]));
+  uint32_t material = kNoAttribute;
+  for (uint32_t f = 0; f < nf; ++f) {
+    if (!a.face_materials.empty() && a.face_materials[f] != material) {
+      material = a.face_materials[f];
+      const std::string& name = a.materials[material].name;
+      w.printed(std::fprintf(w.f, "usemtl %s\n", name.empty() ? "unnamed" : name.c_str()));
+    }
+    w.printed(std::fprintf(w.f, "f"));
+    for (int k = 0; k < 3; ++k) {
+      uint32_t wd = a.corner_wedges.empty() ? 0 : a.corner_wedges[f * 3 + k] + 1;
+      w.printed(uv && normals ? std::fprintf(w.f, " %u/%u/%u", ix[f * 3 + k] + 1, wd, wd)
+                : uv          ? std::fprintf(w.f, " %u/%u", ix[f * 3 + k] + 1, wd)
+                : normals     ? std::fprintf(w.f, " %u//%u", ix[f * 3 + k] + 1, wd)
+                              : std::fprintf(w.f, " %u", ix[f * 3 + k] + 1));
+    }
+    w.printed(std::fprintf(w.f, "\n"));
+  }
+}
+
+// PLY with attributes: one vertex per wedge (normals, 8-bit colours, texture coordinates set 0),
+// the texture files as MeshLab's TextureFile comments with a texnumber per face.
+void write_ply_wedges(Writer& w, const IndexedMesh& m) {
+  const MeshAttributes& a = m.attributes;
+  const uint32_t nw = a.wedge_count(), nf = m.face_count();
+  std::string header = "ply\nformat binary_little_endian 1.0\ncomment written by pmz\n";
+  for (const Material& mat : a.materials)
+    header += "comment TextureFile " + mat.base_color_texture + "\n";
+  header += "element vertex " + std::to_string(nw) +
+            "\nproperty float x\nproperty float y\nproperty float z\n";
+  if (!a.normals.empty()) header += "property float nx\nproperty float ny\nproperty float nz\n";
+  if (a.color_components)
+    header += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+  if (a.color_components == 4) header += "property uchar alpha\n";
+  if (!a.texcoords.empty()) header += "property float texture_u\nproperty float texture_v\n";
+  header += "element face " + std::to_string(nf) + "\nproperty list uchar uint vertex_indices\n";
+  if (!a.face_materials.empty()) header += "property int texnumber\n";
+  header += "end_header\n";
+  w.put(header.data(), header.size());
+  for (uint32_t wd = 0; wd < nw; ++wd) {
+    for (int k = 0; k < 3; ++k) w.f32le(m.positions[size_t(a.wedge_vertices[wd]) * 3 + k]);
+    if (!a.normals.empty())
+      for (int k = 0; k < 3; ++k) w.f32le(a.normals[size_t(wd) * 3 + k]);
+    for (uint32_t k = 0; k < a.color_components; ++k) {
+      float c = a.colors[size_t(wd) * a.color_components + k];
+      uint8_t b = uint8_t(std::lround(std::clamp(c, 0.0f, 1.0f) * 255));
+      w.put(&b, 1);
+    }
+    if (!a.texcoords.empty())
+      for (int k = 0; k < 2; ++k) w.f32le(a.texcoords[0][size_t(wd) * 2 + k]);
+  }
+  for (uint32_t f = 0; f < nf; ++f) {
+    const uint8_t three = 3;
+    w.put(&three, 1);
+    for (int k = 0; k < 3; ++k) w.u32le(a.corner_wedges[f * 3 + k]);
+    if (!a.face_materials.empty()) w.u32le(a.face_materials[f]);
+  }
+}
+
+void write_body(Writer& w, const std::string& ext, const IndexedMesh& m, const std::string& mtl) {
+  const uint32_t nv = m.vertex_count(), nf = m.face_count();
+  const float* p = m.positions.data();
+  const uint32_t* ix = m.indices.data();
+  if (ext == ".obj") {
+    write_obj(w, m, mtl);
+  } else if (ext == ".ply" && m.attributes.has_wedges()) {
+    write_ply_wedges(w, m);
   } else if (ext == ".off") {
     w.printed(std::fprintf(w.f, "OFF\n%u %u 0\n", nv, nf));
     for (uint32_t v = 0; v < nv; ++v)
@@ -748,26 +1240,49 @@ void write_body(Writer& w, const std::string& ext, const IndexedMesh& m) {
 
 }  // namespace
 
-bool read_polygon_soup(const std::string& path, PolygonSoup& out, std::string& error) {
+bool known_input(const std::string& ext) {
+  return ext == ".obj" || ext == ".off" || ext == ".ply" || ext == ".stl" || ext == ".gltf" ||
+         ext == ".glb";
+}
+
+const char* const kInputFormats = ".obj, .off, .ply, .stl, .gltf or .glb";
+
+bool parse_polygon_soup(const std::string& path, std::string_view data, PolygonSoup& out,
+                        std::string& error) {
   out = PolygonSoup();
   out.face_offsets.push_back(0);
   std::string ext = lower_extension(path);
-  if (ext != ".obj" && ext != ".off" && ext != ".ply" && ext != ".stl") {
-    error = path + ": unknown mesh format '" + ext + "' (expected .obj, .off, .ply or .stl)";
+  if (!known_input(ext)) {
+    error = path + ": unknown mesh format '" + ext + "' (expected " + kInputFormats + ")";
     return false;
   }
-  std::string data;
-  if (!read_file(path, data, error)) return false;
+  if (data.empty()) {
+    error = path + ": empty file";
+    return false;
+  }
   bool ok = ext == ".obj"   ? read_obj(path, data, out, error)
             : ext == ".off" ? read_off(path, data, out, error)
             : ext == ".ply" ? read_ply(path, data, out, error)
-                            : read_stl(path, data, out, error);
+            : ext == ".stl" ? read_stl(path, data, out, error)
+                            : read_gltf(path, data, out, error);
   if (ok && out.face_count() == 0) {
     error = path + ": mesh has no faces";
     ok = false;
   }
   if (!ok) out = PolygonSoup();
   return ok;
+}
+
+bool read_polygon_soup(const std::string& path, PolygonSoup& out, std::string& error) {
+  out = PolygonSoup();
+  std::string ext = lower_extension(path);
+  if (!known_input(ext)) {
+    error = path + ": unknown mesh format '" + ext + "' (expected " + kInputFormats + ")";
+    return false;
+  }
+  std::string data;
+  if (!read_file(path, data, error)) return false;
+  return parse_polygon_soup(path, data, out, error);
 }
 
 bool read_mesh(const std::string& path, IndexedMesh& out, MeshRepairStats& stats,
@@ -792,19 +1307,12 @@ bool read_mesh(const std::string& path, IndexedMesh& out, std::string& error) {
   return true;
 }
 
-bool write_mesh(const std::string& path, const IndexedMesh& mesh, std::string& error) {
-  std::string ext = lower_extension(path);
-  if (ext != ".obj" && ext != ".off" && ext != ".ply" && ext != ".stl") {
-    error = path + ": unknown mesh format '" + ext + "' (expected .obj, .off, .ply or .stl)";
-    return false;
-  }
-  for (uint32_t i : mesh.indices)
-    if (i >= mesh.vertex_count()) {
-      error = path + ": mesh to write references vertex " + std::to_string(i) + " of " +
-              std::to_string(mesh.vertex_count());
-      return false;
-    }
-  // Hidden temporary beside the target (same filesystem, so the rename is atomic).
+namespace {
+
+// Hidden temporary beside the target (same filesystem, so the rename is atomic), renamed when
+// `body` has written everything; removed on any error.
+bool write_atomic(const std::string& path, const std::function<void(Writer&)>& body,
+                  std::string& error) {
   std::filesystem::path target(path);
   std::string tmp = (target.parent_path() /
                      ("." + target.filename().string() + ".tmp" + std::to_string(::getpid())))
@@ -815,7 +1323,7 @@ bool write_mesh(const std::string& path, const IndexedMesh& mesh, std::string& e
     return false;
   }
   Writer w{f};
-  write_body(w, ext, mesh);
+  body(w);
   int write_errno = w.ok ? 0 : errno;
   if (std::fflush(f) != 0 && !write_errno) write_errno = errno ? errno : EIO;
   if (std::fclose(f) != 0 && !write_errno) write_errno = errno ? errno : EIO;
@@ -833,6 +1341,68 @@ bool write_mesh(const std::string& path, const IndexedMesh& mesh, std::string& e
     return false;
   }
   return true;
+}
+
+// A mesh's attribute arrays must agree with its geometry before anything is written.
+bool check_attributes(const std::string& path, const IndexedMesh& m, std::string& error) {
+  const MeshAttributes& a = m.attributes;
+  const size_t wedges = a.wedge_count();
+  auto bad = [&](const std::string& what) {
+    error = path + ": mesh to write has " + what;
+    return false;
+  };
+  if (a.has_wedges() && a.corner_wedges.size() != m.indices.size())
+    return bad("attributes for " + std::to_string(a.corner_wedges.size()) + " of " +
+               std::to_string(m.indices.size()) + " corners");
+  for (size_t c = 0; c < a.corner_wedges.size(); ++c)
+    if (a.corner_wedges[c] >= wedges || a.wedge_vertices[a.corner_wedges[c]] != m.indices[c])
+      return bad("corner " + std::to_string(c) + " with a wedge of another vertex");
+  for (const std::vector<float>& t : a.texcoords)
+    if (t.size() != wedges * 2) return bad("texture coordinates not one pair per wedge");
+  if (!a.normals.empty() && a.normals.size() != wedges * 3) return bad("normals not one per wedge");
+  if (a.colors.size() != wedges * a.color_components) return bad("colours not one per wedge");
+  if (!a.face_materials.empty() && a.face_materials.size() != m.face_count())
+    return bad("material ids not one per face");
+  for (uint32_t id : a.face_materials)
+    if (id >= a.materials.size()) return bad("a face with material " + std::to_string(id));
+  return true;
+}
+
+}  // namespace
+
+bool write_mesh(const std::string& path, const IndexedMesh& mesh, std::string& error) {
+  std::string ext = lower_extension(path);
+  if (ext != ".obj" && ext != ".off" && ext != ".ply" && ext != ".stl" && ext != ".glb") {
+    error = path + ": unknown mesh format '" + ext + "' (expected .obj, .off, .ply, .stl or .glb)";
+    return false;
+  }
+  for (uint32_t i : mesh.indices)
+    if (i >= mesh.vertex_count()) {
+      error = path + ": mesh to write references vertex " + std::to_string(i) + " of " +
+              std::to_string(mesh.vertex_count());
+      return false;
+    }
+  if (!check_attributes(path, mesh, error)) return false;
+  if (ext == ".glb") {
+    std::string bytes;
+    if (!write_glb(mesh, bytes, error)) {
+      error = path + ": " + error;
+      return false;
+    }
+    return write_atomic(
+        path, [&](Writer& w) { w.put(bytes.data(), bytes.size()); }, error);
+  }
+  std::string mtl;
+  if (ext == ".obj" && !mesh.attributes.materials.empty()) {
+    // The MTL goes first, beside the OBJ, named after it (mtllib names it relative to the OBJ).
+    std::filesystem::path target(path);
+    mtl = target.stem().string() + ".mtl";
+    if (!write_atomic((target.parent_path() / mtl).string(),
+                      [&](Writer& w) { write_mtl(w, mesh.attributes.materials); }, error))
+      return false;
+  }
+  return write_atomic(
+      path, [&](Writer& w) { write_body(w, ext, mesh, mtl); }, error);
 }
 
 }  // namespace pmz

@@ -15,6 +15,7 @@
 //    at most two faces of opposite orientation. Each pass removes glue, so this terminates.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <unordered_map>
 
 #include "pmz/mesh.hpp"
@@ -27,24 +28,29 @@ namespace {
 constexpr uint32_t kNone = 0xFFFFFFFFu;
 constexpr size_t kMaxEarClipCorners = 64;  // beyond this, a fan (ear clipping is quadratic)
 
-// Removes cyclically consecutive repeats in place (a b b c a -> a b c).
-void remove_consecutive_repeats(std::vector<uint32_t>& loop) {
+// Loops hold input corners (indices into PolygonSoup::corners, so attributes stay with them);
+// `vertex` maps a corner to its vertex id.
+
+// Removes cyclically consecutive repeats in place (a b b c a -> a b c), keeping the first corner.
+void remove_consecutive_repeats(std::vector<uint32_t>& loop, const std::vector<uint32_t>& vertex) {
   size_t n = 0;
-  for (uint32_t v : loop)
-    if (n == 0 || loop[n - 1] != v) loop[n++] = v;
-  while (n > 1 && loop[n - 1] == loop[0]) --n;
+  for (uint32_t c : loop)
+    if (n == 0 || vertex[loop[n - 1]] != vertex[c]) loop[n++] = c;
+  while (n > 1 && vertex[loop[n - 1]] == vertex[loop[0]]) --n;
   loop.resize(n);
 }
 
 // Position j of the first corner whose vertex already occurred at an earlier position i.
-bool find_repeat(const std::vector<uint32_t>& loop, std::vector<uint32_t>& sorted,
-                 std::unordered_map<uint32_t, uint32_t>& seen, size_t& i, size_t& j) {
-  sorted.assign(loop.begin(), loop.end());
+bool find_repeat(const std::vector<uint32_t>& loop, const std::vector<uint32_t>& vertex,
+                 std::vector<uint32_t>& sorted, std::unordered_map<uint32_t, uint32_t>& seen,
+                 size_t& i, size_t& j) {
+  sorted.resize(loop.size());
+  for (size_t k = 0; k < loop.size(); ++k) sorted[k] = vertex[loop[k]];
   std::sort(sorted.begin(), sorted.end());
   if (std::adjacent_find(sorted.begin(), sorted.end()) == sorted.end()) return false;
   seen.clear();
   for (j = 0; j < loop.size(); ++j) {
-    auto [it, fresh] = seen.emplace(loop[j], uint32_t(j));
+    auto [it, fresh] = seen.emplace(vertex[loop[j]], uint32_t(j));
     if (!fresh) {
       i = it->second;
       return true;
@@ -53,9 +59,10 @@ bool find_repeat(const std::vector<uint32_t>& loop, std::vector<uint32_t>& sorte
   return false;
 }
 
-// Triangulates a simple loop of distinct vertices into n-2 triangles with its winding.
-void triangulate_loop(const std::vector<uint32_t>& loop, const std::vector<float>& pos,
-                      std::vector<uint32_t>& tris) {
+// Triangulates a simple loop of corners at distinct vertices into n-2 triangles (of corners)
+// with its winding.
+void triangulate_loop(const std::vector<uint32_t>& loop, const std::vector<uint32_t>& vertex,
+                      const std::vector<float>& pos, std::vector<uint32_t>& tris) {
   const size_t n = loop.size();
   if (n == 3 || n > kMaxEarClipCorners) {
     for (size_t k = 1; k + 1 < n; ++k) tris.insert(tris.end(), {loop[0], loop[k], loop[k + 1]});
@@ -64,8 +71,8 @@ void triangulate_loop(const std::vector<uint32_t>& loop, const std::vector<float
   // Newell normal; project on the plane of its two minor axes, counter-clockwise.
   double normal[3] = {0, 0, 0};
   for (size_t k = 0; k < n; ++k) {
-    const float* a = &pos[size_t(loop[k]) * 3];
-    const float* b = &pos[size_t(loop[(k + 1) % n]) * 3];
+    const float* a = &pos[size_t(vertex[loop[k]]) * 3];
+    const float* b = &pos[size_t(vertex[loop[(k + 1) % n]]) * 3];
     for (int d = 0; d < 3; ++d)
       normal[d] +=
           (double(a[(d + 1) % 3]) - b[(d + 1) % 3]) * (double(a[(d + 2) % 3]) + b[(d + 2) % 3]);
@@ -78,8 +85,8 @@ void triangulate_loop(const std::vector<uint32_t>& loop, const std::vector<float
   double x[kMaxEarClipCorners], y[kMaxEarClipCorners];
   uint8_t next[kMaxEarClipCorners], prev[kMaxEarClipCorners];
   for (size_t k = 0; k < n; ++k) {
-    x[k] = pos[size_t(loop[k]) * 3 + u];
-    y[k] = pos[size_t(loop[k]) * 3 + w];
+    x[k] = pos[size_t(vertex[loop[k]]) * 3 + u];
+    y[k] = pos[size_t(vertex[loop[k]]) * 3 + w];
     next[k] = uint8_t((k + 1) % n);
     prev[k] = uint8_t((k + n - 1) % n);
   }
@@ -135,7 +142,79 @@ struct UnionFind {
   }
 };
 
+// Wedges: per output vertex, one per distinct combination of its corners' attribute values
+// (compared bitwise, so equal values from different file entries share a wedge).
+void build_wedges(const SoupAttributes& in, const std::vector<uint32_t>& source,
+                  const std::vector<uint32_t>& face_source, IndexedMesh& out) {
+  MeshAttributes& a = out.attributes;
+  a = MeshAttributes();
+  a.materials = in.materials;
+  a.material_library = in.material_library;
+  if (!in.face_materials.empty()) {
+    a.face_materials.resize(face_source.size());
+    for (size_t f = 0; f < face_source.size(); ++f)
+      a.face_materials[f] = in.face_materials[face_source[f]];
+  }
+  const size_t sets = in.texcoords.size();
+  const bool normals = !in.corner_normals.empty(), colors = !in.corner_colors.empty();
+  if (sets == 0 && !normals && !colors) return;
+  a.texcoords.resize(sets);
+  a.color_components = colors ? in.color_components : 0;
+  // The wedge's values in one row: u v per set, normal xyz, colour.
+  const size_t width = sets * 2 + (normals ? 3 : 0) + a.color_components;
+  std::vector<float> row(width), rows;
+  auto fill = [&](uint32_t c) {
+    float* r = row.data();
+    auto put = [&](const std::vector<float>& pool, uint32_t index, size_t n) {
+      for (size_t k = 0; k < n; ++k) *r++ = index == kNoAttribute ? 0.0f : pool[index * n + k];
+    };
+    for (size_t s = 0; s < sets; ++s) put(in.texcoords[s], in.corner_texcoords[s][c], 2);
+    if (normals) put(in.normals, in.corner_normals[c], 3);
+    if (colors) put(in.colors, in.corner_colors[c], a.color_components);
+  };
+  std::vector<uint32_t> first(out.vertex_count(), kNoAttribute), next;
+  a.corner_wedges.resize(source.size());
+  for (size_t c = 0; c < source.size(); ++c) {
+    fill(source[c]);
+    uint32_t v = out.indices[c], w = first[v];
+    while (w != kNoAttribute && std::memcmp(&rows[w * width], row.data(), width * 4) != 0)
+      w = next[w];
+    if (w == kNoAttribute) {
+      w = uint32_t(a.wedge_vertices.size());
+      a.wedge_vertices.push_back(v);
+      next.push_back(first[v]);
+      first[v] = w;
+      rows.insert(rows.end(), row.begin(), row.end());
+    }
+    a.corner_wedges[c] = w;
+  }
+  const size_t wedges = a.wedge_vertices.size();
+  for (size_t s = 0; s < sets; ++s) a.texcoords[s].resize(wedges * 2);
+  a.normals.resize(normals ? wedges * 3 : 0);
+  a.colors.resize(wedges * a.color_components);
+  for (size_t w = 0; w < wedges; ++w) {
+    const float* r = &rows[w * width];
+    for (size_t s = 0; s < sets; ++s, r += 2) std::copy(r, r + 2, &a.texcoords[s][w * 2]);
+    if (normals) std::copy(r, r + 3, &a.normals[w * 3]), r += 3;
+    std::copy(r, r + a.color_components, a.colors.data() + w * a.color_components);
+  }
+}
+
 }  // namespace
+
+std::string MeshAttributes::describe() const {
+  std::string s;
+  auto add = [&](const std::string& part) { s += (s.empty() ? "" : ", ") + part; };
+  if (texcoords.size() == 1) add("texture coordinates");
+  if (texcoords.size() > 1) add(std::to_string(texcoords.size()) + " texture coordinate sets");
+  if (!normals.empty()) add("normals");
+  if (color_components) add(color_components == 4 ? "RGBA colours" : "RGB colours");
+  if (!materials.empty())
+    add(std::to_string(materials.size()) + (materials.size() == 1 ? " material" : " materials"));
+  else if (!face_materials.empty())
+    add("material ids");
+  return s;
+}
 
 std::string MeshRepairStats::summary() const {
   std::string s;
@@ -144,6 +223,13 @@ std::string MeshRepairStats::summary() const {
     if (!s.empty()) s += "; ";
     s += std::string(verb) + " " + std::to_string(n) + " " + (n == 1 ? one : many);
   };
+  if (polygons_triangulated)
+    s = "triangulated " + std::to_string(polygons_triangulated) +
+        (polygons_triangulated == 1 ? " polygon" : " polygons") + " into " +
+        std::to_string(triangles_from_polygons) +
+        (triangles_from_polygons == 1 ? " triangle" : " triangles");
+  add(welded_vertices, "welded", "vertex with an equal position (attribute seam)",
+      "vertices with equal positions (attribute seams)");
   add(degenerate_faces_dropped, "dropped", "degenerate face (repeated vertex)",
       "degenerate faces (repeated vertex)");
   add(repeated_corners_removed, "removed repeated corners from", "face", "faces");
@@ -160,36 +246,43 @@ void repair_mesh(const PolygonSoup& soup, IndexedMesh& out, MeshRepairStats& sta
   stats.input_faces = soup.face_count();
   const uint32_t input_vertices = soup.vertex_count();
 
-  // 1. Clean and triangulate, keeping face order.
-  std::vector<uint32_t> tris;
-  tris.reserve(soup.corners.size());
+  // 1. Clean and triangulate, keeping face order. source[c]: the input corner of corner c.
+  std::vector<uint32_t> source, face_source;
+  source.reserve(soup.corners.size());
   std::vector<uint32_t> loop, rest, sorted;
   std::unordered_map<uint32_t, uint32_t> seen;
   for (uint32_t f = 0; f < soup.face_count(); ++f) {
     uint32_t begin = soup.face_offsets[f], end = soup.face_offsets[f + 1];
-    if (end - begin > 3) ++stats.polygons_triangulated;
-    rest.assign(soup.corners.begin() + begin, soup.corners.begin() + end);
-    size_t before = tris.size();
+    rest.resize(end - begin);
+    for (uint32_t c = begin; c < end; ++c) rest[c - begin] = c;
+    size_t before = source.size();
     bool repeats = false;
     for (;;) {
       size_t n = rest.size();
-      remove_consecutive_repeats(rest);
+      remove_consecutive_repeats(rest, soup.corners);
       repeats |= rest.size() != n;
       size_t i, j;
-      if (!find_repeat(rest, sorted, seen, i, j)) break;
+      if (!find_repeat(rest, soup.corners, sorted, seen, i, j)) break;
       // rest[i..j) is a simple loop; the remainder keeps rest[i] once.
       repeats = true;
       loop.assign(rest.begin() + i, rest.begin() + j);
-      if (loop.size() >= 3) triangulate_loop(loop, soup.positions, tris);
+      if (loop.size() >= 3) triangulate_loop(loop, soup.corners, soup.positions, source);
       rest.erase(rest.begin() + i + 1, rest.begin() + j + 1);
     }
-    if (rest.size() >= 3) triangulate_loop(rest, soup.positions, tris);
-    if (tris.size() == before)
+    if (rest.size() >= 3) triangulate_loop(rest, soup.corners, soup.positions, source);
+    if (source.size() == before)
       ++stats.degenerate_faces_dropped;
     else if (repeats)
       ++stats.repeated_corners_removed;
+    if (end - begin > 3) {
+      ++stats.polygons_triangulated;
+      stats.triangles_from_polygons += (source.size() - before) / 3;
+    }
+    face_source.resize(source.size() / 3, f);
   }
-  const uint32_t corner_count = uint32_t(tris.size());
+  const uint32_t corner_count = uint32_t(source.size());
+  std::vector<uint32_t> tris(corner_count);
+  for (uint32_t c = 0; c < corner_count; ++c) tris[c] = soup.corners[source[c]];
 
   // 2. Glue faces in pairs along each edge.
   std::vector<uint32_t> mate(corner_count, kNone);
@@ -308,6 +401,8 @@ void repair_mesh(const PolygonSoup& soup, IndexedMesh& out, MeshRepairStats& sta
   std::vector<uint8_t> used(input_vertices, 0);
   for (uint32_t v : tris) used[v] = 1;
   stats.isolated_vertices = uint64_t(std::count(used.begin(), used.end(), 0));
+  stats.welded_vertices = soup.welded_vertices;
+  build_wedges(soup.attributes, source, face_source, out);
 }
 
 }  // namespace pmz

@@ -12,7 +12,8 @@ set -euo pipefail
 cd "$(dirname "$0")/../.."
 seconds=${1:-60}
 build=${PMZ_FUZZ_BUILD:-build-fuzz}
-targets=${PMZ_FUZZ_TARGETS:-fuzz_decoder fuzz_container fuzz_coding}
+targets=${PMZ_FUZZ_TARGETS:-fuzz_decoder fuzz_container fuzz_coding fuzz_mesh_obj fuzz_mesh_off
+  fuzz_mesh_ply fuzz_mesh_stl fuzz_mesh_gltf}
 
 if ! command -v clang++-14 >/dev/null; then
   echo "fuzz: clang++-14 missing (apt-get install clang-14 libclang-rt-14-dev)" >&2
@@ -28,6 +29,7 @@ encoder=${PMZ_ENCODE:-}
 if [ -z "$encoder" ] && [ -x build/bin/pmz-encode ]; then encoder=build/bin/pmz-encode; fi
 work=$build/fuzz
 python3 tests/fuzz/make_seeds.py "$work/seeds" "$encoder"
+python3 tests/fuzz/make_mesh_seeds.py "$work/seeds"
 mkdir -p "$work/artifacts"
 
 failed=0

@@ -36,6 +36,18 @@ struct TempDir {
   std::string path(const std::string& name) const { return (dir / name).string(); }
 };
 
+// read_mesh refuses the file with one line naming it and saying `what`, and returns no faces.
+inline void expect_refused(const std::string& path, const std::string& what) {
+  pmz::IndexedMesh m;
+  pmz::MeshRepairStats st;
+  std::string err;
+  EXPECT_FALSE(pmz::read_mesh(path, m, st, err)) << path;
+  EXPECT_NE(err.find(what), std::string::npos) << "message: " << err;
+  EXPECT_EQ(err.rfind(path, 0), 0u) << "message: " << err;
+  EXPECT_EQ(err.find('\n'), std::string::npos) << "message: " << err;
+  EXPECT_EQ(m.face_count(), 0u);
+}
+
 // Every undirected edge has at most two faces, of opposite orientation, and the faces around
 // every used vertex form one fan (connected through shared edges). Empty string when manifold.
 inline std::string manifold_problem(const pmz::IndexedMesh& m) {

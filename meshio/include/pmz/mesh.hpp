@@ -2,15 +2,67 @@
 #pragma once
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace pmz {
 
+// A corner without a value for an attribute (e.g. an OBJ face without `vt` in a file with
+// texture coordinates) reads as zeros.
+constexpr uint32_t kNoAttribute = 0xFFFFFFFFu;
+
+// Material metadata as the file states it (OBJ's MTL, glTF materials): carried, not interpreted.
+struct Material {
+  std::string name;
+  std::string base_color_texture;      // texture file name or URI (MTL map_Kd, glTF baseColor)
+  std::string normal_texture;          // MTL norm / map_Bump, glTF normalTexture
+  float base_color[4] = {1, 1, 1, 1};  // MTL Kd (+ d), glTF baseColorFactor
+  bool operator==(const Material&) const = default;
+};
+
+// Per-corner attributes as wedges (Hoppe's progressive meshes): a wedge is one combination of
+// attribute values at one position vertex; a vertex on a texture seam or normal crease has
+// several wedges, and the corners around it each name theirs. Positions stay per vertex, so
+// the geometry (IndexedMesh::positions / indices) is the same with or without attributes.
+struct MeshAttributes {
+  std::vector<uint32_t> corner_wedges;        // wedge per corner (3 per face), or empty
+  std::vector<uint32_t> wedge_vertices;       // position vertex of each wedge
+  std::vector<std::vector<float>> texcoords;  // per set (TEXCOORD_n): u, v per wedge
+  std::vector<float> normals;                 // xyz per wedge, or empty
+  std::vector<float> colors;                  // color_components per wedge (0..1), or empty
+  uint32_t color_components = 0;              // 0, 3 (RGB) or 4 (RGBA)
+  std::vector<uint32_t> face_materials;       // material id per face, or empty
+  std::vector<Material> materials;
+  std::string material_library;  // OBJ mtllib file name as written in the file
+  uint32_t wedge_count() const { return uint32_t(wedge_vertices.size()); }
+  bool has_wedges() const { return !texcoords.empty() || !normals.empty() || !colors.empty(); }
+  bool empty() const { return !has_wedges() && face_materials.empty() && materials.empty(); }
+  // "2 texture coordinate sets, normals, RGBA colours, 3 materials" (empty when none).
+  std::string describe() const;
+};
+
 struct IndexedMesh {
-  std::vector<float> positions;   // xyz per vertex
-  std::vector<uint32_t> indices;  // three per counter-clockwise triangle
+  std::vector<float> positions;    // xyz per vertex
+  std::vector<uint32_t> indices;   // three per counter-clockwise triangle
+  MeshAttributes attributes = {};  // optional; the encoder uses positions and indices only
   uint32_t vertex_count() const { return uint32_t(positions.size() / 3); }
   uint32_t face_count() const { return uint32_t(indices.size() / 3); }
+};
+
+// Attributes as a file states them: each one a pool of values and, per corner, an index into
+// it (OBJ indexes each attribute on its own; per-vertex values in PLY or glTF use the corner's
+// vertex id) or kNoAttribute. Values are checked to be finite; indices to be in range.
+struct SoupAttributes {
+  std::vector<std::vector<float>> texcoords;  // per set: u, v per entry
+  std::vector<std::vector<uint32_t>> corner_texcoords;
+  std::vector<float> normals;  // xyz per entry
+  std::vector<uint32_t> corner_normals;
+  std::vector<float> colors;  // color_components per entry
+  uint32_t color_components = 0;
+  std::vector<uint32_t> corner_colors;
+  std::vector<uint32_t> face_materials;  // per face, or empty
+  std::vector<Material> materials;
+  std::string material_library;
 };
 
 // Faces exactly as a file states them (any corner count, repeated corners allowed), with
@@ -19,6 +71,8 @@ struct PolygonSoup {
   std::vector<float> positions;        // xyz per vertex
   std::vector<uint32_t> corners;       // vertex ids of all faces, concatenated
   std::vector<uint32_t> face_offsets;  // face f: corners[face_offsets[f] .. face_offsets[f+1])
+  SoupAttributes attributes = {};
+  uint64_t welded_vertices = 0;  // glTF / PLY vertices merged with an equal position (seams)
   uint32_t vertex_count() const { return uint32_t(positions.size() / 3); }
   uint32_t face_count() const {
     return face_offsets.empty() ? 0 : uint32_t(face_offsets.size() - 1);
@@ -29,6 +83,8 @@ struct PolygonSoup {
 struct MeshRepairStats {
   uint64_t input_faces = 0;               // faces in the file (polygons count once)
   uint64_t polygons_triangulated = 0;     // input faces with more than three corners
+  uint64_t triangles_from_polygons = 0;   // the triangles those became
+  uint64_t welded_vertices = 0;           // PolygonSoup::welded_vertices
   uint64_t degenerate_faces_dropped = 0;  // fewer than three distinct corners: not representable
   uint64_t repeated_corners_removed = 0;  // faces that kept >= 3 distinct corners after cleaning
   uint64_t duplicate_faces = 0;           // same three vertices as an earlier triangle (kept)
@@ -46,13 +102,21 @@ struct MeshRepairStats {
 // of n corners becomes n-2 consecutive triangles) and their winding; vertices keep their input
 // ids, and the copies made to cut non-manifold edges and split non-manifold vertices are
 // appended after them. Only faces with fewer than three distinct corners are dropped (counted).
+// Attributes follow their corners: each output corner keeps its input corner's values, and the
+// corners of one output vertex with equal values share a wedge.
 void repair_mesh(const PolygonSoup& soup, IndexedMesh& out, MeshRepairStats& stats);
 
-// Parses OBJ/OFF/PLY (ascii, binary)/STL (ascii, binary) by extension into a soup. Returns false
-// with a one-line message naming the problem: missing/unreadable/empty file, unknown format,
-// malformed or truncated data, NaN/Inf coordinates (naming the vertex), out-of-range indices
-// (naming the face), no faces. STL corners with bitwise-equal positions are welded.
+// Parses OBJ/OFF (ascii, binary)/PLY (ascii, binary)/STL (ascii, binary)/glTF (.gltf, .glb) by
+// extension into a soup. Returns false with a one-line message naming the problem:
+// missing/unreadable/empty file, unknown format, malformed or truncated data, NaN/Inf
+// coordinates or attributes (naming the vertex), out-of-range indices (naming the face), no
+// faces. STL corners with bitwise-equal positions are welded, and so are glTF vertices and PLY
+// vertices with attributes (their files split vertices at seams; pmz keeps seams as wedges).
 bool read_polygon_soup(const std::string& path, PolygonSoup& out, std::string& error);
+// The same from bytes in memory; `path` names the format (extension) and the messages. Files a
+// format refers to (OBJ's MTL, glTF's external buffers) are looked up beside `path`.
+bool parse_polygon_soup(const std::string& path, std::string_view data, PolygonSoup& out,
+                        std::string& error);
 
 // read_polygon_soup + repair_mesh. This overload returns the statistics for the caller to print.
 bool read_mesh(const std::string& path, IndexedMesh& out, MeshRepairStats& stats,
@@ -60,10 +124,13 @@ bool read_mesh(const std::string& path, IndexedMesh& out, MeshRepairStats& stats
 // Same, printing the repair summary (if any) on stderr so nothing is changed silently.
 bool read_mesh(const std::string& path, IndexedMesh& out, std::string& error);
 
-// Writes by extension (.obj .off .ply .stl) exactly what is in the mesh (no OpenMesh, so any
-// IndexedMesh round-trips through OBJ/OFF/PLY; STL has no shared vertices, so it cannot keep
-// isolated vertices or split copies apart). Atomic: a temporary file beside the target, renamed
-// when complete; on any error (missing directory, disk full) the temporary is removed.
+// Writes by extension (.obj .off .ply .stl .glb) exactly what is in the mesh (no OpenMesh, so
+// any IndexedMesh round-trips through OBJ/OFF/PLY; STL has no shared vertices, so it cannot keep
+// isolated vertices or split copies apart). Attributes: OBJ writes vt/vn per wedge, usemtl and
+// an MTL beside it (colours per vertex: the first wedge's); PLY and .glb write one vertex per
+// wedge (glTF: one primitive per material); OFF and STL have none. Atomic: a temporary file
+// beside the target, renamed when complete; on any error (missing directory, disk full) the
+// temporary is removed.
 bool write_mesh(const std::string& path, const IndexedMesh& mesh, std::string& error);
 
 }  // namespace pmz

@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# Tool behaviour with attributes and bad attribute input (ctest encode_attribute_tools):
+# pmz-encode / pmz-simplify say in one line that attributes are not encoded / kept yet, report
+# triangulation, and refuse a bad glTF with one line naming it, writing nothing.
+# usage: attribute_tools.sh PMZ_ENCODE PMZ_SIMPLIFY WORK_DIR
+set -euo pipefail
+encode=$1 simplify=$2 work=$3
+rm -rf "$work" && mkdir -p "$work" && cd "$work"
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+cat > quad.obj <<'OBJ'
+mtllib quad.mtl
+v 0 0 0
+v 1 0 0
+v 1 1 0
+v 0 1 0
+v 2 0 0
+vt 0 0
+vt 1 0
+vt 1 1
+vt 0 1
+vn 0 0 1
+usemtl paper
+f 1/1/1 2/2/1 3/3/1 4/4/1
+f 2/2/1 5/1/1 3/3/1
+OBJ
+printf 'newmtl paper\nKd 1 1 1\nmap_Kd paper.png\n' > quad.mtl
+"$encode" quad.obj -o quad.pmz 2> encode.err || fail "pmz-encode quad.obj: $(cat encode.err)"
+[ -s quad.pmz ] || fail "no quad.pmz"
+grep -qx "pmz: quad.obj: triangulated 1 polygon into 2 triangles" encode.err ||
+  fail "no triangulation line: $(cat encode.err)"
+grep -qx "pmz-encode: quad.obj: attributes not encoded yet (texture coordinates, normals, 1 material): the .pmz holds positions and triangles only" encode.err ||
+  fail "no attribute line: $(cat encode.err)"
+[ "$(grep -c 'attributes not' encode.err)" = 1 ] || fail "attribute line repeated"
+"$simplify" quad.obj -o small.obj --faces 2 2> simplify.err || fail "pmz-simplify: $(cat simplify.err)"
+grep -q "pmz-simplify: quad.obj: attributes not kept yet (texture coordinates, normals, 1 material)" simplify.err ||
+  fail "no pmz-simplify attribute line: $(cat simplify.err)"
+
+# A plain mesh gets no attribute line.
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n' > plain.obj
+"$encode" plain.obj -o plain.pmz 2> plain.err || fail "pmz-encode plain.obj"
+if grep -q attributes plain.err; then fail "attribute line for a plain mesh"; fi
+
+# A glTF whose index points past its vertices: one line, non-zero exit, nothing written.
+python3 - <<'PY'
+import base64, json, struct
+data = struct.pack('<9f', 0, 0, 0, 1, 0, 0, 0, 1, 0) + struct.pack('<4H', 0, 1, 9, 0)
+doc = {'asset': {'version': '2.0'}, 'meshes': [{'primitives': [{'attributes': {'POSITION': 0}, 'indices': 1}]}],
+       'accessors': [{'bufferView': 0, 'componentType': 5126, 'count': 3, 'type': 'VEC3'},
+                     {'bufferView': 1, 'componentType': 5123, 'count': 3, 'type': 'SCALAR'}],
+       'bufferViews': [{'buffer': 0, 'byteLength': 36}, {'buffer': 0, 'byteOffset': 36, 'byteLength': 6}],
+       'buffers': [{'byteLength': len(data), 'uri': 'data:application/octet-stream;base64,' + base64.b64encode(data).decode()}]}
+open('bad.gltf', 'w').write(json.dumps(doc))
+PY
+if "$encode" bad.gltf -o bad.pmz 2> bad.err; then fail "bad.gltf accepted"; fi
+[ "$(wc -l < bad.err)" = 1 ] || fail "bad.gltf: not one line: $(cat bad.err)"
+grep -q "^pmz-encode: bad.gltf: mesh 0 primitive 0 index 2 is 9, but POSITION has 3 vertices" bad.err ||
+  fail "bad.gltf message: $(cat bad.err)"
+[ ! -e bad.pmz ] || fail "bad.pmz written"
+[ -z "$(ls -A | grep -i tmp || true)" ] || fail "temporary file left"
+echo "attribute tools: ok"
