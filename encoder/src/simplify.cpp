@@ -33,6 +33,57 @@ constexpr float kMinQuality = 0.05f;
 constexpr float kPlaneCos = 0.99999f;
 constexpr float kInfinity = std::numeric_limits<float>::infinity();
 
+// Squared distance from x to the triangle (a, b, c) (Ericson, Real-Time Collision Detection
+// 5.1.5: the closest point by the Voronoi region of x).
+float squared_distance_to_triangle(const float* x, const float* a, const float* b, const float* c) {
+  auto sub = [](const float* p, const float* q, float* r) {
+    r[0] = p[0] - q[0], r[1] = p[1] - q[1], r[2] = p[2] - q[2];
+  };
+  auto dot = [](const float* p, const float* q) { return p[0] * q[0] + p[1] * q[1] + p[2] * q[2]; };
+  float ab[3], ac[3], ap[3], bp[3], cp[3];
+  sub(b, a, ab), sub(c, a, ac), sub(x, a, ap);
+  auto to = [&](const float* base, const float* dir, float t) {
+    float d[3] = {base[0] + t * dir[0] - x[0], base[1] + t * dir[1] - x[1],
+                  base[2] + t * dir[2] - x[2]};
+    return dot(d, d);
+  };
+  const float d1 = dot(ab, ap), d2 = dot(ac, ap);
+  if (d1 <= 0 && d2 <= 0) return dot(ap, ap);
+  sub(x, b, bp);
+  const float d3 = dot(ab, bp), d4 = dot(ac, bp);
+  if (d3 >= 0 && d4 <= d3) return dot(bp, bp);
+  const float vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return to(a, ab, d1 / (d1 - d3));
+  sub(x, c, cp);
+  const float d5 = dot(ab, cp), d6 = dot(ac, cp);
+  if (d6 >= 0 && d5 <= d6) return dot(cp, cp);
+  const float vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return to(a, ac, d2 / (d2 - d6));
+  const float va = d3 * d6 - d5 * d4;
+  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) {
+    float bc[3];
+    sub(c, b, bc);
+    return to(b, bc, (d4 - d3) / ((d4 - d3) + (d5 - d6)));
+  }
+  const float denom = va + vb + vc;
+  if (!(denom > 0)) {  // degenerate triangle: the nearest of its edges
+    float bc[3];
+    sub(c, b, bc);
+    auto segment = [&](const float* base, const float* dir) {
+      const float len = dot(dir, dir);
+      float d[3];
+      sub(x, base, d);
+      const float t = len > 0 ? std::clamp(dot(d, dir) / len, 0.f, 1.f) : 0.f;
+      return to(base, dir, t);
+    };
+    return std::min({segment(a, ab), segment(a, ac), segment(b, bc)});
+  }
+  const float v = vb / denom, w = vc / denom;
+  const float d[3] = {a[0] + ab[0] * v + ac[0] * w - x[0], a[1] + ab[1] * v + ac[1] * w - x[1],
+                      a[2] + ab[2] * v + ac[2] * w - x[2]};
+  return dot(d, d);
+}
+
 // Min-heap of vertices keyed by their cheapest collapse: 4-ary with the keys inline, so a sift
 // walks one array (the heap dominated the profile when keys were a separate array).
 class VertexHeap {
@@ -143,6 +194,12 @@ class Engine {
   std::vector<double> self_error;  // Q_v(p_v) / L^4, cached: half of every cost evaluation
   Metric metric = Metric::multifeature;
   MetricParams params;
+  // The Hausdorff guard (Metric::guarded, spec/algorithm.md section 6): per vertex one original
+  // point its region must stay near (the one found farthest from the surface so far; at the
+  // start the vertex itself), and the largest bound of the collapses performed so far.
+  bool guard = false;
+  std::vector<float> witness;
+  double worst_bound = 0;
   double inv_unit4 = 1, unit = 1;
   SimplifyStats stats;
   bool stats_enabled = false;
@@ -169,7 +226,15 @@ class Engine {
   // kBoundary: the vertex is on the boundary. Collapses never change that for the vertices
   // they keep (an edge becomes a boundary edge only between two boundary vertices, and the
   // link condition keeps holes open), so it is set once.
-  enum : uint8_t { kTorsionStale = 1, kKeyStale = 2, kInputQuadric = 4, kBoundary = 8 };
+  // kGuardDeferred: the key is the guard's penalised cost of the collapse to target (set when
+  // the collapse was held back; any recomputation of the key clears it).
+  enum : uint8_t {
+    kTorsionStale = 1,
+    kKeyStale = 2,
+    kInputQuadric = 4,
+    kBoundary = 8,
+    kGuardDeferred = 16
+  };
   std::vector<uint8_t> stale;
   // Scratch: a stamp per vertex for set membership, and buffers reused across collapses.
   std::vector<uint32_t> mark;
@@ -233,6 +298,17 @@ class Engine {
   }
   Candidate best_legal_candidate(uint32_t u);
   void set_key(uint32_t v, Candidate c);
+  // The guard's bound of u -> v: the largest distance from u's position and the witnesses of u
+  // and v to the faces v will have after the collapse; the point that attains it in `farthest`.
+  float guard_bound(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb, float farthest[3]);
+  // The guard's cost of a collapse of cost c and bound b: c while b stays within guard_slack
+  // times the worst bound so far, c * (b / (guard_slack * worst))^2 beyond.
+  float guarded(float c, float bound) const {
+    const double scale = double(params.guard_slack) * worst_bound;
+    if (!(scale > 0) || !(bound > scale)) return c;
+    const double excess = double(bound) / scale;
+    return float(double(c) * excess * excess);
+  }
   void perform(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb, float c);
   void fix_out(uint32_t w, uint32_t candidate);
   void update_after(uint32_t u, uint32_t v);
@@ -240,12 +316,38 @@ class Engine {
 };
 
 void Engine::set_key(uint32_t v, Candidate c) {
+  stale[v] &= uint8_t(~kGuardDeferred);
   if (c.target == kNone) {
     heap.remove(v);
     return;
   }
   target[v] = c.target;
   heap.set(v, c.cost);
+}
+
+float Engine::guard_bound(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb, float farthest[3]) {
+  ++stats.guard_checks;
+  const uint32_t fa = ha != kNone ? HalfEdgeMesh::face(ha) : kNone,
+                 fb = hb != kNone ? HalfEdgeMesh::face(hb) : kNone;
+  const float* points[3] = {m.p(u), &witness[size_t(u) * 3], &witness[size_t(v) * 3]};
+  float nearest[3] = {kInfinity, kInfinity, kInfinity};
+  const float* pv = m.p(v);
+  auto fan = [&](uint32_t centre) {
+    for_each_outgoing(m, centre, [&](uint32_t h) {
+      if (HalfEdgeMesh::face(h) == fa || HalfEdgeMesh::face(h) == fb) return;
+      const float* b = m.p(m.dest(h));
+      const float* c = m.p(m.vert[HalfEdgeMesh::prev(h)]);
+      for (int i = 0; i < 3; ++i)
+        nearest[i] = std::min(nearest[i], squared_distance_to_triangle(points[i], pv, b, c));
+    });
+  };
+  fan(u);
+  fan(v);
+  int worst = 0;
+  for (int i = 1; i < 3; ++i)
+    if (nearest[i] > nearest[worst]) worst = i;
+  for (int k = 0; k < 3; ++k) farthest[k] = points[worst][k];
+  return nearest[worst] < kInfinity ? std::sqrt(nearest[worst]) : 0.f;
 }
 
 // Cost of u -> x (o = origin(u)) from its quadric error e and the length ratio of the edge.
@@ -573,13 +675,20 @@ bool Engine::final_boundary_collapse() {
   if (best_u == kNone) return false;
   uint32_t ha, hb;
   find_edge(best_u, best.target, ha, hb);
+  float farthest[3];
+  const float bound = guard ? guard_bound(best_u, best.target, ha, hb, farthest) : 0.f;
   perform(best_u, best.target, ha, hb, best.cost);
+  if (guard) {
+    worst_bound = std::max(worst_bound, double(bound));
+    std::copy(farthest, farthest + 3, &witness[size_t(best.target) * 3]);
+  }
   return true;
 }
 
 bool Engine::init(const IndexedMesh& input, const SimplifyOptions& options, std::string& error) {
   if (!build_halfedge(input, m, error)) return false;
-  metric = options.metric;
+  guard = options.metric == Metric::guarded;
+  metric = guard ? Metric::multifeature : options.metric;
   params = options.params;
   stats_enabled = options.stats != nullptr;
   const uint32_t n = m.vertex_count();
@@ -602,6 +711,7 @@ bool Engine::init(const IndexedMesh& input, const SimplifyOptions& options, std:
   stale.assign(n, metric == Metric::multifeature ? kInputQuadric : 0);
   for (uint32_t v = 0; v < n; ++v)
     if (m.out[v] != kNone && m.is_boundary(v)) stale[v] |= kBoundary;
+  if (guard) witness = m.pos;
   faces = m.face_count();
   mark.assign(n, 0);
   target.assign(n, kNone);
@@ -674,7 +784,26 @@ void Engine::run(const SimplifyOptions& options) {
       final_boundary_collapse();
       break;
     }
+    float farthest[3];
+    float bound = 0;
+    if (guard) {
+      // Hold back a collapse whose bound exceeds the worst so far (times the slack): its cost
+      // is raised by the square of the excess and it goes back into the heap, once; a collapse
+      // that moves no surface (cost 0) is never held back.
+      bound = guard_bound(u, v, ha, hb, farthest);
+      if (const float g = guarded(c, bound); !(stale[u] & kGuardDeferred) && g > c) {
+        ++stats.guard_deferrals;
+        heap.set(u, g);
+        stale[u] |= kGuardDeferred;
+        continue;
+      }
+      stale[u] &= uint8_t(~kGuardDeferred);
+    }
     perform(u, v, ha, hb, c);
+    if (guard) {
+      worst_bound = std::max(worst_bound, double(bound));
+      std::copy(farthest, farthest + 3, &witness[size_t(v) * 3]);
+    }
     update_after(u, v);
     if (options.progress && start_faces - faces >= next_progress) {
       next_progress += progress_step;

@@ -31,10 +31,16 @@ QUICK = ["fandisk", "camel", "lion-head"]
 RATIOS = [0.5, 0.2, 0.1, 0.05, 0.02, 0.01]
 BIG_RATIOS = [0.1, 0.01]
 SUMMARY_RATIOS = [0.1, 0.02]
+PEERS = ["openmesh-decimater", "meshopt-simplify"]  # the summary's ratios are to the better of these
 
 # Simplifiers: cmd(build, input, output, faces) -> argv; the output has about `faces` faces.
 # "prepare" (optional) runs once per mesh (e.g. encode a .pmz to decode prefixes of).
 SIMPLIFIERS = {
+    # The default metric: the paper's plus the Hausdorff guard (spec/algorithm.md section 6).
+    "pmz-guarded": dict(
+        tool="bin/pmz-simplify",
+        cmd=lambda b, i, o, f, w: [b / "bin/pmz-simplify", i, "-o", o, "--faces", f, "--metric", "guarded"]),
+    # The paper's metric alone.
     "pmz-multifeature": dict(
         tool="bin/pmz-simplify",
         cmd=lambda b, i, o, f, w: [b / "bin/pmz-simplify", i, "-o", o, "--faces", f, "--metric", "multifeature"]),
@@ -273,6 +279,60 @@ def run_codecs(args, build, meshes, out, rows):
                 log(f"{name:20s} {codec:28s} FAILED: {e}")
 
 
+def stopped_above(r):
+    """The method stopped above 1.1x the target face count (no legal collapse left)."""
+    return r["faces_out"] > 1.1 * r["target"]
+
+
+def summary_tables(sel, methods, meshes, ratio):
+    """Mean and max error tables at one ratio: every method per mesh, then per column the median
+    and worst ratio to the better of the peers on that mesh (meshes where every method stopped
+    above the target left out; a mesh both sides simplify exactly counts 1)."""
+    L = []
+    peers = [m for m in PEERS if m in methods]
+    for key, title in (("mean", "Mean error"), ("max", "Max (Hausdorff) error")):
+        L.append(f"### {title} at {ratio:g} of the faces (×1e-4 of the diagonal)\n")
+        head = "| mesh | faces | " + " | ".join(methods) + " |"
+        L.append(head)
+        L.append("|" + "---|" * (head.count("|") - 1))
+        to_best = {m: [] for m in methods}
+        for mesh in meshes:
+            by = {r["method"]: r for r in sel if r["mesh"] == mesh}
+            if not by:
+                continue
+            faces = next(iter(by.values()))["faces"]
+            cells = [fmt(by[m][key] * 1e4 if m in by else None, ".3f") + ("*" if m in by and stopped_above(by[m]) else "")
+                     for m in methods]
+            L.append(f"| {mesh} | {faces} | " + " | ".join(cells) + " |")
+            if not all(p in by for p in peers) or all(stopped_above(r) for r in by.values()):
+                continue
+            best = min(by[p][key] for p in peers) if peers else None
+            for m in methods:
+                if m in by and best is not None:
+                    exact = 1e-10  # of the diagonal: both exact
+                    to_best[m].append(1.0 if by[m][key] < exact and best < exact
+                                      else by[m][key] / best if best > 0 else math.inf)
+        if peers:
+            for label, f in (("median / best peer", statistics.median), ("worst / best peer", max)):
+                L.append(f"| {label} | | " + " | ".join(fmt(f(to_best[m]) if to_best[m] else None, ".3f")
+                                                      for m in methods) + " |")
+            n = max((len(v) for v in to_best.values()), default=0)
+            L.append(f"\nRatios to the better of {' and '.join(peers)} on each mesh, over {n} meshes "
+                     "(meshes where every method stopped above the target left out).  ")
+        L.append("\\* stopped above 1.1× the target face count (no legal collapse left).\n")
+    for a, b in [("pmz-guarded", "pmz-multifeature"), ("pmz-multifeature", "pmz-qem"),
+                 ("pmz-prefix", "pmz-guarded"), ("pmz-prefix-lossless", "pmz-guarded")]:
+        for key in ("mean", "max"):
+            q = [by[a][key] / by[b][key] for by in
+                 ({r["method"]: r for r in sel if r["mesh"] == mesh} for mesh in meshes)
+                 if a in by and b in by and by[b][key] > 0]
+            if q:
+                L.append(f"Median {a} / {b} {key}-error ratio at {ratio:g}: {statistics.median(q):.3f} "
+                         f"(max {max(q):.3f}) over {len(q)} meshes  ")
+    L.append("")
+    return L
+
+
 def report(args, rows, out, command):
     simp = [r for r in rows if r["kind"] == "simplify"]
     codecs = [r for r in rows if r["kind"] == "codec"]
@@ -292,43 +352,8 @@ def report(args, rows, out, command):
 
     for ratio in SUMMARY_RATIOS:
         sel = [r for r in simp if abs(r["ratio"] - ratio) < 1e-9]
-        if not sel:
-            continue
-        L.append(f"### Mean error at {ratio:g} of the faces (×1e-4 of the diagonal)\n")
-        head = "| mesh | faces | " + " | ".join(methods) + " |"
-        if "pmz-multifeature" in methods and "pmz-qem" in methods:
-            head += " multifeature / qem |"
-        L.append(head)
-        L.append("|" + "---|" * (head.count("|") - 1))
-        ratios_mf = []
-        for mesh in meshes:
-            by = {r["method"]: r for r in sel if r["mesh"] == mesh}
-            if not by:
-                continue
-            faces = next(iter(by.values()))["faces"]
-            # "*": the method stopped above 1.1x the target (no legal collapse left).
-            cells = [fmt(by[m]["mean"] * 1e4 if m in by else None, ".3f")
-                     + ("*" if m in by and by[m]["faces_out"] > 1.1 * by[m]["target"] else "") for m in methods]
-            line = f"| {mesh} | {faces} | " + " | ".join(cells) + " |"
-            if "pmz-multifeature" in by and "pmz-qem" in by:
-                q = by["pmz-multifeature"]["mean"] / by["pmz-qem"]["mean"]
-                ratios_mf.append(q)
-                line += f" {q:.3f} |"
-            elif "pmz-multifeature" in methods and "pmz-qem" in methods:
-                line += " – |"
-            L.append(line)
-        if ratios_mf:
-            L.append(f"\nMedian multifeature / qem mean-error ratio: {statistics.median(ratios_mf):.3f}  ")
-        for a, b in [("pmz-multifeature", "openmesh-decimater"), ("pmz-prefix", "pmz-multifeature"),
-                     ("pmz-prefix-lossless", "pmz-multifeature")]:
-            q = [by[a]["mean"] / by[b]["mean"] for by in
-                 ({r["method"]: r for r in sel if r["mesh"] == mesh} for mesh in meshes)
-                 if a in by and b in by and by[b]["mean"] > 0]
-            if q:
-                L.append(f"Median {a} / {b} mean-error ratio: {statistics.median(q):.3f} "
-                         f"(max {max(q):.3f}) over {len(q)} meshes  ")
-        L.append("")
-        L.append("\\* stopped above 1.1× the target face count (no legal collapse left).\n")
+        if sel:
+            L.extend(summary_tables(sel, methods, meshes, ratio))
 
     big = [r for r in simp if r["mesh"] == BIG]
     if big:

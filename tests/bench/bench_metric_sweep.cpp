@@ -40,6 +40,8 @@ double median(std::vector<double> v) {
 
 int main(int argc, char** argv) {
   pmz::MetricParams params;
+  pmz::Metric first = pmz::Metric::guarded;
+  bool with_qem = true;
   std::vector<double> ratios;
   std::vector<std::string> meshes;
   for (int i = 1; i < argc; ++i) {
@@ -55,13 +57,23 @@ int main(int argc, char** argv) {
       params.quadric_memory = float(parse_number(argv[++i]));
     else if (a == "--bw" && has_value)
       params.boundary_weight = float(parse_number(argv[++i]));
-    else if (a == "--ratio" && has_value)
+    else if (a == "--no-qem")
+      with_qem = false;
+    else if (a == "--slack" && has_value)
+      params.guard_slack = float(parse_number(argv[++i]));
+    else if (a == "--metric" && has_value) {
+      const std::string name = argv[++i];
+      if (name != "guarded" && name != "multifeature")
+        return std::fprintf(stderr, "%s: --metric guarded|multifeature\n", kTool), 2;
+      first = name == "guarded" ? pmz::Metric::guarded : pmz::Metric::multifeature;
+    } else if (a == "--ratio" && has_value)
       ratios.push_back(parse_number(argv[++i]));
     else if (!a.empty() && a[0] == '-') {
-      std::fprintf(
-          stderr,
-          "usage: %s [--eps E] [--c0 C] [--wt W] [--mem M] [--bw B] [--ratio R]... MESH...\n",
-          kTool);
+      std::fprintf(stderr,
+                   "usage: %s [--metric guarded|multifeature] [--eps E] [--c0 C] [--wt W] [--mem "
+                   "M] [--bw B] "
+                   "[--slack S] [--no-qem] [--ratio R]... MESH...\n",
+                   kTool);
       return 2;
     } else
       meshes.push_back(a);
@@ -77,11 +89,12 @@ int main(int argc, char** argv) {
     std::string name = path.substr(path.find_last_of('/') + 1);
     name = name.substr(0, name.find_last_of('.'));
     for (size_t r = 0; r < ratios.size(); ++r) {
-      double mean[2], max[2];
+      double mean[2], max[2], forward_max = 0, backward_max = 0;
       uint64_t faces[2];
-      for (int k = 0; k < 2; ++k) {
+      mean[1] = max[1] = 0, faces[1] = 0;
+      for (int k = 0; k < (with_qem ? 2 : 1); ++k) {
         pmz::SimplifyOptions options;
-        options.metric = k == 0 ? pmz::Metric::multifeature : pmz::Metric::qem;
+        options.metric = k == 0 ? first : pmz::Metric::qem;
         options.params = params;
         options.target_faces =
             std::max<uint64_t>(4, uint64_t(std::llround(ratios[r] * mesh.face_count())));
@@ -95,15 +108,18 @@ int main(int argc, char** argv) {
         mean[k] = cmp.symmetric.mean / cmp.diag;
         max[k] = cmp.symmetric.max / cmp.diag;
         faces[k] = out.face_count();
+        if (k == 0)
+          forward_max = cmp.forward.max / cmp.diag, backward_max = cmp.backward.max / cmp.diag;
       }
       const bool both_exact = mean[0] < 1e-10 && mean[1] < 1e-10;
       const double q = both_exact ? 1.0 : mean[1] > 0 ? mean[0] / mean[1] : INFINITY;
       ratio_of[r].push_back(q);
       std::printf(
           "%-20s %5.3f  mf %10.5f max %9.4f (%llu faces)  qem %10.5f max %9.4f (%llu faces)  "
-          "mf/qem %.3f\n",
+          "mf/qem %.3f  (mf max: input to output %.4f, output to input %.4f)\n",
           name.c_str(), ratios[r], mean[0] * 1e4, max[0] * 1e4, (unsigned long long)faces[0],
-          mean[1] * 1e4, max[1] * 1e4, (unsigned long long)faces[1], q);
+          mean[1] * 1e4, max[1] * 1e4, (unsigned long long)faces[1], q, forward_max * 1e4,
+          backward_max * 1e4);
       std::fflush(stdout);
     }
   }

@@ -12,7 +12,10 @@ namespace pmz {
 
 inline constexpr uint32_t kNoVertex = 0xFFFFFFFFu;
 
-enum class Metric { multifeature, qem };
+// multifeature: the paper's metric alone. guarded (the default): the paper's metric plus the
+// Hausdorff guard (spec/algorithm.md section 6), which holds back collapses that would carry an
+// original vertex farther from the surface than the worst distance so far. qem: plain QSlim.
+enum class Metric { multifeature, qem, guarded };
 
 // One half-edge collapse u -> v (v keeps its position; u disappears), in *input* vertex ids.
 // vl: third vertex of the face (u, v, vl) holding the directed edge u->v; vr: third vertex of
@@ -33,16 +36,20 @@ struct MetricParams {
   float torsion_weight = 10.0f;  // w_T: weight of the torsion term in the quadric's factor
   float boundary_weight = 1.0f;  // boundary-plane quadrics (both metrics)
   float quadric_memory = 0.1f;   // weight of the accumulated (QSlim) quadric in Q
+  // guarded: a collapse whose bound b exceeds guard_slack times the largest bound of the
+  // collapses performed so far has its cost multiplied by (b / (guard_slack * that))^2.
+  float guard_slack = 0.8f;
 };
 
 // Where the time went (seconds), filled when SimplifyOptions::stats is set.
 struct SimplifyStats {
   double setup = 0, initial_costs = 0, collapse = 0, update_terms = 0, update_costs = 0, total = 0;
   uint64_t cost_evaluations = 0, legality_checks = 0;
+  uint64_t guard_checks = 0, guard_deferrals = 0;  // guarded: bounds computed, collapses held back
 };
 
 struct SimplifyOptions {
-  Metric metric = Metric::multifeature;
+  Metric metric = Metric::guarded;
   MetricParams params;
   SimplifyStats* stats = nullptr;
   uint64_t target_faces = 0;  // stop at this face count (0: as far as legal collapses go)
