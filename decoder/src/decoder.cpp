@@ -453,7 +453,7 @@ bool Decoder::Impl::apply() {
   if (applied - lazy_first == reader.group_end()) {  // a group's first split: start its scan
     group_first = applied;
     choice_ok = reader.begin_group(choice, mesh.vertex_count());
-    find_vertices(kChoiceLag + 1);
+    find_vertices(scan_at_group_start());
   }
   if (s.v == kNoCorner)
     return refuse(Status::corrupt,
@@ -508,7 +508,7 @@ bool Decoder::Impl::apply() {
     // The vertex choice state (its umbrella sums need u's coordinates), then the group's
     // vertices kChoiceLag + 1 ahead (the lag: this split's ring is noted now).
     choice.applied(mesh, coords.data(), has_l, has_r);
-    find_vertices(uint32_t(applied - group_first) + 2 + kChoiceLag);
+    find_vertices(scan_after_split(uint32_t(applied - group_first)));
     s.a = mesh.sector_hint();
     s.b = uint32_t(mesh.sector_faces().size());
     if (++decoded - lazy_first == lazy.front().split_count()) {

@@ -280,10 +280,10 @@ void encode_split_chunk(const std::vector<GroupCode>& groups, const std::vector<
       encode_uint(cn, m->groups, g.size - 1);
       cn.bit(m->near, g.near ? 1 : 0);
     }
-    // Then each group in the decoder's order of reads (spec section 9.3): its choice bits up to its
-    // (kChoiceLag + 1)-th vertex, then per split j the wedge symbols and the choice bits up to
-    // the group's (j + kChoiceLag + 2)-th vertex (those the decoder finds once split j is
-    // applied); the residuals in their own stream.
+    // Then each group in the decoder's order of reads (the schedule, spec section 9.3): its
+    // choice bits up to its scan_at_group_start()-th vertex, then per split j the wedge symbols
+    // and the choice bits up to the group's scan_after_split(j)-th vertex (those the decoder
+    // finds once split j is applied); the residuals in their own stream.
     size_t bit = 0, at = 0;
     for (const GroupCode& g : groups) {
       uint32_t found = 0;
@@ -294,7 +294,7 @@ void encode_split_chunk(const std::vector<GroupCode>& groups, const std::vector<
           found += choice[bit] & 1;
         }
       };
-      choose(kChoiceLag + 1);
+      choose(scan_at_group_start());
       for (uint32_t j = 0; j < g.size && at < count; ++j) {
         const SplitSymbols& s = splits[at++];
         ca.to(kSymbolWedgeCount);
@@ -302,7 +302,7 @@ void encode_split_chunk(const std::vector<GroupCode>& groups, const std::vector<
         ca.to(kSymbolWedgeRank);
         cn.bit(m->rank_zero[s.rank_context], s.wedge_rank > 0 ? 1 : 0);
         if (s.wedge_rank > 0) encode_small(cn, m->wedge_rank[s.rank_context], s.wedge_rank - 1);
-        choose(j + 2 + kChoiceLag);
+        choose(scan_after_split(j));
         for (int a = 0; a < 3; ++a) {
           ga.to(kSymbolResidualT0 + a);
           encode_uint_mixed(ge, m->residual[a][s.residual_context[a]], m->mix(a, s.mix_context[a]),

@@ -121,6 +121,14 @@ inline uint32_t umbrella_class(const RingSums& s) {
 // fan prefetching) and take each ring from that split's own ring walk.
 inline constexpr uint32_t kChoiceLag = 8;
 
+// The split symbol schedule (spec section 9.3), defined here once for the writer
+// (encode_split_chunk), the decoder (Decoder::Impl::apply) and SplitChunkReader::group_symbols:
+// a group's choice bits are read until its first scan_at_group_start() vertices are found, and
+// after its split j (0-based) is first applied until scan_after_split(j) are (1-based counts,
+// capped by the group's size).
+inline constexpr uint32_t scan_at_group_start() { return kChoiceLag + 1; }
+inline constexpr uint32_t scan_after_split(uint32_t j) { return j + 2 + kChoiceLag; }
+
 // Which vertices split (spec/format.md, sections 9.1 and 9.2): the state the writer and the decoder
 // keep in step, updated at every first application of a split, in stream order.
 // - degree of every vertex: base vertices their ring size, then per split the rule of
@@ -363,14 +371,14 @@ bool SplitChunkReader::group_symbols(VertexChoice& choice, const ProgressiveMesh
   std::vector<uint32_t> local;
   std::vector<uint32_t>& vs = found ? *found : local;
   vs.clear();
-  bool more = find(choice, &mesh, kChoiceLag + 1, vs);
+  bool more = find(choice, &mesh, scan_at_group_start(), vs);
   for (uint32_t j = 0; j < size; ++j) {
     if (j >= vs.size()) return false;
     SplitSymbols s{vs[j], 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
     contexts(s);
     if (!wedge_count(s.wedge_context, s.wedge_count) || !wedge_rank(s.rank_context, s.wedge_rank))
       return false;
-    if (more) more = find(choice, &mesh, j + 2 + kChoiceLag, vs);
+    if (more) more = find(choice, &mesh, scan_after_split(j), vs);
     if (!residuals(s.residual_context, s.mix_context, s.residual)) return false;
     out.push_back(s);
   }
