@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The whole test suite, as CI runs it:
-#   1. Release build + ctest (with the real-mesh corpus from libcgal-demo when it can be fetched;
-#      tests that need it skip cleanly otherwise),
+#   1. Release build + ctest (with the real-mesh corpus from libcgal-demo; where apt-get exists a
+#      failed fetch fails the run, see below),
 #   2. the same suite under AddressSanitizer + UndefinedBehaviorSanitizer,
 #   3. each libFuzzer target for a short fixed time (PMZ_FUZZ_SECONDS, default 30),
 #   web: the WebAssembly decoder, npm package and viewer (scripts/web.sh test: node + Chromium).

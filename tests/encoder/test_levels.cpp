@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <map>
 #include <string>
@@ -258,4 +259,56 @@ TEST(Levels, EveryPrefixIsTheFullDecodeAtItsSplitCount) {
   }
   ASSERT_EQ(d.finish(), pmz::Status::ok);
   EXPECT_TRUE(snap(d) == level_at(e.seq.collapses.size()));
+}
+
+// Committed files decoded by this decoder against the meshes they were written from: every
+// decoded vertex within half a quantization step (spec section 3) of a distinct source vertex.
+// A change to both writer and decoder that keeps round trips intact (a residual coded one off on
+// both sides) decodes the committed bytes wrongly and lands a vertex a step or more away.
+TEST(Levels, CommittedFilesDecodeWithinHalfAStepOfTheirSources) {
+  const std::pair<const char*, const char*> files[] = {
+      {"tests/data/sample.pmz", "tests/data/sample.obj"},
+      {"tests/conformance/vectors/torus-q14.pmz", "tests/conformance/meshes/torus.obj"},
+      {"tests/conformance/vectors/sphere-q11.pmz", "tests/conformance/meshes/sphere.obj"}};
+  for (const auto& [pmz_path, obj_path] : files) {
+    SCOPED_TRACE(pmz_path);
+    std::vector<uint8_t> bytes;
+    if (FILE* f = std::fopen((std::string(PMZ_SOURCE_DIR "/") + pmz_path).c_str(), "rb")) {
+      uint8_t buf[4096];
+      for (size_t n; (n = std::fread(buf, 1, sizeof buf, f)) > 0;)
+        bytes.insert(bytes.end(), buf, buf + n);
+      std::fclose(f);
+    }
+    ASSERT_FALSE(bytes.empty());
+    pmz::IndexedMesh source;
+    std::string error;
+    ASSERT_TRUE(pmz::read_mesh(std::string(PMZ_SOURCE_DIR "/") + obj_path, source, error)) << error;
+    pmz::Decoder d;
+    ASSERT_EQ(d.feed(bytes.data(), bytes.size()), pmz::Status::ok) << d.error_message();
+    ASSERT_EQ(d.finish(), pmz::Status::ok);
+    d.refine();
+    ASSERT_EQ(d.vertex_count(), source.vertex_count());
+    const pmz::StreamInfo& info = d.info();
+    ASSERT_GT(info.position_bits, 0u);
+    double range = 0;
+    for (int a = 0; a < 3; ++a)
+      range = std::max(range, double(info.bbox_max[a] - info.bbox_min[a]));
+    const double half_step = range / double((1u << info.position_bits) - 1) / 2;
+    const double slack = 4 * range * std::ldexp(1.0, -24) + 4 * std::ldexp(1.0, -24);
+    std::vector<uint8_t> taken(source.vertex_count(), 0);
+    for (uint32_t i = 0; i < d.vertex_count(); ++i) {
+      const float* p = d.positions() + size_t(i) * 3;
+      uint32_t match = UINT32_MAX;
+      for (uint32_t s = 0; s < source.vertex_count() && match == UINT32_MAX; ++s) {
+        bool near = !taken[s];
+        for (int a = 0; a < 3 && near; ++a)
+          near = std::abs(double(p[a]) - double(source.positions[size_t(s) * 3 + a])) <=
+                 half_step + slack;
+        if (near) match = s;
+      }
+      ASSERT_NE(match, UINT32_MAX) << "decoded vertex " << i << " (" << p[0] << " " << p[1] << " "
+                                   << p[2] << ") is no source vertex within half a step";
+      taken[match] = 1;
+    }
+  }
 }
