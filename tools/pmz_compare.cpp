@@ -5,11 +5,17 @@
 
 #include "pmz/compare.hpp"
 #include "pmz/mesh.hpp"
+#include "tool_common.hpp"
+#include "tool_mesh.hpp"
+
+namespace tool = pmz::tool;
 
 int main(int argc, char** argv) {
+  tool::init("pmz-compare");
   CLI::App app{
       "pmz-compare: Metro-style surface distance between two meshes (both directions).\n"
-      "Relative values are divided by the bounding-box diagonal of ORIGINAL."};
+      "Relative values are divided by the bounding-box diagonal of ORIGINAL.",
+      "pmz-compare"};
   std::string original_path, other_path;
   pmz::CompareOptions options;
   bool json = false, one_sided = false;
@@ -23,20 +29,21 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1u, 256u));
   app.add_flag("--one-sided", one_sided, "only ORIGINAL -> OTHER");
   app.add_flag("--json", json, "print one JSON object");
-  CLI11_PARSE(app, argc, argv);
+  tool::set_footer(app);
+  if (int rc = tool::parse(app, argc, argv); rc >= 0) return rc;
   options.both_directions = !one_sided;
 
   pmz::IndexedMesh original, other;
   std::string error;
-  if (!pmz::read_mesh(original_path, original, error) ||
-      !pmz::read_mesh(other_path, other, error)) {
-    std::fprintf(stderr, "pmz-compare: %s\n", error.c_str());
-    return 1;
+  if (!tool::read_mesh_input(original_path, "", original, error) ||
+      !tool::read_mesh_input(other_path, "", other, error)) {
+    tool::print_error(error);
+    return tool::kExitFailure;
   }
   pmz::CompareResult r;
   if (!pmz::compare(original, other, options, r, error)) {
-    std::fprintf(stderr, "pmz-compare: %s\n", error.c_str());
-    return 1;
+    tool::print_error(error);
+    return tool::kExitFailure;
   }
   const double inv = r.diag > 0 ? 1.0 / r.diag : 0.0;
   if (json) {

@@ -6,7 +6,6 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <string>
 #include <vector>
 
@@ -15,24 +14,12 @@
 #include "pmz/sample_mesh.hpp"
 #include "pmz/simplify.hpp"
 #include "pmz/writer.hpp"
+#include "tool_common.hpp"
 
 namespace {
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
-bool write_file_atomic(const std::filesystem::path& path, const std::vector<uint8_t>& bytes) {
-  std::filesystem::path tmp = path;
-  tmp += ".tmp";
-  {
-    std::ofstream f(tmp, std::ios::binary);
-    f.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
-    if (!f) return false;
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  return !ec;
 }
 
 pmz::IndexedMesh current_mesh(const pmz::Decoder& d) {
@@ -45,14 +32,16 @@ pmz::IndexedMesh current_mesh(const pmz::Decoder& d) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  pmz::tool::init("pmz-demo");
   if (argc > 1 && (!std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h"))) {
-    std::puts(
+    std::printf(
         "usage: pmz-demo [OUT_DIR] [--faces N]\n"
         "Makes a procedural sample mesh (sharp creases + smooth ripples, ~50k triangles),\n"
         "encodes it to OUT_DIR/sample.pmz, streams it back through the decoder and prints,\n"
         "per level of detail: faces, bytes that had to arrive, and the symmetric Hausdorff\n"
         "error (mean / max, relative to the bounding-box diagonal). OUT_DIR defaults to\n"
-        "./pmz-demo; it also receives sample.obj and the decoded levels as lod_*.obj.");
+        "./pmz-demo; it also receives sample.obj and the decoded levels as lod_*.obj.\n\n%s\n",
+        pmz::tool::kExitStatusHelp);
     return 0;
   }
   std::filesystem::path out_dir = "pmz-demo";
@@ -98,8 +87,8 @@ int main(int argc, char** argv) {
   }
   const double t_write = seconds_since(t0);
   const auto pmz_path = out_dir / "sample.pmz";
-  if (!write_file_atomic(pmz_path, bytes)) {
-    std::fprintf(stderr, "pmz-demo: cannot write %s\n", pmz_path.c_str());
+  if (!pmz::tool::write_output(pmz_path.string(), bytes.data(), bytes.size(), error)) {
+    pmz::tool::print_error(error);
     return 1;
   }
   std::printf(

@@ -1,114 +1,221 @@
-// pmz-encode: simplify a mesh and write it as a progressive .pmz stream (atomically).
-#include <unistd.h>
-
+// pmz-encode: simplify meshes and write each as a progressive .pmz stream. One input with -o
+// (a file, or - for stdout), or many with --out-dir encoded by -j worker threads (one line per
+// asset; a failing asset does not stop the others).
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
+#include <mutex>
+#include <set>
 #include <string>
+#include <thread>
 
 #include "pmz/format.hpp"
 #include "pmz/mesh.hpp"
 #include "pmz/simplify.hpp"
 #include "pmz/writer.hpp"
+#include "tool_common.hpp"
+#include "tool_mesh.hpp"
 
 namespace {
-bool write_file_atomic(const std::string& path, const std::vector<uint8_t>& bytes,
-                       std::string& error) {
-  std::string tmp = path + ".tmp";
-  FILE* f = std::fopen(tmp.c_str(), "wb");
-  if (!f) return error = "cannot write " + tmp, false;
-  bool ok = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size();
-  ok = std::fclose(f) == 0 && ok;
-  if (!ok || std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    return error = "cannot write " + path, false;
-  }
-  return true;
-}
-}  // namespace
 
-int main(int argc, char** argv) {
-  CLI::App app{
-      "pmz-encode: simplify a mesh with the multi-feature metric and write a progressive .pmz "
-      "stream"};
-  std::string input, output, metric = "guarded";
-  pmz::WriteOptions wopt;
-  app.add_option("input", input, "input mesh (OBJ/OFF/PLY/STL)")->required();
-  app.add_option("-o,--output", output, "output .pmz")->required();
-  app.add_option("--metric", metric,
-                 "guarded (default): the paper's multi-feature metric plus the Hausdorff guard "
-                 "(spec/algorithm.md section 6); multifeature: the paper's metric alone; qem: "
-                 "plain QEM (QSlim)")
-      ->check(CLI::IsMember({"guarded", "multifeature", "qem"}));
-  app.add_option("--position-bits", wopt.position_bits, "quantization bits (0 = lossless float32)")
-      ->check(CLI::Range(0, 30));
-  app.add_option("--base-faces", wopt.base_faces,
-                 "stop simplifying at this many faces (0: as far as possible)");
-  app.add_flag("--symbol-stats", wopt.symbol_stats,
-               "also print the code length per kind of split symbol (groups, choice, wedges, "
-               "residual slots)");
-  CLI11_PARSE(app, argc, argv);
+namespace tool = pmz::tool;
 
-  auto t0 = std::chrono::steady_clock::now();
+struct EncodeSettings {
+  pmz::Metric metric = pmz::Metric::multifeature;
+  pmz::WriteOptions write;
+  std::string stdin_format;  // extension for a mesh read from stdin
+};
+
+// Encodes one asset; on success `line` is its summary line, else `error` is one line naming
+// the file.
+bool encode(const std::string& input, const std::string& output, const EncodeSettings& settings,
+            tool::Progress* progress, std::string& line, std::string& error) {
+  if (tool::same_file(input, output))
+    return error = output + ": is the input file; not overwriting it", false;
+  const auto t0 = std::chrono::steady_clock::now();
+  // Opened first: an unwritable output fails before minutes of work, and the temporary (removed
+  // on error and on SIGINT/SIGTERM) exists while the work runs.
+  tool::OutputFile out;
+  if (!out.open(output, true, error)) return false;
   pmz::IndexedMesh mesh;
-  std::string error;
-  if (!pmz::read_mesh(input, mesh, error)) {
-    std::fprintf(stderr, "pmz-encode: %s\n", error.c_str());
-    return 1;
+  if (progress) progress->update("reading", 0);
+  if (!tool::read_mesh_input(input, settings.stdin_format, mesh, error)) {
+    if (progress) progress->clear();
+    return false;
   }
   if (!mesh.attributes.empty())  // never a silent loss: the format codes geometry only so far
     std::fprintf(stderr,
                  "pmz-encode: %s: attributes not encoded yet (%s): the .pmz holds positions "
                  "and triangles only\n",
-                 input.c_str(), mesh.attributes.describe().c_str());
+                 input == "-" ? "stdin" : input.c_str(), mesh.attributes.describe().c_str());
   pmz::SimplifyOptions sopt;
-  sopt.metric = metric == "qem"            ? pmz::Metric::qem
-                : metric == "multifeature" ? pmz::Metric::multifeature
-                                           : pmz::Metric::guarded;
-  // A progress line only on a terminal: redirected stderr (logs, CI) gets no carriage returns.
-  const bool tty = isatty(2);
-  int last_pct = -1;
-  if (tty)
-    sopt.progress = [&](double f) {
-      int pct = int(f * 100);
-      if (pct != last_pct) {
-        last_pct = pct;
-        std::fprintf(stderr, "\rpmz-encode: simplifying %3d%%", pct);
-      }
-    };
+  sopt.metric = settings.metric;
+  if (progress) sopt.progress = [&](double f) { progress->update("simplifying", f); };
   pmz::CollapseSequence seq;
-  if (!pmz::simplify(mesh, sopt, seq, error)) {
-    if (tty) std::fputs("\r\033[K", stderr);
-    std::fprintf(stderr, "pmz-encode: %s\n", error.c_str());
-    return 1;
-  }
-  if (tty) std::fputs("\rpmz-encode: simplified, writing\033[K", stderr);
   std::vector<uint8_t> bytes;
   pmz::WriteStats st;
-  const bool written =
-      pmz::write_pmz(seq, wopt, bytes, error, &st) && write_file_atomic(output, bytes, error);
-  if (tty) std::fputs("\r\033[K", stderr);
-  if (!written) {
-    std::fprintf(stderr, "pmz-encode: %s\n", error.c_str());
-    return 1;
-  }
-  double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  bool ok = pmz::simplify(mesh, sopt, seq, error);
+  if (ok && progress) progress->update("writing", 1);
+  ok = ok && pmz::write_pmz(seq, settings.write, bytes, error, &st);
+  if (progress) progress->clear();
+  if (!ok) return error = (input == "-" ? "stdin" : input) + ": " + error, false;
+  out.write(bytes.data(), bytes.size());
+  if (!out.commit(error)) return false;
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const double nv = seq.mesh.vertex_count();
-  std::printf(
-      "%s: %u faces, %u vertices -> %zu bytes, %.2f bits/vertex (connectivity %.2f, geometry %.2f "
-      "bits/split), %.2fs\n",
-      output.c_str(), seq.mesh.face_count(), seq.mesh.vertex_count(), bytes.size(),
-      bytes.size() * 8.0 / nv, st.connectivity_bits / std::max(1.0, double(seq.collapses.size())),
-      st.geometry_bits / std::max(1.0, double(seq.collapses.size())), secs);
-  if (!wopt.symbol_stats) return 0;
-  // Per kind of symbol, the bits its symbols take of their stream (the streams interleave kinds,
-  // so their sizes cannot split them further).
-  const char* kinds[pmz::kSymbolKinds] = {"groups",      "choice",      "wedge_count", "wedge_rank",
-                                          "residual_t0", "residual_t1", "residual_n"};
-  std::printf("  code bits/split:");
-  for (int k = 0; k < pmz::kSymbolKinds; ++k)
-    std::printf(" %s %.2f", kinds[k],
-                st.symbol_bits[k] / std::max(1.0, double(seq.collapses.size())));
-  std::printf("\n");
-  return 0;
+  const double splits = std::max(1.0, double(seq.collapses.size()));
+  char buf[512];
+  std::snprintf(buf, sizeof buf,
+                "%s: %u faces, %u vertices -> %zu bytes, %.2f bits/vertex (connectivity %.2f, "
+                "geometry %.2f bits/split), %.2fs",
+                output == "-" ? "stdout" : output.c_str(), seq.mesh.face_count(),
+                seq.mesh.vertex_count(), bytes.size(), bytes.size() * 8.0 / nv,
+                st.connectivity_bits / splits, st.geometry_bits / splits, secs);
+  line = buf;
+  if (settings.write.symbol_stats) {
+    // Per kind of symbol, the bits its symbols take of their stream (the streams interleave
+    // kinds, so their sizes cannot split them further).
+    const char* kinds[pmz::kSymbolKinds] = {"groups",     "choice",      "wedge_count",
+                                            "wedge_rank", "residual_t0", "residual_t1",
+                                            "residual_n"};
+    line += "\n  code bits/split:";
+    for (int k = 0; k < pmz::kSymbolKinds; ++k) {
+      std::snprintf(buf, sizeof buf, " %s %.2f", kinds[k], st.symbol_bits[k] / splits);
+      line += buf;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  tool::init("pmz-encode");
+  CLI::App app{
+      "pmz-encode: simplify meshes with the multi-feature metric and write each as a progressive "
+      ".pmz stream",
+      "pmz-encode"};
+  std::vector<std::string> inputs;
+  std::string output, out_dir, metric = "guarded", format;
+  unsigned jobs = std::max(1u, std::thread::hardware_concurrency());
+  bool quiet = false, force_progress = false;
+  EncodeSettings settings;
+  app.add_option("inputs", inputs, "input meshes (OBJ/OFF/PLY/STL); - reads one from stdin")
+      ->required()
+      ->type_name("MESH...");
+  auto* out_opt = app.add_option("-o,--output", output, "output .pmz (- for stdout)");
+  auto* dir_opt = app.add_option("--out-dir", out_dir,
+                                 "write each input's NAME.pmz into this folder (several inputs)");
+  out_opt->excludes(dir_opt);
+  app.add_option("-j,--jobs", jobs, "assets encoded at once with --out-dir (default: cores)")
+      ->check(CLI::Range(1u, 1024u))
+      ->capture_default_str();
+  app.add_option("--format", format, "format of a mesh read from stdin")
+      ->check(CLI::IsMember({"obj", "off", "ply", "stl"}));
+  app.add_option("--metric", metric,
+                 "guarded: the paper's multi-feature metric plus the Hausdorff guard "
+                 "(spec/algorithm.md section 6); multifeature: the paper's metric alone; qem: "
+                 "plain QEM (QSlim)")
+      ->check(CLI::IsMember({"guarded", "multifeature", "qem"}))
+      ->capture_default_str();
+  app.add_option("--position-bits", settings.write.position_bits,
+                 "quantization bits (0 = lossless float32)")
+      ->check(CLI::Range(0, 30))
+      ->capture_default_str();
+  app.add_option("--base-faces", settings.write.base_faces,
+                 "stop simplifying at this many faces (0: as far as possible)")
+      ->capture_default_str();
+  app.add_flag("--symbol-stats", settings.write.symbol_stats,
+               "also print the code length per kind of split symbol (groups, choice, wedges, "
+               "residual slots)");
+  tool::add_progress_options(app, quiet, force_progress);
+  tool::set_footer(app);
+  if (int rc = tool::parse(app, argc, argv); rc >= 0) return rc;
+
+  auto usage = [](const std::string& what) {
+    tool::print_error(what + " (see --help)");
+    return tool::kExitUsage;
+  };
+  if (out_opt->count() == 0 && dir_opt->count() == 0)
+    return usage("give -o FILE (one input) or --out-dir DIR");
+  if (out_opt->count() && inputs.size() > 1)
+    return usage("several inputs need --out-dir DIR, not -o");
+  if (std::count(inputs.begin(), inputs.end(), "-") > 1) return usage("stdin given twice");
+  if (std::count(inputs.begin(), inputs.end(), "-") && format.empty())
+    return usage("a mesh read from stdin needs --format obj|off|ply|stl");
+  if (dir_opt->count() && std::count(inputs.begin(), inputs.end(), "-"))
+    return usage("a mesh read from stdin needs -o FILE (it has no name for --out-dir)");
+  settings.metric = metric == "qem"            ? pmz::Metric::qem
+                    : metric == "multifeature" ? pmz::Metric::multifeature
+                                               : pmz::Metric::guarded;
+  settings.stdin_format = format;
+
+  std::vector<std::string> outputs;
+  if (out_opt->count()) {
+    outputs.push_back(output);
+  } else {
+    std::error_code ec;
+    if (!std::filesystem::is_directory(out_dir, ec)) {
+      tool::print_error(out_dir, "not a folder");
+      return tool::kExitFailure;
+    }
+    std::set<std::string> seen;
+    for (const std::string& in : inputs) {
+      outputs.push_back(
+          (std::filesystem::path(out_dir) / std::filesystem::path(in).stem()).string() + ".pmz");
+      if (!seen.insert(outputs.back()).second)
+        return usage("two inputs would both write " + outputs.back());
+    }
+  }
+
+  if (inputs.size() == 1) {
+    tool::Progress progress(quiet, force_progress);
+    std::string line, error;
+    if (!encode(inputs[0], outputs[0], settings, progress.enabled() ? &progress : nullptr, line,
+                error)) {
+      tool::print_error(error);
+      return tool::kExitFailure;
+    }
+    // With -o -, stdout carries the stream: the summary goes to stderr.
+    std::fprintf(outputs[0] == "-" ? stderr : stdout, "%s\n", line.c_str());
+    return tool::kExitOk;
+  }
+
+  // A batch: workers take the next asset until none is left; lines are printed whole as assets
+  // finish, and an overall bar (on a terminal) counts finished assets.
+  tool::Progress progress(quiet, force_progress);
+  std::mutex print_mutex;
+  std::atomic<size_t> next{0};
+  size_t finished = 0, failed = 0;
+  auto worker = [&] {
+    for (size_t i; (i = next.fetch_add(1)) < inputs.size();) {
+      std::string line, error;
+      const bool ok = encode(inputs[i], outputs[i], settings, nullptr, line, error);
+      std::lock_guard<std::mutex> lock(print_mutex);
+      progress.clear();
+      if (ok) {
+        std::printf("%s\n", line.c_str());
+        std::fflush(stdout);
+      } else {
+        tool::print_error(error);
+        ++failed;
+      }
+      progress.update("encoded", double(++finished) / double(inputs.size()));
+    }
+  };
+  std::vector<std::thread> workers;
+  const size_t n_workers = std::min<size_t>(jobs, inputs.size());
+  for (size_t w = 1; w < n_workers; ++w) workers.emplace_back(worker);
+  worker();
+  for (std::thread& t : workers) t.join();
+  progress.clear();
+  if (failed) {
+    tool::print_error(std::to_string(failed) + " of " + std::to_string(inputs.size()) +
+                      " assets failed");
+    return tool::kExitFailure;
+  }
+  return tool::kExitOk;
 }

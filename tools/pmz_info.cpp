@@ -1,7 +1,9 @@
 // pmz-info: a .pmz file's header, counts, bytes per section and per stream, and bits per
 // vertex split divided into connectivity (groups, vertex choice, wedges) and geometry (residuals):
 // the two streams of every SPLT chunk.
-// Reads the container directly (chunk framing + stream sizes); validates by a full decode.
+// Reads the container (chunk framing, CRCs, the base mesh and each chunk's split groups, through
+// the decoder's feed) without applying the splits; a truncated file is described up to where it
+// ends. --decode also applies every split (checking their symbols) and times it.
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
@@ -12,65 +14,81 @@
 #include "pmz/decoder.hpp"
 #include "pmz/format.hpp"
 #include "pmz/split_codec.hpp"
+#include "tool_common.hpp"
+
+namespace tool = pmz::tool;
 
 int main(int argc, char** argv) {
+  tool::init("pmz-info");
   CLI::App app{
-      "pmz-info: print a .pmz file's header, counts, bytes per section and bits per vertex split"};
+      "pmz-info: print a .pmz file's header, counts, bytes per section and bits per vertex split "
+      "(without decoding the splits unless --decode)",
+      "pmz-info"};
   std::string input;
-  bool json = false;
-  app.add_option("input", input, "input .pmz")->required();
+  bool json = false, decode = false;
+  app.add_option("input", input, "input .pmz (- for stdin)")->required();
   app.add_flag("--json", json, "machine-readable output");
-  CLI11_PARSE(app, argc, argv);
+  app.add_flag("--decode", decode,
+               "also apply every split (finds damage in their symbols) and time the refinement");
+  tool::set_footer(app,
+                   "A truncated file is described up to where it ends (exit 0, 'truncated' / "
+                   "\"complete\": false); a damaged one up to the damage (exit 1).");
+  if (int rc = tool::parse(app, argc, argv); rc >= 0) return rc;
 
   std::vector<uint8_t> data;
-  if (FILE* f = std::fopen(input.c_str(), "rb")) {
-    uint8_t buf[1 << 16];
-    size_t n;
-    while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) data.insert(data.end(), buf, buf + n);
-    std::fclose(f);
-  } else {
-    std::fprintf(stderr, "pmz-info: cannot read %s\n", input.c_str());
-    return 1;
+  std::string error;
+  if (!tool::read_input(input, data, error)) {
+    tool::print_error(error);
+    return tool::kExitFailure;
   }
+  const std::string shown = input == "-" ? "stdin" : input;
   pmz::Decoder d;
   pmz::Status s = d.feed(data.data(), data.size());
   if (s == pmz::Status::ok) s = d.finish();
-  if (s != pmz::Status::ok) {
-    std::fprintf(stderr, "pmz-info: %s\n", d.error_message().c_str());
-    return 1;
+  const bool truncated = s == pmz::Status::truncated;
+  const bool damaged = s != pmz::Status::ok && !truncated;
+  if (!d.info().header_done) {
+    tool::print_error(shown, tool::library_message(d.error_message()));
+    return tool::kExitFailure;
   }
-  // Wall time, and the process's CPU time (std::clock), which other processes on a busy
-  // machine do not inflate.
-  auto t0 = std::chrono::steady_clock::now();
-  std::clock_t c0 = std::clock();
-  d.refine();
-  double refine_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const double refine_cpu = double(std::clock() - c0) / CLOCKS_PER_SEC;
-  // Wedge and residual symbols are decoded as splits are first applied: damage there shows now.
-  if (d.status() != pmz::Status::ok) {
-    std::fprintf(stderr, "pmz-info: %s\n", d.error_message().c_str());
-    return 1;
+  double refine_s = 0, refine_cpu = 0, warm_s = 0, warm_cpu = 0;
+  if (decode && !damaged) {
+    // Wall time, and the process's CPU time (std::clock), which other processes on a busy
+    // machine do not inflate.
+    auto t0 = std::chrono::steady_clock::now();
+    std::clock_t c0 = std::clock();
+    d.refine();
+    refine_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    refine_cpu = double(std::clock() - c0) / CLOCKS_PER_SEC;
+    // Wedge and residual symbols are decoded as splits are first applied: damage shows now.
+    if (d.status() != pmz::Status::ok) {
+      tool::print_error(shown, tool::library_message(d.error_message()));
+      return tool::kExitFailure;
+    }
+    // Again with memory already touched and positions computed: the per-frame refinement cost.
+    d.coarsen();
+    t0 = std::chrono::steady_clock::now();
+    c0 = std::clock();
+    d.refine();
+    warm_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    warm_cpu = double(std::clock() - c0) / CLOCKS_PER_SEC;
   }
-  // Again with memory already touched and positions computed: the per-frame refinement cost.
-  d.coarsen();
-  t0 = std::chrono::steady_clock::now();
-  c0 = std::clock();
-  d.refine();
-  double warm_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const double warm_cpu = double(std::clock() - c0) / CLOCKS_PER_SEC;
 
-  // Section sizes from the framing (the decode above validated it).
-  uint64_t head = 8, base = 0, splits = 0, other = 0, chunks = 0;
+  // Section sizes from the framing, up to END (the decoder ignores what follows) or up to where
+  // the bytes end inside a chunk.
+  uint64_t head = 8, base = 0, splits = 0, other = 0, chunks = 0, unfinished = 0;
   uint64_t stream_bytes[pmz::kSplitStreamCount] = {};
   for (size_t at = 8; at < data.size();) {
     pmz::ChunkFrame f;
     if (pmz::parse_chunk_frame(data.data() + at, data.size() - at, f) != pmz::FrameStatus::ok ||
-        f.payload_size > data.size() - at - f.header_size)
-      break;  // cannot happen before END: the decode above validated it
+        f.payload_size > data.size() - at - f.header_size) {
+      unfinished = data.size() - at;  // a chunk cut off (or, when damaged, unreadable framing)
+      break;
+    }
     const uint64_t total = f.header_size + f.payload_size;
     if (f.type == pmz::kChunkEnd) {
       other += total;
-      break;  // the decoder ignores what follows END, even bytes that frame as chunks
+      break;
     }
     if (f.type == pmz::kChunkHead)
       head += total;
@@ -88,64 +106,90 @@ int main(int argc, char** argv) {
     at += total;
   }
   const pmz::StreamInfo& i = d.info();
-  const double ns = double(std::max<uint64_t>(1, i.total_splits));
+  const uint64_t available = d.splits_available();
+  const double ns = double(std::max<uint64_t>(1, available));
   // The two streams of every SPLT chunk are exactly this split (per symbol kind: pmz-encode's
-  // ideal code lengths).
+  // ideal code lengths). Over the splits present, so a truncated file's figures are its own.
   const double conn = double(stream_bytes[pmz::kStreamConnectivity]) * 8 / ns;
   const double geom = double(stream_bytes[pmz::kStreamGeometry]) * 8 / ns;
   const char* names[pmz::kSplitStreamCount] = {"connectivity", "geometry"};
-  const double splits_per_s = refine_s > 0 ? double(i.total_splits) / refine_s : 0;
-  const double warm_per_s = warm_s > 0 ? double(i.total_splits) / warm_s : 0;
+  const bool timed = decode && !damaged;
+  const double splits_per_s = refine_s > 0 ? double(available) / refine_s : 0;
+  const double warm_per_s = warm_s > 0 ? double(available) / warm_s : 0;
+  const char* state = damaged ? "damaged" : truncated ? "truncated" : "complete";
   if (json) {
     std::printf(
-        "{\"file\":\"%s\",\"bytes\":%zu,\"version\":\"%u.%u\",\"position_bits\":%u,\"curvature\":%"
-        "u,\"fine_curvature\":%u,"
+        "{\"file\":\"%s\",\"bytes\":%zu,\"state\":\"%s\",\"complete\":%s,"
+        "\"version\":\"%u.%u\",\"position_bits\":%u,\"curvature\":%u,\"fine_curvature\":%u,"
         "\"base_vertices\":%llu,\"base_faces\":%llu,\"full_vertices\":%llu,\"full_faces\":%llu,"
-        "\"splits\":%llu,\"split_chunks\":%llu,\"header_bytes\":%llu,\"base_bytes\":%llu,"
-        "\"split_bytes\":%llu,\"other_bytes\":%llu,\"bits_per_vertex\":%.4f,"
-        "\"connectivity_bits_per_split\":%.4f,\"geometry_bits_per_split\":%.4f,"
-        "\"refine_splits_per_second\":%.0f,\"rerefine_splits_per_second\":%.0f,"
-        "\"refine_cpu_ms\":%.3f,\"rerefine_cpu_ms\":%.3f,\"stream_bytes\":{",
-        input.c_str(), data.size(), i.version_major, i.version_minor, i.position_bits, i.curvature,
-        i.fine_curvature, (unsigned long long)i.base_vertices, (unsigned long long)i.base_faces,
+        "\"splits\":%llu,\"splits_available\":%llu,\"base_complete\":%s,\"split_chunks\":%llu,"
+        "\"header_bytes\":%llu,\"base_bytes\":%llu,\"split_bytes\":%llu,\"other_bytes\":%llu,"
+        "\"unfinished_chunk_bytes\":%llu,\"bits_per_vertex\":%.4f,"
+        "\"connectivity_bits_per_split\":%.4f,\"geometry_bits_per_split\":%.4f,",
+        shown.c_str(), data.size(), state, truncated || damaged ? "false" : "true", i.version_major,
+        i.version_minor, i.position_bits, i.curvature, i.fine_curvature,
+        (unsigned long long)i.base_vertices, (unsigned long long)i.base_faces,
         (unsigned long long)i.full_vertices, (unsigned long long)i.full_faces,
-        (unsigned long long)i.total_splits, (unsigned long long)chunks, (unsigned long long)head,
+        (unsigned long long)i.total_splits, (unsigned long long)available,
+        i.base_done ? "true" : "false", (unsigned long long)chunks, (unsigned long long)head,
         (unsigned long long)base, (unsigned long long)splits, (unsigned long long)other,
-        data.size() * 8.0 / double(std::max<uint64_t>(1, i.full_vertices)), conn, geom,
-        splits_per_s, warm_per_s, refine_cpu * 1e3, warm_cpu * 1e3);
+        (unsigned long long)unfinished,
+        data.size() * 8.0 / double(std::max<uint64_t>(1, i.full_vertices)), conn, geom);
+    if (timed)
+      std::printf(
+          "\"refine_splits_per_second\":%.0f,\"rerefine_splits_per_second\":%.0f,"
+          "\"refine_cpu_ms\":%.3f,\"rerefine_cpu_ms\":%.3f,",
+          splits_per_s, warm_per_s, refine_cpu * 1e3, warm_cpu * 1e3);
+    std::printf("\"stream_bytes\":{");
     for (int k = 0; k < pmz::kSplitStreamCount; ++k)
       std::printf("%s\"%s\":%llu", k ? "," : "", names[k], (unsigned long long)stream_bytes[k]);
     std::printf("}}\n");
-    return 0;
+  } else {
+    std::printf("%s: %zu bytes, format %u.%u, %s, curvature %u/8 + %u/8\n", shown.c_str(),
+                data.size(), i.version_major, i.version_minor,
+                i.position_bits ? (std::to_string(i.position_bits) + "-bit positions").c_str()
+                                : "lossless float32 positions",
+                i.curvature, i.fine_curvature);
+    std::printf("  bbox      (%g %g %g) - (%g %g %g)\n", i.bbox_min[0], i.bbox_min[1],
+                i.bbox_min[2], i.bbox_max[0], i.bbox_max[1], i.bbox_max[2]);
+    std::printf("  base      %llu vertices, %llu faces%s\n", (unsigned long long)i.base_vertices,
+                (unsigned long long)i.base_faces, i.base_done ? "" : " (not all in the file)");
+    std::printf("  full      %llu vertices, %llu faces, %llu splits in %llu chunks\n",
+                (unsigned long long)i.full_vertices, (unsigned long long)i.full_faces,
+                (unsigned long long)i.total_splits, (unsigned long long)chunks);
+    if (truncated || damaged)
+      std::printf(
+          "  %-9s %llu of %llu splits available (%.1f%%)%s\n", state, (unsigned long long)available,
+          (unsigned long long)i.total_splits,
+          100.0 * double(available) / double(std::max<uint64_t>(1, i.total_splits)),
+          unfinished
+              ? ("; the last " + std::to_string(unfinished) + " bytes are a chunk cut off").c_str()
+              : "");
+    std::printf("  sections  header %llu, base %llu, splits %llu, other %llu bytes\n",
+                (unsigned long long)head, (unsigned long long)base, (unsigned long long)splits,
+                (unsigned long long)other);
+    std::printf(
+        "  per split connectivity %.2f bits, geometry %.2f bits; %.2f bits/vertex overall\n", conn,
+        geom, data.size() * 8.0 / double(std::max<uint64_t>(1, i.full_vertices)));
+    std::printf(
+        "  streams   connectivity %llu bytes, geometry %llu bytes (SPLT framing and counts "
+        "%llu)\n",
+        (unsigned long long)stream_bytes[pmz::kStreamConnectivity],
+        (unsigned long long)stream_bytes[pmz::kStreamGeometry],
+        (unsigned long long)(splits - stream_bytes[pmz::kStreamConnectivity] -
+                             stream_bytes[pmz::kStreamGeometry]));
+    if (timed) {
+      std::printf(
+          "  full refinement %.3f ms (%.1f M splits/s); after coarsening, again %.3f ms (%.1f M "
+          "splits/s)\n",
+          refine_s * 1e3, splits_per_s / 1e6, warm_s * 1e3, warm_per_s / 1e6);
+      std::printf("  cpu time  full refinement %.3f ms, again %.3f ms\n", refine_cpu * 1e3,
+                  warm_cpu * 1e3);
+    }
   }
-  std::printf("%s: %zu bytes, format %u.%u, %s, curvature %u/8 + %u/8\n", input.c_str(),
-              data.size(), i.version_major, i.version_minor,
-              i.position_bits ? (std::to_string(i.position_bits) + "-bit positions").c_str()
-                              : "lossless float32 positions",
-              i.curvature, i.fine_curvature);
-  std::printf("  bbox      (%g %g %g) - (%g %g %g)\n", i.bbox_min[0], i.bbox_min[1], i.bbox_min[2],
-              i.bbox_max[0], i.bbox_max[1], i.bbox_max[2]);
-  std::printf("  base      %llu vertices, %llu faces\n", (unsigned long long)i.base_vertices,
-              (unsigned long long)i.base_faces);
-  std::printf("  full      %llu vertices, %llu faces, %llu splits in %llu chunks\n",
-              (unsigned long long)i.full_vertices, (unsigned long long)i.full_faces,
-              (unsigned long long)i.total_splits, (unsigned long long)chunks);
-  std::printf("  sections  header %llu, base %llu, splits %llu, other %llu bytes\n",
-              (unsigned long long)head, (unsigned long long)base, (unsigned long long)splits,
-              (unsigned long long)other);
-  std::printf("  per split connectivity %.2f bits, geometry %.2f bits; %.2f bits/vertex overall\n",
-              conn, geom, data.size() * 8.0 / double(std::max<uint64_t>(1, i.full_vertices)));
-  std::printf(
-      "  streams   connectivity %llu bytes, geometry %llu bytes (SPLT framing and counts %llu)\n",
-      (unsigned long long)stream_bytes[pmz::kStreamConnectivity],
-      (unsigned long long)stream_bytes[pmz::kStreamGeometry],
-      (unsigned long long)(splits - stream_bytes[pmz::kStreamConnectivity] -
-                           stream_bytes[pmz::kStreamGeometry]));
-  std::printf(
-      "  full refinement %.3f ms (%.1f M splits/s); after coarsening, again %.3f ms (%.1f M "
-      "splits/s)\n",
-      refine_s * 1e3, splits_per_s / 1e6, warm_s * 1e3, warm_per_s / 1e6);
-  std::printf("  cpu time  full refinement %.3f ms, again %.3f ms\n", refine_cpu * 1e3,
-              warm_cpu * 1e3);
-  return 0;
+  if (damaged) {
+    tool::print_error(shown, tool::library_message(d.error_message()));
+    return tool::kExitFailure;
+  }
+  return tool::kExitOk;
 }

@@ -27,6 +27,7 @@
 #include "renderer.hpp"
 #include "source.hpp"
 #include "stream.hpp"
+#include "tool_common.hpp"
 #include "ui.hpp"
 
 using namespace pmzview;
@@ -38,6 +39,9 @@ struct Options {
   double rate_kbps = 0;
   std::string screenshot;
   int width = 1024, height = 768;
+  // --faces 0 / --ratio 0 are the base mesh: whether an option was given is kept apart from
+  // its value.
+  bool faces_set = false, ratio_set = false;
   uint64_t faces = 0;
   double ratio = 0;
   uint64_t bytes = 0;
@@ -136,9 +140,11 @@ int parse(int argc, char** argv, Options& o) {
   app.add_option("--size", size, "screenshot size WxH (default 1024x768; also the window size)")
       ->type_name("WxH");
   auto* faces =
-      app.add_option("--faces", o.faces, "level of detail: at least N faces")->type_name("N");
+      app.add_option("--faces", o.faces, "level of detail: at least N faces (0: the base mesh)")
+          ->type_name("N");
   auto* ratio =
-      app.add_option("--ratio", o.ratio, "level of detail: this fraction of the full face count")
+      app.add_option("--ratio", o.ratio,
+                     "level of detail: this fraction of the full face count (0: the base mesh)")
           ->type_name("R")
           ->check(CLI::Range(0.0, 1.0));
   auto* bytes =
@@ -162,7 +168,7 @@ int parse(int argc, char** argv, Options& o) {
                  "refinement time per frame in milliseconds (at least 30% of the last frame's)")
       ->type_name("MS")
       ->check(CLI::PositiveNumber);
-  app.footer(kKeyHelp);
+  pmz::tool::set_footer(app, kKeyHelp);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -171,6 +177,8 @@ int parse(int argc, char** argv, Options& o) {
     std::fprintf(stderr, "pmz-view: %s (see --help)\n", e.what());
     return 2;
   }
+  o.faces_set = faces->count() > 0;
+  o.ratio_set = ratio->count() > 0;
   if (!size.empty()) {
     char x = 0;
     char extra = 0;
@@ -236,9 +244,9 @@ int main(int argc, char** argv) {
     state.smooth = !o.flat;
     state.wireframe = o.wireframe;
     state.geomorph = !o.no_geomorph;
-    state.lod.follow = o.faces == 0 && o.ratio == 0;
+    state.lod.follow = !o.faces_set && !o.ratio_set;
     state.lod.faces = o.faces;
-    bool ratio_pending = o.ratio > 0;  // needs the header's full face count
+    bool ratio_pending = o.ratio_set;  // needs the header's full face count
     Stats stats;
     pmz::StreamInfo info;
     MeshMirror mirror;

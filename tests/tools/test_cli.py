@@ -1,0 +1,496 @@
+#!/usr/bin/env python3
+"""The tools' command-line conventions (issue 14, item 2 and 4), one check per case:
+`-` for stdin/stdout, outputs through symlinks / onto devices and FIFOs / onto the input,
+temporaries removed on error and on signals, one-line errors with the reason, exit codes
+(0 ok, 1 failure, 2 usage), defaults in --help, the progress bar, pmz-info without decoding
+and on truncated files, unreachable decode targets, --faces 0 / --ratio 0 as the base mesh,
+batch encoding with --out-dir and -j.
+
+usage: test_cli.py BIN_DIR SAMPLE_OBJ SAMPLE_PMZ WORK_DIR [CASE...]
+BIN_DIR holds pmz-encode, pmz-decode, pmz-info, pmz-simplify, pmz-compare (pmz-view optional).
+Exits 1 listing the failed cases."""
+import json
+import os
+import pty
+import resource
+import select
+import shutil
+import signal
+import stat
+import subprocess
+import sys
+import time
+
+BIN, SAMPLE_OBJ, SAMPLE_PMZ, WORK = (os.path.abspath(a) for a in sys.argv[1:5])
+ONLY = sys.argv[5:]
+TOOLS = ["pmz-encode", "pmz-decode", "pmz-info", "pmz-simplify", "pmz-compare"]
+
+
+def tool(name):
+    return os.path.join(BIN, name)
+
+
+def run(args, **kw):
+    kw.setdefault("stdout", subprocess.PIPE)
+    kw.setdefault("stderr", subprocess.PIPE)
+    kw.setdefault("timeout", 120)
+    return subprocess.run(args, **kw)
+
+
+class Failed(Exception):
+    pass
+
+
+def check(cond, what):
+    if not cond:
+        raise Failed(what)
+
+
+def err_text(r):
+    return r.stderr.decode(errors="replace")
+
+
+def fresh(name):
+    d = os.path.join(WORK, name)
+    shutil.rmtree(d, ignore_errors=True)
+    os.makedirs(d)
+    return d
+
+
+def sample_bytes():
+    with open(SAMPLE_PMZ, "rb") as f:
+        return f.read()
+
+
+def info_json(path):
+    r = run([tool("pmz-info"), "--json", path])
+    check(r.returncode == 0, f"pmz-info --json {path}: rc={r.returncode} {err_text(r)}")
+    return json.loads(r.stdout)
+
+
+# ---- `-` for stdin and stdout ----
+
+def case_encode_to_stdout():
+    d = fresh("encode_stdout")
+    ref = os.path.join(d, "ref.pmz")
+    r = run([tool("pmz-encode"), SAMPLE_OBJ, "-o", ref])
+    check(r.returncode == 0, f"encode to a file: rc={r.returncode} {err_text(r)}")
+    r = run([tool("pmz-encode"), SAMPLE_OBJ, "-o", "-"], cwd=d)
+    check(r.returncode == 0, f"encode -o -: rc={r.returncode} {err_text(r)}")
+    check(not os.path.exists(os.path.join(d, "-")), "encode -o - created a file named '-'")
+    check(r.stdout == open(ref, "rb").read(), "encode -o - did not write the stream to stdout")
+
+
+def case_decode_from_stdin_to_stdout():
+    d = fresh("decode_stdio")
+    ref = os.path.join(d, "ref.obj")
+    r = run([tool("pmz-decode"), SAMPLE_PMZ, "-o", ref])
+    check(r.returncode == 0, f"decode to a file: rc={r.returncode} {err_text(r)}")
+    r = run([tool("pmz-decode"), "-", "-o", os.path.join(d, "in.obj")], input=sample_bytes())
+    check(r.returncode == 0, f"pmz-decode - (stdin): rc={r.returncode} {err_text(r)}")
+    check(open(os.path.join(d, "in.obj"), "rb").read() == open(ref, "rb").read(),
+          "decoding stdin gave another mesh than decoding the file")
+    r = run([tool("pmz-decode"), SAMPLE_PMZ, "-o", "-", "--format", "obj"], cwd=d)
+    check(r.returncode == 0, f"pmz-decode -o - --format obj: rc={r.returncode} {err_text(r)}")
+    check(r.stdout == open(ref, "rb").read(), "pmz-decode -o - did not write the mesh to stdout")
+    r = run([tool("pmz-decode"), SAMPLE_PMZ, "-o", "-"], cwd=d)
+    check(r.returncode == 2 and b"--format" in r.stderr,
+          f"pmz-decode -o - without --format: expected exit 2 naming --format, got "
+          f"{r.returncode}: {err_text(r)}")
+
+
+def case_encode_from_stdin():
+    d = fresh("encode_stdin")
+    ref = os.path.join(d, "ref.pmz")
+    run([tool("pmz-encode"), SAMPLE_OBJ, "-o", ref])
+    mesh = open(SAMPLE_OBJ, "rb").read()
+    out = os.path.join(d, "stdin.pmz")
+    r = run([tool("pmz-encode"), "-", "--format", "obj", "-o", out], input=mesh)
+    check(r.returncode == 0, f"pmz-encode - --format obj: rc={r.returncode} {err_text(r)}")
+    check(open(out, "rb").read() == open(ref, "rb").read(),
+          "encoding stdin gave another stream than encoding the file")
+    r = run([tool("pmz-encode"), "-", "-o", out], input=mesh)
+    check(r.returncode == 2 and b"--format" in r.stderr,
+          f"pmz-encode - without --format: expected exit 2 naming --format, got {r.returncode}")
+    r = run([tool("pmz-encode"), "-", "--format", "obj", "-o", out], input=b"v 0 0 nan\n")
+    check(r.returncode == 1 and err_text(r).startswith("pmz-encode: stdin: "),
+          f"bad mesh on stdin: expected exit 1 and 'pmz-encode: stdin: ...', got "
+          f"{r.returncode}: {err_text(r)}")
+
+
+# ---- where outputs go ----
+
+def case_symlink_output_keeps_link():
+    d = fresh("symlink")
+    for name, args in [("pmz-encode", [SAMPLE_OBJ]), ("pmz-decode", [SAMPLE_PMZ]),
+                       ("pmz-simplify", [SAMPLE_OBJ, "--ratio", "0.5"])]:
+        ext = ".pmz" if name == "pmz-encode" else ".obj"
+        target = os.path.join(d, name + "-target" + ext)
+        link = os.path.join(d, name + "-link" + ext)
+        with open(target, "w") as f:
+            f.write("old")
+        os.chmod(target, 0o640)
+        os.symlink(os.path.basename(target), link)
+        r = run([tool(name)] + args + ["-o", link])
+        check(r.returncode == 0, f"{name} -o symlink: rc={r.returncode} {err_text(r)}")
+        check(os.path.islink(link), f"{name} replaced the symlink by a file")
+        check(open(target, "rb").read() != b"old", f"{name} did not update the link's target")
+        check(stat.S_IMODE(os.stat(target).st_mode) == 0o640,
+              f"{name} changed the target's permissions")
+        check(sorted(os.listdir(d)).count(os.path.basename(target)) == 1, "stray files")
+    left = [f for f in os.listdir(d) if f.startswith(".")]
+    check(not left, f"temporaries left: {left}")
+
+
+def mknod_or_none(path, minor):
+    try:
+        os.mknod(path, 0o666 | stat.S_IFCHR, os.makedev(1, minor))
+        return path
+    except (PermissionError, OSError):
+        return None
+
+
+def case_device_written_directly():
+    # Private copies of /dev/null (1,3) and /dev/full (1,7): an old binary that renames over
+    # them destroys only these.
+    d = fresh("device")
+    null = mknod_or_none(os.path.join(d, "null"), 3)
+    full = mknod_or_none(os.path.join(d, "full"), 7)
+    if not null or not full:
+        print("  (skipped: mknod not permitted)")
+        return
+    for name, args in [("pmz-encode", [SAMPLE_OBJ]),
+                       ("pmz-decode", [SAMPLE_PMZ, "--format", "obj"])]:
+        r = run([tool(name)] + args + ["-o", null])
+        check(r.returncode == 0, f"{name} -o null device: rc={r.returncode} {err_text(r)}")
+        check(stat.S_ISCHR(os.stat(null).st_mode), f"{name} replaced the device node")
+        r = run([tool(name)] + args + ["-o", full])
+        e = err_text(r)
+        check(r.returncode == 1 and stat.S_ISCHR(os.stat(full).st_mode),
+              f"{name} -o full device: expected exit 1 and the node kept, got {r.returncode}")
+        check(e == f"{name}: {full}: cannot write: No space left on device\n",
+              f"{name} on a full device: expected one line with the reason, got: {e!r}")
+    left = sorted(set(os.listdir(d)) - {"null", "full"})
+    check(not left, f"files left beside the devices: {left}")
+
+
+def case_fifo_written_directly():
+    d = fresh("fifo")
+    fifo = os.path.join(d, "pipe.pmz")
+    os.mkfifo(fifo)
+    # The read end opened first (non-blocking): the tool's open for writing then succeeds, and
+    # the small stream fits the pipe's buffer.
+    fd = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)
+    r = run([tool("pmz-encode"), SAMPLE_OBJ, "-o", fifo], timeout=30)
+    got = {"data": b""}
+    try:
+        while chunk := os.read(fd, 65536):
+            got["data"] += chunk
+    except BlockingIOError:
+        pass
+    os.close(fd)
+    check(r.returncode == 0, f"pmz-encode -o FIFO: rc={r.returncode} {err_text(r)}")
+    check(stat.S_ISFIFO(os.stat(fifo).st_mode), "the FIFO was replaced by a file")
+    ref = os.path.join(d, "ref.pmz")
+    run([tool("pmz-encode"), SAMPLE_OBJ, "-o", ref])
+    check(got.get("data") == open(ref, "rb").read(), "the stream did not come through the FIFO")
+
+
+def case_output_is_input_refused():
+    d = fresh("same")
+    mesh = os.path.join(d, "m.obj")
+    shutil.copy(SAMPLE_OBJ, mesh)
+    hard = os.path.join(d, "hard.obj")
+    os.link(mesh, hard)
+    before = open(mesh, "rb").read()
+    for args, name in [(["pmz-encode", mesh, "-o", mesh], "encode a -o a"),
+                       (["pmz-encode", mesh, "-o", hard], "encode a -o hard link of a"),
+                       (["pmz-simplify", mesh, "-o", hard, "--ratio", "0.5"], "simplify")]:
+        r = run([tool(args[0])] + args[1:])
+        check(r.returncode == 1, f"{name}: expected exit 1, got {r.returncode}: {err_text(r)}")
+        check("input" in err_text(r), f"{name}: message does not say why: {err_text(r)}")
+        check(open(mesh, "rb").read() == before, f"{name}: the input was overwritten")
+    pmz = os.path.join(d, "s.pmz")
+    shutil.copy(SAMPLE_PMZ, pmz)
+    r = run([tool("pmz-decode"), pmz, "-o", pmz, "--format", "obj"])
+    check(r.returncode == 1 and open(pmz, "rb").read() == sample_bytes(),
+          f"pmz-decode a -o a: expected refusal, got {r.returncode}: {err_text(r)}")
+
+
+def case_write_error_names_output_and_reason():
+    d = fresh("fsize")
+    out = os.path.join(d, "big.obj")
+
+    def cap():
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (1000, 1000))
+
+    r = run([tool("pmz-decode"), SAMPLE_PMZ, "-o", out], preexec_fn=cap)
+    e = err_text(r)
+    check(r.returncode == 1, f"write beyond the file-size cap: expected exit 1, got {r.returncode}")
+    check(e == f"pmz-decode: {out}: cannot write: File too large\n",
+          f"expected one line naming the output and the reason, got {e!r}")
+    check(os.listdir(d) == [], f"left behind: {os.listdir(d)}")
+    r = run([tool("pmz-encode"), SAMPLE_OBJ, "-o", os.path.join(d, "no", "such", "dir.pmz")])
+    e = err_text(r)
+    check(r.returncode == 1 and e.startswith("pmz-encode: ") and "No such file or directory" in e
+          and ".tmp" not in e and e.count("\n") == 1,
+          f"missing folder: expected one line with the reason and no temporary's name: {e!r}")
+
+
+def wait_for_temporary(d, p, seconds=20):
+    t0 = time.time()
+    while time.time() - t0 < seconds:
+        if p.poll() is not None:
+            return None
+        names = [f for f in os.listdir(d) if f.startswith(".")]
+        if names:
+            return names
+        time.sleep(0.02)
+    return None
+
+
+def case_signal_removes_temporary():
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        for name, args in [("pmz-decode", ["-", "-o", "out.obj"]),
+                           ("pmz-encode", ["-", "--format", "obj", "-o", "out.pmz"])]:
+            d = fresh(f"signal_{name}_{int(sig)}")
+            # stdin stays open: the tool has opened its output and waits for its input.
+            p = subprocess.Popen([tool(name)] + args, cwd=d, stdin=subprocess.PIPE,
+                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+            temps = wait_for_temporary(d, p)
+            if temps is None:
+                p.kill()
+                _, e = p.communicate()
+                raise Failed(f"{name}: no temporary output while reading stdin (rc={p.returncode}"
+                             f"): {e.decode(errors='replace')}")
+            p.send_signal(sig)
+            p.stdin.close()
+            p.wait(30)
+            check(p.returncode == -sig,
+                  f"{name}: expected death by signal {int(sig)}, got rc={p.returncode}")
+            check(os.listdir(d) == [], f"{name}: after signal {int(sig)} left {os.listdir(d)}")
+
+
+# ---- messages and exit codes ----
+
+def case_exit_codes_and_one_line_errors():
+    d = fresh("exit")
+    for name in TOOLS:
+        r = run([tool(name), "--no-such-option"])
+        e = err_text(r)
+        check(r.returncode == 2, f"{name} --no-such-option: expected exit 2, got {r.returncode}")
+        check(e.startswith(name + ": "), f"{name}: usage error does not name the tool: {e!r}")
+        r = run([tool(name), "--help"])
+        check(r.returncode == 0 and b"Exit status: 0 success, 1 failure" in r.stdout,
+              f"{name} --help: expected exit 0 and the exit-code convention")
+    missing = os.path.join(d, "missing.pmz")
+    for name, args in [("pmz-decode", [missing, "-o", os.path.join(d, "x.obj")]),
+                       ("pmz-info", [missing])]:
+        r = run([tool(name)] + args)
+        e = err_text(r)
+        check(r.returncode == 1 and e == f"{name}: {missing}: cannot read: No such file or "
+              "directory\n", f"{name} on a missing file: expected exit 1 and one line with "
+              f"file and reason, got {r.returncode}: {e!r}")
+    trunc = os.path.join(d, "trunc.pmz")
+    open(trunc, "wb").write(sample_bytes()[:300])
+    r = run([tool("pmz-decode"), trunc, "-o", os.path.join(d, "t.obj")])
+    check(r.returncode == 1 and err_text(r).startswith(f"pmz-decode: {trunc}: "),
+          f"pmz-decode on a truncated file: the error does not name the file: {err_text(r)!r}")
+
+
+def case_help_shows_defaults():
+    r = run([tool("pmz-encode"), "--help"])
+    h = r.stdout.decode()
+    for opt, default in [("--position-bits", "=14"), ("--metric", "=multifeature"),
+                         ("--base-faces", "=0"), ("--jobs", "=")]:
+        line = next((l for l in h.splitlines() if opt in l), "")
+        check(default in line, f"pmz-encode --help: {opt} does not show its default: {line!r}")
+    r = run([tool("pmz-simplify"), "--help"])
+    line = next((l for l in r.stdout.decode().splitlines() if "--epsilon" in l), "")
+    check("=0.3" in line, f"pmz-simplify --help: --epsilon without its default: {line!r}")
+
+
+def read_pty(master):
+    data = b""
+    while True:
+        ready, _, _ = select.select([master], [], [], 0.5)
+        if not ready:
+            return data
+        try:
+            chunk = os.read(master, 65536)
+        except OSError:
+            return data
+        if not chunk:
+            return data
+        data += chunk
+
+
+def case_progress_bar():
+    d = fresh("progress")
+    out = os.path.join(d, "o.pmz")
+    r = run([tool("pmz-encode"), SAMPLE_OBJ, "-o", out])
+    check(b"\r" not in r.stderr and r.stderr == b"",
+          f"progress on a redirected stderr without --progress: {r.stderr!r}")
+    r = run([tool("pmz-encode"), SAMPLE_OBJ, "-o", out, "--progress"])
+    check(r.returncode == 0 and b"%" in r.stderr and b"simplifying" in r.stderr,
+          f"--progress: no bar on stderr: {r.stderr!r}")
+    for quiet in (False, True):
+        master, slave = pty.openpty()
+        p = subprocess.Popen([tool("pmz-encode"), SAMPLE_OBJ, "-o", out] +
+                             (["--quiet"] if quiet else []), stdout=subprocess.PIPE,
+                             stderr=slave)
+        os.close(slave)
+        p.communicate(timeout=60)
+        seen = read_pty(master)
+        os.close(master)
+        if quiet:
+            check(seen == b"", f"--quiet on a terminal still printed {seen!r}")
+        else:
+            check(b"%" in seen, f"no progress bar on a terminal: {seen!r}")
+
+
+# ---- pmz-info and decode targets ----
+
+def case_info_without_decoding():
+    r = run([tool("pmz-info"), SAMPLE_PMZ])
+    o = r.stdout.decode()
+    check(r.returncode == 0 and "full refinement" not in o,
+          f"pmz-info decodes and times by default: {o!r}")
+    r = run([tool("pmz-info"), SAMPLE_PMZ, "--decode"])
+    check(r.returncode == 0 and "full refinement" in r.stdout.decode(),
+          "pmz-info --decode does not time the refinement")
+    j = info_json(SAMPLE_PMZ)
+    check("refine_cpu_ms" not in j and j.get("complete") is True,
+          f"pmz-info --json: timing without --decode or no 'complete': {j}")
+
+
+def case_info_describes_truncated_file():
+    d = fresh("info_trunc")
+    data = sample_bytes()
+    whole = info_json(SAMPLE_PMZ)
+    for cut in (120, 300, len(data) - 3):
+        path = os.path.join(d, f"cut{cut}.pmz")
+        open(path, "wb").write(data[:cut])
+        r = run([tool("pmz-info"), path])
+        o = r.stdout.decode()
+        check(r.returncode == 0, f"pmz-info on {cut} of {len(data)} bytes: rc={r.returncode} "
+              f"{err_text(r)}")
+        check("truncated" in o and f"of {whole['splits']} splits available" in o,
+              f"pmz-info on {cut} bytes does not say what is there: {o!r}")
+        j = info_json(path)
+        check(j["complete"] is False and j["full_faces"] == whole["full_faces"] and
+              j["splits_available"] <= whole["splits"] and
+              (cut > 300 or j["splits_available"] < whole["splits"]),
+              f"pmz-info --json on {cut} bytes: {j}")
+
+
+def case_unreachable_decode_target_warns():
+    d = fresh("target")
+    out = os.path.join(d, "o.obj")
+    whole = info_json(SAMPLE_PMZ)
+    r = run([tool("pmz-decode"), SAMPLE_PMZ, "-o", out, "--faces", "100000000"])
+    e = err_text(r)
+    check(r.returncode == 0 and "warning" in e and "100000000 faces" in e and
+          str(whole["full_faces"]) in e,
+          f"--faces beyond the file: expected a warning saying what was written: {e!r}")
+    r = run([tool("pmz-decode"), SAMPLE_PMZ, "-o", out, "--bytes", "300", "--faces",
+             str(whole["full_faces"])])
+    e = err_text(r)
+    check(r.returncode == 0 and "warning" in e and "first 300 bytes" in e,
+          f"--faces beyond what --bytes holds: expected a warning: {e!r}")
+    r = run([tool("pmz-decode"), SAMPLE_PMZ, "-o", out, "--faces", "1"])
+    check("warning" not in err_text(r), f"a reachable target warned: {err_text(r)!r}")
+
+
+def faces_in_obj(path):
+    return sum(1 for l in open(path) if l.startswith("f "))
+
+
+def case_zero_is_the_base_mesh():
+    d = fresh("zero")
+    base = info_json(SAMPLE_PMZ)["base_faces"]
+    for opt in ("--faces", "--ratio"):
+        out = os.path.join(d, "z.obj")
+        r = run([tool("pmz-decode"), SAMPLE_PMZ, "-o", out, opt, "0"])
+        check(r.returncode == 0 and faces_in_obj(out) == base,
+              f"pmz-decode {opt} 0: expected the base mesh ({base} faces)")
+    view = tool("pmz-view")
+    if not os.path.exists(view) or not shutil.which("xvfb-run"):
+        print("  (pmz-view part skipped: no pmz-view or no xvfb-run)")
+        return
+    for opt in ("--faces", "--ratio"):
+        png = os.path.join(d, "z.png")
+        r = run(["xvfb-run", "-a", view, SAMPLE_PMZ, "--screenshot", png, "--size", "64x64",
+                 opt, "0"])
+        o = r.stdout.decode()
+        check(r.returncode == 0 and f": {base} faces" in o,
+              f"pmz-view {opt} 0: expected the base mesh ({base} faces): rc={r.returncode} {o!r} "
+              f"{err_text(r)}")
+
+
+# ---- batch encoding ----
+
+def case_batch_encoding():
+    d = fresh("batch")
+    inputs = []
+    for i in range(3):
+        p = os.path.join(d, f"m{i}.obj")
+        shutil.copy(SAMPLE_OBJ, p)
+        inputs.append(p)
+    bad = os.path.join(d, "bad.obj")
+    open(bad, "w").write("v 0 0 0\nf 1 2 3\n")
+    out = os.path.join(d, "out")
+    os.makedirs(out)
+    r = run([tool("pmz-encode")] + inputs[:1] + [bad] + inputs[1:] + ["--out-dir", out, "-j", "2"])
+    lines = r.stdout.decode().splitlines()
+    check(r.returncode == 1, f"a batch with a failing asset: expected exit 1, got {r.returncode}")
+    check(sorted(os.listdir(out)) == ["m0.pmz", "m1.pmz", "m2.pmz"],
+          f"the other assets were not all written: {os.listdir(out)}")
+    check(len(lines) == 3 and all(".pmz: " in l for l in lines),
+          f"expected one line per encoded asset: {lines}")
+    check(f"pmz-encode: {bad}" in err_text(r), f"the failing asset is not named: {err_text(r)}")
+    ref = os.path.join(d, "ref.pmz")
+    run([tool("pmz-encode"), SAMPLE_OBJ, "-o", ref])
+    for f in os.listdir(out):
+        check(open(os.path.join(out, f), "rb").read() == open(ref, "rb").read(),
+              f"{f} differs from a single encode")
+    shutil.rmtree(out)
+    os.makedirs(out)
+    r = run([tool("pmz-encode")] + inputs + ["--out-dir", out])
+    check(r.returncode == 0 and len(r.stdout.decode().splitlines()) == 3,
+          f"an all-good batch (default -j): rc={r.returncode} {err_text(r)}")
+    os.makedirs(os.path.join(d, "sub"))
+    twin = os.path.join(d, "sub", "m0.obj")
+    shutil.copy(SAMPLE_OBJ, twin)
+    r = run([tool("pmz-encode"), inputs[0], twin, "--out-dir", out])
+    check(r.returncode == 2, f"two inputs writing the same output: expected exit 2, got "
+          f"{r.returncode}")
+
+
+CASES = [(n[5:], f) for n, f in sorted(globals().items()) if n.startswith("case_")]
+
+
+def main():
+    os.makedirs(WORK, exist_ok=True)
+    failed = []
+    for name, f in CASES:
+        if ONLY and name not in ONLY:
+            continue
+        try:
+            f()
+            print(f"ok    {name}")
+        except Failed as e:
+            print(f"FAIL  {name}: {e}")
+            failed.append(name)
+        except Exception as e:  # a crash of the test is a failure of the case too
+            print(f"FAIL  {name}: {type(e).__name__}: {e}")
+            failed.append(name)
+    if failed:
+        print(f"{len(failed)} case(s) failed: {' '.join(failed)}")
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

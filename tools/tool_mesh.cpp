@@ -1,0 +1,61 @@
+#include "tool_mesh.hpp"
+
+#include <cstdio>
+#include <vector>
+
+#include "tool_common.hpp"
+
+namespace pmz::tool {
+
+namespace {
+
+void replace_all(std::string& s, const std::string& from, const std::string& to) {
+  if (from.empty()) return;
+  for (size_t at = 0; (at = s.find(from, at)) != std::string::npos; at += to.size())
+    s.replace(at, from.size(), to);
+}
+
+}  // namespace
+
+bool read_mesh_input(const std::string& path, const std::string& stdin_format, IndexedMesh& mesh,
+                     std::string& error) {
+  MeshRepairStats stats;
+  std::string shown = path;
+  bool ok;
+  if (path == "-") {
+    // The readers take a path and go by its extension: stdin goes through a temporary file
+    // named accordingly, and messages say "stdin" instead of its name.
+    shown = "stdin";
+    std::vector<uint8_t> bytes;
+    ScratchFile scratch;
+    ok = read_input("-", bytes, error) && scratch.create(bytes, "." + stdin_format, error) &&
+         read_mesh(scratch.path(), mesh, stats, error);
+    if (!ok) replace_all(error, scratch.path(), shown);
+  } else {
+    ok = read_mesh(path, mesh, stats, error);
+  }
+  const std::string summary = stats.summary();
+  if (ok && !summary.empty()) std::fprintf(stderr, "pmz: %s: %s\n", shown.c_str(), summary.c_str());
+  return ok;
+}
+
+bool write_mesh_output(const std::string& path, const std::string& format, const IndexedMesh& mesh,
+                       std::string& error) {
+  const std::string ext = format.empty() ? extension(path) : format;
+  OutputFile out;
+  if (!out.open(path, ext == "ply" || ext == "stl", error)) return false;
+  // The writer takes a path and writes it atomically: it writes a scratch file named by the
+  // format, whose bytes then go to the output.
+  ScratchFile scratch;
+  std::vector<uint8_t> bytes;
+  if (!scratch.create({}, "." + ext, error)) return false;
+  if (!write_mesh(scratch.path(), mesh, error)) {
+    replace_all(error, scratch.path(), path == "-" ? "stdout" : path);
+    return false;
+  }
+  if (!read_input(scratch.path(), bytes, error)) return false;
+  out.write(bytes.data(), bytes.size());
+  return out.commit(error);
+}
+
+}  // namespace pmz::tool
