@@ -184,14 +184,24 @@ int main(int argc, char** argv) {
     return tool::kExitOk;
   }
 
-  // A batch: workers take the next asset until none is left; lines are printed whole as assets
-  // finish, and an overall bar (on a terminal) counts finished assets.
+  // A batch: workers take the next asset until none is left, largest files first so that no
+  // big asset is left to run alone at the end; lines are printed whole as assets finish, and
+  // an overall bar (on a terminal) counts finished assets.
+  std::vector<std::pair<uintmax_t, size_t>> order;  // (file size, input index)
+  for (size_t i = 0; i < inputs.size(); ++i) {
+    std::error_code ec;
+    const uintmax_t size = std::filesystem::file_size(inputs[i], ec);
+    order.emplace_back(ec ? 0 : size, i);
+  }
+  std::stable_sort(order.begin(), order.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
   tool::Progress progress(quiet, force_progress);
   std::mutex print_mutex;
   std::atomic<size_t> next{0};
   size_t finished = 0, failed = 0;
   auto worker = [&] {
-    for (size_t i; (i = next.fetch_add(1)) < inputs.size();) {
+    for (size_t k; (k = next.fetch_add(1)) < inputs.size();) {
+      const size_t i = order[k].second;
       std::string line, error;
       const bool ok = encode(inputs[i], outputs[i], settings, nullptr, line, error);
       std::lock_guard<std::mutex> lock(print_mutex);
