@@ -302,7 +302,7 @@ def case_exit_codes_and_one_line_errors():
 def case_help_shows_defaults():
     r = run([tool("pmz-encode"), "--help"])
     h = r.stdout.decode()
-    for opt, default in [("--position-bits", "=14"), ("--metric", "=multifeature"),
+    for opt, default in [("--position-bits", "=14"), ("--metric", "=guarded"),
                          ("--base-faces", "=0"), ("--jobs", "=")]:
         line = next((l for l in h.splitlines() if opt in l), "")
         check(default in line, f"pmz-encode --help: {opt} does not show its default: {line!r}")
