@@ -12,7 +12,10 @@ packages=(build-essential cmake ninja-build pkg-config git
   xvfb xauth libgl1-mesa-dri python3
   libmeshoptimizer-dev draco libopenmesh-apps python3-matplotlib
   clang-14 libclang-rt-14-dev clang-format ccache
-  emscripten chromium libtinygltf-dev nlohmann-json3-dev npm)
+  emscripten chromium libtinygltf-dev nlohmann-json3-dev)
+# Debian's npm depends on Debian's nodejs and conflicts with a node installed another way
+# (this kind of machine ships node 20 with its own npm): install them only when npm is absent.
+command -v npm >/dev/null || packages+=(nodejs npm)
 bash scripts/install_packages.sh setup "${packages[@]}"
 
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null
