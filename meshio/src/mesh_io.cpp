@@ -1247,6 +1247,35 @@ bool known_input(const std::string& ext) {
 
 const char* const kInputFormats = ".obj, .off, .ply, .stl, .gltf or .glb";
 
+// One check of every reader's attribute output before repair indexes into it: each corner
+// array covers every corner and each index is kNoAttribute or names an entry of its pool.
+// (fuzz_mesh_ply found a PLY header whose attribute pools and corner indices disagreed.)
+static bool check_attribute_indices(const std::string& path, const PolygonSoup& soup,
+                                    std::string& error) {
+  const SoupAttributes& a = soup.attributes;
+  const size_t corners = soup.corners.size();
+  auto bad = [&](const char* what) {
+    error = path + ": " + what + " attribute index out of range";
+    return false;
+  };
+  auto check = [&](const std::vector<uint32_t>& corner, size_t pool, size_t width,
+                   const char* what) {
+    if (corner.empty()) return true;
+    if (corner.size() != corners || width == 0) return bad(what);
+    for (uint32_t i : corner)
+      if (i != kNoAttribute && (uint64_t(i) + 1) * width > pool) return bad(what);
+    return true;
+  };
+  if (a.corner_texcoords.size() != a.texcoords.size()) return bad("texture coordinate");
+  for (size_t s = 0; s < a.texcoords.size(); ++s)
+    if (!check(a.corner_texcoords[s], a.texcoords[s].size(), 2, "texture coordinate")) return false;
+  if (!check(a.corner_normals, a.normals.size(), 3, "normal")) return false;
+  if (!check(a.corner_colors, a.colors.size(), a.color_components, "colour")) return false;
+  if (!a.face_materials.empty() && a.face_materials.size() != soup.face_count())
+    return bad("material");
+  return true;
+}
+
 bool parse_polygon_soup(const std::string& path, std::string_view data, PolygonSoup& out,
                         std::string& error) {
   out = PolygonSoup();
@@ -1269,6 +1298,7 @@ bool parse_polygon_soup(const std::string& path, std::string_view data, PolygonS
     error = path + ": mesh has no faces";
     ok = false;
   }
+  if (ok) ok = check_attribute_indices(path, out, error);
   if (!ok) out = PolygonSoup();
   return ok;
 }

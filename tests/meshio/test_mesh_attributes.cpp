@@ -587,3 +587,18 @@ TEST(MeshAttributes, AssimpTestModels) {
   EXPECT_GT(read, 30);
   std::printf("assimp-testmodels: %d read, %d refused\n", read, refused);
 }
+
+// fuzz_mesh_ply (CI fuzz stage) found a PLY whose attribute pools and corner indices disagree:
+// repair read past a pool (heap-buffer-overflow in build_wedges). The reader now refuses it.
+TEST(MeshAttributes, FuzzPlyAttributeIndexOverflowIsRefused) {
+  const fs::path file = fs::path(__FILE__).parent_path().parent_path() / "data" /
+                        "fuzz-regressions" / "ply-attribute-index-overflow.ply";
+  std::ifstream in(file, std::ios::binary);
+  ASSERT_TRUE(in) << file;
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  pmz::PolygonSoup soup;
+  std::string error;
+  EXPECT_FALSE(pmz::parse_polygon_soup("x.ply", bytes, soup, error));
+  EXPECT_FALSE(error.empty());
+  EXPECT_EQ(error.find('\n'), std::string::npos) << error;
+}
