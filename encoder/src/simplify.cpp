@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 
+#include "attr_collapse.hpp"
 #include "halfedge.hpp"
 #include "metric.hpp"
 #include "parallel.hpp"
@@ -930,6 +931,47 @@ float initial_collapse_cost(const IndexedMesh& mesh, const SimplifyOptions& opti
 
 }  // namespace detail
 
+namespace {
+
+// The faces alive in replay (input order) and their attributes: the wedges they name, in input
+// order, and the faces' materials. remap: input vertex -> output vertex.
+void attributes_after(const MeshAttributes& in, const CollapseReplay& replay,
+                      const std::vector<uint32_t>& remap, IndexedMesh& out) {
+  MeshAttributes& a = out.attributes;
+  a.color_components = in.color_components;
+  a.materials = in.materials;
+  a.material_library = in.material_library;
+  a.texcoords.resize(in.texcoords.size());
+  std::vector<uint32_t> wedge_remap(replay.has_wedges() ? in.wedge_count() : 0, kNoVertex);
+  for (uint32_t f = 0; f < replay.face_alive.size(); ++f) {
+    if (!replay.face_alive[f]) continue;
+    for (int k = 0; k < 3; ++k) out.indices.push_back(remap[replay.corner_vertex[f * 3 + k]]);
+    if (!in.face_materials.empty()) a.face_materials.push_back(in.face_materials[f]);
+    if (replay.has_wedges())
+      for (int k = 0; k < 3; ++k) wedge_remap[replay.corner_wedge[f * 3 + k]] = 0;
+  }
+  for (uint32_t w = 0; w < wedge_remap.size(); ++w) {
+    if (wedge_remap[w] == kNoVertex) continue;
+    wedge_remap[w] = a.wedge_count();
+    a.wedge_vertices.push_back(remap[in.wedge_vertices[w]]);
+    for (size_t s = 0; s < in.texcoords.size(); ++s)
+      a.texcoords[s].insert(a.texcoords[s].end(), &in.texcoords[s][size_t(w) * 2],
+                            &in.texcoords[s][size_t(w) * 2 + 2]);
+    if (!in.normals.empty())
+      a.normals.insert(a.normals.end(), &in.normals[size_t(w) * 3], &in.normals[size_t(w) * 3 + 3]);
+    const size_t cc = in.color_components;
+    if (!in.colors.empty())
+      a.colors.insert(a.colors.end(), &in.colors[w * cc], &in.colors[w * cc + cc]);
+  }
+  if (replay.has_wedges())
+    for (uint32_t f = 0; f < replay.face_alive.size(); ++f)
+      if (replay.face_alive[f])
+        for (int k = 0; k < 3; ++k)
+          a.corner_wedges.push_back(wedge_remap[replay.corner_wedge[f * 3 + k]]);
+}
+
+}  // namespace
+
 IndexedMesh mesh_after(const CollapseSequence& seq, size_t k) {
   const uint32_t n = seq.mesh.vertex_count();
   k = std::min(k, seq.collapses.size());
@@ -955,6 +997,16 @@ IndexedMesh mesh_after(const CollapseSequence& seq, size_t k) {
     remap[i] = result.vertex_count();
     result.positions.insert(result.positions.end(), &seq.mesh.positions[size_t(i) * 3],
                             &seq.mesh.positions[size_t(i) * 3 + 3]);
+  }
+  if (!seq.mesh.attributes.empty()) {
+    // Attributes need the literal replay: the collapse rule depends on u's fan at the time.
+    CollapseReplay replay(seq.mesh);
+    bool replayed = true;
+    for (size_t i = 0; i < k && replayed; ++i) replayed = replay.collapse(seq.collapses[i]);
+    if (replayed) {
+      attributes_after(seq.mesh.attributes, replay, remap, result);
+      return result;
+    }
   }
   for (size_t f = 0; f < seq.mesh.indices.size(); f += 3) {
     const uint32_t a = find(seq.mesh.indices[f]), b = find(seq.mesh.indices[f + 1]),

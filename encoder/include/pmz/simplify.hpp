@@ -68,7 +68,9 @@ struct CollapseSequence {
 bool simplify(const IndexedMesh& input, const SimplifyOptions& options, CollapseSequence& out,
               std::string& error);
 
-// The mesh after the first k collapses (faces in input ids compacted to the vertices left).
+// The mesh after the first k collapses (faces in input ids compacted to the vertices left), with
+// its attributes when seq.mesh has them: the wedges the collapse rule leaves
+// (encoder/src/attr_collapse.hpp), compacted in input order, and the surviving faces' materials.
 IndexedMesh mesh_after(const CollapseSequence& seq, size_t k);
 
 }  // namespace pmz
