@@ -1,4 +1,5 @@
-// pmz-compare ORIGINAL OTHER [--samples N] [--json]: Metro-style symmetric Hausdorff distance.
+// pmz-compare ORIGINAL OTHER [--samples N] [--json]: Metro-style symmetric Hausdorff distance,
+// and where the maximum is.
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <string>
@@ -9,6 +10,22 @@
 #include "tool_mesh.hpp"
 
 namespace tool = pmz::tool;
+
+namespace {
+
+const char* site_name(pmz::DistanceStats::Site site) {
+  switch (site) {
+    case pmz::DistanceStats::Site::vertex:
+      return "vertex";
+    case pmz::DistanceStats::Site::edge:
+      return "edge";
+    case pmz::DistanceStats::Site::face:
+      return "face";
+  }
+  return "?";
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   tool::init("pmz-compare");
@@ -50,9 +67,11 @@ int main(int argc, char** argv) {
     auto stats = [&](const pmz::DistanceStats& s) {
       std::printf(
           "{\"max\": %.9g, \"mean\": %.9g, \"rms\": %.9g, \"max_abs\": %.9g, \"mean_abs\": %.9g, "
-          "\"rms_abs\": %.9g, \"samples\": %llu}",
+          "\"rms_abs\": %.9g, \"samples\": %llu, \"max_at\": [%.9g, %.9g, %.9g], "
+          "\"max_on\": \"%s\"}",
           s.max * inv, s.mean * inv, s.rms * inv, s.max, s.mean, s.rms,
-          (unsigned long long)s.samples);
+          (unsigned long long)s.samples, s.max_at[0], s.max_at[1], s.max_at[2],
+          site_name(s.max_on));
     };
     const pmz::DistanceStats& s = r.symmetric;
     std::printf(
@@ -81,6 +100,11 @@ int main(int argc, char** argv) {
     row("other -> original", r.backward);
     row("symmetric", r.symmetric);
   }
+  // Where the worst case is: the sample that found the max, on the mesh it was taken from.
+  const pmz::DistanceStats& worst = r.symmetric;
+  std::printf("max at: (%.9g, %.9g, %.9g), a %s sample of %s\n", worst.max_at[0], worst.max_at[1],
+              worst.max_at[2], site_name(worst.max_on),
+              options.both_directions && r.backward.max > r.forward.max ? "OTHER" : "ORIGINAL");
   std::printf("time: %.3f s\n", r.seconds);
   return 0;
 }

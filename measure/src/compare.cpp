@@ -20,6 +20,8 @@ namespace {
 constexpr uint32_t kBlockItems = 2048;
 
 struct Partial {
+  double max_at[3] = {0, 0, 0};
+  DistanceStats::Site max_on = DistanceStats::Site::vertex;
   double max = 0, face_sum = 0, face_sum2 = 0, all_sum = 0, all_sum2 = 0;
   uint64_t face_samples = 0, samples = 0;
 };
@@ -99,9 +101,10 @@ DistanceStats one_direction(const IndexedMesh& from, const TriangleBvh& to, uint
     uint32_t hint = 0xFFFFFFFFu;
     for (uint64_t block; (block = next_block.fetch_add(1)) < n_blocks;) {
       Partial acc;
-      auto measure = [&](const double p[3], bool on_face) {
+      auto measure = [&](const double p[3], DistanceStats::Site site) {
         double d = std::sqrt(to.closest_distance2(p, hint));
-        acc.max = std::max(acc.max, d);
+        if (d > acc.max) acc.max = d, std::copy(p, p + 3, acc.max_at), acc.max_on = site;
+        const bool on_face = site == DistanceStats::Site::face;
         acc.all_sum += d, acc.all_sum2 += d * d, acc.samples++;
         if (on_face) acc.face_sum += d, acc.face_sum2 += d * d, acc.face_samples++;
       };
@@ -111,7 +114,7 @@ DistanceStats one_direction(const IndexedMesh& from, const TriangleBvh& to, uint
         if (item < n_vertices) {
           const float* v = pos + size_t(vertices[item]) * 3;
           const double p[3] = {v[0], v[1], v[2]};
-          measure(p, false);
+          measure(p, DistanceStats::Site::vertex);
         } else if (item < n_vertices + n_edges) {
           const uint64_t e = edges[item - n_vertices];
           const float* a = pos + (e >> 32) * 3;
@@ -122,7 +125,7 @@ DistanceStats one_direction(const IndexedMesh& from, const TriangleBvh& to, uint
             const double t = (double(k) + uniform01(rng)) / double(n);
             const double p[3] = {a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]),
                                  a[2] + t * (b[2] - a[2])};
-            measure(p, false);
+            measure(p, DistanceStats::Site::edge);
           }
         } else {
           const uint32_t f = uint32_t(item - n_vertices - n_edges);
@@ -137,7 +140,7 @@ DistanceStats one_direction(const IndexedMesh& from, const TriangleBvh& to, uint
             const double p[3] = {wa * a[0] + wb * b[0] + wc * c[0],
                                  wa * a[1] + wb * b[1] + wc * c[1],
                                  wa * a[2] + wb * b[2] + wc * c[2]};
-            measure(p, true);
+            measure(p, DistanceStats::Site::face);
           }
         }
       }
@@ -152,13 +155,16 @@ DistanceStats one_direction(const IndexedMesh& from, const TriangleBvh& to, uint
 
   Partial total;
   for (const Partial& p : partials) {
-    total.max = std::max(total.max, p.max);
+    if (p.max > total.max)
+      total.max = p.max, std::copy(p.max_at, p.max_at + 3, total.max_at), total.max_on = p.max_on;
     total.face_sum += p.face_sum, total.face_sum2 += p.face_sum2,
         total.face_samples += p.face_samples;
     total.all_sum += p.all_sum, total.all_sum2 += p.all_sum2, total.samples += p.samples;
   }
   DistanceStats s;
   s.max = total.max;
+  std::copy(total.max_at, total.max_at + 3, s.max_at);
+  s.max_on = total.max_on;
   s.samples = total.samples;
   // Mean and rms are surface integrals: face samples only, unless the surface has no area.
   const bool use_faces = total.face_samples > 0;
@@ -211,7 +217,7 @@ bool compare(const IndexedMesh& original, const IndexedMesh& other, const Compar
     result.backward =
         one_direction(other, to_original, samples, options.seed ^ 0x5bd1e995ull, options.threads);
     const DistanceStats &f = result.forward, &b = result.backward;
-    result.symmetric.max = std::max(f.max, b.max);
+    result.symmetric = f.max >= b.max ? f : b;  // max, where it is
     result.symmetric.mean = 0.5 * (f.mean + b.mean);
     result.symmetric.rms = std::sqrt(0.5 * (f.rms * f.rms + b.rms * b.rms));
     result.symmetric.samples = f.samples + b.samples;

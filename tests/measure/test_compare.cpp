@@ -161,6 +161,11 @@ TEST(Compare, OneSidedDistanceOfASubsetIsZero) {
   EXPECT_LT(r.forward.max, 1e-6);
   EXPECT_NEAR(r.backward.max, std::sqrt(2.0), 2e-3);
   EXPECT_NEAR(r.symmetric.max, r.backward.max, 0);
+  // The max is found at that corner, a vertex of the big square.
+  EXPECT_EQ(r.symmetric.max_on, pmz::DistanceStats::Site::vertex);
+  EXPECT_EQ(r.symmetric.max_at[0], 2.0);
+  EXPECT_EQ(r.symmetric.max_at[1], 2.0);
+  EXPECT_EQ(r.symmetric.max_at[2], 0.0);
   // Mean of the distance to the unit square over [0,2]^2: 3/4 of the area is outside it.
   EXPECT_GT(r.backward.mean, 0.3);
   EXPECT_NEAR(r.symmetric.mean, 0.5 * r.backward.mean, 1e-12);
@@ -213,6 +218,7 @@ TEST(Compare, DeterministicAndThreadIndependent) {
   EXPECT_EQ(r1.symmetric.mean, r2.symmetric.mean);
   EXPECT_EQ(r1.symmetric.max, r2.symmetric.max);
   EXPECT_EQ(r2.symmetric.rms, r3.symmetric.rms);
+  for (int k = 0; k < 3; ++k) EXPECT_EQ(r1.symmetric.max_at[k], r2.symmetric.max_at[k]);
 }
 
 TEST(Compare, RejectsBadInput) {

@@ -26,6 +26,11 @@ struct CompareOptions {
 struct DistanceStats {
   double max = 0, mean = 0, rms = 0;
   uint64_t samples = 0;  // all samples taken
+  // Where the max was found: the sample point (on the measured-from mesh) and what it sampled
+  // (a vertex, an edge or a face interior), to tell which region holds the worst case.
+  enum class Site : uint8_t { vertex, edge, face };
+  double max_at[3] = {0, 0, 0};
+  Site max_on = Site::vertex;
 };
 
 struct CompareResult {
