@@ -13,7 +13,7 @@
 
 #include "pmz/decoder.hpp"
 #include "pmz/format.hpp"
-#include "pmz/split_codec.hpp"
+#include "pmz/split_chunk.hpp"
 #include "tool_common.hpp"
 
 namespace tool = pmz::tool;

@@ -13,9 +13,11 @@
 #include <span>
 
 #include "pmz/base_codec.hpp"
+#include "pmz/fan_wedge.hpp"
 #include "pmz/format.hpp"
 #include "pmz/progressive_mesh.hpp"
-#include "pmz/split_codec.hpp"
+#include "pmz/split_chunk.hpp"
+#include "pmz/vertex_choice.hpp"
 
 // noclone is GCC's: clang has no such attribute and warns (-Wunknown-attributes).
 #if defined(__clang__)
@@ -70,84 +72,110 @@ void advise_huge_pages([[maybe_unused]] const std::vector<T>& v) {
 }
 }  // namespace
 
+// Where the stream is: waiting for HEAD, then BASE, then taking SPLT chunks until END
+// (complete); failed after the first error (the mesh stays usable at its last good level).
+enum class Stage : uint8_t { header, base, splits, complete, failed };
+
 struct Decoder::Impl {
   DecoderLimits limits;
-  Status status = Status::ok;
+  Stage stage = Stage::header;
+  Status status = Status::ok;  // the first error once stage is failed
   std::string message;
   StreamInfo info;
-  MeshChanges changes;
-  uint64_t consumed = 0;
+  Quantizer quant;  // HEAD's
 
-  std::vector<uint8_t> pending;  // bytes of an incomplete signature or chunk
-  bool signature_done = false;
-  uint64_t chunk_index = 0, chunk_offset = 0;
-  uint64_t parse_base = 0;  // stream offset of the buffer parse() is looking at
-  Quantizer quant;
+  // Framing: chunks out of whatever slices arrive.
+  struct Input {
+    uint64_t consumed = 0;         // bytes fed
+    std::vector<uint8_t> pending;  // bytes of an incomplete signature or chunk
+    bool signature_done = false;
+    uint64_t chunk_index = 0, chunk_offset = 0;
+    uint64_t parse_base = 0;  // stream offset of the buffer parse() is looking at
+  } input;
 
-  ProgressiveMesh mesh;
+  // What was decoded, kept to move between levels without re-reading bytes.
   // Available splits: v once its group was decoded (kNoCorner before). From the first application
-  // on (below `decoded`), a and b are what re-applying needs (ProgressiveMesh::resplit): the sector
-  // hint and the sector count (and sides[i] its sides); before, only transiently, the decoded wedge
-  // ranks.
+  // on (below frontier.decoded), a and b are what re-applying needs (ProgressiveMesh::resplit): the
+  // sector hint and the sector count (and sides[i] its sides); before, only transiently, the
+  // decoded wedge ranks.
   struct Split {
     uint32_t v, a, b;
   };
-  std::vector<Split> splits;
   // Buffers sized by split counts grow to the header's total_splits at once when that is at
   // most kHeaderTrust times what the decoded input holds (so a lying header cannot make the
   // decoder reserve more than a bounded multiple of its input).
   static constexpr uint64_t kHeaderTrust = 16;
-  // Chunks whose wedge and residual symbols are not all decoded yet, oldest first; the front
-  // one starts at split lazy_first. Splits below `decoded` have their symbols decoded.
-  std::deque<SplitChunkReader> lazy;
-  std::unique_ptr<SplitModels>
-      models;  // the file's context models (spec section 8: carried across chunks)
-  uint64_t lazy_first = 0, decoded = 0;
-  WedgeScratch wedge_scratch;
-  uint32_t wedge_scratch_ring = 0;  // wedge_scratch has room for rings up to this size
-  VertexChoice choice;              // degrees and neighbourhoods at the first-application frontier
-  std::vector<uint32_t> group_vs;
-  uint64_t group_first = 0;  // the first split of the group being found
-  bool choice_ok = false;    // its scan can continue (else splits without a vertex are refused)
-  // Continues the scan of the group being found (lazy.front()'s) until `upto` of its vertices
-  // are known (within what the lag allows: the caller applied enough of its splits), into
-  // splits[].v; a failure leaves the splits without a vertex, refused when reached.
-  void find_vertices(uint32_t upto) {
-    if (!choice_ok) return;
-    const uint32_t before = choice.found();
-    group_vs.clear();
-    choice_ok = lazy.front().find(choice, nullptr, upto, group_vs);
-    for (size_t i = 0; i < group_vs.size(); ++i) splits[group_first + before + i].v = group_vs[i];
-  }
-  std::vector<uint8_t> sides;  // per split below `decoded`: kHasLeft | kHasRight
-  uint64_t ring_work = 0;      // sum of ring sizes over first applications
-  static constexpr uint64_t kRingWorkPerSplit = 64, kRingWorkSlack = 1u << 22;
-  uint64_t available = 0, applied = 0;
-  std::vector<int32_t> coords;  // 3 per computed vertex (computed >= vertex_count)
-  // Bounding box of coords, its largest side as wedge_scratch.extent (64-bit scores unchecked).
-  int32_t box_lo[3] = {INT32_MAX, INT32_MAX, INT32_MAX},
-          box_hi[3] = {INT32_MIN, INT32_MIN, INT32_MIN};
-  void grow_box(const int32_t* c) {
-    bool grew = false;
-    for (int a = 0; a < 3; ++a) {
-      if (c[a] < box_lo[a]) box_lo[a] = c[a], grew = true;
-      if (c[a] > box_hi[a]) box_hi[a] = c[a], grew = true;
+  struct Record {
+    std::vector<Split> splits;
+    std::vector<uint8_t> sides;   // per split below frontier.decoded: kHasLeft | kHasRight
+    uint64_t available = 0;       // splits of the chunks arrived (splits.size())
+    std::vector<int32_t> coords;  // 3 per computed vertex (computed >= vertex_count)
+    std::vector<float> positions;
+    std::vector<uint32_t> parents;
+  } record;
+
+  // The first-application frontier: splits below `decoded` have their symbols decoded; the
+  // symbols of the others wait in their chunk readers, decoded with contexts from the mesh.
+  struct Frontier {
+    // Chunks whose wedge and residual symbols are not all decoded yet, oldest first; the front
+    // one starts at split lazy_first.
+    std::deque<SplitChunkReader> lazy;
+    std::unique_ptr<SplitModels>
+        models;  // the file's context models (spec section 8: carried across chunks)
+    uint64_t lazy_first = 0, decoded = 0;
+    WedgeScratch wedge_scratch;
+    uint32_t wedge_scratch_ring = 0;  // wedge_scratch has room for rings up to this size
+    VertexChoice choice;              // degrees and neighbourhoods at the frontier
+    std::vector<uint32_t> group_vs;
+    uint64_t group_first = 0;  // the first split of the group being found
+    bool choice_ok = false;    // its scan can continue (else splits without a vertex are refused)
+    uint64_t ring_work = 0;    // sum of ring sizes over first applications
+    // Bounding box of the coordinates, its largest side as wedge_scratch.extent (64-bit scores
+    // unchecked).
+    int32_t box_lo[3] = {INT32_MAX, INT32_MAX, INT32_MAX},
+            box_hi[3] = {INT32_MIN, INT32_MIN, INT32_MIN};
+    void grow_box(const int32_t* c) {
+      bool grew = false;
+      for (int a = 0; a < 3; ++a) {
+        if (c[a] < box_lo[a]) box_lo[a] = c[a], grew = true;
+        if (c[a] > box_hi[a]) box_hi[a] = c[a], grew = true;
+      }
+      if (!grew) return;
+      uint64_t extent = 0;
+      for (int a = 0; a < 3; ++a)
+        extent = std::max<uint64_t>(extent, uint64_t(int64_t(box_hi[a]) - box_lo[a]));
+      wedge_scratch.extent = extent;
     }
-    if (!grew) return;
-    uint64_t extent = 0;
-    for (int a = 0; a < 3; ++a)
-      extent = std::max<uint64_t>(extent, uint64_t(int64_t(box_hi[a]) - box_lo[a]));
-    wedge_scratch.extent = extent;
-  }
-  std::vector<float> positions;
-  std::vector<uint32_t> parents;
+    // Continues the scan of the group being found (lazy.front()'s) until `upto` of its vertices
+    // are known (within what the lag allows: the caller applied enough of its splits), into
+    // splits[].v; a failure leaves the splits without a vertex, refused when reached.
+    void find_vertices(uint32_t upto, std::vector<Split>& splits) {
+      if (!choice_ok) return;
+      const uint32_t before = choice.found();
+      group_vs.clear();
+      choice_ok = lazy.front().find(choice, nullptr, upto, group_vs);
+      for (size_t i = 0; i < group_vs.size(); ++i) splits[group_first + before + i].v = group_vs[i];
+    }
+  } frontier;
+  static constexpr uint64_t kRingWorkPerSplit = 64, kRingWorkSlack = 1u << 22;
+
+  // The current level: the mesh, how many splits it has applied, what changed since the
+  // caller last looked, and the prefetcher of the refinement loop.
+  struct Level {
+    ProgressiveMesh mesh;
+    uint64_t applied = 0;
+    MeshChanges changes;
+    FanPrefetcher fans;
+  } level;
 
   // Error paths and the once-per-file HEAD are cold: kept small, out of the hot code's way
   // (the stripped library has a 150 KB budget).
   [[gnu::cold]] Status fail(Status s, const std::string& what) {
+    stage = Stage::failed;
     status = s;
     message = std::string("pmz: ") + status_name(s) + ": " + what + " (chunk " +
-              std::to_string(chunk_index) + " at byte " + std::to_string(chunk_offset) + ")";
+              std::to_string(input.chunk_index) + " at byte " + std::to_string(input.chunk_offset) +
+              ")";
     return s;
   }
   size_t parse(const uint8_t* p, size_t n);
@@ -164,44 +192,45 @@ struct Decoder::Impl {
   // (set_face_target inlining both cost ~4.6 KB of the library's size budget).
   PMZ_OUT_OF_LINE uint64_t refine(uint64_t max_splits, uint64_t face_target);
   PMZ_OUT_OF_LINE uint64_t coarsen(uint64_t max_splits, uint64_t face_floor);
-  FanPrefetcher fans;
   // Before applying split `applied`: the fans of the next splits (see FanPrefetcher), and
   // further ahead the vertex_corner entries those walks start from. Splits applied before are
   // re-applied from their sector hints: the walks follow only the sectors, and further ahead
   // the hints' faces are prefetched directly.
   void prefetch() {
     constexpr uint64_t kFar = 2 * FanPrefetcher::kWalkers;
-    const uint64_t near = applied + FanPrefetcher::kWalkers;
-    if (near < decoded) {
-      if (applied + kFar < decoded) {
-        const Split& f = splits[applied + kFar];
-        if (f.v < mesh.vertex_corner.size()) __builtin_prefetch(&mesh.vertex_corner[f.v]);
-        if (f.a < mesh.opposite.size()) {
-          __builtin_prefetch(&mesh.opposite[f.a]);
-          __builtin_prefetch(&mesh.corner_vertex[f.a]);
+    const uint64_t near = level.applied + FanPrefetcher::kWalkers;
+    if (near < frontier.decoded) {
+      if (level.applied + kFar < frontier.decoded) {
+        const Split& f = record.splits[level.applied + kFar];
+        if (f.v < level.mesh.vertex_corner.size())
+          __builtin_prefetch(&level.mesh.vertex_corner[f.v]);
+        if (f.a < level.mesh.opposite.size()) {
+          __builtin_prefetch(&level.mesh.opposite[f.a]);
+          __builtin_prefetch(&level.mesh.corner_vertex[f.a]);
         }
       }
-      const Split& s = splits[near];
-      fans.step_sector(mesh, s.a, s.b);
+      const Split& s = record.splits[near];
+      level.fans.step_sector(level.mesh, s.a, s.b);
       // The face across the first sector face's v-side edge gets relinked too (its corner ql
       // = opposite[next(hint)], a line prefetched kFar splits ahead).
       const size_t pl = s.a % 3 == 2 ? size_t(s.a) - 2 : size_t(s.a) + 1;
-      if (pl < mesh.opposite.size()) {
-        const uint32_t ql = mesh.opposite[pl];
-        if (ql < mesh.opposite.size()) __builtin_prefetch(&mesh.opposite[ql]);
+      if (pl < level.mesh.opposite.size()) {
+        const uint32_t ql = level.mesh.opposite[pl];
+        if (ql < level.mesh.opposite.size()) __builtin_prefetch(&level.mesh.opposite[ql]);
       }
       return;
     }
-    if (applied + kFar < available) {
-      const uint32_t v = splits[applied + kFar].v;
-      if (v < mesh.vertex_corner.size()) __builtin_prefetch(&mesh.vertex_corner[v]);
+    if (level.applied + kFar < record.available) {
+      const uint32_t v = record.splits[level.applied + kFar].v;
+      if (v < level.mesh.vertex_corner.size()) __builtin_prefetch(&level.mesh.vertex_corner[v]);
     }
     // Ring coordinates matter only where positions are still to be predicted (not when
     // re-refining after coarsening: there they cost about 10% on bunny00-loop2).
     const bool predicting =
-        coords.size() <= (size_t(mesh.vertex_count()) + FanPrefetcher::kWalkers) * 3;
-    fans.step(mesh, coords.data(), predicting ? coords.size() : 0,
-              near < available ? splits[near].v : kNoCorner, choice.degrees(), choice.sums_bytes());
+        record.coords.size() <= (size_t(level.mesh.vertex_count()) + FanPrefetcher::kWalkers) * 3;
+    level.fans.step(level.mesh, record.coords.data(), predicting ? record.coords.size() : 0,
+                    near < record.available ? record.splits[near].v : kNoCorner,
+                    frontier.choice.degrees(), frontier.choice.sums_bytes());
   }
   // Coarsening: undoing a split rewires the faces across its new faces and repoints
   // vertex_corner of v, vl and vr, all anywhere in the buffers. For the split kUnlinkAhead
@@ -216,19 +245,20 @@ struct Decoder::Impl {
     return (side & kHasLeft ? 1u : 0u) + (side & kHasRight ? 1u : 0u);
   }
   void prefetch_unlink(UnlinkWindow& w) {
-    if (applied <= kUnlinkAhead) return;
-    const uint64_t j = applied - 1 - kUnlinkAhead;
-    if (w.top != applied + 1) {  // (re)start: sum over the window
+    if (level.applied <= kUnlinkAhead) return;
+    const uint64_t j = level.applied - 1 - kUnlinkAhead;
+    if (w.top != level.applied + 1) {  // (re)start: sum over the window
       w.faces = 0;
-      for (uint64_t t = j; t < applied; ++t) w.faces += new_faces(sides[t]);
+      for (uint64_t t = j; t < level.applied; ++t) w.faces += new_faces(record.sides[t]);
     } else {  // slid by one: split `applied` (just undone) left the window, split j entered it
-      w.faces = w.faces - new_faces(sides[applied]) + new_faces(sides[j]);
+      w.faces = w.faces - new_faces(record.sides[level.applied]) + new_faces(record.sides[j]);
     }
-    w.top = applied;
-    const uint8_t side = sides[j];
-    const size_t f0 = 3 * (size_t(mesh.face_count()) - w.faces), corners = mesh.opposite.size();
-    const uint32_t* opp = mesh.opposite.data();
-    const uint32_t* cv = mesh.corner_vertex.data();
+    w.top = level.applied;
+    const uint8_t side = record.sides[j];
+    const size_t f0 = 3 * (size_t(level.mesh.face_count()) - w.faces),
+                 corners = level.mesh.opposite.size();
+    const uint32_t* opp = level.mesh.opposite.data();
+    const uint32_t* cv = level.mesh.corner_vertex.data();
     auto near = [&](uint32_t c) {  // a corner across a new face: its link and its face
       if (c < corners) {
         __builtin_prefetch(opp + c);
@@ -236,9 +266,9 @@ struct Decoder::Impl {
       }
     };
     auto vertex = [&](uint32_t x) {
-      if (x < mesh.vertex_corner.size()) __builtin_prefetch(&mesh.vertex_corner[x]);
+      if (x < level.mesh.vertex_corner.size()) __builtin_prefetch(&level.mesh.vertex_corner[x]);
     };
-    vertex(splits[j].v);
+    vertex(record.splits[j].v);
     if (f0 + 3 * new_faces(side) > corners) return;
     for (size_t g = f0, e = f0 + 3 * new_faces(side); g < e; g += 3) {
       near(opp[g]);
@@ -249,16 +279,16 @@ struct Decoder::Impl {
   // Never throws: called after the mesh changed, it must not leave a split half counted. Out of
   // memory for the list, it reports everything as changed.
   void note_rewritten(std::span<const uint32_t> faces) noexcept {
-    if (changes.all) return;
+    if (level.changes.all) return;
     try {
       for (uint32_t f : faces)
-        if (f < changes.face_begin) changes.modified_faces.push_back(f);
+        if (f < level.changes.face_begin) level.changes.modified_faces.push_back(f);
     } catch (const std::bad_alloc&) {
-      changes.all = true;
+      level.changes.all = true;
     }
-    if (changes.all || changes.modified_faces.size() > mesh.face_count() + 64u) {
-      changes.all = true;
-      changes.modified_faces.clear();
+    if (level.changes.all || level.changes.modified_faces.size() > level.mesh.face_count() + 64u) {
+      level.changes.all = true;
+      level.changes.modified_faces.clear();
     }
   }
 };
@@ -271,22 +301,23 @@ Decoder& Decoder::operator=(Decoder&&) noexcept = default;
 // Consumes complete items from p; returns the bytes used (the rest waits for more input).
 size_t Decoder::Impl::parse(const uint8_t* p, size_t n) {
   size_t at = 0;
-  if (!signature_done) {
+  if (!input.signature_done) {
     size_t k = std::min<size_t>(n, 8);
     if (std::memcmp(p, kSignature, k) != 0) {
       fail(Status::bad_magic, "not a .pmz stream");
       return n;
     }
     if (n < 8) return 0;
-    signature_done = true;
+    input.signature_done = true;
     at = 8;
   }
-  while (status == Status::ok) {
-    if (info.complete) return n;  // bytes after END are ignored, framed or not (spec section 3)
+  while (stage != Stage::failed) {
+    if (stage == Stage::complete)
+      return n;  // bytes after END are ignored, framed or not (spec section 3)
     ChunkFrame f;
     const FrameStatus fs = parse_chunk_frame(p + at, n - at, f);
-    chunk_offset = parse_base + at;
-    if (chunk_index == 0 && n - at >= 1 && p[at] != kChunkHead) {  // a 6.x or older file?
+    input.chunk_offset = input.parse_base + at;
+    if (stage == Stage::header && n - at >= 1 && p[at] != kChunkHead) {  // a 6.x or older file?
       const size_t k = std::min<size_t>(n - at, 14);
       if (p[at] == kOldHeadType[0] &&
           std::memcmp(p + at, kOldHeadType, std::min<size_t>(k, 4)) == 0) {
@@ -316,30 +347,31 @@ size_t Decoder::Impl::parse(const uint8_t* p, size_t n) {
     }
     if (chunk(f.type, payload, size) != Status::ok) return n;
     at += f.header_size + size;
-    ++chunk_index;
+    ++input.chunk_index;
   }
   return at;
 }
 
 Status Decoder::Impl::chunk(uint8_t type, const uint8_t* p, size_t n) {
-  if (chunk_index == 0 && type != kChunkHead)
+  if (stage == Stage::header && type != kChunkHead)
     return fail(Status::corrupt, "first chunk is not HEAD");
   if (type == kChunkHead) {
-    if (info.header_done) return fail(Status::corrupt, "second HEAD chunk");
+    if (stage != Stage::header) return fail(Status::corrupt, "second HEAD chunk");
     return head(p, n);
   }
   if (type == kChunkBase) {
-    if (info.base_done) return fail(Status::corrupt, "second BASE chunk");
+    if (stage != Stage::base) return fail(Status::corrupt, "second BASE chunk");
     return base(p, n);
   }
   if (type == kChunkSplits) {
-    if (!info.base_done) return fail(Status::corrupt, "SPLT before BASE");
+    if (stage != Stage::splits) return fail(Status::corrupt, "SPLT before BASE");
     return split_chunk(p, n);
   }
   if (type == kChunkEnd) {
-    if (!info.base_done || splits.size() != info.total_splits)
+    if (stage != Stage::splits || record.splits.size() != info.total_splits)
       return fail(Status::corrupt, "END before all splits");
     info.complete = true;
+    stage = Stage::complete;
     return Status::ok;
   }
   return Status::ok;  // unknown chunk type: skipped (forward compatibility)
@@ -369,6 +401,7 @@ Status Decoder::Impl::head(const uint8_t* p, size_t n) {
     return fail(Status::limit_exceeded, std::to_string(h.full_vertices()) + " vertices, " +
                                             std::to_string(h.full_faces) + " faces");
   info.header_done = true;
+  stage = Stage::base;
   info.version_major = h.version_major;
   info.version_minor = h.version_minor;
   info.flags = h.flags;
@@ -401,173 +434,182 @@ Status Decoder::Impl::base(const uint8_t* p, size_t n) {
   }
   ProgressiveMesh m;
   if (!m.build(vn, bm.faces.data(), fn, err)) return fail(Status::corrupt, "BASE: " + err);
-  mesh = std::move(m);
-  coords = std::move(bm.coords);
-  choice.reset(mesh, coords.data(), info.position_bits);
-  group_vs.reserve(kChoiceLag + 2);  // find_vertices() adds at most kChoiceLag + 1 at a time
-  for (size_t i = 0; i < vn; ++i) grow_box(&coords[i * 3]);
-  positions.resize(size_t(vn) * 3);
+  level.mesh = std::move(m);
+  record.coords = std::move(bm.coords);
+  frontier.choice.reset(level.mesh, record.coords.data(), info.position_bits);
+  frontier.group_vs.reserve(kChoiceLag +
+                            2);  // find_vertices() adds at most kChoiceLag + 1 at a time
+  for (size_t i = 0; i < vn; ++i) frontier.grow_box(&record.coords[i * 3]);
+  record.positions.resize(size_t(vn) * 3);
   for (size_t i = 0; i < size_t(vn) * 3; ++i)
-    positions[i] = quant.dequantize(coords[i], int(i % 3));
-  parents.assign(vn, 0xFFFFFFFFu);
+    record.positions[i] = quant.dequantize(record.coords[i], int(i % 3));
+  record.parents.assign(vn, 0xFFFFFFFFu);
   info.base_done = true;
-  changes = {};
-  changes.all = true;
+  stage = Stage::splits;
+  level.changes = {};
+  level.changes.all = true;
   return Status::ok;
 }
 
 Status Decoder::Impl::split_chunk(const uint8_t* p, size_t n) {
   std::string err;
   SplitChunkReader r;
-  if (!models) models = std::make_unique<SplitModels>();
-  if (!r.open(p, n, info.total_splits - splits.size(), *models, err))
+  if (!frontier.models) frontier.models = std::make_unique<SplitModels>();
+  if (!r.open(p, n, info.total_splits - record.splits.size(), *frontier.models, err))
     return fail(Status::corrupt, err);
-  const size_t size = splits.size() + r.split_count();
+  const size_t size = record.splits.size() + r.split_count();
   // As refine() grows the mesh buffers: room for every split of the header once the decoded ones
   // are at least 1 / kHeaderTrust of them, instead of doubling (a copy and page faults each).
-  if (size > splits.capacity() && info.total_splits <= kHeaderTrust * size)
-    splits.reserve(info.total_splits);
-  splits.resize(size, {kNoCorner, kNoRank, kNoRank});
-  lazy.push_back(std::move(r));
-  available = splits.size();
+  if (size > record.splits.capacity() && info.total_splits <= kHeaderTrust * size)
+    record.splits.reserve(info.total_splits);
+  record.splits.resize(size, {kNoCorner, kNoRank, kNoRank});
+  frontier.lazy.push_back(std::move(r));
+  record.available = record.splits.size();
   return Status::ok;
 }
 
 // Refuses split `applied` (and everything after it): the mesh stays at the level before.
 bool Decoder::Impl::refuse(Status s, const std::string& what) {
   fail(s, what);
-  splits.resize(applied);
-  available = applied;
-  lazy.clear();
+  record.splits.resize(level.applied);
+  record.available = level.applied;
+  frontier.lazy.clear();
   return false;
 }
 
 bool Decoder::Impl::apply() {
-  Split& s = splits[applied];
-  if (mesh.face_count() + 2ull > limits.max_faces) {
+  Split& s = record.splits[level.applied];
+  if (level.mesh.face_count() + 2ull > limits.max_faces) {
     fail(Status::limit_exceeded, "face limit reached while refining");
     return false;
   }
-  if (applied < decoded) {  // applied before, on this very mesh state: no ring, no symbols
-    const uint8_t side = sides[applied];
-    mesh.resplit(s.v, s.a, s.b, side & kHasLeft, side & kHasRight);
-    note_rewritten(mesh.sector_faces());
-    ++applied;
+  if (level.applied <
+      frontier.decoded) {  // applied before, on this very mesh state: no ring, no symbols
+    const uint8_t side = record.sides[level.applied];
+    level.mesh.resplit(s.v, s.a, s.b, side & kHasLeft, side & kHasRight);
+    note_rewritten(level.mesh.sector_faces());
+    ++level.applied;
     return true;
   }
   auto invalid = [&] {
-    return refuse(Status::corrupt, "split " + std::to_string(applied) + " has an invalid wedge");
+    return refuse(Status::corrupt,
+                  "split " + std::to_string(level.applied) + " has an invalid wedge");
   };
-  SplitChunkReader& reader = lazy.front();
-  if (applied - lazy_first == reader.group_end()) {  // a group's first split: start its scan
-    group_first = applied;
-    choice_ok = reader.begin_group(choice, mesh.vertex_count());
-    find_vertices(scan_at_group_start());
+  SplitChunkReader& reader = frontier.lazy.front();
+  if (level.applied - frontier.lazy_first ==
+      reader.group_end()) {  // a group's first split: start its scan
+    frontier.group_first = level.applied;
+    frontier.choice_ok = reader.begin_group(frontier.choice, level.mesh.vertex_count());
+    frontier.find_vertices(scan_at_group_start(), record.splits);
   }
   if (s.v == kNoCorner)
     return refuse(Status::corrupt,
-                  "split " + std::to_string(applied) + ": vertex choice malformed");
-  if (!mesh.gather_ring(s.v)) return invalid();
+                  "split " + std::to_string(level.applied) + ": vertex choice malformed");
+  if (!level.mesh.gather_ring(s.v)) return invalid();
   {  // first application: the wedge symbols, with contexts from v's ring
-    const uint32_t k = uint32_t(mesh.ring().size());
+    const uint32_t k = uint32_t(level.mesh.ring().size());
     // Ring walks cost the valence: bound their total (first applications; re-applying after
     // coarsening repeats the same work) so splits piling on one vertex cannot go quadratic.
-    ring_work += k;
-    if (ring_work > kRingWorkPerSplit * (applied + 1) + kRingWorkSlack)
+    frontier.ring_work += k;
+    if (frontier.ring_work > kRingWorkPerSplit * (level.applied + 1) + kRingWorkSlack)
       return refuse(Status::limit_exceeded, "vertex valences beyond what a mesh needs");
     // Decoded symbols cannot be put back: allocate what wedge_ranks needs before decoding them
     // (an allocation failure then leaves this split to retry, not a symbol lost).
-    if (k > wedge_scratch_ring) {
-      wedge_scratch.reserve(k);
-      wedge_scratch_ring = k;
+    if (k > frontier.wedge_scratch_ring) {
+      frontier.wedge_scratch.reserve(k);
+      frontier.wedge_scratch_ring = k;
     }
-    choice.reserve(k);
+    frontier.choice.reserve(k);
     uint32_t count, rank;
     auto malformed = [&] {
       return refuse(Status::corrupt,
-                    "split " + std::to_string(applied) + ": wedge streams malformed");
+                    "split " + std::to_string(level.applied) + ": wedge streams malformed");
     };
-    if (!lazy.front().wedge_count(wedge_context(k, mesh.ring_closed()), count)) return malformed();
-    if (!wedge_scores(coords.data(), choice.degrees(), s.v, mesh, count, wedge_scratch))
-      return invalid();
-    if (!lazy.front().wedge_rank(rank_context(mesh.ring_closed(), wedge_scratch.confident), rank))
+    if (!frontier.lazy.front().wedge_count(wedge_context(k, level.mesh.ring_closed()), count))
       return malformed();
-    if (!wedge_pick(mesh, count, rank, s.a, s.b, wedge_scratch)) return invalid();
+    if (!wedge_scores(record.coords.data(), frontier.choice.degrees(), s.v, level.mesh, count,
+                      frontier.wedge_scratch))
+      return invalid();
+    if (!frontier.lazy.front().wedge_rank(
+            rank_context(level.mesh.ring_closed(), frontier.wedge_scratch.confident), rank))
+      return malformed();
+    if (!wedge_pick(level.mesh, count, rank, s.a, s.b, frontier.wedge_scratch)) return invalid();
   }
-  if (!mesh.split_gathered(s.v, s.a, s.b)) return invalid();
+  if (!level.mesh.split_gathered(s.v, s.a, s.b)) return invalid();
   const bool has_l = s.a != kNoRank, has_r = s.b != kNoRank;
   {  // the position, then what re-applying the split needs
     PositionPrediction pred;
     int32_t residual[3], c[3];
-    predict_position(coords.data(), mesh.u_ring(), mesh.ring(), info.curvature, info.fine_curvature,
-                     pred);
-    if (!lazy.front().residuals(pred.context, pred.mix, residual)) {
-      mesh.undo_split(s.v, has_l, has_r);
+    predict_position(record.coords.data(), level.mesh.u_ring(), level.mesh.ring(), info.curvature,
+                     info.fine_curvature, pred);
+    if (!frontier.lazy.front().residuals(pred.context, pred.mix, residual)) {
+      level.mesh.undo_split(s.v, has_l, has_r);
       return refuse(Status::corrupt,
-                    "split " + std::to_string(applied) + ": residual streams malformed");
+                    "split " + std::to_string(level.applied) + ": residual streams malformed");
     }
     position_from_residuals(pred, residual, c);
-    grow_box(c);
+    frontier.grow_box(c);
     for (int k = 0; k < 3; ++k) {
-      coords.push_back(c[k]);
-      positions.push_back(quant.dequantize(c[k], k));
+      record.coords.push_back(c[k]);
+      record.positions.push_back(quant.dequantize(c[k], k));
     }
-    parents.push_back(s.v);
-    sides.push_back(uint8_t((has_l ? kHasLeft : 0) | (has_r ? kHasRight : 0)));
+    record.parents.push_back(s.v);
+    record.sides.push_back(uint8_t((has_l ? kHasLeft : 0) | (has_r ? kHasRight : 0)));
     // The vertex choice state (its umbrella sums need u's coordinates), then the group's
     // vertices kChoiceLag + 1 ahead (the lag: this split's ring is noted now).
-    choice.applied(mesh, coords.data(), has_l, has_r);
-    find_vertices(scan_after_split(uint32_t(applied - group_first)));
-    s.a = mesh.sector_hint();
-    s.b = uint32_t(mesh.sector_faces().size());
-    if (++decoded - lazy_first == lazy.front().split_count()) {
-      lazy_first = decoded;
-      lazy.pop_front();  // its bytes are no longer needed
+    frontier.choice.applied(level.mesh, record.coords.data(), has_l, has_r);
+    frontier.find_vertices(scan_after_split(uint32_t(level.applied - frontier.group_first)),
+                           record.splits);
+    s.a = level.mesh.sector_hint();
+    s.b = uint32_t(level.mesh.sector_faces().size());
+    if (++frontier.decoded - frontier.lazy_first == frontier.lazy.front().split_count()) {
+      frontier.lazy_first = frontier.decoded;
+      frontier.lazy.pop_front();  // its bytes are no longer needed
     }
   }
-  note_rewritten(mesh.sector_faces());
-  ++applied;
+  note_rewritten(level.mesh.sector_faces());
+  ++level.applied;
   return true;
 }
 
 void Decoder::Impl::undo() {
   // undo_resplit may throw bad_alloc only from its scratch, before it changes anything: count
   // the split as undone only after it.
-  const uint8_t side = sides[applied - 1];
-  const Split& s = splits[applied - 1];
-  mesh.undo_resplit(s.v, s.a, s.b, side & kHasLeft, side & kHasRight);
-  --applied;
-  changes.face_begin = std::min(changes.face_begin, mesh.face_count());
-  changes.vertex_begin = std::min(changes.vertex_begin, mesh.vertex_count());
-  note_rewritten(mesh.sector_faces());
+  const uint8_t side = record.sides[level.applied - 1];
+  const Split& s = record.splits[level.applied - 1];
+  level.mesh.undo_resplit(s.v, s.a, s.b, side & kHasLeft, side & kHasRight);
+  --level.applied;
+  level.changes.face_begin = std::min(level.changes.face_begin, level.mesh.face_count());
+  level.changes.vertex_begin = std::min(level.changes.vertex_begin, level.mesh.vertex_count());
+  note_rewritten(level.mesh.sector_faces());
 }
 
 Status Decoder::feed(const void* data, size_t size) {
   Impl& d = *impl_;
-  if (d.status != Status::ok || size == 0) return d.status;
+  if (d.stage == Stage::failed || size == 0) return d.status;
   const auto* p = static_cast<const uint8_t*>(data);
-  d.parse_base = d.consumed - d.pending.size();
-  d.consumed += size;
+  d.input.parse_base = d.input.consumed - d.input.pending.size();
+  d.input.consumed += size;
   try {
-    if (d.pending.empty()) {
+    if (d.input.pending.empty()) {
       size_t used = d.parse(p, size);
-      if (d.status == Status::ok) d.pending.assign(p + used, p + size);
+      if (d.stage != Stage::failed) d.input.pending.assign(p + used, p + size);
     } else {
-      d.pending.insert(d.pending.end(), p, p + size);
-      size_t used = d.parse(d.pending.data(), d.pending.size());
-      if (d.status == Status::ok)
-        d.pending.erase(d.pending.begin(), d.pending.begin() + ptrdiff_t(used));
+      d.input.pending.insert(d.input.pending.end(), p, p + size);
+      size_t used = d.parse(d.input.pending.data(), d.input.pending.size());
+      if (d.stage != Stage::failed)
+        d.input.pending.erase(d.input.pending.begin(), d.input.pending.begin() + ptrdiff_t(used));
     }
   } catch (const std::bad_alloc&) {
     d.fail(Status::out_of_memory, "allocation failed");
   }
-  if (d.status != Status::ok) d.pending.clear();
+  if (d.stage == Stage::failed) d.input.pending.clear();
   return d.status;
 }
 
 Status Decoder::finish() {
   Impl& d = *impl_;
-  if (d.status == Status::ok && !d.info.complete)
+  if (d.stage != Stage::failed && d.stage != Stage::complete)
     d.fail(Status::truncated, "stream ended before its end marker");
   return d.status;
 }
@@ -575,7 +617,7 @@ Status Decoder::finish() {
 Status Decoder::status() const { return impl_->status; }
 const std::string& Decoder::error_message() const { return impl_->message; }
 const StreamInfo& Decoder::info() const { return impl_->info; }
-uint64_t Decoder::bytes_consumed() const { return impl_->consumed; }
+uint64_t Decoder::bytes_consumed() const { return impl_->input.consumed; }
 
 uint64_t Decoder::Impl::refine(uint64_t max_splits, uint64_t face_target) {
   uint64_t n = 0;
@@ -584,10 +626,10 @@ uint64_t Decoder::Impl::refine(uint64_t max_splits, uint64_t face_target) {
     // apply() must not grow a buffer once it changed the mesh (an allocation failure there would
     // leave a split half applied). With a face target, at most the missing faces (a split adds
     // at least one).
-    uint64_t want = std::min(max_splits, available - applied);
-    want = std::min(want, face_target - std::min<uint64_t>(face_target, mesh.face_count()));
-    uint64_t target = applied + want;
-    if (target > applied) {
+    uint64_t want = std::min(max_splits, record.available - level.applied);
+    want = std::min(want, face_target - std::min<uint64_t>(face_target, level.mesh.face_count()));
+    uint64_t target = level.applied + want;
+    if (target > level.applied) {
       // Grown geometrically: at least to the next power of two and at least doubled. Reserving
       // exactly `target`, or all that is available, reallocates (and copies everything) on every
       // small call or every chunk that arrives (a viewer refining a few hundred per frame; a
@@ -598,7 +640,7 @@ uint64_t Decoder::Impl::refine(uint64_t max_splits, uint64_t face_target) {
       // in 997-byte slices with refine(5000) after each: about a quarter of the CPU time), and
       // the reservation stays within kHeaderTrust times the decoded input (untouched capacity
       // costs no memory until used).
-      const uint64_t capacity = sides.capacity();
+      const uint64_t capacity = record.sides.capacity();
       uint64_t room =
           target <= capacity ? target
           : info.total_splits <= kHeaderTrust * target
@@ -606,26 +648,27 @@ uint64_t Decoder::Impl::refine(uint64_t max_splits, uint64_t face_target) {
               : std::max(target, std::min<uint64_t>(info.total_splits,
                                                     std::max(std::bit_ceil(target), 2 * capacity)));
       uint64_t nv = info.base_vertices + room;
-      const uint32_t* before = mesh.opposite.data();
-      mesh.reserve(nv, mesh.face_count() + 2 * (room - applied));
-      coords.reserve(nv * 3);
-      positions.reserve(nv * 3);
-      parents.reserve(nv);
-      sides.reserve(room);
-      const uint32_t* degrees_before = choice.degrees();
-      choice.reserve_vertices(nv, [&](const auto& v) {
-        if (choice.degrees() != degrees_before) advise_huge_pages(v);
+      const uint32_t* before = level.mesh.opposite.data();
+      level.mesh.reserve(nv, level.mesh.face_count() + 2 * (room - level.applied));
+      record.coords.reserve(nv * 3);
+      record.positions.reserve(nv * 3);
+      record.parents.reserve(nv);
+      record.sides.reserve(room);
+      const uint32_t* degrees_before = frontier.choice.degrees();
+      frontier.choice.reserve_vertices(nv, [&](const auto& v) {
+        if (frontier.choice.degrees() != degrees_before) advise_huge_pages(v);
       });
-      if (mesh.opposite.data() != before) {  // reallocated: the new capacity is untouched
-        advise_huge_pages(mesh.corner_vertex);
-        advise_huge_pages(mesh.opposite);
-        advise_huge_pages(mesh.vertex_corner);
-        advise_huge_pages(coords);
-        advise_huge_pages(positions);
+      if (level.mesh.opposite.data() != before) {  // reallocated: the new capacity is untouched
+        advise_huge_pages(level.mesh.corner_vertex);
+        advise_huge_pages(level.mesh.opposite);
+        advise_huge_pages(level.mesh.vertex_corner);
+        advise_huge_pages(record.coords);
+        advise_huge_pages(record.positions);
       }
     }
-    fans.reset();
-    while (n < max_splits && applied < available && mesh.face_count() < face_target) {
+    level.fans.reset();
+    while (n < max_splits && level.applied < record.available &&
+           level.mesh.face_count() < face_target) {
       prefetch();
       if (!apply()) break;
       ++n;
@@ -638,21 +681,22 @@ uint64_t Decoder::Impl::refine(uint64_t max_splits, uint64_t face_target) {
 
 uint64_t Decoder::Impl::coarsen(uint64_t max_splits, uint64_t face_floor) {
   uint64_t n = 0;
-  fans.reset();
+  level.fans.reset();
   UnlinkWindow window;
   try {
-    for (; n < max_splits && applied > 0; ++n) {
-      const uint8_t side = sides[applied - 1];
-      if (mesh.face_count() - (side & kHasLeft ? 1u : 0u) - (side & kHasRight ? 1u : 0u) <
+    for (; n < max_splits && level.applied > 0; ++n) {
+      const uint8_t side = record.sides[level.applied - 1];
+      if (level.mesh.face_count() - (side & kHasLeft ? 1u : 0u) - (side & kHasRight ? 1u : 0u) <
           face_floor)
         break;
       // Splits are undone last first: the sector of the one kWalkers further on, and further
       // still what unlinking its new faces touches (see prefetch_unlink).
       constexpr uint32_t kAhead = FanPrefetcher::kWalkers;
-      if (applied > kAhead)
-        fans.step_sector(mesh, splits[applied - 1 - kAhead].a, splits[applied - 1 - kAhead].b);
+      if (level.applied > kAhead)
+        level.fans.step_sector(level.mesh, record.splits[level.applied - 1 - kAhead].a,
+                               record.splits[level.applied - 1 - kAhead].b);
       else
-        fans.step_sector(mesh, kNoCorner, 0);
+        level.fans.step_sector(level.mesh, kNoCorner, 0);
       prefetch_unlink(window);
       undo();
     }
@@ -674,32 +718,32 @@ void Decoder::set_face_target(uint64_t faces) {
 
 void Decoder::set_split_target(uint64_t splits) {
   Impl& d = *impl_;
-  if (splits < d.applied)
-    coarsen(d.applied - splits);
+  if (splits < d.level.applied)
+    coarsen(d.level.applied - splits);
   else
-    refine(splits - d.applied);
+    refine(splits - d.level.applied);
 }
 
-uint64_t Decoder::splits_applied() const { return impl_->applied; }
-uint64_t Decoder::splits_available() const { return impl_->available; }
-uint32_t Decoder::vertex_count() const { return impl_->mesh.vertex_count(); }
-uint32_t Decoder::face_count() const { return impl_->mesh.face_count(); }
+uint64_t Decoder::splits_applied() const { return impl_->level.applied; }
+uint64_t Decoder::splits_available() const { return impl_->record.available; }
+uint32_t Decoder::vertex_count() const { return impl_->level.mesh.vertex_count(); }
+uint32_t Decoder::face_count() const { return impl_->level.mesh.face_count(); }
 const float* Decoder::positions() const {
-  return impl_->positions.empty() ? nullptr : impl_->positions.data();
+  return impl_->record.positions.empty() ? nullptr : impl_->record.positions.data();
 }
 const uint32_t* Decoder::indices() const {
-  return impl_->mesh.corner_vertex.empty() ? nullptr : impl_->mesh.corner_vertex.data();
+  return impl_->level.mesh.corner_vertex.empty() ? nullptr : impl_->level.mesh.corner_vertex.data();
 }
 const uint32_t* Decoder::split_parents() const {
-  return impl_->parents.empty() ? nullptr : impl_->parents.data();
+  return impl_->record.parents.empty() ? nullptr : impl_->record.parents.data();
 }
-const MeshChanges& Decoder::changes() const { return impl_->changes; }
+const MeshChanges& Decoder::changes() const { return impl_->level.changes; }
 void Decoder::clear_changes() {
   Impl& d = *impl_;
-  d.changes.all = false;
-  d.changes.modified_faces.clear();
-  d.changes.vertex_begin = d.mesh.vertex_count();
-  d.changes.face_begin = d.mesh.face_count();
+  d.level.changes.all = false;
+  d.level.changes.modified_faces.clear();
+  d.level.changes.vertex_begin = d.level.mesh.vertex_count();
+  d.level.changes.face_begin = d.level.mesh.face_count();
 }
 
 }  // namespace pmz

@@ -13,9 +13,11 @@
 
 #include "pmz/base_codec.hpp"
 #include "pmz/decoder.hpp"
+#include "pmz/fan_wedge.hpp"
 #include "pmz/format.hpp"
 #include "pmz/progressive_mesh.hpp"
-#include "pmz/split_codec.hpp"
+#include "pmz/split_chunk.hpp"
+#include "pmz/vertex_choice.hpp"
 
 // ---- peak heap use of this test binary, through a replaced global operator new ----
 namespace {

@@ -10,9 +10,11 @@
 
 #include "pmz/base_codec.hpp"
 #include "pmz/coding.hpp"
+#include "pmz/fan_wedge.hpp"
 #include "pmz/progressive_mesh.hpp"
 #include "pmz/range_coder.hpp"
-#include "pmz/split_codec.hpp"
+#include "pmz/split_chunk.hpp"
+#include "pmz/vertex_choice.hpp"
 
 using namespace pmz;
 

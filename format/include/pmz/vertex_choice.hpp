@@ -1,0 +1,244 @@
+// Which vertices split (spec/format.md, sections 9.1 and 9.2): the vertex choice state the writer
+// and the decoder keep in step (degrees, umbrella sums, the near list, exclusion), the choice
+// contexts, and the scan over a group's candidates. The chunk codec (split_chunk.hpp) codes the
+// choice bits this scan asks for.
+#pragma once
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "pmz/progressive_mesh.hpp"
+#include "pmz/range_coder.hpp"
+
+namespace pmz {
+
+class ProgressiveMesh;
+
+// Vertex choice contexts (spec section 9.2): density x near x degree x umbrella
+// class.
+inline constexpr uint32_t kChoiceDensities = 21, kChoiceDegrees = 9, kChoiceShapes = 3;
+inline constexpr uint32_t kChoiceKeys =
+    kChoiceDegrees * kChoiceShapes;  // per vertex: degree x class
+inline constexpr uint32_t kChoiceContexts = kChoiceDensities * 2 * kChoiceKeys;
+
+// bitlen(floor(D / m)) for m >= 1 without dividing (a division per vertex choice bit costs more
+// than the bit): the quotient has bitlen(D) - bitlen(m) bits or one more, one more exactly when
+// D >= m 2^(bitlen(D) - bitlen(m)), i.e. floor(D / 2^t) >= m.
+inline uint32_t bitlen_quotient(uint64_t D, uint64_t m) {
+  if (D < m) return 0;
+  const uint32_t t = uint32_t(__builtin_clzll(m) - __builtin_clzll(D));
+  return t + ((D >> t) >= m ? 1u : 0u);
+}
+
+// Initial probability of a 0 (scaled to 32768) of the choice models of expected-gap class d
+// (spec section 9.2 and Appendix A): a 1 has probability about 1 / (1.5 * 2^(d - 1)) there. Models
+// with d >= 1 start at count kPriorCount (primed_model, spec section 11.1).
+inline uint32_t choice_prior(uint32_t d) {
+  return d == 0 ? kProbInit : std::min(32768u - 131072u / (3u << d), 31744u);
+}
+
+// The umbrella sums of a vertex w (spec section 9.1): over w's ring as the degree rule
+// counts it, with c' = c >> umbrella_shift (per axis) and the spokes e = c'[x] - c'[w], the sum
+// D of the spokes per axis and the sum L of their lengths |e_x| + |e_y| + |e_z|, modulo 2^32
+// (D two's complement).
+struct alignas(16) RingSums {  // (FanPrefetcher::kSumBytes)
+  uint32_t d[3];
+  uint32_t l;
+};
+static_assert(sizeof(RingSums) == FanPrefetcher::kSumBytes);
+// Coordinates of up to 16 bits are summed as they are; wider ones (and lossless float patterns,
+// 32 bits) lose their low bits: spokes below 2^16 per axis keep the sums exact (no wrap) up to
+// degree 2^14.
+inline uint32_t umbrella_shift(uint32_t position_bits) {
+  return position_bits == 0 ? 16 : position_bits > 16 ? position_bits - 16 : 0;
+}
+// The umbrella class of a vertex with sums s: 0 when 64 |D|^2 < L^2 (the ring's centroid offset
+// |D| / n below 1/8 of the mean spoke length L / n, |D| Euclidean, L in the L1 norm), else 1 when
+// 16 |D|^2 < L^2, else 2 (also when L = 0). Exact in 64 bits: |D|^2 < 3 * 2^62, so |D|^2 <
+// ceil(L^2 / 64) = (L^2 + 63) >> 6 is the comparison, without overflow.
+inline uint32_t umbrella_class(const RingSums& s) {
+  const int64_t x = int32_t(s.d[0]), y = int32_t(s.d[1]), z = int32_t(s.d[2]);
+  // Each square fits int64 (<= 2^62), their sum only uint64: summed unsigned (no signed overflow).
+  const uint64_t d2 = uint64_t(x * x) + uint64_t(y * y) + uint64_t(z * z), l2 = uint64_t(s.l) * s.l;
+  return d2 < ((l2 + 63) >> 6) ? 0 : d2 < ((l2 + 15) >> 4) ? 1 : 2;
+}
+
+// Exclusion lag (spec section 9.2): a group's j-th split excludes its closed one-ring from
+// the group's candidates once kChoiceLag more splits of the group are found, so the decoder
+// can find the group's vertices kChoiceLag + 1 splits ahead of the split it applies (for the
+// fan prefetching) and take each ring from that split's own ring walk.
+inline constexpr uint32_t kChoiceLag = 8;
+
+// Which vertices split (spec/format.md, sections 9.1 and 9.2): the state the writer and the decoder
+// keep in step, updated at every first application of a split, in stream order.
+// - degree of every vertex: base vertices their ring size, then per split the rule of
+//   applied() (the ring sizes on a manifold mesh);
+// - umbrella sums (RingSums) of every vertex over the same rings, and from them and the degree
+//   a context key per vertex: min(degree, 8) * 3 + umbrella class;
+// - the neighbourhood of the splits since start_group(): v's ring before the split, v and u;
+// - exclusion: per vertex, the first split of the current group whose closed one-ring holds it.
+// A group's candidates, in order: near: the previous group's neighbourhood (ascending,
+// distinct); otherwise every vertex below the vertex count at the group's start. One bit per
+// candidate not excluded says whether it splits, until the group's splits are all found.
+class VertexChoice {
+ public:
+  // Degrees and umbrella sums from the base rings (0 without a face); coords: 3 per vertex.
+  void reset(ProgressiveMesh& base, const int32_t* coords, uint32_t position_bits);
+  // Starts a group: the neighbourhood noted since the last call becomes the near list (if
+  // `near`: a decoder knows the group's flag and skips building a list it does not use).
+  void start_group(bool near = true);
+  // Then the group's scan: `size` splits, the first of them split number first_split of the
+  // file (0-based, in stream order); limit: the vertex count at the group's start.
+  void begin_scan(bool near, uint32_t limit, uint32_t size) {
+    near_scan_ = near;
+    n_ = near ? near_.size() : limit;
+    i_ = 0;
+    size_ = size;
+    found_ = 0;
+    chosen_.clear();
+    excluded_ = next_epoch();
+  }
+  uint32_t found() const { return found_; }  // splits of the group found so far
+  // Continues the scan: calls f(w, context) per candidate not excluded, in order, until f
+  // returned 1 (w splits) so often that `upto` (at most the group's size) splits are found.
+  // 1 when they are, 0 if the candidates ran out first, -1 if f returned -1 (stop).
+  // Exclusion: a candidate is skipped when it is in the closed one-ring of the group's split j
+  // (0-based) with j <= found - 1 - kChoiceLag. With mesh (the mesh at the group's start:
+  // writer, tests) that ring is taken from mesh once the scan gets there; without (decoder),
+  // applied() notes it, and the caller applies split j right before it continues the scan to
+  // j + 2 + kChoiceLag found (so every split noted is one whose ring counts, and no other).
+  template <class F>
+  int scan(const ProgressiveMesh* mesh, uint32_t upto, F&& f) {
+    if (upto > size_) upto = size_;
+    // The scan's state in locals (f's stores could alias the members), written back on exit.
+    const uint64_t n = n_;
+    const uint32_t* const list = near_.data();
+    const uint32_t* const mark = mark_.data();  // exclude() writes marks, never resizes
+    const uint32_t excluded = excluded_;
+    const bool near = near_scan_;
+    uint64_t i = i_;
+    uint32_t found = found_;
+    int result = 1;
+    while (found < upto) {
+      if (i >= n) {
+        result = 0;
+        break;
+      }
+      const uint64_t at = i++;
+      const uint32_t w = near ? list[at] : uint32_t(at);
+      if (mark[w] == excluded) continue;
+      const int r = f(w, context(w, bitlen_quotient(n - at, size_ - found), near));
+      if (r < 0) {
+        result = -1;
+        break;
+      }
+      if (r) {
+        ++found;
+        if (mesh) {
+          i_ = i;
+          found_ = found;
+          chosen_.push_back(w);
+          if (found > kChoiceLag) exclude(*mesh, chosen_[found - 1 - kChoiceLag]);
+        }
+      }
+    }
+    i_ = i;
+    found_ = found;
+    return result;
+  }
+  // Writer: whether every vertex of vs is in the near list (vs ascending).
+  bool covers(std::span<const uint32_t> vs) const;
+  // Writer: whether no vertex of vs is in the closed one-ring (in mesh) of another.
+  bool independent(const ProgressiveMesh& mesh, std::span<const uint32_t> vs);
+  // Decoder, before a split with a ring of k vertices: room so that applied() and the next
+  // start_group() do not allocate. (Inline: once per split, it rarely needs to grow anything.)
+  void reserve(size_t k) {
+    if (noted_.capacity() - noted_.size() < k + 2 || degree_.capacity() == degree_.size() ||
+        mark_.capacity() == mark_.size() || sums_.capacity() == sums_.size() ||
+        key_.capacity() == key_.size() || bits_.size() * 64 <= degree_.size())
+      grow(k);
+  }
+  // Decoder: room for n vertices in the per-vertex arrays at once (refine() knows how many it
+  // may add): growing them by doubling one vertex at a time copied them and faulted their
+  // pages in twice. f(vector) is called on each, for memory hints.
+  template <class F>
+  void reserve_vertices(size_t n, F&& f) {
+    degree_.reserve(n);
+    mark_.reserve(n);
+    key_.reserve(n);
+    sums_.reserve(n);
+    bits_.reserve(n / 64 + 2);
+    f(degree_), f(mark_), f(key_), f(sums_);
+  }
+  // After pm.split_gathered() (its ring and u_ring still those of the split), once u's
+  // coordinates are known: coords holds 3 per vertex, u's included.
+  void applied(const ProgressiveMesh& pm, const int32_t* coords, bool has_left, bool has_right);
+  uint32_t degree(uint32_t w) const { return degree_[w]; }
+  const RingSums& sums(uint32_t w) const { return sums_[w]; }
+  const uint8_t* sums_bytes() const {
+    return reinterpret_cast<const uint8_t*>(sums_.data());
+  }                                                                     // (prefetching)
+  uint32_t shape(uint32_t w) const { return key_[w] % kChoiceShapes; }  // umbrella class
+  const uint32_t* degrees() const {
+    return degree_.data();
+  }  // per vertex (the wedge score's end weights)
+
+ private:
+  // ((min(d, 20) * 2 + near) * 9 + min(degree, 8)) * 3 + umbrella class, d = bitlen(expected
+  // gap); the last two as key_[w].
+  uint32_t context(uint32_t w, uint32_t d, bool near) const {
+    return ((d < kChoiceDensities ? d : kChoiceDensities - 1) * 2 + (near ? 1 : 0)) * kChoiceKeys +
+           key_[w];
+  }
+  int64_t coord(const int32_t* coords, uint32_t w, int a) const {
+    return coords[size_t(w) * 3 + a] >> shift_;
+  }
+  static uint8_t key_of(const RingSums& s, uint32_t deg) {
+    return uint8_t((deg < kChoiceDegrees ? deg : kChoiceDegrees - 1) * kChoiceShapes +
+                   umbrella_class(s));
+  }
+  void push_vertex(uint32_t degree);
+  void umbrella(const ProgressiveMesh& pm, const int32_t* coords, bool has_left, bool has_right);
+  template <bool kShift>
+  void umbrella_sums(const ProgressiveMesh& pm, const int32_t* coords, bool has_left,
+                     bool has_right);
+  void update_key(uint32_t w) { key_[w] = key_of(sums_[w], degree_[w]); }
+  // A fresh mark value (all of mark_ differs from it).
+  uint32_t next_epoch() {
+    if (++epoch_ == 0) {
+      std::fill(mark_.begin(), mark_.end(), 0);
+      epoch_ = 1;
+    }
+    return epoch_;
+  }
+  void exclude(const ProgressiveMesh& mesh, uint32_t w);
+  void grow(size_t k);  // reserve()'s work  // w's closed one-ring in mesh
+  std::vector<uint32_t> degree_, near_, noted_;
+  std::vector<RingSums> sums_;  // per vertex
+  std::vector<uint8_t> key_;    // per vertex: min(degree, 8) * 3 + umbrella class
+  uint32_t shift_ = 0;          // umbrella_shift
+  std::vector<uint64_t> bits_;  // start_group's bitmap of the noted vertices (all 0 between calls)
+  // Per vertex: epoch_ when in the near list being built (start_group), excluded_ when
+  // excluded from the group being scanned, another value of epoch_ in independent().
+  std::vector<uint32_t> mark_;
+  uint32_t epoch_ = 0, excluded_ = 0;
+  // The scan: near or all vertices, candidates n_, next candidate i_, the group's size and
+  // splits found; with a mesh, the vertices found.
+  bool near_scan_ = false;
+  uint64_t n_ = 0, i_ = 0;
+  uint32_t size_ = 0, found_ = 0;
+  std::vector<uint32_t> chosen_;
+};
+
+// Writer: the choice bits of a group of vertices vs (ascending, all below limit) as
+// (context << 1 | bit), after
+// choice.start_group(), with exclusion from the rings in mesh (the mesh at the group's start);
+// near: the flag it chose (near whenever the near list holds every vertex of the group). False
+// if the group cannot be coded: a vertex of vs in the closed one-ring of another (the rings the
+// decoder notes when it applies the splits would then differ from mesh's), or excluded.
+bool choice_bits(VertexChoice& choice, const ProgressiveMesh& mesh, uint32_t limit,
+                 std::span<const uint32_t> vs, std::vector<uint32_t>& bits, bool& near);
+
+}  // namespace pmz
