@@ -18,6 +18,7 @@
 #include "pmz/writer.hpp"
 #include "tool_common.hpp"
 #include "tool_mesh.hpp"
+#include "tool_simplify.hpp"
 
 namespace {
 
@@ -25,6 +26,8 @@ namespace tool = pmz::tool;
 
 struct EncodeSettings {
   pmz::Metric metric = pmz::Metric::multifeature;
+  pmz::AttributeMode attributes = pmz::AttributeMode::full;
+  float attribute_weight = pmz::MetricParams{}.attribute_weight;
   pmz::WriteOptions write;
   std::string stdin_format;  // extension for a mesh read from stdin
 };
@@ -53,6 +56,8 @@ bool encode(const std::string& input, const std::string& output, const EncodeSet
                  input == "-" ? "stdin" : input.c_str(), mesh.attributes.describe().c_str());
   pmz::SimplifyOptions sopt;
   sopt.metric = settings.metric;
+  sopt.attributes = settings.attributes;
+  sopt.params.attribute_weight = settings.attribute_weight;
   if (progress) sopt.progress = [&](double f) { progress->update("simplifying", f); };
   pmz::CollapseSequence seq;
   std::vector<uint8_t> bytes;
@@ -99,7 +104,7 @@ int main(int argc, char** argv) {
       ".pmz stream",
       "pmz-encode"};
   std::vector<std::string> inputs;
-  std::string output, out_dir, metric = "guarded", format;
+  std::string output, out_dir, metric = "guarded", format, attribute_mode = "full";
   unsigned jobs = std::max(1u, std::thread::hardware_concurrency());
   bool quiet = false, force_progress = false;
   EncodeSettings settings;
@@ -121,6 +126,7 @@ int main(int argc, char** argv) {
                  "plain QEM (QSlim)")
       ->check(CLI::IsMember({"guarded", "multifeature", "qem"}))
       ->capture_default_str();
+  tool::add_attribute_options(app, attribute_mode, settings.attribute_weight);
   app.add_option("--position-bits", settings.write.position_bits,
                  "quantization bits (0 = lossless float32)")
       ->check(CLI::Range(0, 30))
@@ -151,6 +157,7 @@ int main(int argc, char** argv) {
   settings.metric = metric == "qem"            ? pmz::Metric::qem
                     : metric == "multifeature" ? pmz::Metric::multifeature
                                                : pmz::Metric::guarded;
+  settings.attributes = tool::attribute_mode(attribute_mode);
   settings.stdin_format = format;
 
   std::vector<std::string> outputs;

@@ -9,6 +9,7 @@
 #include "pmz/simplify.hpp"
 #include "tool_common.hpp"
 #include "tool_mesh.hpp"
+#include "tool_simplify.hpp"
 
 namespace tool = pmz::tool;
 
@@ -18,14 +19,15 @@ int main(int argc, char** argv) {
       "pmz-simplify: simplify a triangle mesh by half-edge collapses (multi-feature metric or "
       "QEM)",
       "pmz-simplify"};
-  std::string input, output, metric_name = "guarded", format;
+  std::string input, output, metric_name = "guarded", format, attribute_mode = "full";
   double ratio = -1;
   uint64_t faces = 0;
   bool verbose = false, quiet = false, force_progress = false;
   pmz::SimplifyOptions options;
   app.add_option("input", input, "input mesh (OBJ, OFF, PLY, STL; - for stdin with --format)")
       ->required();
-  app.add_option("-o,--output", output, "output mesh (.obj, .off, .ply, .stl; - for stdout)")
+  app.add_option("-o,--output", output,
+                 "output mesh (.obj, .ply, .glb with attributes; .off, .stl; - for stdout)")
       ->required();
   app.add_option("--format", format, "format of stdin and stdout (default: by extension)")
       ->check(CLI::IsMember({"obj", "off", "ply", "stl"}));
@@ -39,6 +41,7 @@ int main(int argc, char** argv) {
                  "plain QEM (QSlim)")
       ->check(CLI::IsMember({"guarded", "multifeature", "qem"}))
       ->capture_default_str();
+  tool::add_attribute_options(app, attribute_mode, options.params.attribute_weight);
   app.add_option("--epsilon", options.params.epsilon, "torsion threshold epsilon (eq. 2)")
       ->capture_default_str();
   app.add_option("--quadric-floor", options.params.quadric_floor,
@@ -78,6 +81,7 @@ int main(int argc, char** argv) {
   options.metric = metric_name == "qem"            ? pmz::Metric::qem
                    : metric_name == "multifeature" ? pmz::Metric::multifeature
                                                    : pmz::Metric::guarded;
+  options.attributes = tool::attribute_mode(attribute_mode);
 
   std::string error;
   pmz::IndexedMesh mesh;
@@ -85,11 +89,14 @@ int main(int argc, char** argv) {
     tool::print_error(error);
     return tool::kExitFailure;
   }
-  if (!mesh.attributes.empty())  // never a silent loss: the simplifier keeps geometry only so far
-    std::fprintf(stderr,
-                 "pmz-simplify: %s: attributes not kept yet (%s): the output holds positions "
-                 "and triangles only\n",
-                 input.c_str(), mesh.attributes.describe().c_str());
+  {  // never a silent loss: OFF and STL hold geometry only
+    const std::string ext = format.empty() ? output.substr(output.find_last_of('.') + 1) : format;
+    if (!mesh.attributes.empty() && (ext == "off" || ext == "stl"))
+      std::fprintf(stderr,
+                   "pmz-simplify: %s: .%s holds positions and triangles only; the attributes "
+                   "(%s) are not written (use .obj, .ply or .glb)\n",
+                   output.c_str(), ext.c_str(), mesh.attributes.describe().c_str());
+  }
   const uint64_t in_faces = mesh.face_count();
   options.target_faces =
       faces_opt->count() ? faces

@@ -9,6 +9,7 @@
 #include <limits>
 
 #include "attr_collapse.hpp"
+#include "attr_simplify.hpp"
 #include "halfedge.hpp"
 #include "metric.hpp"
 #include "parallel.hpp"
@@ -200,6 +201,7 @@ class Engine {
   // start the vertex itself), and the largest bound of the collapses performed so far.
   bool guard = false;
   std::vector<float> witness;
+  AttributeField attr;  // seams and the attribute term (inactive without attributes)
   double worst_bound = 0;
   double inv_unit4 = 1, unit = 1;
   SimplifyStats stats;
@@ -273,8 +275,15 @@ class Engine {
   }
   float weighted(const Origin& o, double e, float length_ratio) const;
   float cost(const Origin& o, uint32_t x, uint32_t h) const {
-    return weighted(o, quadric_error(o, x),
-                    metric == Metric::qem ? 0.f : edge_length_ratio(m, feat, h));
+    const float c = weighted(o, quadric_error(o, x),
+                             metric == Metric::qem ? 0.f : edge_length_ratio(m, feat, h));
+    return attr.active ? c + attribute_cost(x, h) : c;
+  }
+  // The attribute term of the collapse towards x along h (outgoing u->x, or for the last
+  // neighbour of a boundary vertex the incoming boundary half-edge x->u).
+  float attribute_cost(uint32_t x, uint32_t h) const {
+    if (m.vert[h] == x) return attr.cost(m, m.dest(h), x, kNone, h);
+    return attr.cost(m, m.vert[h], x, h, m.twin[h]);
   }
   float cost(uint32_t u, uint32_t x, uint32_t h) const { return cost(origin(u), x, h); }
   bool find_edge(uint32_t u, uint32_t v, uint32_t& ha, uint32_t& hb) const;
@@ -287,7 +296,7 @@ class Engine {
   // scan() for a vertex whose T is stale: T and the costs in one walk round u.
   Candidate scan_with_torsion(uint32_t u);
   struct Pending {
-    uint32_t x;
+    uint32_t x, h;
     float length_ratio;
     double error;
   };
@@ -368,7 +377,7 @@ Candidate Engine::scan_with_torsion(uint32_t u) {
   for_each_neighbour(m, u, [&](uint32_t x, uint32_t h) {
     t.add(feat, u, x, h);
     if (boundary && m.twin[h] != kNone) return;  // interior directions are never legal for u
-    pending.push_back({x, edge_length_ratio(m, feat, h), quadric_error(o, x)});
+    pending.push_back({x, h, edge_length_ratio(m, feat, h), quadric_error(o, x)});
   });
   feat.vertex[u].torsion = t.value();
   stale[u] &= uint8_t(~kTorsionStale);
@@ -376,7 +385,8 @@ Candidate Engine::scan_with_torsion(uint32_t u) {
   Candidate best{kInfinity, kNone};
   for (const Pending& p : pending) {
     ++stats.cost_evaluations;
-    const float c = weighted(o, p.error, p.length_ratio);
+    float c = weighted(o, p.error, p.length_ratio);
+    if (attr.active) c += attribute_cost(p.x, p.h);
     if (c < best.cost || best.target == kNone) best = {c, p.x};
   }
   return best;
@@ -403,6 +413,8 @@ bool Engine::legal(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb) {
     if (m.twin[HalfEdgeMesh::next(h)] == kNone && m.twin[HalfEdgeMesh::prev(h)] == kNone)
       return false;
   }
+  // Seams and material boundaries: along them or not at all (spec/algorithm.md section 7).
+  if (attr.active && !attr.allowed(m, u, v)) return false;
   const uint32_t vl = ha != kNone ? m.vert[HalfEdgeMesh::prev(ha)] : kNone;
   const uint32_t vr = hb != kNone ? m.vert[HalfEdgeMesh::prev(hb)] : kNone;
   // Link condition: u and v share no neighbour but the wedge vertices (else the collapse
@@ -515,6 +527,7 @@ void Engine::perform(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb, float c) 
   const uint32_t vl = ha != kNone ? m.vert[HalfEdgeMesh::prev(ha)] : kNone;
   const uint32_t vr = hb != kNone ? m.vert[HalfEdgeMesh::prev(hb)] : kNone;
   record->push_back({u, v, vl, vr, c});
+  if (attr.active) attr.collapse(m, u, ha, hb);
   if (metric == Metric::qem) {
     quad[v].add(quad[u]);
     self_error[v] = quad[v].error(m.p(v)) * inv_unit4;
@@ -696,6 +709,8 @@ bool Engine::init(const IndexedMesh& input, const SimplifyOptions& options, std:
   unit = mean_edge_length(m);
   if (!(unit > 0)) unit = 1;
   inv_unit4 = 1.0 / (unit * unit * unit * unit);
+  attr.init(m, input.attributes.corner_wedges, input.attributes.face_materials, input.attributes,
+            options.attributes, params.attribute_weight, unit);
   initial_quadrics(m, params.boundary_weight, quad);
   feat.epsilon = params.epsilon;
   if (metric == Metric::multifeature) feat.compute_all(m);
@@ -864,10 +879,22 @@ void reorder_for_locality(const IndexedMesh& in, IndexedMesh& out, std::vector<u
   for (uint32_t f = 0; f < faces; ++f) ++start[first(f) + 1];
   for (uint32_t v = 0; v < n; ++v) start[v + 1] += start[v];
   out.indices.resize(in.indices.size());
+  // The attributes follow: corners and face materials with their faces, wedges renumbered.
+  const MeshAttributes& a = in.attributes;
+  const bool corner_wedges = a.corner_wedges.size() == in.indices.size();
+  const bool materials = a.face_materials.size() == faces;
+  if (!a.empty()) {
+    out.attributes = a;
+    for (uint32_t& v : out.attributes.wedge_vertices) v = v < n ? new_id[v] : v;
+  }
   for (uint32_t f = 0; f < faces; ++f) {
     const uint32_t slot = start[first(f)]++;
-    for (int k = 0; k < 3; ++k)
+    for (int k = 0; k < 3; ++k) {
       out.indices[size_t(slot) * 3 + k] = new_id[in.indices[size_t(f) * 3 + k]];
+      if (corner_wedges)
+        out.attributes.corner_wedges[size_t(slot) * 3 + k] = a.corner_wedges[size_t(f) * 3 + k];
+    }
+    if (materials) out.attributes.face_materials[slot] = a.face_materials[f];
   }
 }
 

@@ -221,6 +221,8 @@ void TriangleBvh::build(const float* positions, const uint32_t* indices, size_t 
   }
 
   triangles_.resize(face_count * 9);
+  faces_.resize(face_count);
+  for (size_t i = 0; i < face_count; ++i) faces_[i] = prims[i].face;
   for (size_t i = 0; i < face_count; ++i)
     for (int j = 0; j < 3; ++j)
       std::copy_n(positions + size_t(indices[size_t(prims[i].face) * 3 + j]) * 3, 3,

@@ -18,6 +18,10 @@ class TriangleBvh {
   double closest_distance2(const double p[3], uint32_t& hint) const;
 
   size_t triangle_count() const { return triangles_.size() / 9; }
+  // A triangle in leaf order (as closest_distance2's hint names it): its 9 coordinates, and
+  // the face it was built from.
+  const float* triangle(uint32_t t) const { return &triangles_[size_t(t) * 9]; }
+  uint32_t face_of(uint32_t t) const { return faces_[t]; }
 
  private:
   struct Node {
@@ -28,6 +32,7 @@ class TriangleBvh {
   };
   std::vector<Node> nodes_;
   std::vector<float> triangles_;  // 9 floats per triangle, in leaf order
+  std::vector<uint32_t> faces_;   // input face of each triangle, in leaf order
 };
 
 // Squared distance from p to triangle (a, b, c), closest point by Voronoi regions (Ericson,

@@ -3,13 +3,13 @@
 #include "pmz/compare.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
-#include <thread>
 #include <vector>
 
 #include "bvh.hpp"
+#include "compare_attributes.hpp"
+#include "sampling.hpp"
 
 namespace pmz {
 
@@ -26,13 +26,8 @@ struct Partial {
   uint64_t face_samples = 0, samples = 0;
 };
 
-inline uint64_t splitmix64(uint64_t& state) {
-  uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
-inline double uniform01(uint64_t& state) { return double(splitmix64(state) >> 11) * 0x1.0p-53; }
+using sampling::triangle_area;
+using sampling::uniform01;
 
 bool validate(const IndexedMesh& m, const char* name, std::string& error) {
   if (m.face_count() == 0) {
@@ -47,14 +42,6 @@ bool validate(const IndexedMesh& m, const char* name, std::string& error) {
       return false;
     }
   return true;
-}
-
-double triangle_area(const float* a, const float* b, const float* c) {
-  double u[3], v[3];
-  for (int k = 0; k < 3; ++k) u[k] = double(b[k]) - a[k], v[k] = double(c[k]) - a[k];
-  double x = u[1] * v[2] - u[2] * v[1], y = u[2] * v[0] - u[0] * v[2],
-         z = u[0] * v[1] - u[1] * v[0];
-  return 0.5 * std::sqrt(x * x + y * y + z * z);
 }
 
 double length(const float* a, const float* b) {
@@ -95,63 +82,52 @@ DistanceStats one_direction(const IndexedMesh& from, const TriangleBvh& to, uint
   const uint64_t n_items = n_vertices + n_edges + faces;
   const uint64_t n_blocks = (n_items + kBlockItems - 1) / kBlockItems;
   std::vector<Partial> partials(n_blocks);
-  std::atomic<uint64_t> next_block{0};
-
-  auto worker = [&] {
-    uint32_t hint = 0xFFFFFFFFu;
-    for (uint64_t block; (block = next_block.fetch_add(1)) < n_blocks;) {
-      Partial acc;
-      auto measure = [&](const double p[3], DistanceStats::Site site) {
-        double d = std::sqrt(to.closest_distance2(p, hint));
-        if (d > acc.max) acc.max = d, std::copy(p, p + 3, acc.max_at), acc.max_on = site;
-        const bool on_face = site == DistanceStats::Site::face;
-        acc.all_sum += d, acc.all_sum2 += d * d, acc.samples++;
-        if (on_face) acc.face_sum += d, acc.face_sum2 += d * d, acc.face_samples++;
-      };
-      const uint64_t end = std::min(n_items, (block + 1) * kBlockItems);
-      for (uint64_t item = block * kBlockItems; item < end; ++item) {
-        uint64_t rng = seed ^ (item * 0xD1B54A32D192ED03ull);
-        if (item < n_vertices) {
-          const float* v = pos + size_t(vertices[item]) * 3;
-          const double p[3] = {v[0], v[1], v[2]};
-          measure(p, DistanceStats::Site::vertex);
-        } else if (item < n_vertices + n_edges) {
-          const uint64_t e = edges[item - n_vertices];
-          const float* a = pos + (e >> 32) * 3;
-          const float* b = pos + (e & 0xFFFFFFFFu) * 3;
-          // Stratified along the edge; the fractional expected count is rounded at random.
-          const uint64_t n = uint64_t(length(a, b) * edge_density + uniform01(rng));
-          for (uint64_t k = 0; k < n; ++k) {
-            const double t = (double(k) + uniform01(rng)) / double(n);
-            const double p[3] = {a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]),
-                                 a[2] + t * (b[2] - a[2])};
-            measure(p, DistanceStats::Site::edge);
-          }
-        } else {
-          const uint32_t f = uint32_t(item - n_vertices - n_edges);
-          const float* a = pos + size_t(idx[f * 3]) * 3;
-          const float* b = pos + size_t(idx[f * 3 + 1]) * 3;
-          const float* c = pos + size_t(idx[f * 3 + 2]) * 3;
-          const uint64_t n = uint64_t(triangle_area(a, b, c) * face_density + uniform01(rng));
-          for (uint64_t k = 0; k < n; ++k) {
-            // Uniform point in the triangle (square-root warp of two uniforms).
-            const double s = std::sqrt(uniform01(rng)), r = uniform01(rng);
-            const double wa = 1 - s, wb = s * (1 - r), wc = s * r;
-            const double p[3] = {wa * a[0] + wb * b[0] + wc * c[0],
-                                 wa * a[1] + wb * b[1] + wc * c[1],
-                                 wa * a[2] + wb * b[2] + wc * c[2]};
-            measure(p, DistanceStats::Site::face);
-          }
+  sampling::for_each_block(n_blocks, threads, [&](uint64_t block, uint32_t& hint) {
+    Partial acc;
+    auto measure = [&](const double p[3], DistanceStats::Site site) {
+      double d = std::sqrt(to.closest_distance2(p, hint));
+      if (d > acc.max) acc.max = d, std::copy(p, p + 3, acc.max_at), acc.max_on = site;
+      const bool on_face = site == DistanceStats::Site::face;
+      acc.all_sum += d, acc.all_sum2 += d * d, acc.samples++;
+      if (on_face) acc.face_sum += d, acc.face_sum2 += d * d, acc.face_samples++;
+    };
+    const uint64_t end = std::min(n_items, (block + 1) * kBlockItems);
+    for (uint64_t item = block * kBlockItems; item < end; ++item) {
+      uint64_t rng = seed ^ (item * 0xD1B54A32D192ED03ull);
+      if (item < n_vertices) {
+        const float* v = pos + size_t(vertices[item]) * 3;
+        const double p[3] = {v[0], v[1], v[2]};
+        measure(p, DistanceStats::Site::vertex);
+      } else if (item < n_vertices + n_edges) {
+        const uint64_t e = edges[item - n_vertices];
+        const float* a = pos + (e >> 32) * 3;
+        const float* b = pos + (e & 0xFFFFFFFFu) * 3;
+        // Stratified along the edge; the fractional expected count is rounded at random.
+        const uint64_t n = uint64_t(length(a, b) * edge_density + uniform01(rng));
+        for (uint64_t k = 0; k < n; ++k) {
+          const double t = (double(k) + uniform01(rng)) / double(n);
+          const double p[3] = {a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]),
+                               a[2] + t * (b[2] - a[2])};
+          measure(p, DistanceStats::Site::edge);
+        }
+      } else {
+        const uint32_t f = uint32_t(item - n_vertices - n_edges);
+        const float* a = pos + size_t(idx[f * 3]) * 3;
+        const float* b = pos + size_t(idx[f * 3 + 1]) * 3;
+        const float* c = pos + size_t(idx[f * 3 + 2]) * 3;
+        const uint64_t n = uint64_t(triangle_area(a, b, c) * face_density + uniform01(rng));
+        for (uint64_t k = 0; k < n; ++k) {
+          double w[3];
+          sampling::uniform_barycentric(rng, w);
+          const double p[3] = {w[0] * a[0] + w[1] * b[0] + w[2] * c[0],
+                               w[0] * a[1] + w[1] * b[1] + w[2] * c[1],
+                               w[0] * a[2] + w[1] * b[2] + w[2] * c[2]};
+          measure(p, DistanceStats::Site::face);
         }
       }
-      partials[block] = acc;
     }
-  };
-  threads = std::max(1u, std::min<unsigned>(threads, unsigned(std::min<uint64_t>(n_blocks, 64))));
-  std::vector<std::thread> pool;
-  for (unsigned t = 1; t < threads; ++t) pool.emplace_back(worker);
-  worker();
-  for (auto& t : pool) t.join();
+    partials[block] = acc;
+  });
 
   Partial total;
   for (const Partial& p : partials) {
@@ -213,6 +189,9 @@ bool compare(const IndexedMesh& original, const IndexedMesh& other, const Compar
   }
 
   result.forward = one_direction(original, to_other, samples, options.seed, options.threads);
+  if (options.attributes)
+    compare_attributes(original, other, to_other, samples, options.seed ^ 0x61747472ull,
+                       options.threads, result.attributes);
   if (options.both_directions) {
     result.backward =
         one_direction(other, to_original, samples, options.seed ^ 0x5bd1e995ull, options.threads);

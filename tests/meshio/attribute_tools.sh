@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Tool behaviour with attributes and bad attribute input (ctest encode_attribute_tools):
-# pmz-encode / pmz-simplify say in one line that attributes are not encoded / kept yet, report
+# pmz-encode says in one line that attributes are not encoded yet, pmz-simplify keeps them (and
+# says so when the output format cannot), both report
 # triangulation, and refuse a bad glTF with one line naming it, writing nothing.
 # usage: attribute_tools.sh PMZ_ENCODE PMZ_SIMPLIFY WORK_DIR
 set -euo pipefail
@@ -32,9 +33,14 @@ grep -qx "pmz: quad.obj: triangulated 1 polygon into 2 triangles" encode.err ||
 grep -qx "pmz-encode: quad.obj: attributes not encoded yet (texture coordinates, normals, 1 material): the .pmz holds positions and triangles only" encode.err ||
   fail "no attribute line: $(cat encode.err)"
 [ "$(grep -c 'attributes not' encode.err)" = 1 ] || fail "attribute line repeated"
+# pmz-simplify keeps the attributes (simplified along its seams); OFF cannot hold them: one line.
 "$simplify" quad.obj -o small.obj --faces 2 2> simplify.err || fail "pmz-simplify: $(cat simplify.err)"
-grep -q "pmz-simplify: quad.obj: attributes not kept yet (texture coordinates, normals, 1 material)" simplify.err ||
-  fail "no pmz-simplify attribute line: $(cat simplify.err)"
+if grep -q "attributes" simplify.err; then fail "pmz-simplify attribute line for .obj: $(cat simplify.err)"; fi
+grep -q "^vt " small.obj && grep -q "^vn " small.obj && grep -q "^usemtl paper" small.obj ||
+  fail "small.obj lost its attributes"
+"$simplify" quad.obj -o small.off --faces 2 2> simplify.err || fail "pmz-simplify: $(cat simplify.err)"
+grep -qx "pmz-simplify: small.off: .off holds positions and triangles only; the attributes (texture coordinates, normals, 1 material) are not written (use .obj, .ply or .glb)" simplify.err ||
+  fail "no pmz-simplify .off attribute line: $(cat simplify.err)"
 
 # A plain mesh gets no attribute line.
 printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n' > plain.obj

@@ -17,6 +17,14 @@ inline constexpr uint32_t kNoVertex = 0xFFFFFFFFu;
 // original vertex farther from the surface than the worst distance so far. qem: plain QSlim.
 enum class Metric { multifeature, qem, guarded };
 
+// How attribute wedges (texture coordinates, normals, colours) and materials steer the engine
+// (spec/algorithm.md section 7). geometry_only: ignored, the collapses of a mesh without
+// attributes. seams: seams and material boundaries are discontinuity curves (a vertex moves
+// along its seam or stays; seam corners stay). full (the default): seams plus the attribute
+// deviation of each collapse added to its cost. A mesh without attributes is simplified the
+// same way in every mode.
+enum class AttributeMode { geometry_only, seams, full };
+
 // One half-edge collapse u -> v (v keeps its position; u disappears), in *input* vertex ids.
 // vl: third vertex of the face (u, v, vl) holding the directed edge u->v; vr: third vertex of
 // the face (v, u, vr) holding v->u. One of them is kNoVertex when (u, v) is a boundary edge.
@@ -39,6 +47,9 @@ struct MetricParams {
   // guarded: a collapse whose bound b exceeds guard_slack times the largest bound of the
   // collapses performed so far has its cost multiplied by (b / (guard_slack * that))^2.
   float guard_slack = 0.8f;
+  // AttributeMode::full: weight of the attribute deviation (in units where one edge's typical
+  // change of an attribute, moved by one mean edge length, weighs like that much distance).
+  float attribute_weight = 1.0f;
 };
 
 // Where the time went (seconds), filled when SimplifyOptions::stats is set.
@@ -50,6 +61,7 @@ struct SimplifyStats {
 
 struct SimplifyOptions {
   Metric metric = Metric::guarded;
+  AttributeMode attributes = AttributeMode::full;
   MetricParams params;
   SimplifyStats* stats = nullptr;
   uint64_t target_faces = 0;  // stop at this face count (0: as far as legal collapses go)

@@ -17,6 +17,7 @@ struct CompareOptions {
   uint64_t seed = 0x706d7a2d6d6574ull;  // fixed: results are reproducible run to run
   unsigned threads = 2;                 // results do not depend on it (fixed-block reduction)
   bool both_directions = true;          // false: only ORIGINAL -> OTHER (backward stays zero)
+  bool attributes = true;               // attribute error too, when both meshes carry the attribute
 };
 
 // Distances from samples on one surface to the other, absolute (model units).
@@ -33,13 +34,27 @@ struct DistanceStats {
   Site max_on = Site::vertex;
 };
 
+// Attribute error at corresponding surface points: for area-proportional samples on ORIGINAL,
+// the closest point of OTHER; the attribute interpolated there (from OTHER's corners) against
+// the sample's own. mean and rms over the samples, max the largest.
+struct AttributeErrorStats {
+  double max = 0, mean = 0, rms = 0;
+  uint64_t samples = 0;  // 0: not measured (a mesh lacks the attribute)
+};
+struct AttributeErrors {
+  AttributeErrorStats texcoord;  // |delta (u, v)| of texture coordinate set 0, texture units
+  AttributeErrorStats normal;    // angle between the interpolated normals, degrees
+  AttributeErrorStats color;     // |delta| of the colour (RGB or RGBA, channels 0..1)
+};
+
 struct CompareResult {
-  double diag = 0;          // bounding-box diagonal of ORIGINAL (divide by it for relative)
-  DistanceStats forward;    // samples on ORIGINAL, distance to OTHER
-  DistanceStats backward;   // samples on OTHER, distance to ORIGINAL
-  DistanceStats symmetric;  // max of both maxima (the Hausdorff distance); mean and rms of
-                            // both directions with equal weight
-  double seconds = 0;       // wall time of the comparison (BVH builds + queries)
+  double diag = 0;             // bounding-box diagonal of ORIGINAL (divide by it for relative)
+  DistanceStats forward;       // samples on ORIGINAL, distance to OTHER
+  DistanceStats backward;      // samples on OTHER, distance to ORIGINAL
+  DistanceStats symmetric;     // max of both maxima (the Hausdorff distance); mean and rms of
+                               // both directions with equal weight
+  AttributeErrors attributes;  // CompareOptions::attributes and both meshes carry them
+  double seconds = 0;          // wall time of the comparison (BVH builds + queries)
 };
 
 // Returns false with a one-line message when a mesh has no faces or indices out of range.

@@ -1,0 +1,163 @@
+// Attribute wedges in the collapse engine: seams as discontinuity curves and the attribute
+// deviation term (spec/algorithm.md section 7).
+#include "attr_simplify.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace pmz::detail {
+
+void AttributeField::init(const HalfEdgeMesh& m, const std::vector<uint32_t>& corner_wedges,
+                          const std::vector<uint32_t>& face_materials,
+                          const MeshAttributes& attributes, AttributeMode mode, float weight,
+                          double unit) {
+  const uint32_t faces = m.face_count();
+  const bool wedges = corner_wedges.size() == size_t(faces) * 3 && attributes.has_wedges();
+  const bool materials = face_materials.size() == faces;
+  active = mode != AttributeMode::geometry_only && (wedges || materials);
+  if (!active) return;
+  wedge.assign(m.slot_count(), 0);
+  if (wedges)
+    for (uint32_t f = 0; f < faces; ++f)
+      for (uint32_t k = 0; k < 3; ++k)
+        wedge[HalfEdgeMesh::half_edge(f, k)] = corner_wedges[size_t(f) * 3 + k];
+  if (materials) material = face_materials;
+  cost_term = mode == AttributeMode::full && weight > 0 && wedges;
+  if (!cost_term) return;
+
+  // Each attribute kind as (source array, components); texcoord sets, normals, colours.
+  struct Kind {
+    const std::vector<float>* data;
+    uint32_t components;
+  };
+  std::vector<Kind> kinds;
+  for (const auto& set : attributes.texcoords) kinds.push_back({&set, 2});
+  if (!attributes.normals.empty()) kinds.push_back({&attributes.normals, 3});
+  if (!attributes.colors.empty())
+    kinds.push_back({&attributes.colors, attributes.color_components});
+  dims = 0;
+  for (const Kind& k : kinds) dims += k.components;
+  const uint32_t wedge_count = attributes.wedge_count();
+  values.assign(size_t(wedge_count) * dims, 0.f);
+  uint32_t offset = 0;
+  for (const Kind& kind : kinds) {
+    const uint32_t c = kind.components;
+    if (kind.data->size() < size_t(wedge_count) * c) {  // not one value per wedge: left out
+      offset += c;
+      continue;
+    }
+    auto at = [&](uint32_t wd) { return kind.data->data() + size_t(wd) * c; };
+    // The typical change along an edge: the mean over interior non-seam edges, each once.
+    double sum = 0;
+    uint64_t count = 0;
+    for (uint32_t h = 0; h < m.slot_count(); ++h) {
+      const uint32_t t = m.twin[h];
+      if (m.vert[h] == kNone || t == kNone || t < h || is_seam(m, h)) continue;
+      const float *a = at(wedge[h]), *b = at(wedge[HalfEdgeMesh::next(h)]);
+      double d2 = 0;
+      for (uint32_t i = 0; i < c; ++i) d2 += double(a[i] - b[i]) * (a[i] - b[i]);
+      sum += std::sqrt(d2), ++count;
+    }
+    const double typical = count ? sum / double(count) : 0;
+    if (typical > 0 && std::isfinite(typical))
+      for (uint32_t wd = 0; wd < wedge_count; ++wd)
+        for (uint32_t i = 0; i < c; ++i)
+          values[size_t(wd) * dims + offset + i] = float(at(wd)[i] / typical);
+    offset += c;
+  }
+  scale = double(weight) / (unit * unit);
+}
+
+bool AttributeField::allowed(const HalfEdgeMesh& m, uint32_t u, uint32_t x) const {
+  uint32_t seams = 0;
+  bool along = false;
+  for_each_neighbour(m, u, [&](uint32_t w, uint32_t h) {
+    if (m.twin[h] == kNone || !is_seam(m, h)) return;
+    ++seams;
+    along |= w == x;
+  });
+  return seams == 0 || (seams == 2 && along);
+}
+
+template <class F>
+void AttributeField::for_each_moved_corner(const HalfEdgeMesh& m, uint32_t u, uint32_t ha,
+                                           uint32_t hb, F&& f) const {
+  const uint32_t fb = hb != kNone ? HalfEdgeMesh::face(hb) : kNone;
+  if (ha == kNone) {  // only R: every corner takes v's wedge in R
+    const uint32_t wr = wedge[hb];
+    for_each_outgoing(m, u, [&](uint32_t h) {
+      if (HalfEdgeMesh::face(h) != fb) f(h, wr);
+    });
+    return;
+  }
+  const uint32_t wl = wedge[HalfEdgeMesh::next(ha)];
+  const uint32_t wr = hb != kNone ? wedge[hb] : wl;
+  // From L around u away from R: the leading corners naming u's wedge in L form the L arc, the
+  // rest the R arc (collapse_left_arc in attr_collapse.hpp, walked here without a buffer since
+  // the costs are evaluated on two threads). Only L: all L's.
+  const uint32_t u_wedge_l = wedge[ha];
+  bool left = true;
+  uint32_t last = ha;
+  for (uint32_t h = m.rotate(ha); h != kNone && HalfEdgeMesh::face(h) != fb; h = m.rotate(h)) {
+    left = left && (hb == kNone || wedge[h] == u_wedge_l);
+    f(h, left ? wl : wr);
+    last = h;
+  }
+  if (hb == kNone || m.rotate(last) != kNone) return;
+  // The walk met the boundary before R (u on the boundary, (u, v) interior): the faces between
+  // R and the other end of the fan, walked back from R, are R's arc.
+  for (uint32_t t = m.twin[HalfEdgeMesh::next(hb)]; t != kNone;) {
+    const uint32_t h = HalfEdgeMesh::next(t);
+    if (HalfEdgeMesh::face(h) == HalfEdgeMesh::face(ha)) break;
+    f(h, wr);
+    t = m.twin[h];
+  }
+}
+
+float AttributeField::cost(const HalfEdgeMesh& m, uint32_t u, uint32_t x, uint32_t ha,
+                           uint32_t hb) const {
+  if (!allowed(m, u, x)) return std::numeric_limits<float>::infinity();
+  if (!cost_term) return 0.f;
+  const float *pu = m.p(u), *px = m.p(x);
+  double sum = 0;
+  for_each_moved_corner(m, u, ha, hb, [&](uint32_t h, uint32_t moved) {
+    const float* pb = m.p(m.dest(h));
+    const float* pc = m.p(m.vert[HalfEdgeMesh::prev(h)]);
+    double e1[3], e2[3], d[3];
+    for (int k = 0; k < 3; ++k)
+      e1[k] = double(pb[k]) - pu[k], e2[k] = double(pc[k]) - pu[k], d[k] = double(px[k]) - pu[k];
+    const double d11 = e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2];
+    const double d12 = e1[0] * e2[0] + e1[1] * e2[1] + e1[2] * e2[2];
+    const double d22 = e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2];
+    const double r1 = d[0] * e1[0] + d[1] * e1[1] + d[2] * e1[2];
+    const double r2 = d[0] * e2[0] + d[1] * e2[1] + d[2] * e2[2];
+    const double den = d11 * d22 - d12 * d12;  // (2 * area)^2
+    if (!(den > 0)) return;
+    // p_x in the face's barycentric frame (in its plane; outside the face, so extrapolated),
+    // clamped so a needle's huge coordinates do not swamp the sum.
+    const double lb = std::clamp((d22 * r1 - d12 * r2) / den, -4.0, 4.0);
+    const double lc = std::clamp((d11 * r2 - d12 * r1) / den, -4.0, 4.0);
+    const double la = 1 - lb - lc;
+    const float* a = &values[size_t(wedge[h]) * dims];
+    const float* b = &values[size_t(wedge[HalfEdgeMesh::next(h)]) * dims];
+    const float* c = &values[size_t(wedge[HalfEdgeMesh::prev(h)]) * dims];
+    const float* n = &values[size_t(moved) * dims];
+    double err = 0;
+    for (uint32_t i = 0; i < dims; ++i) {
+      const double e = la * a[i] + lb * b[i] + lc * c[i] - n[i];
+      err += e * e;
+    }
+    sum += 0.5 * std::sqrt(den) * err;
+  });
+  return float(sum * scale);
+}
+
+void AttributeField::collapse(const HalfEdgeMesh& m, uint32_t u, uint32_t ha, uint32_t hb) {
+  // Decided on the wedges as they are, then written (the walk reads u's old wedges).
+  moved_.clear();
+  for_each_moved_corner(m, u, ha, hb, [&](uint32_t h, uint32_t w) { moved_.push_back({h, w}); });
+  for (const auto& [h, w] : moved_) wedge[h] = w;
+}
+
+}  // namespace pmz::detail

@@ -1,0 +1,61 @@
+// Internal: attribute wedges on the collapse engine's half-edge mesh (spec/algorithm.md section
+// 7). Seams and material boundaries are discontinuity curves: a collapse moves a vertex along a
+// seam or not at all, and seam corners stay. The attribute deviation a collapse causes at the
+// corners it re-points is added to the geometric cost.
+#pragma once
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "halfedge.hpp"
+#include "pmz/simplify.hpp"
+
+namespace pmz::detail {
+
+struct AttributeField {
+  bool active = false;     // the mesh has wedges or materials and the mode is not geometry_only
+  bool cost_term = false;  // AttributeMode::full with a positive weight
+  // Per half-edge slot: the attribute wedge of the corner at its origin (0 everywhere when the
+  // mesh has materials but no wedges).
+  std::vector<uint32_t> wedge;
+  std::vector<uint32_t> material;  // per face, or empty
+  // Per wedge, `dims` values: every attribute divided by its mean change along a non-seam edge
+  // of the input, times its weight, so one typical edge's change counts 1 whatever the unit.
+  std::vector<float> values;
+  uint32_t dims = 0;
+  double scale = 0;  // attribute_weight / L^2 (L: the metric's unit of length)
+
+  // corner_wedges / face_materials in the engine's face order; values from `attributes`.
+  void init(const HalfEdgeMesh& m, const std::vector<uint32_t>& corner_wedges,
+            const std::vector<uint32_t>& face_materials, const MeshAttributes& attributes,
+            AttributeMode mode, float weight, double unit);
+
+  // Whether the interior edge of half-edge h (twin present) is a seam: the faces on its two
+  // sides name different wedges at either end, or have different materials.
+  bool is_seam(const HalfEdgeMesh& m, uint32_t h) const {
+    const uint32_t t = m.twin[h];
+    return wedge[h] != wedge[HalfEdgeMesh::next(t)] || wedge[HalfEdgeMesh::next(h)] != wedge[t] ||
+           (!material.empty() &&
+            material[HalfEdgeMesh::face(h)] != material[HalfEdgeMesh::face(t)]);
+  }
+  // The seam rule for u -> x: u on no seam edge moves anywhere; u on exactly two moves along
+  // one of them; seam ends and corners (one, three or more seam edges) stay.
+  bool allowed(const HalfEdgeMesh& m, uint32_t u, uint32_t x) const;
+  // The attribute term of u -> x (ha: u->x in L, hb: x->u in R, either kNone): infinity when
+  // the seam rule forbids it, else scale times the sum over u's surviving faces of
+  // area * |A_f(p_x) - a'|^2, A_f the face's linear attribute field (extrapolated in its
+  // plane) and a' the value the collapse rule gives the corner moved to p_x.
+  float cost(const HalfEdgeMesh& m, uint32_t u, uint32_t x, uint32_t ha, uint32_t hb) const;
+  // Applies the collapse rule to u's corners outside L and R; before the topology changes.
+  void collapse(const HalfEdgeMesh& m, uint32_t u, uint32_t ha, uint32_t hb);
+
+ private:
+  // f(h, w) for each corner h of u outside L and R with the wedge w the collapse rule
+  // (attr_collapse.hpp) gives it.
+  template <class F>
+  void for_each_moved_corner(const HalfEdgeMesh& m, uint32_t u, uint32_t ha, uint32_t hb,
+                             F&& f) const;
+  std::vector<std::pair<uint32_t, uint32_t>> moved_;  // collapse(): corner, new wedge
+};
+
+}  // namespace pmz::detail

@@ -1,0 +1,175 @@
+// Attribute error at corresponding surface points: a sample on ORIGINAL, the closest point on
+// OTHER, the attributes interpolated at both compared (texture space, normal angle, colour).
+#include "compare_attributes.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "sampling.hpp"
+
+namespace pmz {
+
+namespace {
+
+constexpr uint32_t kBlockFaces = 2048;
+constexpr double kDegreesPerRadian =
+    57.295779513082321;  // fixed blocks reduced in order: any thread count agrees
+
+using sampling::triangle_area;
+using sampling::uniform01;
+
+double dot3(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+// Barycentric coordinates of the point of triangle (a, b, c) closest to p (Ericson, Real-Time
+// Collision Detection 5.1.5); a degenerate triangle gives its first corner.
+void closest_barycentric(const double p[3], const float* fa, const float* fb, const float* fc,
+                         double w[3]) {
+  double ab[3], ac[3], ap[3], bp[3], cp[3];
+  for (int k = 0; k < 3; ++k)
+    ab[k] = double(fb[k]) - fa[k], ac[k] = double(fc[k]) - fa[k], ap[k] = p[k] - fa[k],
+    bp[k] = p[k] - fb[k], cp[k] = p[k] - fc[k];
+  auto set = [&](double a, double b, double c) { w[0] = a, w[1] = b, w[2] = c; };
+  const double d1 = dot3(ab, ap), d2 = dot3(ac, ap);
+  if (d1 <= 0 && d2 <= 0) return set(1, 0, 0);
+  const double d3 = dot3(ab, bp), d4 = dot3(ac, bp);
+  if (d3 >= 0 && d4 <= d3) return set(0, 1, 0);
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+    const double t = d1 - d3 != 0 ? d1 / (d1 - d3) : 0;
+    return set(1 - t, t, 0);
+  }
+  const double d5 = dot3(ab, cp), d6 = dot3(ac, cp);
+  if (d6 >= 0 && d5 <= d6) return set(0, 0, 1);
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+    const double t = d2 - d6 != 0 ? d2 / (d2 - d6) : 0;
+    return set(1 - t, 0, t);
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) {
+    const double den = (d4 - d3) + (d5 - d6);
+    const double t = den != 0 ? (d4 - d3) / den : 0;
+    return set(0, 1 - t, t);
+  }
+  const double sum = va + vb + vc;
+  if (!(sum > 0)) return set(1, 0, 0);
+  set(va / sum, vb / sum, vc / sum);
+}
+
+// One attribute of one mesh: `components` values per wedge, interpolated over a face.
+struct Field {
+  const std::vector<float>* values = nullptr;
+  uint32_t stride = 0, components = 0;
+  void interpolate(const IndexedMesh& m, uint32_t f, const double w[3], double* out) const {
+    for (uint32_t i = 0; i < components; ++i) out[i] = 0;
+    for (int k = 0; k < 3; ++k) {
+      const float* v =
+          values->data() + size_t(m.attributes.corner_wedges[size_t(f) * 3 + k]) * stride;
+      for (uint32_t i = 0; i < components; ++i) out[i] += w[k] * v[i];
+    }
+  }
+};
+
+enum Kind { kTexcoord, kNormal, kColor, kKinds };
+
+struct Partial {
+  double sum[kKinds] = {}, sum2[kKinds] = {}, max[kKinds] = {};
+  uint64_t n[kKinds] = {};
+};
+
+}  // namespace
+
+void compare_attributes(const IndexedMesh& original, const IndexedMesh& other,
+                        const TriangleBvh& to_other, uint64_t face_samples, uint64_t seed,
+                        unsigned threads, AttributeErrors& out) {
+  out = AttributeErrors();
+  const MeshAttributes &a = original.attributes, &b = other.attributes;
+  if (a.corner_wedges.size() != original.indices.size() ||
+      b.corner_wedges.size() != other.indices.size() || original.indices.empty())
+    return;
+  // Each kind measured when both meshes have one value per wedge.
+  Field fa[kKinds], fb[kKinds];
+  auto pick = [](const MeshAttributes& m, Kind kind, Field& f) {
+    const std::vector<float>* v = nullptr;
+    uint32_t stride = 0;
+    if (kind == kTexcoord && !m.texcoords.empty()) v = &m.texcoords[0], stride = 2;
+    if (kind == kNormal && !m.normals.empty()) v = &m.normals, stride = 3;
+    if (kind == kColor && !m.colors.empty()) v = &m.colors, stride = m.color_components;
+    if (v && stride && v->size() >= size_t(m.wedge_count()) * stride) f = {v, stride, stride};
+  };
+  bool any = false;
+  for (int k = 0; k < kKinds; ++k) {
+    pick(a, Kind(k), fa[k]);
+    pick(b, Kind(k), fb[k]);
+    if (!fa[k].values || !fb[k].values) {
+      fa[k].values = nullptr;
+      continue;
+    }
+    fa[k].components = fb[k].components = std::min(fa[k].components, fb[k].components);
+    any = true;
+  }
+  if (!any) return;
+
+  const float* pos = original.positions.data();
+  const uint32_t* idx = original.indices.data();
+  const uint32_t faces = original.face_count();
+  double total_area = 0;
+  for (uint32_t f = 0; f < faces; ++f)
+    total_area += triangle_area(pos + size_t(idx[f * 3]) * 3, pos + size_t(idx[f * 3 + 1]) * 3,
+                                pos + size_t(idx[f * 3 + 2]) * 3);
+  const double density = total_area > 0 ? double(face_samples) / total_area : 0;
+  const uint64_t blocks = (faces + kBlockFaces - 1) / kBlockFaces;
+  std::vector<Partial> partials(blocks);
+  sampling::for_each_block(blocks, threads, [&](uint64_t block, uint32_t& hint) {
+    Partial acc;
+    const uint32_t end = uint32_t(std::min<uint64_t>(faces, (block + 1) * kBlockFaces));
+    for (uint32_t f = uint32_t(block * kBlockFaces); f < end; ++f) {
+      uint64_t rng = seed ^ (uint64_t(f) * 0xD1B54A32D192ED03ull);
+      const float* pa = pos + size_t(idx[f * 3]) * 3;
+      const float* pb = pos + size_t(idx[f * 3 + 1]) * 3;
+      const float* pc = pos + size_t(idx[f * 3 + 2]) * 3;
+      const uint64_t n = uint64_t(triangle_area(pa, pb, pc) * density + uniform01(rng));
+      for (uint64_t s = 0; s < n; ++s) {
+        double w[3];
+        sampling::uniform_barycentric(rng, w);
+        double p[3];
+        for (int k = 0; k < 3; ++k) p[k] = w[0] * pa[k] + w[1] * pb[k] + w[2] * pc[k];
+        to_other.closest_distance2(p, hint);
+        const float* t = to_other.triangle(hint);
+        double wo[3];
+        closest_barycentric(p, t, t + 3, t + 6, wo);
+        const uint32_t g = to_other.face_of(hint);
+        for (int k = 0; k < kKinds; ++k) {
+          if (!fa[k].values) continue;
+          double va[4], vb[4];
+          fa[k].interpolate(original, f, w, va);
+          fb[k].interpolate(other, g, wo, vb);
+          double e;
+          if (k == kNormal) {
+            const double la = std::sqrt(dot3(va, va)), lb = std::sqrt(dot3(vb, vb));
+            if (!(la > 0) || !(lb > 0)) continue;
+            e = std::acos(std::clamp(dot3(va, vb) / (la * lb), -1.0, 1.0)) * kDegreesPerRadian;
+          } else {
+            double d2 = 0;
+            for (uint32_t i = 0; i < fa[k].components; ++i) d2 += (va[i] - vb[i]) * (va[i] - vb[i]);
+            e = std::sqrt(d2);
+          }
+          acc.sum[k] += e, acc.sum2[k] += e * e, acc.max[k] = std::max(acc.max[k], e), ++acc.n[k];
+        }
+      }
+    }
+    partials[block] = acc;
+  });
+  AttributeErrorStats* stats[kKinds] = {&out.texcoord, &out.normal, &out.color};
+  for (int k = 0; k < kKinds; ++k) {
+    double sum = 0, sum2 = 0, max = 0;
+    uint64_t n = 0;
+    for (const Partial& p : partials)
+      sum += p.sum[k], sum2 += p.sum2[k], max = std::max(max, p.max[k]), n += p.n[k];
+    if (n == 0) continue;
+    *stats[k] = {max, sum / double(n), std::sqrt(sum2 / double(n)), n};
+  }
+}
+
+}  // namespace pmz

@@ -1,0 +1,172 @@
+// Attribute-aware simplification (spec/algorithm.md section 7): seams and material boundaries
+// are discontinuity curves, the attribute term measures what a collapse does to the field, and
+// a mesh without attributes (or AttributeMode::geometry_only) collapses exactly as before.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <vector>
+
+#include "../../encoder/src/metric.hpp"
+#include "pmz/simplify.hpp"
+
+namespace {
+
+// An n x n grid on [0,1]^2 with a gentle bump (so collapses have different costs), two texture
+// charts split at x = 0.5 (the column's vertices have two wedges: u = x on the left, x + 1 on
+// the right) and two materials split at y = 0.5. The seams cross at the centre.
+pmz::IndexedMesh crossing_seams_grid(int n, float bump = 0.05f) {
+  pmz::IndexedMesh m;
+  auto id = [&](int i, int j) { return uint32_t(j * (n + 1) + i); };
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      const float x = float(i) / n, y = float(j) / n;
+      m.positions.insert(m.positions.end(),
+                         {x, y, bump * std::sin(7.f * x + 1.f) * std::cos(5.f * y + 0.5f)});
+    }
+  pmz::MeshAttributes& a = m.attributes;
+  a.texcoords.resize(1);
+  // Wedge of (i, j) in chart c: one per vertex for its own chart, plus a right-chart wedge for
+  // the seam column, appended after.
+  std::vector<uint32_t> right_wedge(size_t(n + 1) * (n + 1), 0);
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      const float x = float(i) / n, y = float(j) / n;
+      a.wedge_vertices.push_back(id(i, j));
+      a.texcoords[0].insert(a.texcoords[0].end(), {2 * i > n ? x + 1 : x, y});
+    }
+  for (int j = 0; j <= n; ++j) {
+    right_wedge[id(n / 2, j)] = a.wedge_count();
+    a.wedge_vertices.push_back(id(n / 2, j));
+    a.texcoords[0].insert(a.texcoords[0].end(), {0.5f + 1, float(j) / n});
+  }
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const uint32_t q[4] = {id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)};
+      const bool right = 2 * i >= n;
+      const uint32_t material = 2 * j >= n;
+      const std::array<std::array<uint32_t, 3>, 2> triangles = {
+          {{q[0], q[1], q[2]}, {q[0], q[2], q[3]}}};
+      for (const auto& t : triangles) {
+        for (int k = 0; k < 3; ++k) {
+          m.indices.push_back(t[k]);
+          const bool on_seam = int(t[k] % (n + 1)) == n / 2;
+          a.corner_wedges.push_back(right && on_seam ? right_wedge[t[k]] : t[k]);
+        }
+        a.face_materials.push_back(material);
+      }
+    }
+  a.materials.resize(2);
+  return m;
+}
+
+TEST(AttributeSimplify, SeamsAreKeptAndTheirCornersStay) {
+  const int n = 24;
+  const pmz::IndexedMesh mesh = crossing_seams_grid(n);
+  for (pmz::AttributeMode mode : {pmz::AttributeMode::seams, pmz::AttributeMode::full}) {
+    pmz::SimplifyOptions options;
+    options.attributes = mode;
+    options.target_faces = 60;
+    pmz::CollapseSequence seq;
+    std::string error;
+    ASSERT_TRUE(pmz::simplify(mesh, options, seq, error)) << error;
+    // Far enough to have moved seam vertices many times.
+    EXPECT_LT(seq.base_indices.size() / 3, 200u);
+    auto column = [&](uint32_t v) { return int(v % (n + 1)); };
+    auto row = [&](uint32_t v) { return int(v / (n + 1)); };
+    uint64_t along_seams = 0;
+    for (const pmz::HalfEdgeCollapse& c : seq.collapses) {
+      const bool vertical = column(c.u) == n / 2, horizontal = row(c.u) == n / 2;
+      // The seam corners (the crossing and the four ends on the boundary) never move.
+      EXPECT_FALSE(vertical && horizontal) << "the seam crossing moved";
+      EXPECT_FALSE(vertical && (row(c.u) == 0 || row(c.u) == n)) << "a seam end moved";
+      EXPECT_FALSE(horizontal && (column(c.u) == 0 || column(c.u) == n)) << "a seam end moved";
+      // A seam vertex moves along its seam only.
+      if (vertical) {
+        EXPECT_EQ(column(c.v), n / 2) << c.u << " -> " << c.v << " left the seam";
+      }
+      if (horizontal) {
+        EXPECT_EQ(row(c.v), n / 2) << c.u << " -> " << c.v << " left the seam";
+      }
+      along_seams += vertical || horizontal;
+    }
+    EXPECT_GT(along_seams, uint64_t(n));  // seams are simplified, not frozen
+    // The result (mesh_after replays the collapse rule): no face straddles a seam. Each face
+    // lies in one chart (left: u <= 0.5, right: u >= 1.5) and its material is its side's.
+    const pmz::IndexedMesh result = pmz::mesh_after(seq, seq.collapses.size());
+    const pmz::MeshAttributes& a = result.attributes;
+    ASSERT_EQ(a.corner_wedges.size(), result.indices.size());
+    ASSERT_EQ(a.face_materials.size(), result.face_count());
+    for (uint32_t f = 0; f < result.face_count(); ++f) {
+      float cx = 0, cy = 0;
+      int right = 0;
+      for (int k = 0; k < 3; ++k) {
+        cx += result.positions[size_t(result.indices[f * 3 + k]) * 3] / 3;
+        cy += result.positions[size_t(result.indices[f * 3 + k]) * 3 + 1] / 3;
+        right += a.texcoords[0][size_t(a.corner_wedges[f * 3 + k]) * 2] > 1;
+      }
+      EXPECT_EQ(right, cx > 0.5f ? 3 : 0) << "face " << f << " straddles the texture seam";
+      EXPECT_EQ(a.face_materials[f], cy > 0.5f ? 1u : 0u) << "face " << f;
+    }
+  }
+}
+
+// Without attributes, or with AttributeMode::geometry_only, the collapses are the same bits.
+TEST(AttributeSimplify, GeometryOnlyIsTheGeometryRun) {
+  const pmz::IndexedMesh seamed = crossing_seams_grid(20);
+  pmz::IndexedMesh plain;
+  plain.positions = seamed.positions;
+  plain.indices = seamed.indices;
+  pmz::SimplifyOptions geometry;
+  geometry.attributes = pmz::AttributeMode::geometry_only;
+  pmz::CollapseSequence a, b, c;
+  std::string error;
+  ASSERT_TRUE(pmz::simplify(seamed, geometry, a, error)) << error;
+  ASSERT_TRUE(pmz::simplify(plain, pmz::SimplifyOptions{}, b, error)) << error;
+  ASSERT_TRUE(pmz::simplify(plain, geometry, c, error)) << error;
+  ASSERT_EQ(a.collapses.size(), b.collapses.size());
+  ASSERT_EQ(b.collapses.size(), c.collapses.size());
+  for (size_t i = 0; i < a.collapses.size(); ++i) {
+    EXPECT_EQ(a.collapses[i].u, b.collapses[i].u);
+    EXPECT_EQ(a.collapses[i].v, b.collapses[i].v);
+    EXPECT_EQ(a.collapses[i].cost, b.collapses[i].cost);
+    EXPECT_EQ(c.collapses[i].u, b.collapses[i].u);
+    EXPECT_EQ(c.collapses[i].v, b.collapses[i].v);
+  }
+  EXPECT_EQ(a.base_indices, b.base_indices);
+}
+
+// The attribute term: zero where the field is linear, positive where a collapse distorts it;
+// a seam vertex's move off its seam is forbidden (infinite) in both attribute modes.
+TEST(AttributeSimplify, AttributeTermMeasuresTheFieldsDistortion) {
+  const int n = 8;
+  pmz::IndexedMesh flat = crossing_seams_grid(n, 0.f);  // texture coordinates linear in each chart
+  flat.attributes.face_materials.clear();
+  flat.attributes.materials.clear();
+  const uint32_t u = 2 * (n + 1) + 2, v = u + 1;  // interior, left chart, off the seam
+  auto cost = [&](const pmz::IndexedMesh& m, pmz::AttributeMode mode, uint32_t a, uint32_t b) {
+    pmz::SimplifyOptions options;
+    options.attributes = mode;
+    return pmz::detail::initial_collapse_cost(m, options, a, b);
+  };
+  // Flat: the geometric cost is zero, and so is the attribute term of a linear field.
+  EXPECT_EQ(cost(flat, pmz::AttributeMode::geometry_only, u, v), 0.f);
+  EXPECT_LT(cost(flat, pmz::AttributeMode::full, u, v), 1e-9f);
+  // u's texture coordinate pushed off the linear field by a quarter of an edge's change:
+  // collapsing u costs, in proportion to the square of the push.
+  pmz::IndexedMesh bent = flat;
+  bent.attributes.texcoords[0][size_t(u) * 2 + 1] += 0.25f / n;
+  const float bent_cost = cost(bent, pmz::AttributeMode::full, u, v);
+  EXPECT_GT(bent_cost, 1e-3f);
+  bent.attributes.texcoords[0][size_t(u) * 2 + 1] += 0.25f / n;  // twice the push
+  EXPECT_NEAR(cost(bent, pmz::AttributeMode::full, u, v) / bent_cost, 4.f, 0.05f);
+  EXPECT_EQ(cost(bent, pmz::AttributeMode::seams, u, v), 0.f);  // seams: no attribute term
+  // A seam vertex: along the seam allowed, off it forbidden.
+  const uint32_t s = 3 * (n + 1) + n / 2;
+  EXPECT_LT(cost(flat, pmz::AttributeMode::full, s, s + (n + 1)), 1e-9f);
+  EXPECT_TRUE(std::isinf(cost(flat, pmz::AttributeMode::full, s, s + 1)));
+  EXPECT_TRUE(std::isinf(cost(flat, pmz::AttributeMode::seams, s, s - 1)));
+  EXPECT_EQ(cost(flat, pmz::AttributeMode::geometry_only, s, s + 1), 0.f);
+}
+
+}  // namespace

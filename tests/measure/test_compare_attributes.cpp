@@ -1,0 +1,92 @@
+// pmz::compare's attribute error at corresponding surface points, on cases with known answers.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "pmz/compare.hpp"
+
+namespace {
+
+// The unit square split into n x n quads, one wedge per vertex: texture coordinates
+// (x, y) + uv_offset, normal (0, sin a, cos a), colour (x, y, 0) + red.
+pmz::IndexedMesh square(int n, float uv_offset = 0, float normal_angle = 0, float red = 0) {
+  pmz::IndexedMesh m;
+  pmz::MeshAttributes& a = m.attributes;
+  a.texcoords.resize(1);
+  a.color_components = 3;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      const float x = float(i) / n, y = float(j) / n;
+      m.positions.insert(m.positions.end(), {x, y, 0.f});
+      a.wedge_vertices.push_back(uint32_t(a.wedge_vertices.size()));
+      a.texcoords[0].insert(a.texcoords[0].end(), {x + uv_offset, y + uv_offset});
+      a.normals.insert(a.normals.end(), {0.f, std::sin(normal_angle), std::cos(normal_angle)});
+      a.colors.insert(a.colors.end(), {x + red, y, 0.f});
+    }
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const uint32_t p = uint32_t(j * (n + 1) + i), q = p + 1, r = p + uint32_t(n) + 1, s = r + 1;
+      m.indices.insert(m.indices.end(), {p, q, s, p, s, r});
+    }
+  m.attributes.corner_wedges = m.indices;
+  return m;
+}
+
+pmz::AttributeErrors measure(const pmz::IndexedMesh& a, const pmz::IndexedMesh& b) {
+  pmz::CompareResult r;
+  std::string error;
+  pmz::CompareOptions options;
+  options.samples = 20000;
+  EXPECT_TRUE(pmz::compare(a, b, options, r, error)) << error;
+  return r.attributes;
+}
+
+// A linear field is reproduced exactly by a coarser mesh of the same plane: no error.
+TEST(CompareAttributes, LinearFieldOnACoarserMeshHasNoError) {
+  const pmz::AttributeErrors e = measure(square(16), square(1));
+  EXPECT_GT(e.texcoord.samples, 10000u);
+  EXPECT_LT(e.texcoord.max, 1e-6);
+  EXPECT_LT(e.normal.max, 1e-3);  // degrees
+  EXPECT_LT(e.color.max, 1e-6);
+}
+
+// Known offsets: |(0.03, 0.03)| in texture space, 10 degrees, 0.1 in red.
+TEST(CompareAttributes, KnownOffsetsAreMeasured) {
+  const float angle = 10.f * float(M_PI) / 180.f;
+  const pmz::AttributeErrors e = measure(square(16), square(3, 0.03f, angle, 0.1f));
+  const double uv = 0.03 * std::sqrt(2.0);
+  EXPECT_NEAR(e.texcoord.mean, uv, 1e-6);
+  EXPECT_NEAR(e.texcoord.rms, uv, 1e-6);
+  EXPECT_NEAR(e.texcoord.max, uv, 1e-6);
+  EXPECT_NEAR(e.normal.mean, 10.0, 1e-3);
+  EXPECT_NEAR(e.color.mean, 0.1, 1e-6);
+}
+
+// A field that is not linear (u = x^2 at the fine mesh's vertices) against its linear
+// interpolation on one quad: the error is the interpolation's, x(1 - x) on average 1/6 minus
+// the fine mesh's own interpolation error (1/6 - 1/(6 n^2)); the sampled mean agrees closely.
+TEST(CompareAttributes, InterpolationErrorOfAQuadraticField) {
+  const int n = 16;
+  pmz::IndexedMesh fine = square(n), coarse = square(1);
+  for (uint32_t w = 0; w < fine.attributes.wedge_count(); ++w) {
+    const float x = fine.positions[size_t(w) * 3];
+    fine.attributes.texcoords[0][size_t(w) * 2] = x * x;
+  }
+  const pmz::AttributeErrors e = measure(fine, coarse);
+  EXPECT_NEAR(e.texcoord.mean, 1.0 / 6.0 - 1.0 / (6.0 * n * n), 2e-3);
+  EXPECT_NEAR(e.texcoord.max, 0.25, 2e-3);
+}
+
+// Attributes only one mesh has are not measured.
+TEST(CompareAttributes, MissingAttributesAreNotMeasured) {
+  pmz::IndexedMesh bare = square(2);
+  bare.attributes = {};
+  EXPECT_EQ(measure(square(4), bare).texcoord.samples, 0u);
+  pmz::IndexedMesh no_normals = square(2);
+  no_normals.attributes.normals.clear();
+  const pmz::AttributeErrors e = measure(square(4), no_normals);
+  EXPECT_EQ(e.normal.samples, 0u);
+  EXPECT_GT(e.texcoord.samples, 0u);
+}
+
+}  // namespace
