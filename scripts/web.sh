@@ -33,16 +33,17 @@ opt=${PMZ_WASM_OPT:--O3}
 out=web/build
 pkg=web/dist/pkg
 mkdir -p "$out" "$pkg"
-# -sFILESYSTEM=0: no file I/O; exceptions stay disabled (the default: a throw aborts, which the
-# JS wrapper reports as out_of_memory, the only exception the decoder can meet).
+# A standalone module (no emscripten JS runtime: web/src/pmz_wasm.js instantiates it, 2 KB
+# instead of emscripten's 14 KB of glue). -sFILESYSTEM=0: no file I/O; exceptions stay disabled
+# (the default: a throw aborts, which the JS wrapper reports as out_of_memory, the only
+# exception the decoder can meet).
 em++ -std=c++20 $opt -flto -Wall -Wextra -Idecoder/include -Iformat/include "${sources[@]}" \
-  -o "$out/pmz_wasm.mjs" -sMODULARIZE=1 -sEXPORT_ES6=1 -sENVIRONMENT=web,worker \
-  -sFILESYSTEM=0 -sALLOW_MEMORY_GROWTH=1 -sWASM_BIGINT=1 -sEXPORTED_RUNTIME_METHODS='[]' \
-  -sEXPORTED_FUNCTIONS="[$exports,\"_malloc\",\"_free\"]" -sINCOMING_MODULE_JS_API='[wasmBinary]'
+  -o "$out/pmz_wasm.wasm" --no-entry -sSTANDALONE_WASM=1 -sFILESYSTEM=0 -sALLOW_MEMORY_GROWTH=1 \
+  -sWASM_BIGINT=1 -sEXPORTED_FUNCTIONS="[$exports,\"_malloc\",\"_free\"]"
 
 rm -rf "$pkg" && mkdir -p "$pkg"
 cp web/pkg/package.json web/pkg/README.md "$pkg/"
-cp web/src/*.js web/src/*.d.ts "$out/pmz_wasm.mjs" "$out/pmz_wasm.wasm" "$pkg/"
+cp web/src/*.js web/src/*.d.ts "$out/pmz_wasm.wasm" "$pkg/"
 rm -f web/dist/*.tgz
 (cd "$pkg" && npm pack --silent --pack-destination "$root/web/dist" >/dev/null)
 
@@ -55,8 +56,8 @@ cp web/node_modules/three/build/three.module.js "$viewer/vendor/"
 cp web/node_modules/three/examples/jsm/controls/OrbitControls.js "$viewer/vendor/"
 
 wasm_bytes=$(stat -c %s "$out/pmz_wasm.wasm")
-glue_bytes=$(stat -c %s "$out/pmz_wasm.mjs")
-gz_bytes=$(cat "$out/pmz_wasm.wasm" "$out/pmz_wasm.mjs" | gzip -9 | wc -c)
+glue_bytes=$(stat -c %s web/src/pmz_wasm.js)
+gz_bytes=$(cat "$out/pmz_wasm.wasm" web/src/pmz_wasm.js | gzip -9 | wc -c)
 echo "web: $(ls web/dist/*.tgz), $viewer/index.html; wasm $wasm_bytes + glue $glue_bytes bytes" \
   "($gz_bytes gzip -9)" >&2
 

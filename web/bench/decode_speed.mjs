@@ -85,7 +85,7 @@ if (process.argv[2] === 'child') {
   }
   const size = (f) => readFileSync(f).length;
   const gz = (fs) => gzipSync(Buffer.concat(fs.map((f) => readFileSync(f))), { level: 9 }).length;
-  const ours = [path.join(pkgDir, 'pmz_wasm.wasm'), path.join(pkgDir, 'pmz_wasm.mjs')];
+  const ours = [path.join(pkgDir, 'pmz_wasm.wasm'), path.join(pkgDir, 'pmz_wasm.js')];
   const dd = path.join(root, 'web', 'node_modules', 'draco3d');
   const theirs = [path.join(dd, 'draco_decoder.wasm'), path.join(dd, 'draco_decoder_nodejs.js')];
   const report = {

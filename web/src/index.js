@@ -1,7 +1,7 @@
 // pmz-decoder: the pmz streaming decoder compiled to WebAssembly, wrapping its C API
 // (decoder/include/pmz/pmz.h). Push model: feed() slices of a .pmz stream in any size, then
 // refine() / setFaceTarget() move the mesh between the base mesh and what has arrived.
-import createModule from './pmz_wasm.mjs';
+import createModule from './pmz_wasm.js';
 
 // Status codes of pmz.h (PMZ_OK ... PMZ_ERR_MEMORY), as the names the API returns.
 export const STATUS_NAMES = Object.freeze([
@@ -16,12 +16,13 @@ export const STATUS_NAMES = Object.freeze([
 ]);
 const ALL = 0xffffffffffffffffn;
 const FEED_SLICE = 1 << 20;  // input copied into the heap at most this much at a time
+const REFINE_BATCH = 16384n;  // splits per call into the instance (see refine())
 
 let modulePromise = null;
 
 // One WebAssembly instance serves every decoder. In node the .wasm beside this file is read
-// with fs (emscripten's ES module output locates it with fetch, which node cannot use for
-// file: URLs); in browsers and workers it is fetched relative to this module.
+// with fs (node's fetch cannot read file: URLs); in browsers and workers it is fetched
+// relative to this module.
 async function instantiate(options) {
   const moduleOptions = {};
   if (options.wasmBinary) {
@@ -114,8 +115,21 @@ export class Decoder {
     return this._call((m) => cString(m, m._pmz_decoder_error(this._ptr)), this._dead);
   }
 
+  // In calls of at most REFINE_BATCH splits: V8 runs a wasm function's first calls in its
+  // baseline tier and swaps in the optimized code only for later calls (there is no on-stack
+  // replacement for wasm), so one call refining a whole mesh stays in baseline code throughout.
   refine(maxSplits) {
-    return Number(this._call((m) => m._pmz_decoder_refine(this._ptr, toU64(maxSplits)), 0n));
+    const want = toU64(maxSplits);
+    let total = 0n;
+    this._call((m) => {
+      while (total < want) {
+        const batch = want - total < REFINE_BATCH ? want - total : REFINE_BATCH;
+        const n = m._pmz_decoder_refine(this._ptr, batch);
+        total += n;
+        if (n < batch) break;
+      }
+    });
+    return Number(total);
   }
   coarsen(maxSplits) {
     return Number(this._call((m) => m._pmz_decoder_coarsen(this._ptr, toU64(maxSplits)), 0n));
