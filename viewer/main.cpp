@@ -1,6 +1,7 @@
 // pmz-view: streams a .pmz file, stdin or URL and shows the mesh refining as bytes arrive.
 // The worker thread (stream.cpp) reads and feeds the decoder; this thread moves the level of
-// detail within a per-frame time budget, mirrors the changes and uploads only those.
+// detail within a per-frame time budget, mirrors the changes and uploads only those. A mesh
+// file (OBJ, PLY, glTF, ...) is shown as it is, through the same mirror and renderer.
 #include <epoxy/gl.h>
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
@@ -23,9 +24,11 @@
 
 #include "camera.hpp"
 #include "lod.hpp"
+#include "materials.hpp"
 #include "mesh_mirror.hpp"
 #include "renderer.hpp"
 #include "source.hpp"
+#include "static_mesh.hpp"
 #include "stream.hpp"
 #include "tool_common.hpp"
 #include "ui.hpp"
@@ -46,7 +49,7 @@ struct Options {
   double ratio = 0;
   uint64_t bytes = 0;
   bool log = false, exit_when_complete = false;
-  bool flat = false, wireframe = false, no_geomorph = false;
+  bool flat = false, wireframe = false, no_geomorph = false, no_attributes = false;
   float yaw_degrees = 34, pitch_degrees = 20;
   double budget_ms = 6;
 };
@@ -54,6 +57,31 @@ struct Options {
 int fail(const std::string& message) {
   std::fprintf(stderr, "pmz-view: %s\n", message.c_str());
   return 1;
+}
+
+// Reads the material table's textures and hands them to the renderer; each texture that cannot
+// be read is one warning line and its material is drawn with its base colour only.
+void use_materials(Renderer& renderer, const std::string& source,
+                   const std::vector<ViewMaterial>& materials, const std::string& directory,
+                   bool texcoord_origin_top) {
+  std::vector<Image> images;
+  std::vector<std::string> warnings;
+  load_textures(materials, directory, images, warnings);
+  for (const std::string& w : warnings)
+    std::fprintf(stderr, "pmz-view: warning: %s: %s\n", source.c_str(), w.c_str());
+  renderer.set_materials(materials, images, texcoord_origin_top);
+}
+
+// "attributes: texture coordinates, normals, 2 materials" for the overlay ("" when none).
+std::string describe_attributes(const MeshMirror& mesh, size_t materials) {
+  std::string line;
+  auto add = [&](const std::string& part) { line += (line.empty() ? "" : ", ") + part; };
+  if (mesh.has_texcoords) add("texture coordinates");
+  if (mesh.has_normals) add("normals");
+  if (mesh.has_colors) add("colours");
+  if (materials) add(std::to_string(materials) + (materials == 1 ? " material" : " materials"));
+  if (mesh.has_wedges) add(std::to_string(mesh.wedge_count) + " wedges");
+  return line.empty() ? line : "attributes: " + line;
 }
 
 std::string g_glfw_error;
@@ -129,7 +157,9 @@ bool write_png(const std::string& path, int width, int height, const std::vector
 
 int parse(int argc, char** argv, Options& o) {
   CLI::App app{"pmz-view: stream a .pmz mesh and watch it refine as its bytes arrive.", "pmz-view"};
-  app.add_option("source", o.source, "a .pmz file, - for stdin, or an http:// or https:// URL")
+  app.add_option("source", o.source,
+                 "a .pmz file, - for stdin, an http:// or https:// URL, or a mesh file "
+                 "(.obj .ply .gltf .glb .off .stl) shown as it is")
       ->required();
   app.add_option("--rate", o.rate_kbps, "throttle the source to KBPS kilobytes (1000 B) per second")
       ->type_name("KBPS")
@@ -160,6 +190,8 @@ int parse(int argc, char** argv, Options& o) {
   app.add_flag("--flat", o.flat, "start with flat shading");
   app.add_flag("--wireframe", o.wireframe, "start with the wireframe overlay");
   app.add_flag("--no-geomorph", o.no_geomorph, "start with geomorphs off");
+  app.add_flag("--no-attributes", o.no_attributes,
+               "start with the geometry look: no textures, colours or decoded normals");
   app.add_option("--yaw", o.yaw_degrees, "initial view azimuth in degrees")->type_name("DEG");
   app.add_option("--pitch", o.pitch_degrees, "initial view elevation in degrees")
       ->type_name("DEG")
@@ -201,8 +233,20 @@ int main(int argc, char** argv) {
   const bool screenshot = !o.screenshot.empty();
 
   std::string error;
-  std::unique_ptr<Source> source = open_source(o.source, error);
-  if (!source) return fail(error);
+  const bool is_static = is_mesh_file(o.source);
+  StaticMesh static_mesh;
+  std::unique_ptr<Source> source;
+  if (is_static) {
+    if (o.bytes || o.rate_kbps > 0 || o.faces_set || o.ratio_set)
+      std::fprintf(stderr,
+                   "pmz-view: warning: %s is a mesh file, shown whole: --bytes, --rate, --faces "
+                   "and --ratio apply to .pmz streams\n",
+                   o.source.c_str());
+    if (!load_static_mesh(o.source, static_mesh, error)) return fail(error);
+  } else {
+    source = open_source(o.source, error);
+    if (!source) return fail(error);
+  }
   curl_global_init(CURL_GLOBAL_DEFAULT);
 
   if (!std::getenv("DISPLAY") && !std::getenv("WAYLAND_DISPLAY"))
@@ -244,6 +288,7 @@ int main(int argc, char** argv) {
     state.smooth = !o.flat;
     state.wireframe = o.wireframe;
     state.geomorph = !o.no_geomorph;
+    state.attributes = !o.no_attributes;
     state.lod.follow = !o.faces_set && !o.ratio_set;
     state.lod.faces = o.faces;
     bool ratio_pending = o.ratio_set;  // needs the header's full face count
@@ -253,13 +298,50 @@ int main(int argc, char** argv) {
     LodStepper stepper;
 
     Stream stream;
-    StreamOptions stream_options;
-    stream_options.bytes_per_second = o.rate_kbps * 1000;
-    stream_options.byte_limit = o.bytes;
-    stream.start(std::move(source), stream_options);
+    if (!is_static) {
+      StreamOptions stream_options;
+      stream_options.bytes_per_second = o.rate_kbps * 1000;
+      stream_options.byte_limit = o.bytes;
+      stream.start(std::move(source), stream_options);
+    }
     const auto t0 = Clock::now();
+    size_t material_count = 0;
+    if (is_static) {
+      const std::vector<ViewMaterial> materials =
+          view_materials(static_mesh.mesh.attributes.materials);
+      use_materials(renderer, o.source, materials, static_mesh.texture_directory,
+                    static_mesh.texcoord_origin_top);
+      material_count = materials.size();
+      mirror.sync(static_mesh.frame(), 0, 0);
+      stats.faces = stats.base_faces = mirror.face_count;
+      stats.full_faces = mirror.face_count;
+      stats.vertices = mirror.vertex_count;
+      stats.base_done = stats.complete = true;
+      stats.attributes = mirror.has_wedges;
+      stats.attributes_line = describe_attributes(mirror, material_count);
+    }
 
-    if (screenshot) {
+    // One frame of the mirrored mesh into --screenshot; `note` ends the summary line.
+    auto write_screenshot = [&](const std::string& note) {
+      renderer.upload(mirror);
+      frame_camera(camera, info, mirror, float(o.width) / float(o.height));
+      RenderOptions render_options;
+      render_options.smooth = state.smooth;
+      render_options.wireframe = state.wireframe;
+      render_options.attributes = state.attributes;
+      std::vector<uint8_t> rgb;
+      if (!renderer.capture(camera, o.width, o.height, render_options, rgb, error) ||
+          !write_png(o.screenshot, o.width, o.height, rgb, error))
+        return fail(error);
+      std::printf("pmz-view: wrote %s (%dx%d): %u faces, %u vertices%s%s\n", o.screenshot.c_str(),
+                  o.width, o.height, stats.faces, stats.vertices, note.c_str(),
+                  stats.attributes_line.empty() ? "" : (", " + stats.attributes_line).c_str());
+      return 0;
+    };
+
+    if (screenshot && is_static) {
+      rc = write_screenshot("");
+    } else if (screenshot) {
       // The whole requested prefix first, then exactly that level of detail.
       while (!stream.done()) std::this_thread::sleep_for(std::chrono::milliseconds(5));
       if (!stream.error().empty()) {
@@ -281,20 +363,7 @@ int main(int argc, char** argv) {
                                   " bytes do not hold the base mesh"
                             : o.source + ": the stream ended before its base mesh");
         } else {
-          renderer.upload(mirror);
-          frame_camera(camera, info, mirror, float(o.width) / float(o.height));
-          RenderOptions render_options;
-          render_options.smooth = state.smooth;
-          render_options.wireframe = state.wireframe;
-          std::vector<uint8_t> rgb;
-          if (!renderer.capture(camera, o.width, o.height, render_options, rgb, error) ||
-              !write_png(o.screenshot, o.width, o.height, rgb, error))
-            rc = fail(error);
-          else
-            std::printf("pmz-view: wrote %s (%dx%d): %u faces, %u vertices, %" PRIu64
-                        " bytes read\n",
-                        o.screenshot.c_str(), o.width, o.height, stats.faces, stats.vertices,
-                        stream.bytes_received());
+          rc = write_screenshot(", " + std::to_string(stream.bytes_received()) + " bytes read");
         }
       }
     } else {
@@ -320,8 +389,11 @@ int main(int argc, char** argv) {
         const float morph_seconds = state.geomorph ? state.morph_seconds : 0;
         const auto update_start = Clock::now();
         // Never wait on the worker for long: a busy lock costs a frame or two at most.
-        bool locked = lock_misses >= 3 ? (stream.mutex.lock(), true) : stream.mutex.try_lock();
-        if (locked) {
+        bool locked = !is_static &&
+                      (lock_misses >= 3 ? (stream.mutex.lock(), true) : stream.mutex.try_lock());
+        if (is_static) {
+          // Synced once before the loop; nothing arrives.
+        } else if (locked) {
           lock_misses = 0;
           pmz::Decoder& decoder = stream.decoder;
           if (ratio_pending && decoder.info().header_done) {
@@ -346,7 +418,7 @@ int main(int argc, char** argv) {
         stats.bytes = stream.bytes_received();
         stats.bytes_total = stream.bytes_total();
 
-        const bool stream_done = stream.done();
+        const bool stream_done = is_static || stream.done();
         if (stream_done && !stream.error().empty() && !error_reported) {
           error_reported = true;
           stats.error = stream.error();
@@ -381,6 +453,7 @@ int main(int argc, char** argv) {
         render_options.wireframe = state.wireframe;
         render_options.morph_seconds = morph_seconds;
         render_options.now = now;
+        render_options.attributes = state.attributes;
         renderer.draw(camera, fb_width, fb_height, render_options);
         ImGui_ImplOpenGL3_NewFrame();
         ImGui_ImplGlfw_NewFrame();
@@ -399,9 +472,10 @@ int main(int argc, char** argv) {
           window_start = t;
           window_splits = window_frames = 0;
         }
-        const bool finished = stream_done && stream.error().empty() && stepper.settled() &&
-                              (stats.complete || o.bytes) &&
-                              (!state.lod.follow || stats.splits_applied == stats.splits_available);
+        const bool finished =
+            is_static || (stream_done && stream.error().empty() && stepper.settled() &&
+                          (stats.complete || o.bytes) &&
+                          (!state.lod.follow || stats.splits_applied == stats.splits_available));
         if (o.log && (t >= next_log || (finished && o.exit_when_complete))) {
           log_line(t, stats, finished ? "complete" : "");
           next_log = t + 0.1;
@@ -409,8 +483,8 @@ int main(int argc, char** argv) {
         if (finished && o.exit_when_complete) break;
 
         // Idle (nothing arriving, refining or gliding): sleep until input instead of spinning.
-        const bool idle =
-            stream_done && stepper.settled() && now - mirror.last_morph_start > morph_seconds;
+        const bool idle = is_static || (stream_done && stepper.settled() &&
+                                        now - mirror.last_morph_start > morph_seconds);
         const double frame_seconds = seconds_since(t0) - t;
         if (idle) {
           glfwWaitEventsTimeout(0.25);

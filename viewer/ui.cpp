@@ -17,6 +17,7 @@ const char* const kKeyHelp =
     "  F                  follow the stream (refine as bytes arrive)\n"
     "  W                  wireframe overlay\n"
     "  S                  smooth / flat shading\n"
+    "  A                  attributes: textures, colours, decoded normals / geometry only\n"
     "  G                  geomorphs (new vertices glide out of their parent)\n"
     "  R                  reset the view\n"
     "  H                  hide / show the overlay\n"
@@ -105,6 +106,9 @@ void on_key(GLFWwindow* window, int key, int, int action, int) {
     case GLFW_KEY_G:
       s.geomorph = !s.geomorph;
       break;
+    case GLFW_KEY_A:
+      s.attributes = !s.attributes;
+      break;
     case GLFW_KEY_R:
       s.reset_view = true;
       break;
@@ -166,6 +170,7 @@ void draw_overlay(ViewState& s, const Stats& stats) {
     ImGui::TextColored(ImVec4(1, 0.8f, 0.3f, 1), "waiting for the base mesh...");
   else if (stats.complete)
     ImGui::TextColored(ImVec4(0.5f, 1, 0.5f, 1), "stream complete");
+  if (!stats.attributes_line.empty()) ImGui::Text("%s", stats.attributes_line.c_str());
   if (!stats.error.empty()) ImGui::TextColored(ImVec4(1, 0.4f, 0.4f, 1), "%s", stats.error.c_str());
 
   ImGui::Separator();
@@ -184,6 +189,7 @@ void draw_overlay(ViewState& s, const Stats& stats) {
     s.lod.faces = stats.faces;
   ImGui::Checkbox("wireframe (W)", &s.wireframe);
   ImGui::Checkbox("smooth shading (S)", &s.smooth);
+  if (stats.attributes) ImGui::Checkbox("attributes (A)", &s.attributes);
   ImGui::Checkbox("geomorphs (G)", &s.geomorph);
   if (s.geomorph) ImGui::SliderFloat("morph s", &s.morph_seconds, 0.05f, 3.0f, "%.2f");
   if (ImGui::Button("reset view (R)")) s.reset_view = true;

@@ -17,6 +17,7 @@ struct ViewState {
   bool wireframe = false;
   bool smooth = true;
   bool geomorph = true;
+  bool attributes = true;  // textures, colours, decoded normals (false: geometry look)
   float morph_seconds = 0.5f;
   bool overlay = true;
   bool reset_view = false;  // reframe the camera on the next frame
@@ -31,6 +32,8 @@ struct Stats {
   double splits_per_second = 0, frames_per_second = 0;
   double update_ms = 0;  // slowest recent frame's refine + mirror + upload time
   bool base_done = false, complete = false;
+  bool attributes = false;      // the mesh has attribute wedges or materials
+  std::string attributes_line;  // e.g. "attributes: texcoords, normals, 2 materials"
   std::string error;
 };
 

@@ -1,7 +1,8 @@
 // pmz-view's CPU side against the real decoder: the incrementally synced mirror (indices,
 // positions, smooth normals) equals one built from scratch, the dirty ranges cover every
 // change (a shadow "GPU buffer" patched only with them ends up equal), and the budgeted LOD
-// stepper reaches its targets.
+// stepper reaches its targets. Attribute wedges the same way, driven by a scripted stream
+// that grows, rewrites and shrinks like the decoder's change report says a stream does.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -147,6 +148,242 @@ TEST(MeshMirror, NewVerticesMorphFromTheirParent) {
   EXPECT_EQ(mirror.morph_start[v], 5.0f);
   for (int i = 0; i < 3; ++i)
     EXPECT_EQ(mirror.morph_from[3 * v + i], mirror.positions[3 * parent + i]);
+}
+
+// A mesh with attribute wedges that changes the way a progressive stream does: appended
+// vertices, wedges and faces; rewritten faces (wedge and vertex indices) and rewritten wedge
+// values; LIFO shrinking back to an earlier state. Changes accumulate until taken, as
+// pmz::MeshChanges do between clear_changes() calls.
+struct ScriptedWedgeStream {
+  struct State {
+    std::vector<float> positions, texcoords, normals, colors;
+    std::vector<uint32_t> indices, parents, wedge_vertices, wedge_indices, face_materials;
+    uint32_t vertices() const { return uint32_t(parents.size()); }
+    uint32_t wedges() const { return uint32_t(wedge_vertices.size()); }
+    uint32_t faces() const { return uint32_t(face_materials.size()); }
+  };
+  State now;
+  std::vector<State> history;
+  bool all = true;
+  uint32_t vertex_begin = 0, wedge_begin = 0, face_begin = 0;
+  std::vector<uint32_t> modified;
+  std::mt19937 rng;
+
+  explicit ScriptedWedgeStream(unsigned seed) : rng(seed) {
+    for (int i = 0; i < 8; ++i) add_vertex();
+    for (int i = 0; i < 12; ++i) add_wedge(uint32_t(rng() % now.vertices()));
+    for (int i = 0; i < 10; ++i) add_face();
+  }
+  float value() { return float(rng() % 10000) / 1000.0f; }
+  void add_vertex() {
+    for (int i = 0; i < 3; ++i) now.positions.push_back(value());
+    now.parents.push_back(now.vertices() ? uint32_t(rng() % now.vertices()) : UINT32_MAX);
+  }
+  void set_wedge_values(uint32_t w) {
+    for (int i = 0; i < 2; ++i) now.texcoords[2 * w + i] = value();
+    for (int i = 0; i < 3; ++i) now.normals[3 * w + i] = value();
+    for (int i = 0; i < 3; ++i) now.colors[3 * w + i] = value() / 10;
+  }
+  void add_wedge(uint32_t vertex) {
+    now.wedge_vertices.push_back(vertex);
+    now.texcoords.resize(2 * now.wedges());
+    now.normals.resize(3 * now.wedges());
+    now.colors.resize(3 * now.wedges());
+    set_wedge_values(now.wedges() - 1);
+  }
+  void set_face(uint32_t f) {
+    for (int k = 0; k < 3; ++k) {
+      uint32_t w = uint32_t(rng() % now.wedges());
+      now.wedge_indices[3 * f + k] = w;
+      now.indices[3 * f + k] = now.wedge_vertices[w];
+    }
+    now.face_materials[f] = uint32_t(rng() % 3);
+  }
+  void add_face() {
+    now.indices.resize(3 * (now.faces() + 1));
+    now.wedge_indices.resize(3 * (now.faces() + 1));
+    now.face_materials.push_back(0);
+    set_face(now.faces() - 1);
+  }
+  void grow() {
+    history.push_back(now);
+    const uint32_t nv = now.vertices(), nw = now.wedges(), nf = now.faces();
+    for (uint32_t i = 1 + rng() % 3; i > 0; --i) add_vertex();
+    for (uint32_t v = nv; v < now.vertices(); ++v) add_wedge(v);
+    for (uint32_t i = rng() % 4; i > 0; --i) add_wedge(uint32_t(rng() % now.vertices()));
+    if (rng() % 3 == 0) {  // rewritten wedge values: the report's wedge_begin goes below nw
+      uint32_t from = uint32_t(rng() % nw);
+      for (uint32_t w = from; w < nw; ++w) set_wedge_values(w);
+      wedge_begin = std::min(wedge_begin, from);
+    }
+    for (uint32_t i = 1 + rng() % 6; i > 0; --i) add_face();
+    for (uint32_t i = rng() % 4; i > 0; --i) {
+      uint32_t f = uint32_t(rng() % nf);
+      set_face(f);
+      modified.push_back(f);
+      if (rng() % 2) modified.push_back(f);  // the report may repeat a face
+    }
+    vertex_begin = std::min(vertex_begin, nv);
+    wedge_begin = std::min(wedge_begin, nw);
+    face_begin = std::min(face_begin, nf);
+  }
+  void shrink() {
+    if (history.empty()) return;
+    State before = history.back();
+    history.pop_back();
+    for (uint32_t f = 0; f < before.faces(); ++f)
+      for (int k = 0; k < 3; ++k)
+        if (f < now.faces() && now.wedge_indices[3 * f + k] != before.wedge_indices[3 * f + k])
+          modified.push_back(f);
+    // Undone wedge rewrites are rewrites too.
+    for (uint32_t w = 0; w < std::min(before.wedges(), now.wedges()); ++w) {
+      const float* a = before.texcoords.data() + 2 * w;
+      const float* b = now.texcoords.data() + 2 * w;
+      const float* na = before.normals.data() + 3 * w;
+      const float* nb = now.normals.data() + 3 * w;
+      if (!std::equal(a, a + 2, b) || !std::equal(na, na + 3, nb)) {
+        wedge_begin = std::min(wedge_begin, w);
+        break;
+      }
+    }
+    std::swap(now, before);
+    vertex_begin = std::min(vertex_begin, now.vertices());
+    wedge_begin = std::min(wedge_begin, now.wedges());
+    face_begin = std::min(face_begin, now.faces());
+  }
+  pmzview::MeshFrame frame() const {
+    pmzview::MeshFrame f;
+    f.vertex_count = now.vertices();
+    f.face_count = now.faces();
+    f.positions = now.positions.data();
+    f.indices = now.indices.data();
+    f.split_parents = now.parents.data();
+    f.all = all;
+    f.vertex_begin = vertex_begin;
+    f.wedge_begin = wedge_begin;
+    f.face_begin = face_begin;
+    f.modified_faces = modified.data();
+    f.modified_face_count = modified.size();
+    f.wedge_count = now.wedges();
+    f.wedge_vertices = now.wedge_vertices.data();
+    f.wedge_indices = now.wedge_indices.data();
+    f.texcoords = now.texcoords.data();
+    f.normals = now.normals.data();
+    f.colors = now.colors.data();
+    f.color_components = 3;
+    f.face_materials = now.face_materials.data();
+    return f;
+  }
+  void clear_changes() {
+    all = false;
+    vertex_begin = now.vertices();
+    wedge_begin = now.wedges();
+    face_begin = now.faces();
+    modified.clear();
+  }
+};
+
+// The renderer's wedge-mode buffers patched with exactly the dirty ranges.
+struct WedgeShadow {
+  std::vector<uint32_t> wedge_vertices, wedge_indices, face_materials;
+  std::vector<float> texcoords, colors, wedge_normals;
+  std::vector<UploadRun> runs;
+
+  void apply(MeshMirror& m) {
+    auto patch = [](auto& dst, const auto& src, size_t width, uint32_t begin, uint32_t end) {
+      dst.resize(src.size());
+      std::copy(src.begin() + width * begin, src.begin() + width * end,
+                dst.begin() + width * begin);
+    };
+    const uint32_t wedge_begin = m.dirty_all ? 0 : std::min(m.dirty_wedge_begin, m.wedge_count);
+    patch(wedge_vertices, m.wedge_vertices, 1, wedge_begin, m.wedge_count);
+    patch(texcoords, m.texcoords, 2, wedge_begin, m.wedge_count);
+    patch(colors, m.colors, 4, wedge_begin, m.wedge_count);
+    patch(wedge_normals, m.wedge_normals, 3, wedge_begin, m.wedge_count);
+    if (m.dirty_all)
+      runs.assign(1, UploadRun{0, m.face_count});
+    else
+      m.dirty_faces.take_runs(m.face_count, 16, runs);
+    wedge_indices.resize(m.wedge_indices.size());
+    face_materials.resize(m.face_materials.size());
+    for (const UploadRun& r : runs) {
+      patch(wedge_indices, m.wedge_indices, 3, r.begin, r.end);
+      patch(face_materials, m.face_materials, 1, r.begin, r.end);
+    }
+    m.clear_dirty();
+  }
+};
+
+TEST(MeshMirror, WedgeArraysFollowGrowRewriteAndShrink) {
+  for (unsigned seed = 1; seed <= 6; ++seed) {
+    ScriptedWedgeStream stream(seed);
+    MeshMirror mirror;
+    WedgeShadow shadow;
+    std::mt19937 rng(seed * 77);
+    for (int step = 0; step < 600; ++step) {
+      if (rng() % 5 < 3)
+        stream.grow();
+      else
+        stream.shrink();
+      if (rng() % 3 == 0) continue;  // changes accumulate over several steps
+      mirror.sync(stream.frame(), float(step), 0.5f);
+      stream.clear_changes();
+      shadow.apply(mirror);
+    }
+    mirror.sync(stream.frame(), 600, 0.5f);
+    stream.clear_changes();
+    shadow.apply(mirror);
+
+    stream.all = true;
+    MeshMirror fresh;
+    fresh.sync(stream.frame(), 0, 0);
+    ASSERT_TRUE(fresh.has_wedges && fresh.has_texcoords && fresh.has_normals && fresh.has_colors);
+    ASSERT_TRUE(mirror.has_wedges && mirror.has_face_materials);
+    ASSERT_GT(fresh.wedge_count, 12u);
+    ASSERT_EQ(mirror.wedge_count, fresh.wedge_count) << "seed " << seed;
+    ASSERT_EQ(mirror.face_count, fresh.face_count);
+    EXPECT_EQ(mirror.indices, fresh.indices);
+    auto expect_wedges_equal = [&](const auto& got, const char* what) {
+      EXPECT_EQ(got.wedge_vertices, fresh.wedge_vertices) << what << ", seed " << seed;
+      EXPECT_EQ(got.texcoords, fresh.texcoords) << what;
+      EXPECT_EQ(got.colors, fresh.colors) << what;
+      EXPECT_EQ(got.wedge_normals, fresh.wedge_normals) << what;
+      EXPECT_EQ(got.wedge_indices, fresh.wedge_indices) << what;
+      EXPECT_EQ(got.face_materials, fresh.face_materials) << what;
+    };
+    expect_wedges_equal(mirror, "mirror");
+    expect_wedges_equal(shadow, "uploaded");
+    // RGB colours are widened to RGBA with alpha 1.
+    for (uint32_t w = 0; w < fresh.wedge_count; ++w) {
+      EXPECT_EQ(fresh.colors[4 * w + 3], 1.0f);
+      EXPECT_EQ(fresh.colors[4 * w], stream.now.colors[3 * w]);
+    }
+  }
+}
+
+TEST(MeshMirror, WedgeAndVertexIdsOutOfRangeAreClamped) {
+  ScriptedWedgeStream stream(3);
+  stream.now.wedge_vertices[2] = 1000000;  // names no vertex
+  stream.now.wedge_indices[4] = 1000000;   // names no wedge
+  MeshMirror mirror;
+  mirror.sync(stream.frame(), 0, 0);
+  EXPECT_EQ(mirror.wedge_vertices[2], 0u);
+  EXPECT_EQ(mirror.wedge_indices[3], 0u);  // the whole face falls back to wedge 0
+  EXPECT_EQ(mirror.wedge_indices[4], 0u);
+  EXPECT_EQ(mirror.wedge_indices[5], 0u);
+}
+
+TEST(MeshMirror, GeometryOnlyStreamsHaveNoWedgeArrays) {
+  const std::vector<uint8_t>& bytes = sample_stream();
+  pmz::Decoder decoder;
+  ASSERT_EQ(decoder.feed(bytes.data(), bytes.size()), pmz::Status::ok);
+  MeshMirror mirror;
+  mirror.sync(decoder, 0, 0);
+  EXPECT_FALSE(mirror.has_wedges);
+  EXPECT_EQ(mirror.wedge_count, 0u);
+  EXPECT_TRUE(mirror.wedge_indices.empty());
+  EXPECT_TRUE(mirror.face_materials.empty());
+  EXPECT_GT(mirror.face_count, 0u);
 }
 
 TEST(DirtyBits, RunsAreSortedMergedAndCleared) {

@@ -4,8 +4,10 @@
   viewer_test.py screenshots --view BIN --encode BIN --workdir DIR
   viewer_test.py streaming   --view BIN --encode BIN --workdir DIR
   viewer_test.py errors      --view BIN --workdir DIR
+  viewer_test.py attributes  --view BIN --workdir DIR
 
-The first two encode a generated mesh with pmz-encode first. Exit 77 (ctest SKIP) when xvfb-run is
+The first two encode a generated mesh with pmz-encode first; attributes renders a generated
+textured OBJ (MTL + PNG checkerboard) and a vertex-coloured PLY. Exit 77 (ctest SKIP) when xvfb-run is
 missing. Standard library only: PNGs are decoded here with zlib.
 """
 import argparse
@@ -30,15 +32,14 @@ def fail(message):
     sys.exit(1)
 
 
-def write_bumpy_torus(path, rings=96, segments=48):
-    """A torus with ripples: rings * segments * 2 faces, clearly visible at every size."""
-    vertices, faces = [], []
-    for i in range(rings):
-        u = 2 * math.pi * i / rings
-        for j in range(segments):
-            v = 2 * math.pi * j / segments
-            r = 0.35 * (1 + 0.18 * math.sin(5 * u) * math.cos(3 * v))
-            vertices.append(((1 + r * math.cos(v)) * math.cos(u), r * math.sin(v), (1 + r * math.cos(v)) * math.sin(u)))
+def torus_point(u, v):
+    r = 0.35 * (1 + 0.18 * math.sin(5 * u) * math.cos(3 * v))
+    return ((1 + r * math.cos(v)) * math.cos(u), r * math.sin(v), (1 + r * math.cos(v)) * math.sin(u))
+
+
+def torus_faces(rings, segments):
+    """Two triangles per grid cell, wrapping both ways: vertex (i, j) is i * segments + j."""
+    faces = []
     for i in range(rings):
         for j in range(segments):
             a = i * segments + j
@@ -46,11 +47,78 @@ def write_bumpy_torus(path, rings=96, segments=48):
             c = ((i + 1) % rings) * segments + (j + 1) % segments
             d = i * segments + (j + 1) % segments
             faces += [(a, d, c), (a, c, b)]
+    return faces
+
+
+def write_bumpy_torus(path, rings=96, segments=48):
+    """A torus with ripples: rings * segments * 2 faces, clearly visible at every size."""
+    vertices = [torus_point(2 * math.pi * i / rings, 2 * math.pi * j / segments)
+                for i in range(rings) for j in range(segments)]
+    faces = torus_faces(rings, segments)
     with open(path, "w") as f:
         f.write("OFF\n%d %d 0\n" % (len(vertices), len(faces)))
         f.writelines("%.6f %.6f %.6f\n" % p for p in vertices)
         f.writelines("3 %d %d %d\n" % t for t in faces)
     return len(faces)
+
+
+def write_png(path, width, height, rgb_rows):
+    """8-bit RGB PNG from rows of bytes (filter 0)."""
+    def chunk(kind, body):
+        return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body) & 0xFFFFFFFF)
+    raw = b"".join(b"\x00" + bytes(row) for row in rgb_rows)
+    with open(path, "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)) +
+                chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+
+
+def write_textured_torus(directory, texture="checker.png", rings=96, segments=48):
+    """The bumpy torus as an OBJ with texture coordinates (a seam where u and v wrap: those
+    vertices get two wedges), an MTL naming TEXTURE, and a red / blue checkerboard PNG."""
+    obj, mtl = os.path.join(directory, "textured.obj"), os.path.join(directory, "textured.mtl")
+    with open(obj, "w") as f:
+        f.write("mtllib textured.mtl\nusemtl checker\n")
+        for i in range(rings):
+            for j in range(segments):
+                f.write("v %.6f %.6f %.6f\n" % torus_point(2 * math.pi * i / rings, 2 * math.pi * j / segments))
+        for i in range(rings + 1):
+            for j in range(segments + 1):
+                f.write("vt %.6f %.6f\n" % (4.0 * i / rings, 2.0 * j / segments))
+        for i in range(rings):
+            for j in range(segments):
+                v = [1 + (ii % rings) * segments + (jj % segments) for ii, jj in
+                     ((i, j), (i, j + 1), (i + 1, j + 1), (i + 1, j))]
+                t = [1 + ii * (segments + 1) + jj for ii, jj in ((i, j), (i, j + 1), (i + 1, j + 1), (i + 1, j))]
+                f.write("f %d/%d %d/%d %d/%d\n" % (v[0], t[0], v[1], t[1], v[2], t[2]))
+                f.write("f %d/%d %d/%d %d/%d\n" % (v[0], t[0], v[2], t[2], v[3], t[3]))
+    with open(mtl, "w") as f:
+        f.write("newmtl checker\nKd 1 1 1\nmap_Kd %s\n" % texture)
+    size, square = 64, 8
+    rows = []
+    for y in range(size):
+        row = bytearray()
+        for x in range(size):
+            row += bytes((230, 40, 30) if (x // square + y // square) % 2 else (30, 60, 230))
+        rows.append(row)
+    write_png(os.path.join(directory, "checker.png"), size, size, rows)
+    return obj
+
+
+def write_colored_torus(path, normal=None, rings=96, segments=48):
+    """The bumpy torus as an ASCII PLY with a colour per vertex: red on one half, green on the
+    other; with NORMAL, that one normal at every vertex (so decoded normals light it evenly)."""
+    with open(path, "w") as f:
+        f.write("ply\nformat ascii 1.0\nelement vertex %d\nproperty float x\nproperty float y\n"
+                "property float z\n%sproperty uchar red\nproperty uchar green\nproperty uchar blue\n"
+                "element face %d\nproperty list uchar int vertex_indices\nend_header\n" %
+                (rings * segments, "property float nx\nproperty float ny\nproperty float nz\n" if normal else "",
+                 2 * rings * segments))
+        for i in range(rings):
+            for j in range(segments):
+                p = torus_point(2 * math.pi * i / rings, 2 * math.pi * j / segments)
+                color = (220, 40, 40) if i < rings // 2 else (40, 200, 60)
+                f.write("%.6f %.6f %.6f " % p + ("%g %g %g " % normal if normal else "") + "%d %d %d\n" % color)
+        f.writelines("3 %d %d %d\n" % t for t in torus_faces(rings, segments))
 
 
 def encode(args):
@@ -112,6 +180,24 @@ def read_png(path):
 def pixels(path):
     width, height, channels, rows = read_png(path)
     return width, height, [tuple(row[x * channels:x * channels + 3]) for row in rows for x in range(width)]
+
+
+def saturated(p, spread=80):
+    return max(p) - min(p) > spread
+
+
+def colour_stats(path):
+    """Among the pixels that are not background: the fraction that are strongly coloured, and
+    the fractions where red or blue dominate."""
+    w, h, px = pixels(path)
+    background = px[0]
+    shown = [p for p in px if far(p, background)]
+    if len(shown) < 0.05 * len(px):
+        fail("%s shows too little of the object (%.1f%%)" % (path, 100.0 * len(shown) / len(px)))
+    n = float(len(shown))
+    return {"covered": n / len(px), "saturated": sum(saturated(p) for p in shown) / n,
+            "red": sum(p[0] > p[2] + 60 for p in shown) / n, "blue": sum(p[2] > p[0] + 60 for p in shown) / n,
+            "green": sum(p[1] > p[0] + 60 for p in shown) / n}
 
 
 def far(p, q, tolerance=24):
@@ -299,9 +385,85 @@ def test_errors(args):
     print("PASS")
 
 
+def screenshot(args, source, png, extra=()):
+    if os.path.exists(png):
+        os.remove(png)
+    run = xvfb(args, [args.view, source, "--screenshot", png, "--size", "320x240"] + list(extra), 60)
+    if run.returncode != 0 or not os.path.exists(png):
+        fail("screenshot of %s exited %d: %s" % (source, run.returncode, run.stderr.strip()))
+    print(run.stdout.strip())
+    return run
+
+
+def test_attributes(args):
+    """Textures, vertex colours and the missing-texture warning, on mesh files shown as they are."""
+    workdir = args.workdir
+    os.makedirs(workdir, exist_ok=True)
+    obj = write_textured_torus(workdir)
+    shots = {}
+    run = screenshot(args, obj, os.path.join(workdir, "textured.png"))
+    if "texture coordinates" not in run.stdout or "1 material" not in run.stdout:
+        fail("the textured OBJ's attributes are not reported: " + run.stdout.strip())
+    if "warning" in run.stderr:
+        fail("unexpected warning: " + run.stderr.strip())
+    shots["textured"] = colour_stats(os.path.join(workdir, "textured.png"))
+    screenshot(args, obj, os.path.join(workdir, "geometry.png"), ["--no-attributes"])
+    shots["geometry"] = colour_stats(os.path.join(workdir, "geometry.png"))
+
+    # The MTL names a texture that is not there: one warning line, drawn untextured, exit 0.
+    missing = os.path.join(workdir, "missing")
+    os.makedirs(missing, exist_ok=True)
+    write_textured_torus(missing, texture="no-such-texture.png")
+    run = screenshot(args, os.path.join(missing, "textured.obj"), os.path.join(workdir, "missing.png"))
+    warnings = [line for line in run.stderr.splitlines() if line.startswith("pmz-view: warning:")]
+    print("missing texture: " + (warnings[0] if warnings else "(no warning)"))
+    if len(warnings) != 1 or "no-such-texture.png" not in warnings[0] or "untextured" not in warnings[0]:
+        fail("want one warning line naming the missing texture, got %r" % run.stderr)
+    shots["missing"] = colour_stats(os.path.join(workdir, "missing.png"))
+
+    ply = os.path.join(workdir, "colored.ply")
+    write_colored_torus(ply)
+    run = screenshot(args, ply, os.path.join(workdir, "colored.png"))
+    if "colours" not in run.stdout:
+        fail("the PLY's vertex colours are not reported: " + run.stdout.strip())
+    shots["colored"] = colour_stats(os.path.join(workdir, "colored.png"))
+
+    # Decoded normals, all the same: the colours are lit evenly, unlike the smooth normals' shading.
+    even = os.path.join(workdir, "even.ply")
+    write_colored_torus(even, normal=(0.3, 0.9, 0.3))
+    run = screenshot(args, even, os.path.join(workdir, "even.png"))
+    if "normals" not in run.stdout:
+        fail("the PLY's normals are not reported: " + run.stdout.strip())
+    spread = {}
+    for name in ("colored", "even"):
+        w, h, px = pixels(os.path.join(workdir, name + ".png"))
+        red = [p[0] for p in px if p[0] > p[2] + 60]  # the red half, away from the background
+        mean = sum(red) / float(len(red))
+        spread[name] = math.sqrt(sum((r - mean) ** 2 for r in red) / len(red))
+    print("red channel spread: smooth normals %.1f, decoded constant normals %.1f" %
+          (spread["colored"], spread["even"]))
+    if not spread["even"] < 0.5 * spread["colored"]:
+        fail("the decoded normals do not seem to light the mesh (spread %.1f vs %.1f)" %
+             (spread["even"], spread["colored"]))
+
+    for name, st in shots.items():
+        print("%-9s covered %.1f%%, saturated %.1f%%, red %.1f%%, blue %.1f%%, green %.1f%%" %
+              (name, 100 * st["covered"], 100 * st["saturated"], 100 * st["red"], 100 * st["blue"],
+               100 * st["green"]))
+    t, g, m, c = shots["textured"], shots["geometry"], shots["missing"], shots["colored"]
+    if not (t["red"] > 0.15 and t["blue"] > 0.15):
+        fail("the checkerboard texture is not visible (red %.2f, blue %.2f)" % (t["red"], t["blue"]))
+    if g["saturated"] > 0.02 or m["saturated"] > 0.02:
+        fail("untextured renders should be grey (saturated: geometry %.3f, missing texture %.3f)" %
+             (g["saturated"], m["saturated"]))
+    if not (c["red"] > 0.15 and c["green"] > 0.15 and c["blue"] < 0.02):
+        fail("the vertex colours are not visible (red %.2f, green %.2f, blue %.2f)" % (c["red"], c["green"], c["blue"]))
+    print("PASS")
+
+
 def main():
     parser = argparse.ArgumentParser()
-    parser.add_argument("test", choices=["screenshots", "streaming", "errors"])
+    parser.add_argument("test", choices=["screenshots", "streaming", "errors", "attributes"])
     parser.add_argument("--view", required=True)
     parser.add_argument("--encode")
     parser.add_argument("--workdir", required=True)
@@ -309,9 +471,10 @@ def main():
     if not shutil.which("xvfb-run"):
         print("SKIP: xvfb-run not found (apt-get install xvfb xauth)")
         sys.exit(SKIP)
-    if args.test != "errors" and not args.encode:
+    if args.test in ("screenshots", "streaming") and not args.encode:
         parser.error("--encode is required for " + args.test)
-    {"screenshots": test_screenshots, "streaming": test_streaming, "errors": test_errors}[args.test](args)
+    {"screenshots": test_screenshots, "streaming": test_streaming, "errors": test_errors,
+     "attributes": test_attributes}[args.test](args)
 
 
 if __name__ == "__main__":
