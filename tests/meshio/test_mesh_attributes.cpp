@@ -591,8 +591,9 @@ TEST(MeshAttributes, AssimpTestModels) {
 // fuzz_mesh_ply (CI fuzz stage) found a PLY whose attribute pools and corner indices disagree:
 // repair read past a pool (heap-buffer-overflow in build_wedges). The reader now refuses it.
 TEST(MeshAttributes, FuzzPlyAttributeIndexOverflowIsRefused) {
-  const fs::path file = fs::path(__FILE__).parent_path().parent_path() / "data" /
-                        "fuzz-regressions" / "ply-attribute-index-overflow.ply";
+  // PMZ_SOURCE_DIR, not __FILE__: ccache's CCACHE_BASEDIR makes __FILE__ relative.
+  const fs::path file = fs::path(PMZ_SOURCE_DIR) / "tests" / "data" / "fuzz-regressions" /
+                        "ply-attribute-index-overflow.ply";
   std::ifstream in(file, std::ios::binary);
   ASSERT_TRUE(in) << file;
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
