@@ -541,7 +541,7 @@ bool Decoder::Impl::apply() {
     PositionPrediction pred;
     int32_t residual[3], c[3];
     predict_position(record.coords.data(), level.mesh.u_ring(), level.mesh.ring(), info.curvature,
-                     info.fine_curvature, pred);
+                     info.fine_curvature, pred, frontier.wedge_scratch.extent);
     if (!frontier.lazy.front().residuals(pred.context, pred.mix, residual)) {
       level.mesh.undo_split(s.v, has_l, has_r);
       return refuse(Status::corrupt,
