@@ -82,7 +82,7 @@ int main(int argc, char** argv) {
       if (std::fabs(n[k]) > std::fabs(n[axis])) axis = k;
     chart[f] = uint8_t(axis * 2 + (n[axis] < 0));
   }
-  for (int round = 0; round < 4; ++round) {
+  for (int round = 0; round < 12; ++round) {
     std::vector<uint8_t> next(chart);
     for (uint32_t f = 0; f < faces; ++f) {
       int votes[6] = {};

@@ -49,7 +49,7 @@ struct MetricParams {
   float guard_slack = 0.8f;
   // AttributeMode::full: weight of the attribute deviation (in units where one edge's typical
   // change of an attribute, moved by one mean edge length, weighs like that much distance).
-  float attribute_weight = 1.0f;
+  float attribute_weight = 0.5f;
 };
 
 // Where the time went (seconds), filled when SimplifyOptions::stats is set.
