@@ -118,8 +118,14 @@ class VertexChoice {
     const uint32_t* const mark = mark_.data();  // exclude() writes marks, never resizes
     const uint32_t excluded = excluded_;
     const bool near = near_scan_;
+    const uint8_t* const key = key_.data();
     uint64_t i = i_;
     uint32_t found = found_;
+    // The density class d = bitlen_quotient(n - at, size_ - found) changes only once n - at
+    // falls below lo = (size_ - found) 2^(d - 1), or when a split is found: recomputed then, not
+    // per candidate. base: the context without the vertex's key.
+    uint64_t lo = UINT64_MAX;
+    uint32_t base = 0;
     int result = 1;
     while (found < upto) {
       if (i >= n) {
@@ -129,12 +135,19 @@ class VertexChoice {
       const uint64_t at = i++;
       const uint32_t w = near ? list[at] : uint32_t(at);
       if (mark[w] == excluded) continue;
-      const int r = f(w, context(w, bitlen_quotient(n - at, size_ - found), near));
+      if (n - at < lo) {
+        const uint64_t m = size_ - found;
+        const uint32_t d = bitlen_quotient(n - at, m);
+        lo = d ? m << (d - 1) : 0;
+        base = context_base(d, near);
+      }
+      const int r = f(w, base + key[w]);
       if (r < 0) {
         result = -1;
         break;
       }
       if (r) {
+        lo = UINT64_MAX;  // size_ - found changes
         ++found;
         if (mesh) {
           i_ = i;
@@ -186,11 +199,10 @@ class VertexChoice {
   }  // per vertex (the wedge score's end weights)
 
  private:
-  // ((min(d, 20) * 2 + near) * 9 + min(degree, 8)) * 3 + umbrella class, d = bitlen(expected
-  // gap); the last two as key_[w].
-  uint32_t context(uint32_t w, uint32_t d, bool near) const {
-    return ((d < kChoiceDensities ? d : kChoiceDensities - 1) * 2 + (near ? 1 : 0)) * kChoiceKeys +
-           key_[w];
+  // A candidate w's context is context_base(d, near) + key_[w]: ((min(d, 20) * 2 + near) * 9 +
+  // min(degree, 8)) * 3 + umbrella class, d = bitlen(expected gap); the last two as key_[w].
+  static uint32_t context_base(uint32_t d, bool near) {
+    return ((d < kChoiceDensities ? d : kChoiceDensities - 1) * 2 + (near ? 1 : 0)) * kChoiceKeys;
   }
   int64_t coord(const int32_t* coords, uint32_t w, int a) const {
     return coords[size_t(w) * 3 + a] >> shift_;
