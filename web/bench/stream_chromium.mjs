@@ -1,9 +1,12 @@
 // Streaming in headless Chromium over a throttled link: the viewer (web/dist/viewer) loads
 // MESH.pmz from a node HTTP server on 127.0.0.1 paced to RATE bytes/s. From the page's own
 // requestAnimationFrame timestamps: the first frame drawn with the object after the first body
-// bytes arrived, and the gaps between frames until the stream is complete.
+// bytes arrived, and the gaps between frames until the stream is complete; from the Long Tasks
+// API the page's main-thread tasks over 50 ms in that time (what blocks the page itself, apart
+// from frames waiting on SwiftShader's rendering in the GPU process).
 //
 //   node web/bench/stream_chromium.mjs MESH.pmz [RATE=2000000] [RUNS=3] [WIDTHxHEIGHT=640x480]
+//                                     [WORKER=1]   (0: decode on the page's thread)
 import { mkdtempSync, rmSync } from 'node:fs';
 import { loadavg, tmpdir } from 'node:os';
 import path from 'node:path';
@@ -13,7 +16,8 @@ import puppeteer from 'puppeteer-core';
 import { CHROMIUM_ARGS, serveViewer } from '../test/serve.mjs';
 
 const here = path.dirname(fileURLToPath(import.meta.url));
-const [file, rateArg, runsArg, sizeArg] = process.argv.slice(2);
+const [file, rateArg, runsArg, sizeArg, workerArg] = process.argv.slice(2);
+const worker = workerArg !== '0';
 const rate = Number(rateArg || 2e6), runs = Number(runsArg || 3);
 const [width, height] = (sizeArg || '640x480').split('x').map(Number);
 const server = await serveViewer(path.join(here, '..', 'dist', 'viewer'), { 'mesh.pmz': path.resolve(file) }, rate);
@@ -24,11 +28,11 @@ for (let r = 0; r < runs; ++r) {
     args: [...CHROMIUM_ARGS, `--user-data-dir=${profile}`] });
   const page = await browser.newPage();
   await page.setViewport({ width, height });
-  await page.goto(`http://127.0.0.1:${server.address().port}/index.html?src=/stream/mesh.pmz`);
+  await page.goto(`http://127.0.0.1:${server.address().port}/index.html?src=/stream/mesh.pmz${worker ? '' : '&worker=0'}`);
   await page.waitForFunction(() => window.pmzStatus.complete || window.pmzStatus.error,
     { timeout: 600000, polling: 200 });
   const s = await page.evaluate(() => ({ status: window.pmzStatus, timing: window.pmzTiming,
-    frames: window.pmzFrames }));
+    frames: window.pmzFrames, longTasks: window.pmzLongTasks }));
   await browser.close();
   rmSync(profile, { recursive: true, force: true });
   const { firstBytes, firstObjectFrame } = s.timing;
@@ -40,8 +44,11 @@ for (let r = 0; r < runs; ++r) {
     first_object_ms: +(firstObjectFrame - firstBytes).toFixed(1),
     complete_ms: done ? +(done.t - firstBytes).toFixed(1) : null, frames: during.length,
     gap_median_ms: q(0.5), gap_p95_ms: q(0.95), gap_max_ms: gaps.length ? +gaps[gaps.length - 1].toFixed(1) : null,
-    gaps_over_50ms: gaps.filter((g) => g > 50).length });
+    gaps_over_50ms: gaps.filter((g) => g > 50).length,
+    long_tasks: s.longTasks.filter((x) => x.start >= firstBytes && (!done || x.start <= done.t)).length,
+    long_task_max_ms: +Math.max(0, ...s.longTasks.filter((x) => x.start >= firstBytes &&
+      (!done || x.start <= done.t)).map((x) => x.duration)).toFixed(1) });
 }
 server.close();
-console.log(JSON.stringify({ file: path.basename(file), rate, width, height,
+console.log(JSON.stringify({ file: path.basename(file), rate, width, height, worker,
   loadavg: loadavg().map((x) => +x.toFixed(1)), runs: results }, null, 1));

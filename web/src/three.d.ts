@@ -1,5 +1,5 @@
 import { BufferGeometry, Loader, LoadingManager, Material } from 'three';
-import { Decoder, DecoderOptions, PmzStatus } from './index.js';
+import { Decoder, DecoderOptions, PmzStatus, StreamInfo } from './index.js';
 
 export interface PMZOptions extends DecoderOptions {
   /** Keep a pmzMorph attribute (parent position, birth time) for geomorphMaterial(). */
@@ -8,46 +8,80 @@ export interface PMZOptions extends DecoderOptions {
   frameBudgetMs?: number;
   /** false: the caller calls stream.update() itself (default: every animation frame). */
   autoUpdate?: boolean;
+  /** Decode in a Web Worker (worker.js): stream() gives a PMZWorkerStream. */
+  worker?: boolean;
 }
 
-/** One stream's geometry, updated in place (changed ranges only) by update(). */
-export declare class PMZStream {
-  constructor(decoder: Decoder, options?: PMZOptions);
-  readonly decoder: Decoder;
+/** A copy of the decoder's current mesh. */
+export interface PMZSnapshot {
+  positions: Float32Array;
+  indices: Uint32Array;
+}
+
+/** What both streams have: one stream's geometry, updated in place (changed ranges only). */
+export interface PMZStreamState {
   readonly geometry: BufferGeometry;
   /** null: follow the stream to the finest level; a number: hold that face count. */
   faceTarget: number | null;
   bytes: number;
   totalBytes: number;
   status: PmzStatus;
-  /** Every byte fed, finish() ok and (when following the stream) the finest level shown. */
+  /** Every byte decoded, finish() ok and (when following the stream) the finest level shown. */
   complete: boolean;
   readonly error: string;
   readonly faceCount: number;
   readonly vertexCount: number;
-  /** Resolves to the final status once every byte is fed (set by PMZLoader.stream()). */
-  done?: Promise<PmzStatus>;
+  readonly splitsApplied: number;
+  info(): StreamInfo;
+  /** A copy of the decoder's current mesh. */
+  snapshot(): Promise<PMZSnapshot>;
   feed(bytes: Uint8Array): PmzStatus;
   finish(): PmzStatus;
-  /** Refines within budgetMs and copies what changed into the geometry; true if it changed. */
+  /** Copies what changed into the geometry (refining first within budgetMs when the decoder
+   * is on this thread); true if it changed. */
   update(budgetMs?: number): boolean;
   dispose(): void;
 }
 
+/** The decoder on this thread. */
+export interface PMZStream extends PMZStreamState {}
+export declare class PMZStream {
+  constructor(decoder: Decoder, options?: PMZOptions);
+  readonly decoder: Decoder;
+  /** Resolves to the final status once every byte is fed (set by PMZLoader.stream()). */
+  done?: Promise<PmzStatus>;
+}
+
+/** The decoder in a Web Worker (worker.js): update() applies the ranges the worker posted. */
+export interface PMZWorkerStream extends PMZStreamState {}
+export declare class PMZWorkerStream {
+  constructor(options?: PMZOptions);
+  readonly worker: Worker;
+  /** When the first body bytes reached the worker (performance.now() of this page), or null. */
+  readonly firstBytesTime: number | null;
+  /** Resolves to the final status once every byte is decoded and, following the stream, applied. */
+  done: Promise<PmzStatus>;
+  /** The worker fetches a URL or reads a Blob itself; feed() passes bytes read on the page. */
+  open(source: string | URL | Blob, init?: RequestInit): void;
+}
+
 /** Lets new vertices glide from their parent's position; call the result every frame. */
-export declare function geomorphMaterial(material: Material, seconds?: number): () => void;
+export declare function geomorphMaterial(
+  material: Material,
+  seconds?: number,
+): (() => void) & { uniforms: { pmzTime: { value: number }; pmzDuration: { value: number } } };
 
 export declare class PMZLoader extends Loader<BufferGeometry> {
   constructor(manager?: LoadingManager, options?: PMZOptions);
   options: PMZOptions;
   load(
     url: string,
-    onLoad?: (geometry: BufferGeometry, stream: PMZStream) => void,
-    onProgress?: (event: { loaded: number; total: number; stream: PMZStream }) => void,
+    onLoad?: (geometry: BufferGeometry, stream: PMZStream | PMZWorkerStream) => void,
+    onProgress?: (event: { loaded: number; total: number; stream: PMZStream | PMZWorkerStream }) => void,
     onError?: (error: unknown) => void,
   ): void;
   stream(
     source: string | URL | Response | ReadableStream<Uint8Array> | Blob,
-    onUpdate?: (stream: PMZStream) => void,
-  ): Promise<PMZStream & { done: Promise<PmzStatus> }>;
+    onUpdate?: (stream: PMZStream | PMZWorkerStream) => void,
+  ): Promise<(PMZStream | PMZWorkerStream) & { done: Promise<PmzStatus> }>;
 }

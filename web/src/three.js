@@ -5,6 +5,44 @@ import { createDecoder, feedStream } from './index.js';
 
 const RUNS_MAX = 64;  // more rewritten-face runs than this upload as one span
 
+// Update ranges for rewritten faces: sorted runs, or one span when there are many.
+function addFaceRuns(index, modifiedFaces) {
+  const faces = Uint32Array.from(modifiedFaces).sort();
+  const runs = [];
+  for (const f of faces) {
+    const last = runs[runs.length - 1];
+    if (last && f <= last[1]) last[1] = Math.max(last[1], f + 1);
+    else runs.push([f, f + 1]);
+  }
+  if (runs.length > RUNS_MAX) runs.splice(0, runs.length, [runs[0][0], runs[runs.length - 1][1]]);
+  for (const [a, b] of runs) index.addUpdateRange(3 * a, 3 * (b - a));
+}
+
+// Index, position and (optional) pmzMorph attributes sized for the whole mesh from the header
+// (grown by doubling past that), contents kept.
+function allocateGeometry(g, info, vertices, faces, caps, geomorph) {
+  const vcap = Math.max(vertices, Math.min(info.fullVertices, 1 << 24), 2 * caps.vertices);
+  const fcap = Math.max(faces, Math.min(info.fullFaces, 1 << 25), 2 * caps.faces);
+  const grow = (name, old, size, itemSize, Type) => {
+    const a = new BufferAttribute(new Type(size * itemSize), itemSize);
+    if (old) a.array.set(old.array.subarray(0, Math.min(old.array.length, a.array.length)));
+    if (name) g.setAttribute(name, a);
+    return a;
+  };
+  if (vertices > caps.vertices) {
+    grow('position', g.getAttribute('position'), vcap, 3, Float32Array);
+    if (geomorph) grow('pmzMorph', g.getAttribute('pmzMorph'), vcap, 4, Float32Array);
+    caps.vertices = vcap;
+  }
+  if (faces > caps.faces) {
+    g.setIndex(grow(null, g.getIndex(), 3 * fcap, 1, Uint32Array));  // itemSize 1: three counts indices
+    caps.faces = fcap;
+  }
+  const box = new Box3(new Vector3(...info.bboxMin), new Vector3(...info.bboxMax));
+  g.boundingBox = box;
+  g.boundingSphere = box.getBoundingSphere(new Sphere());
+}
+
 // The geometry of one stream and the decoder behind it. update() each animation frame.
 export class PMZStream {
   constructor(decoder, options = {}) {
@@ -27,6 +65,12 @@ export class PMZStream {
   get error() { return this.status === 'ok' ? '' : this.decoder.error; }
   get faceCount() { return this.decoder.faceCount; }
   get vertexCount() { return this.decoder.vertexCount; }
+  get splitsApplied() { return this.decoder.splitsApplied; }
+  info() { return this.decoder.info(); }
+  // The decoder's current mesh (copies), e.g. to check the geometry against.
+  async snapshot() {
+    return { positions: this.decoder.positions().slice(), indices: this.decoder.indices().slice() };
+  }
 
   feed(bytes) {
     this.bytes += bytes.length;
@@ -57,28 +101,10 @@ export class PMZStream {
   }
 
   _allocate(vertices, faces) {
-    const info = this.decoder.info();
-    const g = this.geometry;
-    const vcap = Math.max(vertices, Math.min(info.fullVertices, 1 << 24), 2 * this._vertexCap);
-    const fcap = Math.max(faces, Math.min(info.fullFaces, 1 << 25), 2 * this._faceCap);
-    const grow = (name, old, size, itemSize, Type) => {
-      const a = new BufferAttribute(new Type(size * itemSize), itemSize);
-      if (old) a.array.set(old.array.subarray(0, Math.min(old.array.length, a.array.length)));
-      if (name) g.setAttribute(name, a);
-      return a;
-    };
-    if (vertices > this._vertexCap) {
-      grow('position', g.getAttribute('position'), vcap, 3, Float32Array);
-      if (this.geomorph) grow('pmzMorph', g.getAttribute('pmzMorph'), vcap, 4, Float32Array);
-      this._vertexCap = vcap;
-    }
-    if (faces > this._faceCap) {
-      g.setIndex(grow(null, g.getIndex(), 3 * fcap, 1, Uint32Array));  // itemSize 1: three counts indices
-      this._faceCap = fcap;
-    }
-    const box = new Box3(new Vector3(...info.bboxMin), new Vector3(...info.bboxMax));
-    g.boundingBox = box;
-    g.boundingSphere = box.getBoundingSphere(new Sphere());
+    const caps = { vertices: this._vertexCap, faces: this._faceCap };
+    allocateGeometry(this.geometry, this.decoder.info(), vertices, faces, caps, this.geomorph);
+    this._vertexCap = caps.vertices;
+    this._faceCap = caps.faces;
   }
 
   _sync() {
@@ -108,16 +134,8 @@ export class PMZStream {
       changed = true;
     }
     if (!all && c.modifiedFaces.length) {
-      const faces = Uint32Array.from(c.modifiedFaces).sort();
-      for (const f of faces) index.array.set(t.subarray(3 * f, 3 * f + 3), 3 * f);
-      const runs = [];
-      for (const f of faces) {
-        const last = runs[runs.length - 1];
-        if (last && f <= last[1]) last[1] = Math.max(last[1], f + 1);
-        else runs.push([f, f + 1]);
-      }
-      if (runs.length > RUNS_MAX) runs.splice(0, runs.length, [runs[0][0], runs[runs.length - 1][1]]);
-      for (const [a, b] of runs) index.addUpdateRange(3 * a, 3 * (b - a));
+      for (const f of c.modifiedFaces) index.array.set(t.subarray(3 * f, 3 * f + 3), 3 * f);
+      addFaceRuns(index, c.modifiedFaces);
       changed = true;
     }
     if (changed) index.needsUpdate = true;
@@ -156,6 +174,161 @@ export class PMZStream {
   }
 }
 
+// The same geometry decoded in a Web Worker (worker.js): the page only copies the changed
+// ranges the worker posts into the geometry, so decoding never blocks a frame. update() each
+// animation frame applies what arrived since the last one (budgetMs is not needed here).
+export class PMZWorkerStream {
+  constructor(options = {}) {
+    this.geometry = new BufferGeometry();
+    this.geomorph = options.geomorph ?? false;
+    this.faceTarget = null;
+    this.bytes = 0;
+    this.totalBytes = 0;
+    this.status = 'ok';
+    this.complete = false;
+    this.faceCount = 0;
+    this.vertexCount = 0;
+    this.splitsApplied = 0;
+    this._error = '';
+    this._info = { headerDone: false, baseDone: false, complete: false };
+    this._caps = { vertices: 0, faces: 0 };
+    this._pending = [];
+    this._sentTarget = null;
+    this._snapshots = new Map();
+    this.firstBytesTime = null;
+    this._clock = typeof performance === 'object' ? performance : Date;
+    const { worker: _, ...cloneable } = options;
+    this.worker = new Worker(new URL('./worker.js', import.meta.url), { type: 'module' });
+    this.worker.postMessage({ type: 'init', options: cloneable });
+    let settle;
+    this.done = new Promise((resolve, reject) => { settle = { resolve, reject }; });
+    this.worker.onmessage = (e) => {
+      const m = e.data;
+      if (m.type === 'update') {
+        this._pending.push(m);
+        // When the first body bytes reached the worker, on this page's clock.
+        if (this.firstBytesTime === null && m.firstBytesAt !== null)
+          this.firstBytesTime = m.firstBytesAt - performance.timeOrigin;
+        this.bytes = m.bytes;
+        this.totalBytes = m.totalBytes || this.totalBytes;
+      } else if (m.type === 'done') {
+        this._done = m;
+        settle.resolve(m.status);
+      } else if (m.type === 'snapshot') {
+        this._snapshots.get(m.id)(m);
+        this._snapshots.delete(m.id);
+      } else if (m.type === 'failed') {
+        settle.reject(new Error(m.error));
+      }
+    };
+    this.worker.onerror = (e) => settle.reject(new Error(`pmz: worker: ${e.message}`));
+  }
+
+  get error() { return this.status === 'ok' ? '' : this._error; }
+  info() { return this._info; }
+  // The worker's current mesh (copies), e.g. to check the geometry against.
+  snapshot() {
+    const id = this._snapshots.size + Math.random();
+    return new Promise((resolve) => {
+      this._snapshots.set(id, resolve);
+      this.worker.postMessage({ type: 'snapshot', id });
+    });
+  }
+
+  open(source, init) {
+    if (typeof source === 'string' || source instanceof URL)
+      this.worker.postMessage({ type: 'open', url: new URL(source, location.href).href, init });
+    else if (source && typeof source.stream === 'function')  // Blob, File
+      this.worker.postMessage({ type: 'open', blob: source });
+  }
+  // Bytes read on the page (a Response or a ReadableStream), passed on to the worker.
+  feed(bytes) {
+    const copy = bytes.slice();
+    this.worker.postMessage({ type: 'feed', bytes: copy }, [copy.buffer]);
+    return this.status;
+  }
+  finish() {
+    this.worker.postMessage({ type: 'finish' });
+    return this.status;
+  }
+
+  // Applies the worker's updates that arrived since the last call. True when the geometry
+  // changed.
+  update() {
+    if (this.faceTarget !== this._sentTarget) {
+      this._sentTarget = this.faceTarget;
+      this.worker.postMessage({ type: 'target', faces: this.faceTarget });
+    }
+    const g = this.geometry;
+    let changed = false, vmin = Infinity, vmax = 0, fmin = Infinity, fmax = 0, mmin = Infinity;
+    const modified = [];
+    for (const m of this._pending) {
+      Object.assign(this, { faceCount: m.faces, vertexCount: m.vertices,
+        splitsApplied: m.splitsApplied, status: m.status });
+      this._error = m.error;
+      this._info = m.info;
+      if (!m.positions) continue;
+      let all = m.all;
+      if (m.vertices > this._caps.vertices || m.faces > this._caps.faces) {
+        if (this._caps.faces) all = true;  // reallocated: whatever came before is in, kept
+        allocateGeometry(g, m.info, m.vertices, m.faces, this._caps, this.geomorph);
+        vmin = 0; vmax = Math.max(vmax, m.vertices); fmin = 0; fmax = Math.max(fmax, m.faces);
+      }
+      g.getAttribute('position').array.set(m.positions, 3 * m.vertexBegin);
+      g.getIndex().array.set(m.indices, 3 * m.faceBegin);
+      vmin = Math.min(vmin, m.vertexBegin); vmax = Math.max(vmax, m.vertices);
+      fmin = Math.min(fmin, m.faceBegin); fmax = Math.max(fmax, m.faces);
+      if (all) { vmin = 0; fmin = 0; }
+      if (m.modified) {
+        const index = g.getIndex().array;
+        for (let i = 0; i < m.modified.length; i += 4) {
+          const f = m.modified[i];
+          index.set(m.modified.subarray(i + 1, i + 4), 3 * f);
+          modified.push(f);
+        }
+      }
+      if (m.morph) {
+        const morph = g.getAttribute('pmzMorph').array;
+        const now = m.all ? -1e6 : this._clock.now() / 1000;
+        for (let v = m.morphBegin, i = 0; v < m.vertices; ++v, i += 3) {
+          morph[4 * v] = m.morph[i];
+          morph[4 * v + 1] = m.morph[i + 1];
+          morph[4 * v + 2] = m.morph[i + 2];
+          morph[4 * v + 3] = now;
+        }
+        mmin = Math.min(mmin, m.morphBegin);
+      }
+      changed = true;
+    }
+    this._pending.length = 0;
+    if (changed) {
+      const pos = g.getAttribute('position'), index = g.getIndex();
+      if (vmin < vmax) {
+        pos.addUpdateRange(3 * vmin, 3 * (vmax - vmin));
+        pos.needsUpdate = true;
+        if (this.geomorph && Math.min(mmin, vmin) < vmax) {
+          const morph = g.getAttribute('pmzMorph'), from = Math.min(mmin, vmin);
+          morph.addUpdateRange(4 * from, 4 * (vmax - from));
+          morph.needsUpdate = true;
+        }
+      }
+      if (fmin < fmax) index.addUpdateRange(3 * fmin, 3 * (fmax - fmin));
+      if (modified.length) addFaceRuns(index, modified);
+      index.needsUpdate = true;
+      g.setDrawRange(0, 3 * this.faceCount);
+    }
+    this.complete = !!this._done && this._done.status === 'ok' && this.status === 'ok' &&
+      this._pending.length === 0 &&
+      (this.faceTarget !== null || this.splitsApplied === this._info.totalSplits);
+    return changed;
+  }
+
+  dispose() {
+    this.worker.postMessage({ type: 'close' });
+    this.geometry.dispose();
+  }
+}
+
 // Patches a three.js material so new vertices glide from their parent's position over
 // `seconds` (geometry from a PMZStream with geomorph: true). Call uniforms.pmzTime update via
 // the returned function each frame.
@@ -172,7 +345,9 @@ export function geomorphMaterial(material, seconds = 0.4) {
   };
   material.customProgramCacheKey = () => 'pmz-geomorph';
   const clock = typeof performance === 'object' ? performance : Date;
-  return () => { uniforms.pmzTime.value = clock.now() / 1000; };
+  const tick = () => { uniforms.pmzTime.value = clock.now() / 1000; };
+  tick.uniforms = uniforms;  // pmzTime (seconds, performance.now() / 1000), pmzDuration
+  return tick;
 }
 
 // three.js loader: load(url, onLoad, onProgress, onError) calls onLoad(geometry, stream) once
@@ -197,7 +372,7 @@ export class PMZLoader extends Loader {
       this.manager.itemEnd(resolved);
     };
     const onUpdate = (s) => {
-      if (!loaded && s.decoder.info().baseDone) {
+      if (!loaded && s.info().baseDone) {
         loaded = true;
         if (onLoad) onLoad(s.geometry, s);
       }
@@ -215,13 +390,25 @@ export class PMZLoader extends Loader {
 
   async stream(source, onUpdate) {
     const opts = this.options;
-    const s = new PMZStream(await createDecoder(opts), opts);
     const auto = opts.autoUpdate !== false && typeof requestAnimationFrame === 'function';
+    const inWorker = opts.worker && typeof Worker === 'function';
+    const s = inWorker ? new PMZWorkerStream(opts) : new PMZStream(await createDecoder(opts), opts);
     const tick = () => {
       s.update();
       if (onUpdate) onUpdate(s);
       if (!s.complete && s.status === 'ok') requestAnimationFrame(tick);
     };
+    if (inWorker && (typeof source === 'string' || source instanceof URL ||
+                     (source && typeof source.stream === 'function'))) {
+      // The worker fetches or reads it itself.
+      s.open(source, typeof source === 'string' || source instanceof URL ? {
+        headers: this.requestHeader,
+        credentials: this.withCredentials ? 'include' : 'same-origin',
+      } : undefined);
+      if (auto) requestAnimationFrame(tick);
+      return s;
+    }
+    const workerDone = inWorker ? s.done : null;
     s.done = (async () => {
       let body = source;
       if (typeof source === 'string' || source instanceof URL) {
@@ -241,8 +428,9 @@ export class PMZLoader extends Loader {
       }
       if (auto) requestAnimationFrame(tick);
       // Stops reading at the first error, which it resolves to.
-      return feedStream({ feed: (b) => s.feed(b), finish: () => s.finish() }, body,
-                        () => onUpdate && onUpdate(s));
+      const status = await feedStream({ feed: (b) => s.feed(b), finish: () => s.finish() }, body,
+                                      () => onUpdate && onUpdate(s));
+      return workerDone ? workerDone : status;
     })();
     return s;
   }

@@ -1,6 +1,7 @@
 // The viewer in headless Chromium (Debian's, via puppeteer-core) over a throttled local HTTP
-// stream: the face count rises while bytes arrive and reaches the full mesh; a coarse and the
-// final level both show the object and differ.
+// stream, decoding in a Web Worker (the default) and on the page's thread: the face count rises
+// while bytes arrive and reaches the full mesh; the geomorph shader matches its blend; a coarse
+// and the final level both show the object and differ.
 import assert from 'node:assert/strict';
 import { mkdtempSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
@@ -69,6 +70,30 @@ test('the viewer refines while the stream arrives and shows the object', async (
   for (let i = 1; i < arriving.length; ++i) assert.ok(arriving[i].faces >= arriving[i - 1].faces);
   assert.ok(levels[0] < fullFaces / 2, `first level ${levels[0]} of ${fullFaces}`);
 
+  // Geomorphs: the shader at a fixed time draws what the same blend computed from the
+  // geometry's pmzMorph attribute draws without them: at the first birth every streamed vertex
+  // sits at its parent, after the last birth plus the glide time at its own position, and in
+  // between a mix.
+  const births = await page.evaluate(() => window.pmzBirthTimes());
+  const vertices = await page.evaluate(() => window.pmzStatus.vertices);
+  assert.ok(births.length > vertices / 2, `${births.length} of ${vertices} vertices glide`);
+  const glide = {};
+  for (const [name, T] of [['start', births[0]], ['middle', births[births.length >> 1]],
+    ['end', births[births.length - 1] + 0.5]]) {
+    const r = await page.evaluate((t) => window.pmzGeomorphCheck(t), T);
+    assert.ok(differingShare(r.shader, r.cpu) < 0.002, `geomorph shader at ${name} differs from the blend`);
+    glide[name] = r;
+  }
+  assert.equal(glide.start.counts.parent, births.length);
+  assert.equal(glide.end.counts.own, vertices);
+  // Half the streamed vertices are born after the middle one; those born before it glided on.
+  assert.ok(glide.middle.counts.parent >= births.length / 2 - 1, JSON.stringify(glide.middle.counts));
+  assert.ok(glide.middle.counts.own > vertices - births.length, JSON.stringify(glide.middle.counts));
+  // (Each new vertex sits on its own parent's final position at the start: a mesh one split
+  // coarser everywhere, not the base mesh; 0.0067 of the pixels differ on the pmz-demo sample.)
+  const moved = differingShare(glide.start.shader, glide.end.shader);
+  assert.ok(moved > 0.003, `the glide moves only ${moved} of the pixels`);
+
   const shot = async (faces, name) => {
     await page.evaluate((f) => window.pmzSetFaces(f), faces);
     await page.waitForFunction((f) => f === null ? window.pmzStatus.faces === window.pmzStatus.faces
@@ -94,6 +119,25 @@ test('the viewer refines while the stream arrives and shows the object', async (
   assert.ok(coarse.coverage > 0.05, `coarse coverage ${coarse.coverage}`);
   assert.ok(fine.coverage > 0.05, `final coverage ${fine.coverage}`);
   assert.ok(differingShare(coarse, fine) > 0.01, 'coarse and final views do not differ');
+  await page.close();
+});
+
+test('the viewer decodes on its own thread with ?worker=0 too', async () => {
+  const page = await browser.newPage();
+  const messages = [];
+  page.on('pageerror', (e) => messages.push(String(e)));
+  await page.setViewport({ width: 320, height: 240 });
+  const { port } = server.address();
+  await page.goto(`http://127.0.0.1:${port}/index.html?src=/stream/sample.pmz&worker=0`);
+  await page.waitForFunction(() => window.pmzStatus && (window.pmzStatus.complete || window.pmzStatus.error),
+    { timeout: 60000, polling: 100 });
+  const s = await page.evaluate(() => ({ ...window.pmzStatus }));
+  assert.equal(s.error, '', messages.join('\n'));
+  assert.equal(s.faces, nativeDecode(demoPmz()).indices.length / 3);
+  const shot = await page.evaluate(() => window.pmzSnapshot());
+  const reference = await page.evaluate(() => window.pmzReferenceSnapshot());
+  assert.ok(shot.coverage > 0.05, `coverage ${shot.coverage}`);
+  assert.ok(differingShare(shot, reference) < 0.002, 'in-place geometry differs from a fresh one');
   await page.close();
 });
 

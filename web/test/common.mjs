@@ -2,7 +2,7 @@
 // `npm install ./web/dist/pmz-decoder-*.tgz`, then `import ... from 'pmz-decoder'`), the native
 // tools, and the sample streams.
 import { execFileSync } from 'node:child_process';
-import { mkdtempSync, readdirSync, readFileSync, writeFileSync } from 'node:fs';
+import { mkdtempSync, readdirSync, readFileSync, symlinkSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import path from 'node:path';
 import { fileURLToPath, pathToFileURL } from 'node:url';
@@ -11,7 +11,7 @@ export const webDir = path.resolve(path.dirname(fileURLToPath(import.meta.url)),
 export const rootDir = path.resolve(webDir, '..');
 export const binDir = process.env.PMZ_BIN || path.join(rootDir, 'build', 'bin');
 
-let installed = null;
+let installed = null, installedThree = null;
 // The package as a consumer gets it: installed from the tarball, imported by name.
 export async function importPackage() {
   if (!installed) {
@@ -22,10 +22,20 @@ export async function importPackage() {
     writeFileSync(path.join(dir, 'package.json'), '{"private": true}\n');
     execFileSync('npm', ['install', '--offline', '--no-audit', '--no-fund', '--loglevel=error',
       path.join(dist, tgz)], { cwd: dir, stdio: ['ignore', 'ignore', 'inherit'] });
+    // three (the loader's peer dependency) from web/'s devDependencies.
+    symlinkSync(path.join(webDir, 'node_modules', 'three'), path.join(dir, 'node_modules', 'three'));
     writeFileSync(path.join(dir, 'probe.mjs'), "export * from 'pmz-decoder';\n");
+    writeFileSync(path.join(dir, 'probe_three.mjs'), "export * from 'pmz-decoder/three';\n");
     installed = import(pathToFileURL(path.join(dir, 'probe.mjs')).href);
+    installedThree = import(pathToFileURL(path.join(dir, 'probe_three.mjs')).href);
   }
   return installed;
+}
+
+// pmz-decoder/three from the same installation.
+export async function importThreeLoader() {
+  await importPackage();
+  return installedThree;
 }
 
 // The procedural sample (pmz-demo: ~50k faces), made once by scripts/web.sh.

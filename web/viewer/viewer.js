@@ -4,7 +4,10 @@ import * as THREE from 'three';
 import { OrbitControls } from './vendor/OrbitControls.js';
 import { PMZLoader, geomorphMaterial } from 'pmz-decoder/three';
 
+// Decoding runs in a Web Worker (?worker=0: on this thread, REFINE_BUDGET_MS of splits per frame).
 const REFINE_BUDGET_MS = 8;  // of a 16.7 ms frame: rendering and feeding keep the rest
+const params = new URLSearchParams(location.search);
+const useWorker = params.get('worker') !== '0' && typeof Worker === 'function';
 const BACKGROUND = 0x20242a;
 
 const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
@@ -25,8 +28,26 @@ const controls = new OrbitControls(camera, renderer.domElement);
 const material = new THREE.MeshStandardMaterial({ color: 0xd8c8a8, flatShading: true,
   side: THREE.DoubleSide, roughness: 0.7 });
 const morphClock = geomorphMaterial(material);
+let morphTime = null;  // tests: a fixed geomorph time instead of the clock
 const plainMaterial = new THREE.MeshStandardMaterial({ color: 0xd8c8a8, flatShading: true,
   side: THREE.DoubleSide, roughness: 0.7 });
+
+// Both materials' shader programs are compiled before a stream is opened (in parallel where
+// the browser has KHR_parallel_shader_compile): compiling on the first frame with the object
+// blocked the page for seconds in SwiftShader.
+const shadersReady = (async () => {
+  const dummy = new THREE.BufferGeometry();
+  dummy.setAttribute('position', new THREE.BufferAttribute(new Float32Array(9), 3));
+  dummy.setAttribute('pmzMorph', new THREE.BufferAttribute(new Float32Array(12), 4));
+  const meshes = [material, plainMaterial].map((m) => new THREE.Mesh(dummy, m));
+  for (const m of meshes) scene.add(m);
+  try {
+    await renderer.compileAsync(scene, camera);
+  } finally {
+    for (const m of meshes) scene.remove(m);
+    dummy.dispose();
+  }
+})();
 
 const overlay = document.getElementById('overlay');
 const lod = document.getElementById('lod');
@@ -38,12 +59,20 @@ const status = { faces: 0, vertices: 0, bytes: 0, totalBytes: 0, complete: false
 window.pmzStatus = status;
 window.pmzTiming = { firstBytes: null, firstObjectFrame: null };
 window.pmzFrames = [];
+// Main-thread tasks over 50 ms (Long Tasks API, where supported): {start, duration}.
+window.pmzLongTasks = [];
+if (typeof PerformanceObserver === 'function' &&
+    (PerformanceObserver.supportedEntryTypes || []).includes('longtask')) {
+  new PerformanceObserver((list) => {
+    for (const e of list.getEntries()) window.pmzLongTasks.push({ start: e.startTime, duration: e.duration });
+  }).observe({ type: 'longtask' });
+}
 
 let current = null;  // { stream, mesh, fitted }
 let faceTarget = null;  // null: follow the stream; else the LOD slider's face count
 lod.addEventListener('input', () => {
   const v = Number(lod.value);
-  const full = current ? current.stream.decoder.info().fullFaces : 0;
+  const full = current ? current.stream.info().fullFaces : 0;
   faceTarget = v >= 1000 ? null : Math.max(1, Math.round(full * (v / 1000) ** 2));
 });
 let rate = { t: performance.now(), splits: 0, perSecond: 0 };
@@ -61,8 +90,10 @@ async function open(source) {
   Object.assign(status, { faces: 0, vertices: 0, bytes: 0, totalBytes: 0, complete: false, error: '' });
   window.pmzTiming = { firstBytes: null, firstObjectFrame: null };
   window.pmzFrames = [];
-  const loader = new PMZLoader(undefined, { geomorph: true, autoUpdate: false });
+  window.pmzLongTasks = [];
+  const loader = new PMZLoader(undefined, { geomorph: true, autoUpdate: false, worker: useWorker });
   try {
+    await shadersReady;
     const stream = await loader.stream(source, (s) => {
       if (window.pmzTiming.firstBytes === null && s.bytes > 0) window.pmzTiming.firstBytes = performance.now();
       status.bytes = s.bytes;
@@ -94,27 +125,35 @@ function fit(info) {
 
 function frame(t) {
   requestAnimationFrame(frame);
+  let work = 0;  // ms spent in update(): refinement on this thread, or applying the worker's
   if (current) {
-    const s = current.stream, d = s.decoder;
-    const info = d.info();
+    const s = current.stream;
+    const info = s.info();
     if (info.baseDone && !current.fitted) {
       fit(info);
       current.fitted = true;
     }
-    const before = d.splitsApplied;
+    const before = s.splitsApplied;
     s.faceTarget = faceTarget;
+    const t0 = performance.now();
     s.update(REFINE_BUDGET_MS);
-    rate.splits += Math.max(0, d.splitsApplied - before);
+    work = performance.now() - t0;
+    rate.splits += Math.max(0, s.splitsApplied - before);
+    if (window.pmzTiming.firstBytes === null && s.firstBytesTime != null)
+      window.pmzTiming.firstBytes = s.firstBytesTime;
+    Object.assign(status, { bytes: s.bytes, totalBytes: s.totalBytes });
     Object.assign(status, { faces: s.faceCount, vertices: s.vertexCount, complete: s.complete });
     if (s.status !== 'ok') setError(s.error);
     current.mesh.material = morph.checked ? material : plainMaterial;
   }
-  morphClock();
+  if (morphTime === null) morphClock();
   controls.update();
+  const t0r = performance.now();
   renderer.render(scene, camera);
   const now = performance.now();
   if (status.faces > 0 && window.pmzTiming.firstObjectFrame === null) window.pmzTiming.firstObjectFrame = now;
-  if (window.pmzFrames.length < 100000) window.pmzFrames.push({ t, faces: status.faces, bytes: status.bytes });
+  if (window.pmzFrames.length < 100000)
+    window.pmzFrames.push({ t, faces: status.faces, bytes: status.bytes, work, render: performance.now() - t0r });
   if (now - rate.t >= 500) {
     rate = { t: now, splits: 0, perSecond: rate.splits / ((now - rate.t) / 1000) };
   }
@@ -138,7 +177,7 @@ window.addEventListener('resize', () => {
 // pixels not the background) with a downsampled copy for comparing two frames.
 window.pmzSetFaces = (faces) => {
   faceTarget = faces;
-  const full = current ? current.stream.decoder.info().fullFaces : 0;
+  const full = current ? current.stream.info().fullFaces : 0;
   lod.value = faces === null ? 1000 : Math.min(999, Math.round(1000 * Math.sqrt(faces / Math.max(1, full))));
 };
 function snapshot() {
@@ -161,11 +200,11 @@ window.pmzSnapshot = () => {
 };
 // The same view drawn from a geometry built afresh from the decoder's current buffers: what
 // the in-place updated geometry must look like.
-window.pmzReferenceSnapshot = () => {
-  const d = current.stream.decoder, streamed = current.mesh.geometry;
+window.pmzReferenceSnapshot = async () => {
+  const d = await current.stream.snapshot(), streamed = current.mesh.geometry;
   const fresh = new THREE.BufferGeometry();
-  fresh.setAttribute('position', new THREE.BufferAttribute(d.positions().slice(), 3));
-  fresh.setIndex(new THREE.BufferAttribute(d.indices().slice(), 1));
+  fresh.setAttribute('position', new THREE.BufferAttribute(d.positions, 3));
+  fresh.setIndex(new THREE.BufferAttribute(d.indices, 1));
   current.mesh.geometry = fresh;
   current.mesh.material = plainMaterial;
   renderer.render(scene, camera);
@@ -175,7 +214,46 @@ window.pmzReferenceSnapshot = () => {
   return shot;
 };
 
-const params = new URLSearchParams(location.search);
+// Tests: the geomorph shader at time T (seconds) against the same blend computed here from the
+// geometry's pmzMorph attribute and drawn without geomorphs. Returns both snapshots and how
+// many vertices sit at their parent (blend 0), between, and at their own position (blend 1).
+window.pmzGeomorphCheck = (T) => {
+  const mesh = current.mesh, streamed = mesh.geometry;
+  const pos = streamed.getAttribute('position').array, glide = streamed.getAttribute('pmzMorph').array;
+  const nv = current.stream.vertexCount, duration = morphClock.uniforms.pmzDuration.value;
+  const blended = new Float32Array(3 * nv);
+  const counts = { parent: 0, between: 0, own: 0 };
+  for (let v = 0; v < nv; ++v) {
+    const t = Math.min(1, Math.max(0, (T - glide[4 * v + 3]) / duration));
+    if (t === 0) ++counts.parent; else if (t === 1) ++counts.own; else ++counts.between;
+    for (let k = 0; k < 3; ++k) blended[3 * v + k] = glide[4 * v + k] * (1 - t) + pos[3 * v + k] * t;
+  }
+  morphTime = T;
+  morphClock.uniforms.pmzTime.value = T;
+  mesh.material = material;
+  renderer.render(scene, camera);
+  const shader = snapshot();
+  const fresh = new THREE.BufferGeometry();
+  fresh.setAttribute('position', new THREE.BufferAttribute(blended, 3));
+  fresh.setIndex(new THREE.BufferAttribute(streamed.getIndex().array.slice(0, streamed.drawRange.count), 1));
+  mesh.geometry = fresh;
+  mesh.material = plainMaterial;
+  renderer.render(scene, camera);
+  const cpu = snapshot();
+  mesh.geometry = streamed;
+  mesh.material = morph.checked ? material : plainMaterial;
+  morphTime = null;
+  fresh.dispose();
+  return { shader, cpu, counts };
+};
+// Birth times (pmzMorph.w) of the vertices that glide, sorted: for choosing T above.
+window.pmzBirthTimes = () => {
+  const glide = current.mesh.geometry.getAttribute('pmzMorph').array;
+  const out = [];
+  for (let v = 0; v < current.stream.vertexCount; ++v) if (glide[4 * v + 3] > -1e5) out.push(glide[4 * v + 3]);
+  return out.sort((a, b) => a - b);
+};
+
 if (params.get('src')) {
   document.getElementById('url').value = params.get('src');
   open(params.get('src'));
