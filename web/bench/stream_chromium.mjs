@@ -45,6 +45,10 @@ for (let r = 0; r < runs; ++r) {
     complete_ms: done ? +(done.t - firstBytes).toFixed(1) : null, frames: during.length,
     gap_median_ms: q(0.5), gap_p95_ms: q(0.95), gap_max_ms: gaps.length ? +gaps[gaps.length - 1].toFixed(1) : null,
     gaps_over_50ms: gaps.filter((g) => g > 50).length,
+    // The page's own JS per frame: update() (applying the worker's ranges, or refining here)
+    // and the render() call (queuing GL commands; SwiftShader draws in the GPU process).
+    update_max_ms: +Math.max(0, ...during.map((f) => f.work)).toFixed(1),
+    render_call_max_ms: +Math.max(0, ...during.map((f) => f.render)).toFixed(1),
     long_tasks: s.longTasks.filter((x) => x.start >= firstBytes && (!done || x.start <= done.t)).length,
     long_task_max_ms: +Math.max(0, ...s.longTasks.filter((x) => x.start >= firstBytes &&
       (!done || x.start <= done.t)).map((x) => x.duration)).toFixed(1) });
