@@ -17,7 +17,10 @@ void AttributeField::init(const HalfEdgeMesh& m, const std::vector<uint32_t>& co
                           const MeshAttributes& attributes, AttributeMode mode, float weight,
                           double unit) {
   const uint32_t faces = m.face_count();
-  const bool wedges = corner_wedges.size() == size_t(faces) * 3 && attributes.has_wedges();
+  // Wedges out of range (a caller's inconsistent arrays) are ignored rather than read past.
+  const bool wedges = corner_wedges.size() == size_t(faces) * 3 && attributes.has_wedges() &&
+                      std::all_of(corner_wedges.begin(), corner_wedges.end(),
+                                  [&](uint32_t w) { return w < attributes.wedge_count(); });
   const bool materials = face_materials.size() == faces;
   active = mode != AttributeMode::geometry_only && (wedges || materials);
   if (!active) return;

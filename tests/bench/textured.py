@@ -74,9 +74,17 @@ def main():
     ap.add_argument("--out", default="bench-out/textured")
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--repeat", type=int, default=3, help="alternating timing runs")
+    ap.add_argument("--size-only", action="store_true", help="only (a): encode and compare sizes")
+    ap.add_argument("--report", help="only rewrite the report from this textured.json")
     args = ap.parse_args()
     build = Path(args.build).resolve()
     out = Path(args.out).resolve()
+    if args.report:
+        data = json.loads(Path(args.report).read_text())
+        ratios = [x for x in RATIOS if f"{int(x * 100)}%" in data["results"][0]]
+        write_report(out / "textured.md", data["results"], data["load"], ratios)
+        print((out / "textured.md").read_text())
+        return
     (out / "set").mkdir(parents=True, exist_ok=True)
     gltfpack = build / "gltfpack/node_modules/.bin/gltfpack"
     if not gltfpack.exists():
@@ -127,7 +135,7 @@ def main():
         row["pmz_codes_attributes"] = "attributes not encoded" not in r.stderr
         row["pmz_bytes"] = pmz.stat().st_size
         # (b) and (c) per ratio.
-        for ratio in RATIOS:
+        for ratio in [] if args.size_only else RATIOS:
             key = f"{int(ratio * 100)}%"
             gp = work / f"gltfpack-{key}.glb"
             run([gltfpack, "-i", m["glb"], "-o", gp, "-si", ratio, "-noq"])
@@ -150,18 +158,25 @@ def main():
                             seconds_geometry=statistics.median(times["geometry-only"]))
         results.append(row)
     (out / "textured.json").write_text(json.dumps(dict(load=load, results=results), indent=1))
-    write_report(out / "textured.md", results, load)
+    write_report(out / "textured.md", results, load, [] if args.size_only else RATIOS)
     print((out / "textured.md").read_text())
 
 
+# Relative errors below this are both "exact" (blade's planar faces): no meaningful ratio.
+EXACT = 1e-6
+
+
 def ratio_text(a, b):
+    if a is not None and b is not None and a < EXACT and b < EXACT:
+        return "both < 1e-6"
     return f"{a / b:.3f}" if a is not None and b else "n/a"
 
 
-def write_report(path, results, load):
+def write_report(path, results, load, ratios):
     L = []
     L.append(f"Load average at the start: {load:.1f} (2 cores). Relative geometric errors (/ bbox "
-             "diagonal), texture error in uv units (mean |delta uv| at corresponding points).\n")
+             "diagonal), texture error in uv units (mean |delta uv| at corresponding points). "
+             "Ratios where both errors are below 1e-6 (exact) are left out of the medians.\n")
     L.append("### (a) Size: pmz-encode vs draco_encoder -qp 14 -qt 12 -qn 10 -qg 8 -cl 10\n")
     L.append("| mesh | faces | attributes | Draco bytes | pmz bytes | pmz / Draco |")
     L.append("|---|---:|---|---:|---:|---:|")
@@ -171,7 +186,8 @@ def write_report(path, results, load):
         ratio = r["pmz_bytes"] / r["draco_bytes"]
         if coded:
             size_ratios.append(ratio)
-        L.append(f"| {r['name']} | {r['faces']} | {r['attributes']} | {r['draco_bytes']} | "
+        L.append(f"| {r['name']} | {r['faces']} | {r['attributes'].replace(', colours', '')} | "
+                 f"{r['draco_bytes']} | "
                  f"{r['pmz_bytes']}{'' if coded else ' (geometry only)'} | "
                  f"{f'{ratio:.3f}' if coded else 'n/a'} |")
     if size_ratios:
@@ -179,7 +195,7 @@ def write_report(path, results, load):
     else:
         L.append("\npmz-encode does not code attributes yet: no size ratio (the .pmz column "
                  "holds geometry only).\n")
-    for key in [f"{int(x * 100)}%" for x in RATIOS]:
+    for key in [f"{int(x * 100)}%" for x in ratios]:
         L.append(f"### (b) {key}: pmz-simplify vs gltfpack -si {float(key[:-1]) / 100} -noq, "
                  "same face count\n")
         L.append("| mesh | gltfpack faces | pmz faces | texture err gltfpack | texture err pmz | "
@@ -188,9 +204,11 @@ def write_report(path, results, load):
         tex, geo = [], []
         for r in results:
             g, p = r[key]["gltfpack"], r[key]["pmz"]
-            if g["texcoord"] is not None and p["texcoord"] is not None and g["texcoord"] > 0:
+            if g["texcoord"] is not None and p["texcoord"] is not None and \
+                    max(g["texcoord"], p["texcoord"]) >= EXACT:
                 tex.append(p["texcoord"] / g["texcoord"])
-            geo.append(p["mean"] / g["mean"] if g["mean"] > 0 else 1.0)
+            if p["mean"] >= EXACT or g["mean"] >= EXACT:
+                geo.append(p["mean"] / g["mean"])
             t = lambda x: "n/a" if x is None else f"{x:.3e}"
             L.append(f"| {r['name']} | {g['faces']} | {p['faces']} | {t(g['texcoord'])} | "
                      f"{t(p['texcoord'])} | {ratio_text(p['texcoord'], g['texcoord'])} | "
@@ -200,15 +218,19 @@ def write_report(path, results, load):
                      f"pmz at or below on {sum(x <= 1 for x in tex)} of {len(tex)}. ")
         L.append(f"Geometric mean error pmz / gltfpack: median {statistics.median(geo):.3f}, "
                  f"pmz ahead on {sum(x < 1 for x in geo)} of {len(geo)}.\n")
+    if not ratios:
+        path.write_text("\n".join(L) + "\n")
+        return
     L.append("### (c) Attribute-aware (default) vs geometry-only pmz-simplify, same face count\n")
     L.append("| mesh | ratio | faces | geo mean geometry-only | geo mean full | full / geometry | "
              "texture err geometry-only | texture err full | time geometry-only s | time full s |")
     L.append("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|")
-    for key in [f"{int(x * 100)}%" for x in RATIOS]:
+    for key in [f"{int(x * 100)}%" for x in ratios]:
         c = []
         for r in results:
             f, g = r[key]["full"], r[key]["geometry"]
-            c.append(f["mean"] / g["mean"] if g["mean"] > 0 else 1.0)
+            if f["mean"] >= EXACT or g["mean"] >= EXACT:
+                c.append(f["mean"] / g["mean"])
             t = lambda x: "n/a" if x is None else f"{x:.3e}"
             L.append(f"| {r['name']} | {key} | {f['faces']} | {g['mean']:.3e} | {f['mean']:.3e} | "
                      f"{ratio_text(f['mean'], g['mean'])} | {t(g['texcoord'])} | "
