@@ -424,14 +424,7 @@ Status Decoder::Impl::base(const uint8_t* p, size_t n) {
   const uint32_t vn = uint32_t(info.base_vertices), fn = uint32_t(info.base_faces);
   std::string err;
   BaseMesh bm;
-  switch (decode_base(p, n, vn, fn, bm, err)) {
-    case BaseResult::ok:
-      break;
-    case BaseResult::corrupt:
-      return fail(Status::corrupt, err);
-    case BaseResult::limit_exceeded:
-      return fail(Status::limit_exceeded, err);
-  }
+  if (const Status s = decode_base(p, n, vn, fn, bm, err); s != Status::ok) return fail(s, err);
   ProgressiveMesh m;
   if (!m.build(vn, bm.faces.data(), fn, err)) return fail(Status::corrupt, "BASE: " + err);
   level.mesh = std::move(m);

@@ -228,7 +228,7 @@ Face canonical_face(uint32_t a, uint32_t b, uint32_t c) {
 
 bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector<uint8_t>& out,
                std::string& error, WriteStats* stats) {
-  if (opt.position_bits > 30) return error = "--position-bits must be 0..30", false;
+  if (opt.position_bits > 30) return error = "position bits must be 0..30", false;
   for (float x : seq.mesh.positions)
     if (!std::isfinite(x)) return error = "non-finite vertex coordinate", false;
   Plan plan;

@@ -177,8 +177,8 @@ struct DecodeIO {
 // The traversal (spec section 7), coding or decoding each value in turn: IO::kEncode
 // takes the values from the oracle, otherwise from the stream.
 template <class IO>
-BaseResult code_base(IO& io, uint32_t n, uint32_t fn, uint32_t midpoint, Oracle* oracle,
-                     BaseMesh& mesh, std::string& error) {
+Status code_base(IO& io, uint32_t n, uint32_t fn, uint32_t midpoint, Oracle* oracle, BaseMesh& mesh,
+                 std::string& error) {
   constexpr bool kEnc = IO::kEncode;
   io.direct(midpoint);
   auto models = std::make_unique<BaseModels>();
@@ -234,9 +234,8 @@ BaseResult code_base(IO& io, uint32_t n, uint32_t fn, uint32_t midpoint, Oracle*
   };
   const uint64_t work_limit = kWorkPerHalfEdge * 3 * uint64_t(fn) + kWorkSlack;
   while (front.face_count() < fn) {
-    if (!io.ok()) return error = "BASE stream truncated", BaseResult::corrupt;
-    if (front.work > work_limit)
-      return error = "BASE front too tangled", BaseResult::limit_exceeded;
+    if (!io.ok()) return error = "BASE stream truncated", Status::corrupt;
+    if (front.work > work_limit) return error = "BASE front too tangled", Status::limit_exceeded;
     uint32_t h;
     if (!front.pop_gate(h)) {  // a component's first face
       uint32_t g[3] = {0, 0, 0}, v[3];
@@ -247,9 +246,9 @@ BaseResult code_base(IO& io, uint32_t n, uint32_t fn, uint32_t midpoint, Oracle*
       }
       for (int k = 0; k < 3; ++k)
         if ((v[k] = vertex(g[k], kNone, kNone, 0, last(), m.residual[1])) == kNone)
-          return error = "BASE vertex malformed", BaseResult::corrupt;
+          return error = "BASE vertex malformed", Status::corrupt;
       if (v[0] == v[1] || v[0] == v[2] || v[1] == v[2])
-        return error = "BASE face repeats a vertex", BaseResult::corrupt;
+        return error = "BASE face repeats a vertex", Status::corrupt;
       front.add_face(v[0], v[1], v[2]);
       continue;
     }
@@ -259,8 +258,7 @@ BaseResult code_base(IO& io, uint32_t n, uint32_t fn, uint32_t midpoint, Oracle*
       const auto it = oracle->edge.find(edge_key(oracle->given_of->at(b), oracle->given_of->at(a)));
       if (it != oracle->edge.end()) {
         has = 1;
-        if (oracle->done[it->second / 3])
-          return error = "BASE face coded twice", BaseResult::corrupt;
+        if (oracle->done[it->second / 3]) return error = "BASE face coded twice", Status::corrupt;
         oracle->done[it->second / 3] = 1;
         g = oracle->faces[prev_corner(it->second)];
       }
@@ -282,8 +280,8 @@ BaseResult code_base(IO& io, uint32_t n, uint32_t fn, uint32_t midpoint, Oracle*
                         uint32_t(mesh.coords[size_t(d) * 3 + k]));
     const uint32_t c =
         vertex(g, left, right, 1 + (left != kNone) + 2 * (right != kNone), pred, m.residual[0]);
-    if (c == kNone) return error = "BASE vertex malformed", BaseResult::corrupt;
-    if (c == a || c == b) return error = "BASE face repeats a vertex", BaseResult::corrupt;
+    if (c == kNone) return error = "BASE vertex malformed", Status::corrupt;
+    if (c == a || c == b) return error = "BASE face repeats a vertex", Status::corrupt;
     front.add_face(b, a, c);
   }
   while (vertices < n) {  // vertices without faces
@@ -293,11 +291,11 @@ BaseResult code_base(IO& io, uint32_t n, uint32_t fn, uint32_t midpoint, Oracle*
       g = oracle->next_isolated;
     }
     if (new_vertex(g, last(), m.residual[1]) == kNone)
-      return error = "BASE vertex malformed", BaseResult::corrupt;
+      return error = "BASE vertex malformed", Status::corrupt;
   }
-  if (!io.ok()) return error = "BASE stream truncated", BaseResult::corrupt;
+  if (!io.ok()) return error = "BASE stream truncated", Status::corrupt;
   mesh.faces = std::move(front.faces);
-  return BaseResult::ok;
+  return Status::ok;
 }
 
 }  // namespace
@@ -327,7 +325,7 @@ bool encode_base(const int32_t* coords, uint32_t n, const uint32_t* faces, uint3
     oracle.next_seed = oracle.next_isolated = 0;
     std::vector<uint8_t> stream;
     EncodeIO io{RangeEncoder(stream)};
-    if (code_base(io, n, fn, midpoint, &oracle, decoded, error) != BaseResult::ok) return false;
+    if (code_base(io, n, fn, midpoint, &oracle, decoded, error) != Status::ok) return false;
     io.rc.finish();
     if (!midpoint || stream.size() < best.size()) best.swap(stream);
   }
@@ -335,11 +333,11 @@ bool encode_base(const int32_t* coords, uint32_t n, const uint32_t* faces, uint3
   return true;
 }
 
-BaseResult decode_base(const uint8_t* p, size_t size, uint32_t n, uint32_t fn, BaseMesh& out,
-                       std::string& error) {
+Status decode_base(const uint8_t* p, size_t size, uint32_t n, uint32_t fn, BaseMesh& out,
+                   std::string& error) {
   if (fn > kFacesPerByte * (size + 1) || n > kVerticesPerByte * (size + 1)) {
     error = "BASE counts beyond what its " + std::to_string(size) + " bytes can hold";
-    return BaseResult::corrupt;
+    return Status::corrupt;
   }
   RangeDecoder dec(p, size);
   DecodeIO io{dec.state()};

@@ -1511,7 +1511,7 @@ void base_round_trip(const std::vector<int32_t>& coords, const std::vector<uint3
   std::string error;
   ASSERT_TRUE(encode_base(coords.data(), n, faces.data(), fn, stream, given_of, enc, error))
       << error;
-  ASSERT_EQ(decode_base(stream.data(), stream.size(), n, fn, dec, error), BaseResult::ok) << error;
+  ASSERT_EQ(decode_base(stream.data(), stream.size(), n, fn, dec, error), Status::ok) << error;
   EXPECT_EQ(dec.coords, enc.coords);
   EXPECT_EQ(dec.faces, enc.faces);
   ASSERT_EQ(given_of.size(), n);
@@ -1534,11 +1534,11 @@ void base_round_trip(const std::vector<int32_t>& coords, const std::vector<uint3
   // another base: the stream ends at the last nonzero byte of the shortest value of its final
   // interval (spec section 8), so a cut value lies outside that interval; the zero bytes read
   // past the end can make it decode (the chunk's CRC is what catches a cut chunk).
-  EXPECT_EQ(decode_base(stream.data(), stream.size(), n + 1, fn, dec, error), BaseResult::corrupt);
+  EXPECT_EQ(decode_base(stream.data(), stream.size(), n + 1, fn, dec, error), Status::corrupt);
   size_t refused = 0;
   for (size_t cut = 0; cut < stream.size(); ++cut) {
     BaseMesh other;
-    if (decode_base(stream.data(), cut, n, fn, other, error) != BaseResult::ok) {
+    if (decode_base(stream.data(), cut, n, fn, other, error) != Status::ok) {
       ++refused;
       continue;
     }
@@ -1595,7 +1595,7 @@ TEST(BaseCodec, CheapestVerticesFitTheCountBound) {
   ASSERT_TRUE(encode_base(coords.data(), n, nullptr, 0, stream, given_of, enc, error)) << error;
   EXPECT_GT(n, 48 * (stream.size() + 1));
   EXPECT_LE(n, 64 * (stream.size() + 1));
-  ASSERT_EQ(decode_base(stream.data(), stream.size(), n, 0, dec, error), BaseResult::ok) << error;
+  ASSERT_EQ(decode_base(stream.data(), stream.size(), n, 0, dec, error), Status::ok) << error;
   EXPECT_EQ(dec.coords, coords);
 }
 
@@ -1652,7 +1652,7 @@ TEST(BaseCodec, HandCodedStreamIsTheSpec) {
   const std::vector<uint8_t> good = code(false), bad = code(true);
   BaseMesh m;
   std::string error;
-  ASSERT_EQ(decode_base(good.data(), good.size(), 4, 2, m, error), BaseResult::ok) << error;
+  ASSERT_EQ(decode_base(good.data(), good.size(), 4, 2, m, error), Status::ok) << error;
   EXPECT_EQ(m.faces, (std::vector<uint32_t>{0, 1, 2, 1, 0, 3}));
   EXPECT_EQ(m.coords,
             (std::vector<int32_t>{100, 200, 300, 110, 190, 300, 105, 210, 301, 105, 180, 299}));
@@ -1663,7 +1663,7 @@ TEST(BaseCodec, HandCodedStreamIsTheSpec) {
   ASSERT_TRUE(encode_base(m.coords.data(), 4, m.faces.data(), 2, stream, given_of, enc, error))
       << error;
   EXPECT_EQ(stream, good);
-  EXPECT_EQ(decode_base(bad.data(), bad.size(), 4, 2, m, error), BaseResult::corrupt);
+  EXPECT_EQ(decode_base(bad.data(), bad.size(), 4, 2, m, error), Status::corrupt);
   EXPECT_NE(error.find("malformed"), std::string::npos) << error;
 }
 

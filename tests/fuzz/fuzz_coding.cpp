@@ -367,9 +367,8 @@ void fuzz_base(const uint8_t* data, size_t size) {
   if (!r.ok || n > 4096 || fn > 8192) return;
   pmz::BaseMesh m;
   std::string error;
-  const pmz::BaseResult res =
-      pmz::decode_base(r.p, r.remaining(), uint32_t(n), uint32_t(fn), m, error);
-  if (res != pmz::BaseResult::ok) {
+  const pmz::Status res = pmz::decode_base(r.p, r.remaining(), uint32_t(n), uint32_t(fn), m, error);
+  if (res != pmz::Status::ok) {
     PMZ_FUZZ_CHECK(!error.empty());
     return;
   }
@@ -383,7 +382,7 @@ void fuzz_base(const uint8_t* data, size_t size) {
   PMZ_FUZZ_CHECK(pmz::encode_base(m.coords.data(), uint32_t(n), m.faces.data(), uint32_t(fn),
                                   stream, given_of, enc, error));
   PMZ_FUZZ_CHECK(pmz::decode_base(stream.data(), stream.size(), uint32_t(n), uint32_t(fn), dec,
-                                  error) == pmz::BaseResult::ok);
+                                  error) == pmz::Status::ok);
   PMZ_FUZZ_CHECK(dec.faces == enc.faces && dec.coords == enc.coords && given_of.size() == n);
   for (uint32_t d = 0; d < n; ++d)
     for (int a = 0; a < 3; ++a)

@@ -17,21 +17,9 @@
 #include <vector>
 
 #include "pmz/export.h"
+#include "pmz/status.hpp"
 
 namespace pmz {
-
-enum class Status : int {
-  ok = 0,
-  bad_magic = 1,       // not a .pmz stream
-  bad_version = 2,     // a major version this decoder does not read
-  bad_checksum = 3,    // a chunk's checksum does not match its bytes
-  corrupt = 4,         // bytes that parse but describe an impossible mesh or stream
-  limit_exceeded = 5,  // counts beyond DecoderLimits or beyond what the input can hold
-  truncated = 6,       // only from finish(): the stream ended before its end marker
-  out_of_memory = 7,
-};
-
-PMZ_API const char* status_name(Status s);
 
 struct DecoderLimits {
   // Hard caps, checked against header counts before any allocation.

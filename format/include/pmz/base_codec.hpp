@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-namespace pmz {
+#include "pmz/status.hpp"
 
-enum class BaseResult { ok, corrupt, limit_exceeded };
+namespace pmz {
 
 // The base mesh as decoded: n vertices (3 int32 coordinates each) and faces (3 vertex ids each,
 // counter-clockwise), numbered in traversal order.
@@ -30,8 +30,9 @@ bool encode_base(const int32_t* coords, uint32_t n, const uint32_t* faces, uint3
 
 // Decodes a stream of `size` bytes holding n vertices and fn faces. Checks the counts against
 // the stream size before allocating (spec sections 7 and 12), every reference, and the end of
-// input; edge-manifoldness of the result is left to ProgressiveMesh::build.
-BaseResult decode_base(const uint8_t* p, size_t size, uint32_t n, uint32_t fn, BaseMesh& out,
-                       std::string& error);
+// input; edge-manifoldness of the result is left to ProgressiveMesh::build. Status::ok, or
+// corrupt / limit_exceeded with a one-line message in error.
+Status decode_base(const uint8_t* p, size_t size, uint32_t n, uint32_t fn, BaseMesh& out,
+                   std::string& error);
 
 }  // namespace pmz
