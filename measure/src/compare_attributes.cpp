@@ -88,6 +88,12 @@ void compare_attributes(const IndexedMesh& original, const IndexedMesh& other,
   if (a.corner_wedges.size() != original.indices.size() ||
       b.corner_wedges.size() != other.indices.size() || original.indices.empty())
     return;
+  // Inconsistent arrays (a caller's, not a reader's: those are checked) are not read past.
+  auto in_range = [](const MeshAttributes& m) {
+    return std::all_of(m.corner_wedges.begin(), m.corner_wedges.end(),
+                       [&](uint32_t w) { return w < m.wedge_count(); });
+  };
+  if (!in_range(a) || !in_range(b)) return;
   // Each kind measured when both meshes have one value per wedge.
   Field fa[kKinds], fb[kKinds];
   auto pick = [](const MeshAttributes& m, Kind kind, Field& f) {
