@@ -4,6 +4,7 @@ import { Box3, BufferAttribute, BufferGeometry, Loader, Sphere, Vector3 } from '
 import { createDecoder, feedStream } from './index.js';
 
 const RUNS_MAX = 64;  // more rewritten-face runs than this upload as one span
+const MODIFIED_LIST_MAX = 1 << 16;  // rewritten faces listed per frame; more: one span
 
 // Update ranges for rewritten faces: sorted runs, or one span when there are many.
 function addFaceRuns(index, modifiedFaces) {
@@ -265,7 +266,8 @@ export class PMZWorkerStream {
     }
     const g = this.geometry;
     let changed = false, vmin = Infinity, vmax = 0, fmin = Infinity, fmax = 0, mmin = Infinity;
-    const modified = [];
+    const modified = [];  // rewritten faces, or with manyModified only their span
+    let modMin = Infinity, modMax = -1, manyModified = false;
     for (const m of this._pending) {
       Object.assign(this, { faceCount: m.faces, vertexCount: m.vertices,
         splitsApplied: m.splitsApplied, status: m.status });
@@ -283,12 +285,17 @@ export class PMZWorkerStream {
       vmin = Math.min(vmin, m.vertexBegin); vmax = Math.max(vmax, m.vertices);
       fmin = Math.min(fmin, m.faceBegin); fmax = Math.max(fmax, m.faces);
       if (all) { vmin = 0; fmin = 0; }
-      if (m.modified) {
-        const index = g.getIndex().array;
-        for (let i = 0; i < m.modified.length; i += 4) {
-          const f = m.modified[i];
-          index.set(m.modified.subarray(i + 1, i + 4), 3 * f);
-          modified.push(f);
+      if (m.modified) {  // (face, a, b, c); element copies: a subarray per face was seconds
+        const index = g.getIndex().array, mm = m.modified;
+        for (let i = 0; i < mm.length; i += 4) {
+          const f = mm[i];
+          index[3 * f] = mm[i + 1];
+          index[3 * f + 1] = mm[i + 2];
+          index[3 * f + 2] = mm[i + 3];
+          if (f < modMin) modMin = f;
+          if (f > modMax) modMax = f;
+          if (modified.length < MODIFIED_LIST_MAX) modified.push(f);
+          else manyModified = true;
         }
       }
       if (m.morph) {
@@ -317,7 +324,8 @@ export class PMZWorkerStream {
         }
       }
       if (fmin < fmax) index.addUpdateRange(3 * fmin, 3 * (fmax - fmin));
-      if (modified.length) addFaceRuns(index, modified);
+      if (manyModified) index.addUpdateRange(3 * modMin, 3 * (modMax + 1 - modMin));
+      else if (modified.length) addFaceRuns(index, modified);
       index.needsUpdate = true;
       g.setDrawRange(0, 3 * this.faceCount);
     }

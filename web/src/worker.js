@@ -106,20 +106,25 @@ function post(info) {
     msg.positions = p.slice(3 * vb, 3 * nv);
     msg.indices = d.indices().slice(3 * fb, 3 * nf);
     if (!all && c.modifiedFaces.length) {
-      const t = d.indices(), m = new Uint32Array(4 * c.modifiedFaces.length);
-      c.modifiedFaces.forEach((f, i) => {
+      const t = d.indices(), faces = c.modifiedFaces, m = new Uint32Array(4 * faces.length);
+      for (let i = 0; i < faces.length; ++i) {
+        const f = faces[i];
         m[4 * i] = f;
-        m.set(t.subarray(3 * f, 3 * f + 3), 4 * i + 1);
-      });
+        m[4 * i + 1] = t[3 * f];
+        m[4 * i + 2] = t[3 * f + 1];
+        m[4 * i + 3] = t[3 * f + 2];
+      }
       msg.modified = m;
       transfer.push(m.buffer);
     }
     if (options.geomorph) {
       const from = all ? 0 : Math.max(vb, Math.min(shownVertices, nv));
       const parents = d.splitParents(), morph = new Float32Array(3 * (nv - from));
-      for (let v = from; v < nv; ++v) {
-        const u = parents[v], src = u === 0xffffffff || all ? v : u;
-        morph.set(p.subarray(3 * src, 3 * src + 3), 3 * (v - from));
+      for (let v = from, i = 0; v < nv; ++v, i += 3) {
+        const u = parents[v], src = 3 * (u === 0xffffffff || all ? v : u);
+        morph[i] = p[src];
+        morph[i + 1] = p[src + 1];
+        morph[i + 2] = p[src + 2];
       }
       msg.morph = morph;
       msg.morphBegin = from;
