@@ -196,11 +196,16 @@ class Engine {
   std::vector<double> self_error;  // Q_v(p_v) / L^4, cached: half of every cost evaluation
   Metric metric = Metric::multifeature;
   MetricParams params;
-  // The Hausdorff guard (Metric::guarded, spec/algorithm.md section 6): per vertex one original
-  // point its region must stay near (the one found farthest from the surface so far; at the
-  // start the vertex itself), and the largest bound of the collapses performed so far.
+  // The Hausdorff guard (Metric::guarded, spec/algorithm.md section 6): per vertex kWitnesses
+  // original points its region must stay near (those found farthest from the surface so far; at
+  // the start the vertex itself), and the largest bound of the collapses performed so far.
+  // One witness forgot the points it displaced, and the surface later drifted from them.
+  static constexpr int kWitnesses = 4;
+  static constexpr int kBoundPoints = 1 + 2 * kWitnesses;  // p_u, witnesses of u and of v
   bool guard = false;
-  std::vector<float> witness;
+  std::vector<float> witness;  // kWitnesses points (x, y, z) per vertex
+  // guard_bound's choice of the witnesses v keeps if the collapse is performed.
+  float next_witness[3 * kWitnesses];
   AttributeField attr;  // seams and the attribute term (inactive without attributes)
   double worst_bound = 0;
   double inv_unit4 = 1, unit = 1;
@@ -309,8 +314,12 @@ class Engine {
   Candidate best_legal_candidate(uint32_t u);
   void set_key(uint32_t v, Candidate c);
   // The guard's bound of u -> v: the largest distance from u's position and the witnesses of u
-  // and v to the faces v will have after the collapse; the point that attains it in `farthest`.
-  float guard_bound(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb, float farthest[3]);
+  // and v to the faces v will have after the collapse; the farthest of these points in
+  // next_witness, which keep_witnesses(v) makes v's after the collapse.
+  float guard_bound(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb);
+  void keep_witnesses(uint32_t v) {
+    std::copy(next_witness, next_witness + 3 * kWitnesses, &witness[size_t(v) * 3 * kWitnesses]);
+  }
   // The guard's cost of a collapse of cost c and bound b: c while b stays within guard_slack
   // times the worst bound so far, c * (b / (guard_slack * worst))^2 beyond.
   float guarded(float c, float bound) const {
@@ -335,29 +344,46 @@ void Engine::set_key(uint32_t v, Candidate c) {
   heap.set(v, c.cost);
 }
 
-float Engine::guard_bound(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb, float farthest[3]) {
+float Engine::guard_bound(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb) {
   ++stats.guard_checks;
   const uint32_t fa = ha != kNone ? HalfEdgeMesh::face(ha) : kNone,
                  fb = hb != kNone ? HalfEdgeMesh::face(hb) : kNone;
-  const float* points[3] = {m.p(u), &witness[size_t(u) * 3], &witness[size_t(v) * 3]};
-  float nearest[3] = {kInfinity, kInfinity, kInfinity};
+  const float* points[kBoundPoints];
+  points[0] = m.p(u);
+  for (int i = 0; i < kWitnesses; ++i) {
+    points[1 + i] = &witness[(size_t(u) * kWitnesses + i) * 3];
+    points[1 + kWitnesses + i] = &witness[(size_t(v) * kWitnesses + i) * 3];
+  }
+  float nearest[kBoundPoints];
+  std::fill(nearest, nearest + kBoundPoints, kInfinity);
   const float* pv = m.p(v);
   auto fan = [&](uint32_t centre) {
     for_each_outgoing(m, centre, [&](uint32_t h) {
       if (HalfEdgeMesh::face(h) == fa || HalfEdgeMesh::face(h) == fb) return;
       const float* b = m.p(m.dest(h));
       const float* c = m.p(m.vert[HalfEdgeMesh::prev(h)]);
-      for (int i = 0; i < 3; ++i)
+      for (int i = 0; i < kBoundPoints; ++i)
         nearest[i] = std::min(nearest[i], squared_distance_to_triangle(points[i], pv, b, c));
     });
   };
   fan(u);
   fan(v);
-  int worst = 0;
-  for (int i = 1; i < 3; ++i)
-    if (nearest[i] > nearest[worst]) worst = i;
-  for (int k = 0; k < 3; ++k) farthest[k] = points[worst][k];
-  return nearest[worst] < kInfinity ? std::sqrt(nearest[worst]) : 0.f;
+  // The kWitnesses farthest distinct points, ties in the order above (deterministic); when fewer
+  // are distinct (at the start every witness of a vertex is the vertex), the farthest repeats.
+  int order[kBoundPoints];
+  for (int i = 0; i < kBoundPoints; ++i) order[i] = i;
+  std::stable_sort(order, order + kBoundPoints,
+                   [&](int a, int b) { return nearest[a] > nearest[b]; });
+  int kept = 0;
+  for (int j = 0; j < kBoundPoints && kept < kWitnesses; ++j) {
+    const float* p = points[order[j]];
+    bool seen = false;
+    for (int i = 0; i < kept && !seen; ++i) seen = std::equal(p, p + 3, &next_witness[i * 3]);
+    if (!seen) std::copy(p, p + 3, &next_witness[3 * kept++]);
+  }
+  for (int i = kept; i < kWitnesses; ++i)
+    std::copy(next_witness, next_witness + 3, &next_witness[i * 3]);
+  return nearest[order[0]] < kInfinity ? std::sqrt(nearest[order[0]]) : 0.f;
 }
 
 // Cost of u -> x (o = origin(u)) from its quadric error e and the length ratio of the edge.
@@ -689,12 +715,11 @@ bool Engine::final_boundary_collapse() {
   if (best_u == kNone) return false;
   uint32_t ha, hb;
   find_edge(best_u, best.target, ha, hb);
-  float farthest[3];
-  const float bound = guard ? guard_bound(best_u, best.target, ha, hb, farthest) : 0.f;
+  const float bound = guard ? guard_bound(best_u, best.target, ha, hb) : 0.f;
   perform(best_u, best.target, ha, hb, best.cost);
   if (guard) {
     worst_bound = std::max(worst_bound, double(bound));
-    std::copy(farthest, farthest + 3, &witness[size_t(best.target) * 3]);
+    keep_witnesses(best.target);
   }
   return true;
 }
@@ -727,7 +752,12 @@ bool Engine::init(const IndexedMesh& input, const SimplifyOptions& options, std:
   stale.assign(n, metric == Metric::multifeature ? kInputQuadric : 0);
   for (uint32_t v = 0; v < n; ++v)
     if (m.out[v] != kNone && m.is_boundary(v)) stale[v] |= kBoundary;
-  if (guard) witness = m.pos;
+  if (guard) {
+    witness.resize(size_t(n) * 3 * kWitnesses);
+    for (uint32_t v = 0; v < n; ++v)
+      for (int i = 0; i < kWitnesses; ++i)
+        std::copy(m.p(v), m.p(v) + 3, &witness[(size_t(v) * kWitnesses + i) * 3]);
+  }
   faces = m.face_count();
   mark.assign(n, 0);
   target.assign(n, kNone);
@@ -800,13 +830,12 @@ void Engine::run(const SimplifyOptions& options) {
       final_boundary_collapse();
       break;
     }
-    float farthest[3];
     float bound = 0;
     if (guard) {
       // Hold back a collapse whose bound exceeds the worst so far (times the slack): its cost
       // is raised by the square of the excess and it goes back into the heap, once; a collapse
       // that moves no surface (cost 0) is never held back.
-      bound = guard_bound(u, v, ha, hb, farthest);
+      bound = guard_bound(u, v, ha, hb);
       if (const float g = guarded(c, bound); !(stale[u] & kGuardDeferred) && g > c) {
         ++stats.guard_deferrals;
         heap.set(u, g);
@@ -818,7 +847,7 @@ void Engine::run(const SimplifyOptions& options) {
     perform(u, v, ha, hb, c);
     if (guard) {
       worst_bound = std::max(worst_bound, double(bound));
-      std::copy(farthest, farthest + 3, &witness[size_t(v) * 3]);
+      keep_witnesses(v);
     }
     update_after(u, v);
     if (options.progress && start_faces - faces >= next_progress) {
@@ -828,6 +857,7 @@ void Engine::run(const SimplifyOptions& options) {
     }
   }
   stats.collapse = seconds_since(t0) - stats.update_terms - stats.update_costs;
+  stats.guard_worst_bound = worst_bound;
 }
 
 // Renumbers vertices along a Morton curve and faces by their first vertex, so that neighbours

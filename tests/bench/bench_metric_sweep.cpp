@@ -4,7 +4,9 @@
 // parameters, defaults otherwise) and with qem, then pmz::compare each result with the input
 // (default samples). Prints one line per mesh and ratio (mean and max symmetric error / bbox
 // diagonal, x1e-4) and the median multifeature / qem ratio of the means per ratio; a mesh that
-// both metrics simplify exactly (mean below 1e-10 of the diagonal) counts 1.
+// both metrics simplify exactly (mean below 1e-10 of the diagonal) counts 1. For the first
+// metric also: the two one-sided maxima, where the max is, the max over the input vertices
+// alone and the guard's final bound (docs/algorithm-notes.md section 6).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -90,6 +92,8 @@ int main(int argc, char** argv) {
     name = name.substr(0, name.find_last_of('.'));
     for (size_t r = 0; r < ratios.size(); ++r) {
       double mean[2], max[2], forward_max = 0, backward_max = 0;
+      pmz::DistanceStats worst;
+      double vertex_max = 0, bound = 0;  // guarded / multifeature: the direction holding the max
       uint64_t faces[2];
       mean[1] = max[1] = 0, faces[1] = 0;
       for (int k = 0; k < (with_qem ? 2 : 1); ++k) {
@@ -98,6 +102,8 @@ int main(int argc, char** argv) {
         options.params = params;
         options.target_faces =
             std::max<uint64_t>(4, uint64_t(std::llround(ratios[r] * mesh.face_count())));
+        pmz::SimplifyStats stats;
+        options.stats = &stats;
         pmz::CollapseSequence seq;
         if (!pmz::simplify(mesh, options, seq, error))
           return std::fprintf(stderr, "%s: %s: %s\n", kTool, path.c_str(), error.c_str()), 1;
@@ -108,18 +114,31 @@ int main(int argc, char** argv) {
         mean[k] = cmp.symmetric.mean / cmp.diag;
         max[k] = cmp.symmetric.max / cmp.diag;
         faces[k] = out.face_count();
-        if (k == 0)
-          forward_max = cmp.forward.max / cmp.diag, backward_max = cmp.backward.max / cmp.diag;
+        if (k == 0) {
+          forward_max = cmp.forward.max / cmp.diag, backward_max = cmp.backward.max / cmp.diag,
+          worst = cmp.symmetric;
+          pmz::CompareOptions vertices_only;  // one face sample, no edge samples
+          vertices_only.samples = 1, vertices_only.both_directions = false;
+          pmz::CompareResult at_vertices;
+          pmz::compare(mesh, out, vertices_only, at_vertices, error);
+          vertex_max = at_vertices.forward.max / cmp.diag;
+          bound = stats.guard_worst_bound / cmp.diag;
+        }
       }
       const bool both_exact = mean[0] < 1e-10 && mean[1] < 1e-10;
       const double q = both_exact ? 1.0 : mean[1] > 0 ? mean[0] / mean[1] : INFINITY;
       ratio_of[r].push_back(q);
       std::printf(
           "%-20s %5.3f  mf %10.5f max %9.4f (%llu faces)  qem %10.5f max %9.4f (%llu faces)  "
-          "mf/qem %.3f  (mf max: input to output %.4f, output to input %.4f)\n",
+          "mf/qem %.3f  (mf max: input to output %.4f, output to input %.4f, at %.6g %.6g %.6g "
+          "%s; input vertices %.4f, guard bound %.4f)\n",
           name.c_str(), ratios[r], mean[0] * 1e4, max[0] * 1e4, (unsigned long long)faces[0],
           mean[1] * 1e4, max[1] * 1e4, (unsigned long long)faces[1], q, forward_max * 1e4,
-          backward_max * 1e4);
+          backward_max * 1e4, worst.max_at[0], worst.max_at[1], worst.max_at[2],
+          worst.max_on == pmz::DistanceStats::Site::vertex ? "vertex"
+          : worst.max_on == pmz::DistanceStats::Site::edge ? "edge"
+                                                           : "face",
+          vertex_max * 1e4, bound * 1e4);
       std::fflush(stdout);
     }
   }

@@ -57,6 +57,7 @@ struct SimplifyStats {
   double setup = 0, initial_costs = 0, collapse = 0, update_terms = 0, update_costs = 0, total = 0;
   uint64_t cost_evaluations = 0, legality_checks = 0;
   uint64_t guard_checks = 0, guard_deferrals = 0;  // guarded: bounds computed, collapses held back
+  double guard_worst_bound = 0;  // guarded: the largest bound of the collapses performed
 };
 
 struct SimplifyOptions {
