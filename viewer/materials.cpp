@@ -2,10 +2,14 @@
 
 #include <stb/stb_image.h>
 
+#include <atomic>
 #include <cerrno>
+#include <climits>
 #include <cstdio>
 #include <cstring>
 #include <map>
+
+#include "source.hpp"
 
 namespace pmzview {
 
@@ -20,10 +24,7 @@ std::string texture_path(const std::string& directory, const std::string& refere
     error = "embedded (data:) images are not read";
     return "";
   }
-  if (starts("http://") || starts("https://")) {
-    error = "remote images are not fetched";
-    return "";
-  }
+  if (starts("http://") || starts("https://")) return reference;
   std::string path = starts("file://") ? reference.substr(7) : reference;
   // MTL files written on Windows name textures like ".\\tex.jpg".
   for (char& c : path)
@@ -33,14 +34,35 @@ std::string texture_path(const std::string& directory, const std::string& refere
 }
 
 bool load_image(const std::string& path, Image& out, std::string& error) {
-  FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) {
-    error = std::strerror(errno);
-    return false;
-  }
   int width = 0, height = 0, channels = 0;
-  stbi_uc* pixels = stbi_load_from_file(f, &width, &height, &channels, 4);
-  std::fclose(f);
+  stbi_uc* pixels = nullptr;
+  if (is_url(path)) {
+    // Fetched whole (textures are small next to meshes), with the stream's own HTTP client.
+    std::unique_ptr<Source> source = open_source(path, error);
+    std::vector<uint8_t> bytes;
+    std::atomic<bool> stop{false};
+    if (source)
+      error = source->run(
+          [&](const uint8_t* data, size_t size) {
+            bytes.insert(bytes.end(), data, data + size);
+            return bytes.size() < (size_t(1) << 30);
+          },
+          stop);
+    if (!source || !error.empty()) return false;
+    if (bytes.size() > size_t(INT_MAX)) {
+      error = "image too large";
+      return false;
+    }
+    pixels = stbi_load_from_memory(bytes.data(), int(bytes.size()), &width, &height, &channels, 4);
+  } else {
+    FILE* f = std::fopen(path.c_str(), "rb");
+    if (!f) {
+      error = std::strerror(errno);
+      return false;
+    }
+    pixels = stbi_load_from_file(f, &width, &height, &channels, 4);
+    std::fclose(f);
+  }
   if (!pixels) {
     const char* reason = stbi_failure_reason();
     error = std::string("not a readable image (") + (reason ? reason : "unknown format") + ")";

@@ -20,12 +20,13 @@ struct Image {
 };
 
 // The file a texture reference names: relative references are resolved against `directory`
-// (the folder of the file that holds the material; "" = the working directory). Returns ""
-// with `error` set for references pmz-view cannot read from disk (data: and http(s): URIs).
+// (the folder or URL folder of the file that holds the material; "" = the working directory).
+// Returns "" with `error` set for references pmz-view cannot read (data: URIs).
 std::string texture_path(const std::string& directory, const std::string& reference,
                          std::string& error);
 
-// Reads PNG, JPEG, BMP, TGA, ... into 8-bit RGBA. False with a reason on failure.
+// Reads PNG, JPEG, BMP, TGA, ... into 8-bit RGBA from a file or an http(s) URL. False with a
+// reason on failure.
 bool load_image(const std::string& path, Image& out, std::string& error);
 
 // Loads each material's texture; a texture that cannot be loaded leaves its image empty and

@@ -111,10 +111,13 @@ class UrlSource final : public Source {
 
 }  // namespace
 
+bool is_url(const std::string& spec) {
+  return spec.rfind("http://", 0) == 0 || spec.rfind("https://", 0) == 0;
+}
+
 std::unique_ptr<Source> open_source(const std::string& spec, std::string& error) {
   if (spec == "-") return std::make_unique<FdSource>(STDIN_FILENO, false, 0);
-  if (spec.rfind("http://", 0) == 0 || spec.rfind("https://", 0) == 0)
-    return std::make_unique<UrlSource>(spec);
+  if (is_url(spec)) return std::make_unique<UrlSource>(spec);
   int fd = open(spec.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) {
     error = "cannot open " + spec + ": " + std::strerror(errno);

@@ -26,6 +26,9 @@ class Source {
   std::atomic<uint64_t> total_{0};
 };
 
+// An http:// or https:// URL.
+bool is_url(const std::string& spec);
+
 // SOURCE is "-" (stdin), an http:// or https:// URL, or a path. Files are opened here so a bad
 // path fails at once (null + error); a URL can only fail once run() connects.
 std::unique_ptr<Source> open_source(const std::string& spec, std::string& error);

@@ -4,10 +4,11 @@
   viewer_test.py screenshots --view BIN --encode BIN --workdir DIR
   viewer_test.py streaming   --view BIN --encode BIN --workdir DIR
   viewer_test.py errors      --view BIN --workdir DIR
-  viewer_test.py attributes  --view BIN --workdir DIR
+  viewer_test.py attributes  --view BIN [--encode BIN] --workdir DIR
 
 The first two encode a generated mesh with pmz-encode first; attributes renders a generated
-textured OBJ (MTL + PNG checkerboard) and a vertex-coloured PLY. Exit 77 (ctest SKIP) when xvfb-run is
+textured OBJ (MTL + PNG checkerboard) and a vertex-coloured PLY, and with --encode streams the
+textured OBJ's .pmz from a file and over HTTP (the texture fetched beside it). Exit 77 (ctest SKIP) when xvfb-run is
 missing. Standard library only: PNGs are decoded here with zlib.
 """
 import argparse
@@ -361,6 +362,9 @@ def test_errors(args):
     junk = os.path.join(workdir, "junk.pmz")
     with open(junk, "wb") as f:
         f.write(b"this is not a pmz stream at all" * 10)
+    bad_obj = os.path.join(workdir, "bad.obj")
+    with open(bad_obj, "w") as f:
+        f.write("v 0 0 0\nv 1 0 0\nf 1 2 7\n")
     env_no_display = dict(os.environ)
     env_no_display.pop("DISPLAY", None)
     env_no_display.pop("WAYLAND_DISPLAY", None)
@@ -372,6 +376,7 @@ def test_errors(args):
         ("not a .pmz", ["xvfb-run", "-a", args.view, junk, "--screenshot", os.path.join(workdir, "x.png")], None,
          "bad stream"),
         ("bad --size", [args.view, junk, "--size", "12"], None, "--size"),
+        ("bad mesh file", [args.view, bad_obj], None, "references vertex"),
     ]
     for name, command, env, expect in cases:
         run = subprocess.run(command, capture_output=True, text=True, timeout=30, env=env)
@@ -420,6 +425,17 @@ def test_attributes(args):
     if len(warnings) != 1 or "no-such-texture.png" not in warnings[0] or "untextured" not in warnings[0]:
         fail("want one warning line naming the missing texture, got %r" % run.stderr)
     shots["missing"] = colour_stats(os.path.join(workdir, "missing.png"))
+    # ... or a file that is not an image: the same, with stb_image's reason.
+    corrupt = os.path.join(workdir, "corrupt")
+    os.makedirs(corrupt, exist_ok=True)
+    write_textured_torus(corrupt, texture="corrupt.png")
+    with open(os.path.join(corrupt, "corrupt.png"), "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n this is not a PNG after all" * 3)
+    run = screenshot(args, os.path.join(corrupt, "textured.obj"), os.path.join(workdir, "corrupt.png"))
+    warnings = [line for line in run.stderr.splitlines() if line.startswith("pmz-view: warning:")]
+    print("corrupt texture: " + (warnings[0] if warnings else "(no warning)"))
+    if len(warnings) != 1 or "not a readable image" not in warnings[0]:
+        fail("want one warning line saying the texture is not a readable image, got %r" % run.stderr)
 
     ply = os.path.join(workdir, "colored.ply")
     write_colored_torus(ply)
@@ -446,8 +462,33 @@ def test_attributes(args):
         fail("the decoded normals do not seem to light the mesh (spread %.1f vs %.1f)" %
              (spread["even"], spread["colored"]))
 
+    if args.encode:
+        pmz = os.path.join(workdir, "textured.pmz")
+        run = subprocess.run([args.encode, obj, "-o", pmz], capture_output=True, text=True, timeout=120)
+        if run.returncode != 0:
+            fail("pmz-encode failed (%d): %s" % (run.returncode, (run.stderr or run.stdout).strip()))
+        for name, lod in (("stream-coarse", ["--ratio", "0.05"]), ("stream-full", [])):
+            run = screenshot(args, pmz, os.path.join(workdir, name + ".png"), lod)
+            if "texture coordinates" not in run.stdout or "warning" in run.stderr:
+                fail("%s: attributes not decoded or a warning: %s %s" % (name, run.stdout, run.stderr))
+            shots[name] = colour_stats(os.path.join(workdir, name + ".png"))
+        server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), functools.partial(QuietHandler, directory=workdir))
+        threading.Thread(target=server.serve_forever, daemon=True).start()
+        url = "http://127.0.0.1:%d/textured.pmz" % server.server_address[1]
+        try:
+            run = screenshot(args, url, os.path.join(workdir, "stream-http.png"))
+        finally:
+            server.shutdown()
+        if "warning" in run.stderr:
+            fail("http: the texture beside the .pmz was not fetched: " + run.stderr.strip())
+        shots["stream-http"] = colour_stats(os.path.join(workdir, "stream-http.png"))
+        for name in ("stream-coarse", "stream-full", "stream-http"):
+            if not (shots[name]["red"] > 0.15 and shots[name]["blue"] > 0.15):
+                fail("%s: the checkerboard texture is not visible (red %.2f, blue %.2f)" %
+                     (name, shots[name]["red"], shots[name]["blue"]))
+
     for name, st in shots.items():
-        print("%-9s covered %.1f%%, saturated %.1f%%, red %.1f%%, blue %.1f%%, green %.1f%%" %
+        print("%-13s covered %.1f%%, saturated %.1f%%, red %.1f%%, blue %.1f%%, green %.1f%%" %
               (name, 100 * st["covered"], 100 * st["saturated"], 100 * st["red"], 100 * st["blue"],
                100 * st["green"]))
     t, g, m, c = shots["textured"], shots["geometry"], shots["missing"], shots["colored"]
