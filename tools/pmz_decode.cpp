@@ -1,105 +1,29 @@
 // pmz-decode: decode a .pmz stream (or its first N bytes, as a partial download would) to
-// OBJ/PLY/OFF at a chosen level of detail. Reads a file or stdin (-); writes each format itself
-// through a 1 MiB buffer into a safe output (tool_common: temporary + rename, or stdout with -).
-// No OpenMesh.
+// OBJ/PLY/OFF at a chosen level of detail. Reads a file or stdin (-); the level goes to meshio's
+// writer as an IndexedMesh (decoder -> IndexedMesh -> write_mesh_to) into a safe output
+// (tool_common: temporary + rename, or stdout with -). No OpenMesh.
 #include <CLI/CLI.hpp>
 #include <algorithm>
-#include <charconv>
 #include <cstdio>
-#include <cstring>
 #include <string>
 #include <vector>
 
 #include "pmz/decoder.hpp"
+#include "pmz/mesh.hpp"
 #include "tool_common.hpp"
+#include "tool_mesh.hpp"
 
 namespace {
 
 namespace tool = pmz::tool;
 
-// Buffered output: a fixed 1 MiB buffer flushed with fwrite (no whole-file copy in memory);
-// large contiguous blocks (PLY positions) go straight to fwrite.
-class Out {
- public:
-  explicit Out(tool::OutputFile& f) : f_(f), buf_(size_t(1) << 20) {}
-  ~Out() { flush(); }
-  char* room(size_t n) {  // n <= 64 bytes of space at the end of the buffer
-    if (buf_.size() - used_ < n) flush();
-    return buf_.data() + used_;
-  }
-  size_t room_left() const { return buf_.size() - used_; }
-  void commit(char* end) { used_ = size_t(end - buf_.data()); }
-  void put(const char* s, size_t n) {
-    if (n > buf_.size() / 2) {
-      flush();
-      f_.write(s, n);
-      return;
-    }
-    if (buf_.size() - used_ < n) flush();
-    std::memcpy(buf_.data() + used_, s, n);
-    used_ += n;
-  }
-  void put(const std::string& s) { put(s.data(), s.size()); }
-  void flush() {
-    if (used_) f_.write(buf_.data(), used_);
-    used_ = 0;
-  }
-
- private:
-  tool::OutputFile& f_;
-  std::vector<char> buf_;
-  size_t used_ = 0;
-};
-
-template <typename T>
-char* put_number(char* o, T x) {
-  return std::to_chars(o, o + 32, x).ptr;
-}
-
-void write_mesh(const std::string& ext, const pmz::Decoder& d, Out& out) {
-  const uint32_t nv = d.vertex_count(), nf = d.face_count();
-  const float* p = d.positions();
-  const uint32_t* t = d.indices();
-  if (ext == "ply") {
-    out.put("ply\nformat binary_little_endian 1.0\nelement vertex " + std::to_string(nv) +
-            "\nproperty float x\nproperty float y\nproperty float z\nelement face " +
-            std::to_string(nf) + "\nproperty list uchar int vertex_indices\nend_header\n");
-    if (nv)
-      out.put(reinterpret_cast<const char*>(p),
-              size_t(nv) * 12);  // little-endian host assumed (x86, ARM)
-    // 13 bytes per face, written a buffer's worth at a time (no per-face room check).
-    for (uint32_t f = 0; f < nf;) {
-      char* o = out.room(13);
-      const uint32_t n = uint32_t(std::min<size_t>(nf - f, out.room_left() / 13));
-      for (const uint32_t e = f + n; f < e; ++f, o += 13) {
-        *o = 3;
-        std::memcpy(o + 1, t + size_t(f) * 3, 12);
-      }
-      out.commit(o);
-    }
-    return;
-  }
-  const bool obj = ext == "obj";
-  if (!obj) out.put("OFF\n" + std::to_string(nv) + " " + std::to_string(nf) + " 0\n");
-  for (uint32_t i = 0; i < nv; ++i) {
-    char* o = out.room(64);  // 3 shortest floats (<= 15 chars each), separators
-    if (obj) *o++ = 'v', *o++ = ' ';
-    for (int a = 0; a < 3; ++a) {
-      o = put_number(o, p[size_t(i) * 3 + a]);
-      *o++ = a == 2 ? '\n' : ' ';
-    }
-    out.commit(o);
-  }
-  for (uint32_t f = 0; f < nf; ++f) {
-    char* o = out.room(64);  // "f " + 3 indices (<= 10 digits each) + separators
-    *o++ = obj ? 'f' : '3';
-    *o++ = ' ';
-    for (int a = 0; a < 3; ++a) {
-      o = put_number(o, t[size_t(f) * 3 + a] + (obj ? 1u : 0u));
-      *o++ = a == 2 ? '\n' : ' ';
-    }
-    out.commit(o);
-  }
+// The decoder's current level as a mesh for meshio's writer (the one writer of every tool).
+pmz::IndexedMesh current_mesh(const pmz::Decoder& d) {
+  pmz::IndexedMesh m;
+  const size_t nv = d.vertex_count(), nf = d.face_count();
+  if (nv) m.positions.assign(d.positions(), d.positions() + nv * 3);
+  if (nf) m.indices.assign(d.indices(), d.indices() + nf * 3);
+  return m;
 }
 
 }  // namespace
@@ -222,11 +146,7 @@ int main(int argc, char** argv) {
                           std::to_string(d.vertex_count()) +
                           (all_available ? "" : " of " + std::to_string(info.full_vertices)) +
                           ": writing those");
-  {
-    Out buffered(out);
-    write_mesh(format, d, buffered);
-  }
-  if (!out.commit(error)) {
+  if (!tool::write_mesh_into(out, format, current_mesh(d), error) || !out.commit(error)) {
     tool::print_error(error);
     return tool::kExitFailure;
   }

@@ -39,23 +39,27 @@ bool read_mesh_input(const std::string& path, const std::string& stdin_format, I
   return ok;
 }
 
+bool write_mesh_into(OutputFile& out, const std::string& format, const IndexedMesh& mesh,
+                     std::string& error) {
+  bool refused = false;
+  const MeshSink sink = [&](const void* data, size_t size) {
+    return out.write(data, size) || (refused = true, false);
+  };
+  if (write_mesh_to(out.path() == "-" ? "stdout" : out.path(), format, mesh, sink, error))
+    return true;
+  // A refused write: OutputFile remembered its errno, and commit() fails with that reason (and
+  // removes the temporary). Otherwise the mesh was refused before anything was written.
+  std::string reason;
+  if (refused && !out.commit(reason)) error = reason;
+  return false;
+}
+
 bool write_mesh_output(const std::string& path, const std::string& format, const IndexedMesh& mesh,
                        std::string& error) {
   const std::string ext = format.empty() ? extension(path) : format;
   OutputFile out;
-  if (!out.open(path, ext == "ply" || ext == "stl", error)) return false;
-  // The writer takes a path and writes it atomically: it writes a scratch file named by the
-  // format, whose bytes then go to the output.
-  ScratchFile scratch;
-  std::vector<uint8_t> bytes;
-  if (!scratch.create({}, "." + ext, error)) return false;
-  if (!write_mesh(scratch.path(), mesh, error)) {
-    replace_all(error, scratch.path(), path == "-" ? "stdout" : path);
-    return false;
-  }
-  if (!read_input(scratch.path(), bytes, error)) return false;
-  out.write(bytes.data(), bytes.size());
-  return out.commit(error);
+  if (!out.open(path, ext == "ply" || ext == "stl" || ext == "glb", error)) return false;
+  return write_mesh_into(out, ext, mesh, error) && out.commit(error);
 }
 
 }  // namespace pmz::tool

@@ -7,6 +7,8 @@
 
 namespace pmz::tool {
 
+class OutputFile;
+
 // Reads `path` ("-": stdin, parsed as `stdin_format`: obj, off, ply or stl) and repairs it;
 // repairs are reported on stderr ("pmz: FILE: ...") as by pmz::read_mesh. Errors name the file
 // ("stdin" for -).
@@ -18,5 +20,10 @@ bool read_mesh_input(const std::string& path, const std::string& stdin_format, I
 // written directly, a failed or interrupted write leaves no temporary behind.
 bool write_mesh_output(const std::string& path, const std::string& format, const IndexedMesh& mesh,
                        std::string& error);
+
+// The same into an output already open (opened before the work, so an unwritable output fails
+// first): meshio's writer straight into it (format: obj, off, ply, stl, glb). The caller commits.
+bool write_mesh_into(OutputFile& out, const std::string& format, const IndexedMesh& mesh,
+                     std::string& error);
 
 }  // namespace pmz::tool

@@ -1072,30 +1072,89 @@ bool read_stl(const std::string& path, std::string_view data, PolygonSoup& out,
 
 // ---- writers ----
 
-struct Writer {
-  FILE* f;
-  bool ok = true;
-  void put(const void* p, size_t n) { ok = ok && std::fwrite(p, 1, n, f) == n; }
-  void printed(int r) { ok = ok && r > 0; }
+// Buffered output to a MeshSink: a 1 MiB buffer handed over when full (no copy of the whole file
+// in memory), numbers printed with std::to_chars (the shortest text that reads back to the same
+// float: exact, and much faster than printf), large binary blocks passed through directly.
+class Writer {
+ public:
+  explicit Writer(const MeshSink& sink) : sink_(sink), buf_(size_t(1) << 20) {}
+  // Room for n <= kMaxRoom bytes at the end of the buffer; commit() says how many were used.
+  static constexpr size_t kMaxRoom = 256;
+  char* room(size_t n) {
+    if (buf_.size() - used_ < n) flush();
+    return buf_.data() + used_;
+  }
+  size_t room_left() const { return buf_.size() - used_; }
+  void commit(char* end) { used_ = size_t(end - buf_.data()); }
+  void put(const void* p, size_t n) {
+    if (n > buf_.size() / 2) {
+      flush();
+      ok_ = ok_ && sink_(p, n);
+      return;
+    }
+    if (buf_.size() - used_ < n) flush();
+    std::memcpy(buf_.data() + used_, p, n);
+    used_ += n;
+  }
+  Writer& str(std::string_view s) {
+    put(s.data(), s.size());
+    return *this;
+  }
+  template <typename T>
+  Writer& num(T x) {
+    commit(number(room(32), x));
+    return *this;
+  }
+  template <typename T>
+  static char* number(char* o, T x) {
+    return std::to_chars(o, o + 32, x).ptr;
+  }
   void u32le(uint32_t v) {
     unsigned char b[4] = {uint8_t(v), uint8_t(v >> 8), uint8_t(v >> 16), uint8_t(v >> 24)};
     put(b, 4);
   }
   void f32le(float v) { u32le(std::bit_cast<uint32_t>(v)); }
+  // Hands over what is buffered; false if the sink refused anything.
+  bool finish() {
+    flush();
+    return ok_;
+  }
+
+ private:
+  void flush() {
+    if (used_) ok_ = ok_ && sink_(buf_.data(), used_);
+    used_ = 0;
+  }
+  const MeshSink& sink_;
+  std::vector<char> buf_;
+  size_t used_ = 0;
+  bool ok_ = true;
 };
 
 void write_mtl(Writer& w, const std::vector<Material>& materials) {
-  w.printed(std::fprintf(w.f, "# written by pmz\n"));
+  w.str("# written by pmz\n");
   for (const Material& m : materials) {
-    w.printed(std::fprintf(w.f, "newmtl %s\nKd %.9g %.9g %.9g\n",
-                           m.name.empty() ? "unnamed" : m.name.c_str(), m.base_color[0],
-                           m.base_color[1], m.base_color[2]));
-    if (m.base_color[3] != 1) w.printed(std::fprintf(w.f, "d %.9g\n", m.base_color[3]));
-    if (!m.base_color_texture.empty())
-      w.printed(std::fprintf(w.f, "map_Kd %s\n", m.base_color_texture.c_str()));
-    if (!m.normal_texture.empty())
-      w.printed(std::fprintf(w.f, "norm %s\n", m.normal_texture.c_str()));
+    w.str("newmtl ").str(m.name.empty() ? "unnamed" : m.name).str("\nKd ");
+    w.num(m.base_color[0]).str(" ").num(m.base_color[1]).str(" ").num(m.base_color[2]).str("\n");
+    if (m.base_color[3] != 1) w.str("d ").num(m.base_color[3]).str("\n");
+    if (!m.base_color_texture.empty()) w.str("map_Kd ").str(m.base_color_texture).str("\n");
+    if (!m.normal_texture.empty()) w.str("norm ").str(m.normal_texture).str("\n");
   }
+}
+
+// One text line of up to six numbers (plus `add` each, for OBJ's 1-based indices) after a
+// prefix ("v ", "3 ", "f "): the hot loops of the OBJ and OFF writers, with room for the longest
+// line checked once.
+template <typename T>
+void put_line(Writer& w, std::string_view prefix, const T* x, int n, T add = 0) {
+  char* o = w.room(Writer::kMaxRoom);
+  std::memcpy(o, prefix.data(), prefix.size());
+  o += prefix.size();
+  for (int a = 0; a < n; ++a) {
+    o = Writer::number(o, add ? T(x[a] + add) : x[a]);  // (-0.0f + 0 would lose its sign)
+    *o++ = a == n - 1 ? '\n' : ' ';
+  }
+  w.commit(o);
 }
 
 // OBJ: positions per vertex (with the colour of the vertex's first wedge: OBJ colours are per
@@ -1105,47 +1164,55 @@ void write_obj(Writer& w, const IndexedMesh& m, const std::string& mtl) {
   const uint32_t nv = m.vertex_count(), nf = m.face_count();
   const float* p = m.positions.data();
   const uint32_t* ix = m.indices.data();
-  if (!mtl.empty()) w.printed(std::fprintf(w.f, "mtllib %s\n", mtl.c_str()));
+  if (!mtl.empty()) w.str("mtllib ").str(mtl).str("\n");
   std::vector<uint32_t> vertex_wedge;
   if (a.color_components) {
     vertex_wedge.assign(nv, kNoAttribute);
     for (uint32_t wd = a.wedge_count(); wd-- > 0;) vertex_wedge[a.wedge_vertices[wd]] = wd;
   }
-  // %.9g prints every float exactly enough to read back bit-identical.
   for (uint32_t v = 0; v < nv; ++v) {
-    w.printed(std::fprintf(w.f, "v %.9g %.9g %.9g", p[v * 3], p[v * 3 + 1], p[v * 3 + 2]));
-    if (a.color_components) {
-      const float* c = vertex_wedge[v] == kNoAttribute
-                           ? nullptr
-                           : &a.colors[size_t(vertex_wedge[v]) * a.color_components];
-      w.printed(
-          std::fprintf(w.f, " %.9g %.9g %.9g", c ? c[0] : 0.0f, c ? c[1] : 0.0f, c ? c[2] : 0.0f));
+    if (!a.color_components) {
+      put_line(w, "v ", p + size_t(v) * 3, 3);
+      continue;
     }
-    w.printed(std::fprintf(w.f, "\n"));
+    const float* c = vertex_wedge[v] == kNoAttribute
+                         ? nullptr
+                         : &a.colors[size_t(vertex_wedge[v]) * a.color_components];
+    const float xyzrgb[6] = {p[v * 3],        p[v * 3 + 1],    p[v * 3 + 2],
+                             c ? c[0] : 0.0f, c ? c[1] : 0.0f, c ? c[2] : 0.0f};
+    put_line(w, "v ", xyzrgb, 6);
   }
   const bool uv = !a.texcoords.empty(), normals = !a.normals.empty();
   for (uint32_t wd = 0; uv && wd < a.wedge_count(); ++wd)
-    w.printed(
-        std::fprintf(w.f, "vt %.9g %.9g\n", a.texcoords[0][wd * 2], a.texcoords[0][wd * 2 + 1]));
+    put_line(w, "vt ", &a.texcoords[0][size_t(wd) * 2], 2);
   for (uint32_t wd = 0; normals && wd < a.wedge_count(); ++wd)
-    w.printed(std::fprintf(w.f, "vn %.9g %.9g %.9g\n", a.normals[wd * 3], a.normals[wd * 3 + 1],
-                           a.normals[wd * 3 + 2]));
+    put_line(w, "vn ", &a.normals[size_t(wd) * 3], 3);
   uint32_t material = kNoAttribute;
+  const bool wedges = uv || normals;
   for (uint32_t f = 0; f < nf; ++f) {
     if (!a.face_materials.empty() && a.face_materials[f] != material) {
       material = a.face_materials[f];
       const std::string& name = a.materials[material].name;
-      w.printed(std::fprintf(w.f, "usemtl %s\n", name.empty() ? "unnamed" : name.c_str()));
+      w.str("usemtl ").str(name.empty() ? "unnamed" : name).str("\n");
     }
-    w.printed(std::fprintf(w.f, "f"));
+    if (!wedges) {
+      put_line(w, "f ", ix + size_t(f) * 3, 3, 1u);
+      continue;
+    }
+    char* o = w.room(Writer::kMaxRoom);
+    *o++ = 'f';
     for (int k = 0; k < 3; ++k) {
-      uint32_t wd = a.corner_wedges.empty() ? 0 : a.corner_wedges[f * 3 + k] + 1;
-      w.printed(uv && normals ? std::fprintf(w.f, " %u/%u/%u", ix[f * 3 + k] + 1, wd, wd)
-                : uv          ? std::fprintf(w.f, " %u/%u", ix[f * 3 + k] + 1, wd)
-                : normals     ? std::fprintf(w.f, " %u//%u", ix[f * 3 + k] + 1, wd)
-                              : std::fprintf(w.f, " %u", ix[f * 3 + k] + 1));
+      const uint32_t wd = a.corner_wedges[f * 3 + k] + 1;
+      *o++ = ' ';
+      o = Writer::number(o, ix[f * 3 + k] + 1);
+      if (uv) *o++ = '/', o = Writer::number(o, wd);
+      if (normals) {
+        if (!uv) *o++ = '/';
+        *o++ = '/', o = Writer::number(o, wd);
+      }
     }
-    w.printed(std::fprintf(w.f, "\n"));
+    *o++ = '\n';
+    w.commit(o);
   }
 }
 
@@ -1188,6 +1255,41 @@ void write_ply_wedges(Writer& w, const IndexedMesh& m) {
   }
 }
 
+// PLY without attributes: the positions as one block (the float array is the file's layout on a
+// little-endian host), the faces 13 bytes each, a buffer's worth at a time.
+void write_ply(Writer& w, const IndexedMesh& m) {
+  const uint32_t nv = m.vertex_count(), nf = m.face_count();
+  w.str("ply\nformat binary_little_endian 1.0\ncomment written by pmz\nelement vertex ")
+      .num(nv)
+      .str("\nproperty float x\nproperty float y\nproperty float z\nelement face ")
+      .num(nf)
+      .str("\nproperty list uchar uint vertex_indices\nend_header\n");
+  if constexpr (std::endian::native == std::endian::little) {
+    w.put(m.positions.data(), size_t(nv) * 12);
+  } else {
+    for (size_t i = 0; i < size_t(nv) * 3; ++i) w.f32le(m.positions[i]);
+  }
+  const uint32_t* ix = m.indices.data();
+  for (uint32_t f = 0; f < nf;) {
+    char* o = w.room(13);
+    const uint32_t n = uint32_t(std::min<size_t>(nf - f, w.room_left() / 13));
+    for (const uint32_t e = f + n; f < e; ++f, o += 13) {
+      *o = 3;
+      if constexpr (std::endian::native == std::endian::little) {
+        std::memcpy(o + 1, ix + size_t(f) * 3, 12);  // the file's layout: one copy per face
+      } else {
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t v = ix[size_t(f) * 3 + k];
+          const unsigned char b[4] = {uint8_t(v), uint8_t(v >> 8), uint8_t(v >> 16),
+                                      uint8_t(v >> 24)};
+          std::memcpy(o + 1 + 4 * k, b, 4);
+        }
+      }
+    }
+    w.commit(o);
+  }
+}
+
 void write_body(Writer& w, const std::string& ext, const IndexedMesh& m, const std::string& mtl) {
   const uint32_t nv = m.vertex_count(), nf = m.face_count();
   const float* p = m.positions.data();
@@ -1196,25 +1298,12 @@ void write_body(Writer& w, const std::string& ext, const IndexedMesh& m, const s
     write_obj(w, m, mtl);
   } else if (ext == ".ply" && m.attributes.has_wedges()) {
     write_ply_wedges(w, m);
-  } else if (ext == ".off") {
-    w.printed(std::fprintf(w.f, "OFF\n%u %u 0\n", nv, nf));
-    for (uint32_t v = 0; v < nv; ++v)
-      w.printed(std::fprintf(w.f, "%.9g %.9g %.9g\n", p[v * 3], p[v * 3 + 1], p[v * 3 + 2]));
-    for (uint32_t f = 0; f < nf; ++f)
-      w.printed(std::fprintf(w.f, "3 %u %u %u\n", ix[f * 3], ix[f * 3 + 1], ix[f * 3 + 2]));
   } else if (ext == ".ply") {
-    w.printed(
-        std::fprintf(w.f,
-                     "ply\nformat binary_little_endian 1.0\ncomment written by pmz\n"
-                     "element vertex %u\nproperty float x\nproperty float y\nproperty float z\n"
-                     "element face %u\nproperty list uchar uint vertex_indices\nend_header\n",
-                     nv, nf));
-    for (uint32_t i = 0; i < nv * 3; ++i) w.f32le(p[i]);
-    for (uint32_t f = 0; f < nf; ++f) {
-      const uint8_t three = 3;
-      w.put(&three, 1);
-      for (int k = 0; k < 3; ++k) w.u32le(ix[f * 3 + k]);
-    }
+    write_ply(w, m);
+  } else if (ext == ".off") {
+    w.str("OFF\n").num(nv).str(" ").num(nf).str(" 0\n");
+    for (uint32_t v = 0; v < nv; ++v) put_line(w, "", p + size_t(v) * 3, 3);
+    for (uint32_t f = 0; f < nf; ++f) put_line(w, "3 ", ix + size_t(f) * 3, 3);
   } else {  // .stl, binary
     char header[80] = "binary STL written by pmz";
     w.put(header, 80);
@@ -1352,12 +1441,17 @@ bool write_atomic(const std::string& path, const std::function<void(Writer&)>& b
     error = path + ": cannot create file: " + std::strerror(errno);
     return false;
   }
-  Writer w{f};
+  int sink_errno = 0;  // the first failed fwrite's
+  const MeshSink sink = [&](const void* p, size_t n) {
+    if (std::fwrite(p, 1, n, f) == n) return true;
+    if (!sink_errno) sink_errno = errno ? errno : EIO;
+    return false;
+  };
+  Writer w(sink);
   body(w);
-  int write_errno = w.ok ? 0 : errno;
+  int write_errno = w.finish() ? 0 : sink_errno;
   if (std::fflush(f) != 0 && !write_errno) write_errno = errno ? errno : EIO;
   if (std::fclose(f) != 0 && !write_errno) write_errno = errno ? errno : EIO;
-  if (!w.ok && !write_errno) write_errno = EIO;
   if (write_errno) {
     std::remove(tmp.c_str());
     error = path + ": write failed: " + std::strerror(write_errno);
@@ -1400,8 +1494,12 @@ bool check_attributes(const std::string& path, const IndexedMesh& m, std::string
 
 }  // namespace
 
-bool write_mesh(const std::string& path, const IndexedMesh& mesh, std::string& error) {
-  std::string ext = lower_extension(path);
+namespace {
+
+// What both writers check first: a known format (ext with its dot), indices and attributes that
+// agree with the geometry.
+bool check_writable(const std::string& path, const std::string& ext, const IndexedMesh& mesh,
+                    std::string& error) {
   if (ext != ".obj" && ext != ".off" && ext != ".ply" && ext != ".stl" && ext != ".glb") {
     error = path + ": unknown mesh format '" + ext + "' (expected .obj, .off, .ply, .stl or .glb)";
     return false;
@@ -1412,7 +1510,34 @@ bool write_mesh(const std::string& path, const IndexedMesh& mesh, std::string& e
               std::to_string(mesh.vertex_count());
       return false;
     }
-  if (!check_attributes(path, mesh, error)) return false;
+  return check_attributes(path, mesh, error);
+}
+
+}  // namespace
+
+bool write_mesh_to(const std::string& name, const std::string& format, const IndexedMesh& mesh,
+                   const MeshSink& sink, std::string& error) {
+  const std::string ext = "." + format;
+  if (!check_writable(name, ext, mesh, error)) return false;
+  Writer w(sink);
+  if (ext == ".glb") {
+    std::string bytes;
+    if (!write_glb(mesh, bytes, error)) {
+      error = name + ": " + error;
+      return false;
+    }
+    w.put(bytes.data(), bytes.size());
+  } else {
+    write_body(w, ext, mesh, "");
+  }
+  if (w.finish()) return true;
+  error = name + ": write failed";
+  return false;
+}
+
+bool write_mesh(const std::string& path, const IndexedMesh& mesh, std::string& error) {
+  std::string ext = lower_extension(path);
+  if (!check_writable(path, ext, mesh, error)) return false;
   if (ext == ".glb") {
     std::string bytes;
     if (!write_glb(mesh, bytes, error)) {

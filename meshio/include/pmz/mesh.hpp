@@ -1,6 +1,8 @@
 // Plain indexed triangle mesh shared by the encoder's stages (flat arrays, no OpenMesh).
 #pragma once
+#include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -132,5 +134,14 @@ bool read_mesh(const std::string& path, IndexedMesh& out, std::string& error);
 // beside the target, renamed when complete; on any error (missing directory, disk full) the
 // temporary is removed.
 bool write_mesh(const std::string& path, const IndexedMesh& mesh, std::string& error);
+
+// Receives a writer's bytes in order, a buffer's worth at a time; false stops the writing.
+using MeshSink = std::function<bool(const void* data, size_t size)>;
+// The same bytes as write_mesh, in `format` (obj, off, ply, stl, glb), handed to `sink` instead
+// of a file: for outputs that are not plain files (stdout, pipes, devices; the tools' safe
+// output). OBJ materials get no MTL and no mtllib line here. `name` names the output in
+// messages; a refused write gives "name: write failed" (the sink knows why).
+bool write_mesh_to(const std::string& name, const std::string& format, const IndexedMesh& mesh,
+                   const MeshSink& sink, std::string& error);
 
 }  // namespace pmz
