@@ -827,7 +827,8 @@ bool read_ply(const std::string& path, std::string_view data, PolygonSoup& out,
     const uint32_t color_components =
         is_vertex && rgba[0] >= 0 && rgba[1] >= 0 && rgba[2] >= 0 ? (rgba[3] >= 0 ? 4 : 3) : 0;
     if (is_vertex) {
-      if (has_normals) attrs.normals.reserve(size_t(e.count) * 3);
+      // Bounded by the bytes left, as the positions below (a huge count threw length_error).
+      if (has_normals) attrs.normals.reserve(plausible(e.count, body.remaining(), 2) * 3);
       if (has_uv) attrs.texcoords.assign(1, {});
       attrs.color_components = color_components;
     }

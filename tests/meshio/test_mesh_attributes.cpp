@@ -603,3 +603,19 @@ TEST(MeshAttributes, FuzzPlyAttributeIndexOverflowIsRefused) {
   EXPECT_FALSE(error.empty());
   EXPECT_EQ(error.find('\n'), std::string::npos) << error;
 }
+
+// fuzz_mesh_ply (the long reader run of issue 14) found an ASCII PLY with normals declaring
+// 3.3e17 vertices: the normals were reserved before the count was checked (std::length_error,
+// an abort). The count is now bounded by the bytes left, and the file refused with one line.
+TEST(MeshAttributes, FuzzPlyHugeCountWithNormalsIsRefused) {
+  const fs::path file = fs::path(PMZ_SOURCE_DIR) / "tests" / "data" / "fuzz-regressions" /
+                        "ply-normals-huge-count.ply";
+  std::ifstream in(file, std::ios::binary);
+  ASSERT_TRUE(in) << file;
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  pmz::PolygonSoup soup;
+  std::string error;
+  EXPECT_FALSE(pmz::parse_polygon_soup("x.ply", bytes, soup, error));
+  EXPECT_FALSE(error.empty());
+  EXPECT_EQ(error.find('\n'), std::string::npos) << error;
+}
