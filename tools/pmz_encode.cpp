@@ -49,11 +49,6 @@ bool encode(const std::string& input, const std::string& output, const EncodeSet
     if (progress) progress->clear();
     return false;
   }
-  if (!mesh.attributes.empty())  // never a silent loss: the format codes geometry only so far
-    std::fprintf(stderr,
-                 "pmz-encode: %s: attributes not encoded yet (%s): the .pmz holds positions "
-                 "and triangles only\n",
-                 input == "-" ? "stdin" : input.c_str(), mesh.attributes.describe().c_str());
   pmz::SimplifyOptions sopt;
   sopt.metric = settings.metric;
   sopt.attributes = settings.attributes;
@@ -80,6 +75,11 @@ bool encode(const std::string& input, const std::string& output, const EncodeSet
                 seq.mesh.vertex_count(), bytes.size(), bytes.size() * 8.0 / nv,
                 st.connectivity_bits / splits, st.geometry_bits / splits, secs);
   line = buf;
+  if (!seq.mesh.attributes.empty()) {
+    std::snprintf(buf, sizeof buf, "; attributes: %s, %llu bytes",
+                  seq.mesh.attributes.describe().c_str(), (unsigned long long)st.attribute_bytes);
+    line += buf;
+  }
   if (settings.write.symbol_stats) {
     // Per kind of symbol, the bits its symbols take of their stream (the streams interleave
     // kinds, so their sizes cannot split them further).
@@ -130,6 +130,18 @@ int main(int argc, char** argv) {
   app.add_option("--position-bits", settings.write.position_bits,
                  "quantization bits (0 = lossless float32)")
       ->check(CLI::Range(0, 30))
+      ->capture_default_str();
+  app.add_option("--texcoord-bits", settings.write.texcoord_bits,
+                 "texture coordinate bits over each set's bounding box (0 = lossless float32)")
+      ->check(CLI::Range(0, 24))
+      ->capture_default_str();
+  app.add_option("--normal-bits", settings.write.normal_bits,
+                 "normal bits per octahedral component (0 = lossless float32)")
+      ->check(CLI::Range(0, 16) & !CLI::IsMember({1}))
+      ->capture_default_str();
+  app.add_option("--color-bits", settings.write.color_bits,
+                 "colour bits per component over [0, 1] (0 = lossless float32)")
+      ->check(CLI::Range(0, 16))
       ->capture_default_str();
   app.add_option("--base-faces", settings.write.base_faces,
                  "stop simplifying at this many faces (0: as far as possible)")

@@ -91,7 +91,45 @@ PMZ_API void pmz_decoder_changes(const pmz_decoder* d, pmz_changes* out) {
   out->modified_faces = c.modified_faces.data();
   out->modified_count = c.modified_faces.size();
   out->all = c.all;
+  out->wedge_begin = c.wedge_begin;
 }
 PMZ_API void pmz_decoder_clear_changes(pmz_decoder* d) { d->dec.clear_changes(); }
+
+PMZ_API uint32_t pmz_decoder_wedge_count(const pmz_decoder* d) { return d->dec.wedge_count(); }
+PMZ_API const uint32_t* pmz_decoder_wedge_vertices(const pmz_decoder* d) {
+  return d->dec.wedge_vertices();
+}
+PMZ_API const float* pmz_decoder_wedge_positions(const pmz_decoder* d) {
+  return d->dec.wedge_positions();
+}
+PMZ_API const uint32_t* pmz_decoder_wedge_indices(const pmz_decoder* d) {
+  return d->dec.wedge_indices();
+}
+PMZ_API uint32_t pmz_decoder_texcoord_set_count(const pmz_decoder* d) {
+  return d->dec.texcoord_set_count();
+}
+PMZ_API const float* pmz_decoder_texcoords(const pmz_decoder* d, uint32_t set) {
+  return d->dec.texcoords(set);
+}
+PMZ_API const float* pmz_decoder_normals(const pmz_decoder* d) { return d->dec.normals(); }
+PMZ_API uint32_t pmz_decoder_color_components(const pmz_decoder* d) {
+  return d->dec.color_components();
+}
+PMZ_API const float* pmz_decoder_colors(const pmz_decoder* d) { return d->dec.colors(); }
+PMZ_API const uint32_t* pmz_decoder_face_materials(const pmz_decoder* d) {
+  return d->dec.face_materials();
+}
+PMZ_API uint32_t pmz_decoder_material_count(const pmz_decoder* d) {
+  return d->dec.material_count();
+}
+PMZ_API int pmz_decoder_material(const pmz_decoder* d, uint32_t i, pmz_material* out) {
+  const pmz::MaterialInfo* m = d->dec.material(i);
+  if (!m) return 0;
+  out->name = m->name.c_str();
+  out->base_color_texture = m->base_color_texture.c_str();
+  out->normal_texture = m->normal_texture.c_str();
+  for (int k = 0; k < 4; ++k) out->base_color[k] = m->base_color[k];
+  return 1;
+}
 
 }  // extern "C"

@@ -12,6 +12,7 @@
 #include <new>
 #include <span>
 
+#include "attribute_stream.hpp"
 #include "pmz/base_codec.hpp"
 #include "pmz/fan_wedge.hpp"
 #include "pmz/format.hpp"
@@ -168,8 +169,17 @@ struct Decoder::Impl {
     FanPrefetcher fans;
   } level;
 
+  // Attributes (spec section 14): null for a stream without them, so their cost there is one
+  // branch per split. base_geometry: BASE decoded, its ATTR chunk awaited (stage stays base);
+  // attr_awaited: the last SPLT chunk's ATTR chunk has not arrived (its splits are not
+  // available yet).
+  std::unique_ptr<AttributeStream> attrs;
+  bool base_geometry = false, attr_awaited = false;
+  std::unique_ptr<std::pair<ProgressiveMesh, std::vector<int32_t>>> pending_base;  // its coords
+  std::vector<MaterialInfo> materials;
+
   // Error paths and the once-per-file HEAD are cold: kept small, out of the hot code's way
-  // (the stripped library has a 150 KB budget).
+  // (the stripped library has a 200 KB budget).
   [[gnu::cold]] Status fail(Status s, const std::string& what) {
     stage = Stage::failed;
     status = s;
@@ -183,6 +193,8 @@ struct Decoder::Impl {
   [[gnu::cold]] Status head(const uint8_t* p, size_t n);
   [[gnu::cold]] Status base(const uint8_t* p, size_t n);  // once per file, like head
   Status split_chunk(const uint8_t* p, size_t n);
+  [[gnu::cold]] Status attribute_chunk(const uint8_t* p, size_t n);
+  [[gnu::cold]] Status install_base(ProgressiveMesh&& m, std::vector<int32_t>&& coords);
   bool apply();
   [[gnu::cold]] bool refuse(Status s, const std::string& what);
   void undo();
@@ -360,15 +372,17 @@ Status Decoder::Impl::chunk(uint8_t type, const uint8_t* p, size_t n) {
     return head(p, n);
   }
   if (type == kChunkBase) {
-    if (stage != Stage::base) return fail(Status::corrupt, "second BASE chunk");
+    if (stage != Stage::base || base_geometry) return fail(Status::corrupt, "second BASE chunk");
     return base(p, n);
   }
   if (type == kChunkSplits) {
     if (stage != Stage::splits) return fail(Status::corrupt, "SPLT before BASE");
+    if (attr_awaited) return fail(Status::corrupt, "SPLT before the last SPLT's ATTR");
     return split_chunk(p, n);
   }
+  if (type == kChunkAttributes && attrs) return attribute_chunk(p, n);
   if (type == kChunkEnd) {
-    if (stage != Stage::splits || record.splits.size() != info.total_splits)
+    if (stage != Stage::splits || record.splits.size() != info.total_splits || attr_awaited)
       return fail(Status::corrupt, "END before all splits");
     info.complete = true;
     stage = Stage::complete;
@@ -379,7 +393,8 @@ Status Decoder::Impl::chunk(uint8_t type, const uint8_t* p, size_t n) {
 
 Status Decoder::Impl::head(const uint8_t* p, size_t n) {
   FileHeader h;
-  if (!read_head_payload(p, n, h)) return fail(Status::corrupt, "HEAD malformed");
+  size_t fixed = 0;
+  if (!read_head_payload(p, n, h, &fixed)) return fail(Status::corrupt, "HEAD malformed");
   if (h.version_major != kVersionMajor)
     return fail(Status::bad_version, "format version " + std::to_string(h.version_major) + "." +
                                          std::to_string(h.version_minor));
@@ -400,6 +415,19 @@ Status Decoder::Impl::head(const uint8_t* p, size_t n) {
   if (h.full_vertices() > limits.max_vertices || h.full_faces > limits.max_faces)
     return fail(Status::limit_exceeded, std::to_string(h.full_vertices()) + " vertices, " +
                                             std::to_string(h.full_faces) + " faces");
+  if (h.flags & kFlagAttributes) {
+    std::string err;
+    attrs = std::make_unique<AttributeStream>();
+    if (!attrs->head(p + fixed, n - fixed, h.full_faces, err))
+      return fail(Status::corrupt, "HEAD attributes: " + err);
+    for (const FileMaterial& m : attrs->state.head.materials) {
+      MaterialInfo& out = materials.emplace_back();
+      out.name = m.name;
+      out.base_color_texture = m.base_color_texture;
+      out.normal_texture = m.normal_texture;
+      std::memcpy(out.base_color, m.base_color, sizeof m.base_color);
+    }
+  }
   info.header_done = true;
   stage = Stage::base;
   info.version_major = h.version_major;
@@ -427,8 +455,19 @@ Status Decoder::Impl::base(const uint8_t* p, size_t n) {
   if (const Status s = decode_base(p, n, vn, fn, bm, err); s != Status::ok) return fail(s, err);
   ProgressiveMesh m;
   if (!m.build(vn, bm.faces.data(), fn, err)) return fail(Status::corrupt, "BASE: " + err);
+  base_geometry = true;
+  if (attrs) {  // drawable once its ATTR chunk arrived
+    pending_base = std::make_unique<std::pair<ProgressiveMesh, std::vector<int32_t>>>(
+        std::move(m), std::move(bm.coords));
+    return Status::ok;
+  }
+  return install_base(std::move(m), std::move(bm.coords));
+}
+
+Status Decoder::Impl::install_base(ProgressiveMesh&& m, std::vector<int32_t>&& coords) {
+  const uint32_t vn = uint32_t(info.base_vertices);
   level.mesh = std::move(m);
-  record.coords = std::move(bm.coords);
+  record.coords = std::move(coords);
   frontier.choice.reset(level.mesh, record.coords.data(), info.position_bits);
   frontier.group_vs.reserve(kChoiceLag +
                             2);  // find_vertices() adds at most kChoiceLag + 1 at a time
@@ -441,6 +480,27 @@ Status Decoder::Impl::base(const uint8_t* p, size_t n) {
   stage = Stage::splits;
   level.changes = {};
   level.changes.all = true;
+  return Status::ok;
+}
+
+Status Decoder::Impl::attribute_chunk(const uint8_t* p, size_t n) {
+  if (stage == Stage::base && base_geometry) {  // the base mesh's a-wedges
+    std::string err;
+    auto& [mesh, coords] = *pending_base;
+    std::vector<float> positions(coords.size());
+    for (size_t i = 0; i < coords.size(); ++i)
+      positions[i] = quant.dequantize(coords[i], int(i % 3));
+    if (!attrs->base(p, n, mesh, coords.data(), positions.data(), err))
+      return fail(Status::corrupt, err);
+    const Status st = install_base(std::move(mesh), std::move(coords));
+    pending_base.reset();
+    return st;
+  }
+  if (stage != Stage::splits || !attr_awaited)
+    return fail(Status::corrupt, "ATTR chunk without its BASE or SPLT chunk");
+  attrs->chunk(p, n);
+  attr_awaited = false;
+  record.available = record.splits.size();
   return Status::ok;
 }
 
@@ -457,7 +517,10 @@ Status Decoder::Impl::split_chunk(const uint8_t* p, size_t n) {
     record.splits.reserve(info.total_splits);
   record.splits.resize(size, {kNoCorner, kNoRank, kNoRank});
   frontier.lazy.push_back(std::move(r));
-  record.available = record.splits.size();
+  if (attrs)
+    attr_awaited = true;  // available with its ATTR chunk
+  else
+    record.available = record.splits.size();
   return Status::ok;
 }
 
@@ -467,6 +530,7 @@ bool Decoder::Impl::refuse(Status s, const std::string& what) {
   record.splits.resize(level.applied);
   record.available = level.applied;
   frontier.lazy.clear();
+  if (attrs) attrs->lazy.clear();
   return false;
 }
 
@@ -480,6 +544,7 @@ bool Decoder::Impl::apply() {
       frontier.decoded) {  // applied before, on this very mesh state: no ring, no symbols
     const uint8_t side = record.sides[level.applied];
     level.mesh.resplit(s.v, s.a, s.b, side & kHasLeft, side & kHasRight);
+    if (attrs) attrs->reapply(level.mesh, level.applied, side & kHasLeft, side & kHasRight);
     note_rewritten(level.mesh.sector_faces());
     ++level.applied;
     return true;
@@ -546,6 +611,14 @@ bool Decoder::Impl::apply() {
       record.coords.push_back(c[k]);
       record.positions.push_back(quant.dequantize(c[k], k));
     }
+    if (attrs && !attrs->first_apply(level.mesh, record.coords.data(), record.positions.data(),
+                                     has_l, has_r)) {
+      record.coords.resize(record.coords.size() - 3);
+      record.positions.resize(record.positions.size() - 3);
+      level.mesh.undo_split(s.v, has_l, has_r);
+      return refuse(Status::corrupt,
+                    "split " + std::to_string(level.applied) + ": attributes malformed");
+    }
     record.parents.push_back(s.v);
     record.sides.push_back(uint8_t((has_l ? kHasLeft : 0) | (has_r ? kHasRight : 0)));
     // The vertex choice state (its umbrella sums need u's coordinates), then the group's
@@ -558,6 +631,7 @@ bool Decoder::Impl::apply() {
     if (++frontier.decoded - frontier.lazy_first == frontier.lazy.front().split_count()) {
       frontier.lazy_first = frontier.decoded;
       frontier.lazy.pop_front();  // its bytes are no longer needed
+      if (attrs) attrs->chunk_done();
     }
   }
   note_rewritten(level.mesh.sector_faces());
@@ -572,6 +646,10 @@ void Decoder::Impl::undo() {
   const Split& s = record.splits[level.applied - 1];
   level.mesh.undo_resplit(s.v, s.a, s.b, side & kHasLeft, side & kHasRight);
   --level.applied;
+  if (attrs) {
+    attrs->undo(level.mesh, level.applied, s.v, side & kHasLeft, side & kHasRight);
+    level.changes.wedge_begin = std::min(level.changes.wedge_begin, attrs->state.wedge_count);
+  }
   level.changes.face_begin = std::min(level.changes.face_begin, level.mesh.face_count());
   level.changes.vertex_begin = std::min(level.changes.vertex_begin, level.mesh.vertex_count());
   note_rewritten(level.mesh.sector_faces());
@@ -647,6 +725,11 @@ uint64_t Decoder::Impl::refine(uint64_t max_splits, uint64_t face_target) {
       record.positions.reserve(nv * 3);
       record.parents.reserve(nv);
       record.sides.reserve(room);
+      if (attrs) {  // the per-face arrays (a-wedge values grow with what the splits decode)
+        const size_t faces = level.mesh.face_count() + 2 * (room - level.applied);
+        attrs->state.corner_wedge.reserve(faces * 3);
+        if (!attrs->state.face_material.empty()) attrs->state.face_material.reserve(faces);
+      }
       const uint32_t* degrees_before = frontier.choice.degrees();
       frontier.choice.reserve_vertices(nv, [&](const auto& v) {
         if (frontier.choice.degrees() != degrees_before) advise_huge_pages(v);
@@ -737,6 +820,51 @@ void Decoder::clear_changes() {
   d.level.changes.modified_faces.clear();
   d.level.changes.vertex_begin = d.level.mesh.vertex_count();
   d.level.changes.face_begin = d.level.mesh.face_count();
+  d.level.changes.wedge_begin = d.attrs ? d.attrs->state.wedge_count : 0;
+}
+
+// Attributes: nothing (0 / nullptr) without them, and before the base ATTR chunk.
+uint32_t Decoder::wedge_count() const {
+  const Impl& d = *impl_;
+  return d.attrs && d.info.base_done ? d.attrs->state.wedge_count : 0;
+}
+const uint32_t* Decoder::wedge_vertices() const {
+  return wedge_count() ? impl_->attrs->state.wedge_vertex.data() : nullptr;
+}
+const float* Decoder::wedge_positions() const {
+  return wedge_count() ? impl_->attrs->wedge_positions.data() : nullptr;
+}
+const uint32_t* Decoder::wedge_indices() const {
+  return wedge_count() ? impl_->attrs->state.corner_wedge.data() : nullptr;
+}
+uint32_t Decoder::texcoord_set_count() const {
+  return wedge_count() ? impl_->attrs->state.head.texcoord_sets : 0;
+}
+const float* Decoder::texcoords(uint32_t set) const {
+  return set < texcoord_set_count() ? impl_->attrs->texcoords[set].data() : nullptr;
+}
+const float* Decoder::normals() const {
+  return wedge_count() && impl_->attrs->state.head.normals ? impl_->attrs->normals.data() : nullptr;
+}
+uint32_t Decoder::color_components() const {
+  return wedge_count() ? impl_->attrs->state.head.color_components : 0;
+}
+const float* Decoder::colors() const {
+  return color_components() ? impl_->attrs->colors.data() : nullptr;
+}
+const uint32_t* Decoder::face_materials() const {
+  const Impl& d = *impl_;
+  return d.attrs && d.info.base_done && !d.attrs->state.face_material.empty()
+             ? d.attrs->state.face_material.data()
+             : nullptr;
+}
+uint32_t Decoder::material_count() const { return uint32_t(impl_->materials.size()); }
+const MaterialInfo* Decoder::material(uint32_t i) const {
+  return i < impl_->materials.size() ? &impl_->materials[i] : nullptr;
+}
+const std::string& Decoder::material_library() const {
+  static const std::string kNone;
+  return impl_->attrs ? impl_->attrs->state.head.material_library : kNone;
 }
 
 }  // namespace pmz

@@ -50,6 +50,7 @@ bool CollapseReplay::collapse(const HalfEdgeCollapse& c, CollapseFan* fan) {
   if (has_l != (face_l != kNoSlot) || has_r != (face_r != kNoSlot) || (!has_l && !has_r))
     return false;
   if (fan) {
+    fan->faces = uf;
     fan->corners.clear();
     fan->wedges.clear();
     for (uint32_t f : uf) {

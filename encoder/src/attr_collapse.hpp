@@ -17,25 +17,19 @@
 #include <span>
 #include <vector>
 
+#include "pmz/attribute_codec.hpp"
 #include "pmz/mesh.hpp"
 #include "pmz/simplify.hpp"
 
 namespace pmz {
 
-// How many leading sector corners (u's wedges, in order from L's side) take v's wedge in L;
-// the others take v's wedge in R. u_wedge_l: u's wedge in L (ignored without L).
-inline uint32_t collapse_left_arc(std::span<const uint32_t> sector_u_wedges, uint32_t u_wedge_l,
-                                  bool has_l, bool has_r) {
-  if (!has_l) return 0;
-  if (!has_r) return uint32_t(sector_u_wedges.size());
-  uint32_t n = 0;
-  while (n < sector_u_wedges.size() && sector_u_wedges[n] == u_wedge_l) ++n;
-  return n;
-}
+// collapse_left_arc() (pmz/attribute_codec.hpp, shared with the decoder, which undoes splits
+// with it) is the rule's one definition.
 
 // The faces of u's fan as they were right before a collapse (the mesh a split of it restores):
 // vertices and corner wedges per face, in input ids.
 struct CollapseFan {
+  std::vector<uint32_t> faces;    // input face slots
   std::vector<uint32_t> corners;  // 3 vertices per face, as the face is stored
   std::vector<uint32_t> wedges;   // the corners' wedges (empty without wedges)
 };

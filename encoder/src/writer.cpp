@@ -10,6 +10,7 @@
 #include <iterator>
 #include <memory>
 
+#include "attr_writer.hpp"
 #include "pmz/base_codec.hpp"
 #include "pmz/decoder.hpp"
 #include "pmz/fan_wedge.hpp"
@@ -250,6 +251,13 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
   h.base_faces = uint32_t(plan.base_faces.size() / 3);
   h.full_faces = mesh.face_count();
   h.total_splits = splits;
+  // Attributes (spec section 13): the ATTR chunks follow BASE and each SPLT chunk.
+  std::unique_ptr<AttributeWriter> attrs;
+  if (!mesh.attributes.empty()) {
+    attrs = std::make_unique<AttributeWriter>();
+    if (!attrs->init(seq, plan.order.size(), opt, plan.input_of, error)) return false;
+  }
+  std::vector<uint8_t> base_attributes, chunk_attributes;
 
   // Splits: replay in final order with the decoder's core to get ranks and predictions. The
   // curvature weight (HEAD) is the file's: one replay codes the splits once per candidate
@@ -260,6 +268,7 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
   WriteStats trial_st[kCandidates];
   {
     if (!pm.build(base_n, plan.base_faces.data(), h.base_faces, error)) return false;
+    if (attrs) attrs->encode_base(pm, coords.data(), base_attributes);
     std::vector<SplitSymbols> chunk[kCandidates];
     std::vector<GroupCode> chunk_groups;
     std::vector<uint32_t> chunk_choice, vs;  // connectivity: the same for every candidate
@@ -281,6 +290,12 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
         trial_st[k].geometry_bits += sizes[kStreamGeometry] * 8;
         const size_t before = trial[k].size();
         append_chunk(trial[k], kChunkSplits, payload);
+        if (attrs) {
+          if (k == 0) attrs->finish_chunk(chunk_attributes);
+          const size_t at_attributes = trial[k].size();
+          append_chunk(trial[k], kChunkAttributes, chunk_attributes);
+          trial_st[k].attribute_bytes += trial[k].size() - at_attributes;
+        }
         trial_st[k].split_bytes += trial[k].size() - before;
         chunk[k].clear();
       }
@@ -305,7 +320,8 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
         chunk_groups.push_back({n, near});
         left -= n;
         for (uint32_t i = 0; i < n; ++i) {
-          const HalfEdgeCollapse& c = seq.collapses[plan.order[at++]];
+          const uint32_t collapse = plan.order[at++];
+          const HalfEdgeCollapse& c = seq.collapses[collapse];
           uint32_t v = plan.decoded_id[c.v];
           uint32_t vl = c.vl == kNoVertex ? kNoVertex : plan.decoded_id[c.vl];
           uint32_t vr = c.vr == kNoVertex ? kNoVertex : plan.decoded_id[c.vr];
@@ -323,6 +339,7 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
           code.rank_context = rank_context(pm.ring_closed(), scratch.confident);
           choice.applied(pm, coords.data(), rl != kNoRank, rr != kNoRank);
           const uint32_t u = pm.vertex_count() - 1;
+          if (attrs) attrs->encode_split(pm, coords.data(), collapse, rl != kNoRank, rr != kNoRank);
           RingBasis basis;  // the ring part once; per candidate only the offset and contexts
           ring_basis(coords.data(), pm.u_ring(), pm.ring(), true, true, basis);
           for (size_t k = 0; k < kCandidates; ++k) {
@@ -351,11 +368,22 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
 
   out.assign(kSignature, kSignature + 8);
   std::vector<uint8_t> head;
+  if (attrs) h.flags |= kFlagAttributes;
   write_head_payload(head, h);
+  if (attrs) {
+    AttributeHeader a = attrs->header();
+    a.full_wedges = attrs->wedge_count();
+    write_attribute_header(head, a);
+  }
   append_chunk(out, kChunkHead, head);
   st.header_bytes = out.size();
   append_chunk(out, kChunkBase,
                plan.base_stream);  // BASE: the stream alone (its counts are HEAD's)
+  if (attrs) {
+    const size_t before = out.size();
+    append_chunk(out, kChunkAttributes, base_attributes);
+    st.attribute_bytes += out.size() - before;
+  }
   st.base_bytes = out.size() - st.header_bytes;
   out.insert(out.end(), split_bytes.begin(), split_bytes.end());
   append_chunk(out, kChunkEnd, {});
@@ -372,6 +400,7 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
   std::sort(want.begin(), want.end());
   std::sort(got.begin(), got.end());
   if (want != got) return error = "internal: decoded faces differ from the input", false;
+  if (attrs && !attrs->check_full(pm, error)) return false;
   if (stats) *stats = st;
   return true;
 }

@@ -31,7 +31,7 @@ void write_head_payload(std::vector<uint8_t>& out, const FileHeader& h) {
   for (float f : h.bbox_max) put_f32le(out, f);
 }
 
-bool read_head_payload(const uint8_t* p, size_t size, FileHeader& h) {
+bool read_head_payload(const uint8_t* p, size_t size, FileHeader& h, size_t* consumed) {
   ByteReader r(p, size);
   h.version_major = r.u8();
   h.version_minor = r.u8();
@@ -51,6 +51,7 @@ bool read_head_payload(const uint8_t* p, size_t size, FileHeader& h) {
   h.full_faces = u32();
   for (float& f : h.bbox_min) f = r.f32le();
   for (float& f : h.bbox_max) f = r.f32le();
+  if (consumed) *consumed = size - r.remaining();
   return r.ok && fits;
 }
 

@@ -110,6 +110,26 @@ std::string mesh_hash(const pmz::Decoder& d) {
     put(u);
   }
   for (size_t i = 0; i < size_t(d.face_count()) * 3; ++i) put(d.indices()[i]);
+  // With attributes (spec section 14), then: the a-wedges' vertices, the faces' a-wedges, the
+  // texture coordinates set by set, the normals, the colours (f32 bit patterns) and the faces'
+  // materials.
+  const uint32_t w = d.wedge_count();
+  auto floats = [&](const float* p, size_t n) {
+    for (size_t i = 0; i < n; ++i) {
+      uint32_t u;
+      std::memcpy(&u, p + i, 4);
+      put(u);
+    }
+  };
+  if (w) {
+    for (uint32_t i = 0; i < w; ++i) put(d.wedge_vertices()[i]);
+    for (size_t i = 0; i < size_t(d.face_count()) * 3; ++i) put(d.wedge_indices()[i]);
+    for (uint32_t t = 0; t < d.texcoord_set_count(); ++t) floats(d.texcoords(t), size_t(w) * 2);
+    if (d.normals()) floats(d.normals(), size_t(w) * 3);
+    if (d.colors()) floats(d.colors(), size_t(w) * d.color_components());
+  }
+  if (d.face_materials())
+    for (uint32_t f = 0; f < d.face_count(); ++f) put(d.face_materials()[f]);
   return sha.hex();
 }
 
@@ -375,6 +395,63 @@ std::string obj_text(const Mesh& m, const std::string& what) {
   return s;
 }
 
+// A bumpy n x n grid with every attribute section 14 codes: a texture seam down column `seam`
+// (two charts, the right one mirrored), normals with a crease along the seam, RGB vertex
+// colours, and two materials (left and right of the seam), as OBJ with its MTL.
+std::string seamed_obj(uint32_t n, uint32_t seam) {
+  std::string s = "# bumpy grid with a texture seam, a normal crease, colours, 2 materials\n";
+  s += "mtllib seamed.mtl\n";
+  char buf[160];
+  auto height = [](double x, double y) { return 0.1 * std::sin(3 * x) * std::cos(2 * y); };
+  for (uint32_t j = 0; j <= n; ++j)
+    for (uint32_t i = 0; i <= n; ++i) {
+      const double x = double(i) / n, y = double(j) / n;
+      std::snprintf(buf, sizeof buf, "v %.6f %.6f %.6f %.4f %.4f %.4f\n", x, y, height(x, y), x, y,
+                    0.5 + 0.5 * std::sin(7 * x * y));
+      s += buf;
+    }
+  // Texture coordinates: the left chart as is, the right chart mirrored and moved (vt per
+  // vertex and side; off the seam both sides are the same entry).
+  for (uint32_t side = 0; side < 2; ++side)
+    for (uint32_t j = 0; j <= n; ++j)
+      for (uint32_t i = 0; i <= n; ++i) {
+        const double x = double(i) / n, y = double(j) / n;
+        std::snprintf(buf, sizeof buf, "vt %.6f %.6f\n", side ? 1.0 - 0.4 * x : 0.45 * x, y);
+        s += buf;
+      }
+  // Normals: the surface's on the left, tilted on the right (a crease along the seam).
+  for (uint32_t side = 0; side < 2; ++side)
+    for (uint32_t j = 0; j <= n; ++j)
+      for (uint32_t i = 0; i <= n; ++i) {
+        const double x = double(i) / n, y = double(j) / n;
+        const double dx = 0.3 * std::cos(3 * x) * std::cos(2 * y),
+                     dy = -0.2 * std::sin(3 * x) * std::sin(2 * y);
+        std::snprintf(buf, sizeof buf, "vn %.6f %.6f %.6f\n", -dx + (side ? 0.5 : 0), -dy, 1.0);
+        s += buf;
+      }
+  const uint32_t per_side = (n + 1) * (n + 1);
+  for (uint32_t side = 0; side < 2; ++side) {
+    s += side ? "usemtl metal\n" : "usemtl paint\n";
+    for (uint32_t j = 0; j < n; ++j)
+      for (uint32_t i = 0; i < n; ++i) {
+        if ((i < seam) != (side == 0)) continue;
+        const uint32_t q[4] = {j * (n + 1) + i, j * (n + 1) + i + 1, (j + 1) * (n + 1) + i + 1,
+                               (j + 1) * (n + 1) + i};
+        const uint32_t tris[2][3] = {{q[0], q[1], q[2]}, {q[0], q[2], q[3]}};
+        for (const auto& t : tris) {
+          s += "f";
+          for (uint32_t x : t) {
+            const uint32_t a = side * per_side + x + 1;
+            std::snprintf(buf, sizeof buf, " %u/%u/%u", x + 1, a, a);
+            s += buf;
+          }
+          s += "\n";
+        }
+      }
+  }
+  return s;
+}
+
 bool meshes(const fs::path& dir) {
   fs::create_directories(dir);
   bool ok = true;
@@ -400,6 +477,12 @@ bool meshes(const fs::path& dir) {
   put("terrain.obj", terrain(24), "height field 24 x 24 with two holes: open fans, boundaries");
   put("cone.obj", cone(160), "closed cone with 160 rim vertices");
   put("disc.obj", disc(200), "flat disc, a centre and 200 rim vertices: rings of 199");
+  ok = write_file(dir / "seamed.obj", seamed_obj(14, 6)) && ok;
+  ok =
+      write_file(dir / "seamed.mtl",
+                 "# two materials for seamed.obj\nnewmtl paint\nKd 0.8 0.2 0.2\nmap_Kd "
+                 "paint.png\nnewmtl metal\nKd 0.6 0.6 0.7\nmap_Kd metal.png\nnorm metal_n.png\n") &&
+      ok;
   {
     Mesh spiky = icosphere(2);
     for (uint32_t i = 0; i < spiky.v.size() / 3; i += 17)

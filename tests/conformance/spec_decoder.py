@@ -205,9 +205,9 @@ def read_head(p):  # section 4
     if any(h[n] >= 1 << 32 for n in ("flags", "base_vertices", "base_faces", "total_splits",
                                      "full_faces")):
         raise Refused("corrupt")
-    if h["major"] != 7:
+    if h["major"] != 8:
         raise Refused("bad_version")
-    if h["flags"] != 0 or h["position_bits"] > 30 or h["curvature"] > 8 or h["fine_curvature"] > 8:
+    if h["flags"] & ~1 or h["position_bits"] > 30 or h["curvature"] > 8 or h["fine_curvature"] > 8:
         raise Refused("corrupt")
     for a in range(3):
         lo, hi = h["bbox_min"][a], h["bbox_max"][a]
@@ -217,7 +217,61 @@ def read_head(p):  # section 4
         raise Refused("corrupt")
     if h["base_vertices"] + h["total_splits"] >= 1 << 32:
         raise Refused("corrupt")
+    h["attr"] = read_attribute_fields(p, at + 24, h) if h["flags"] & 1 else None
     return h
+
+
+def read_attribute_fields(p, at, h):  # section 14.1
+    def u8():
+        nonlocal at
+        if at >= len(p):
+            raise Refused("corrupt")
+        at += 1
+        return p[at - 1]
+
+    def f32s(n):
+        nonlocal at
+        if at + 4 * n > len(p):
+            raise Refused("corrupt")
+        at += 4 * n
+        return struct.unpack_from("<%df" % n, p, at - 4 * n)
+
+    def string():
+        nonlocal at
+        n, at = varint(p, at)
+        if n > 4096 or at + n > len(p):
+            raise Refused("corrupt")
+        at += n
+        return p[at - n : at]
+
+    a = {"sets": u8(), "tbits": u8()}
+    if a["sets"] > 8 or a["tbits"] > 24:
+        raise Refused("corrupt")
+    a["box"] = []
+    for _ in range(a["sets"]):
+        box = f32s(4)
+        if not all(math.isfinite(x) for x in box) or box[2] < box[0] or box[3] < box[1]:
+            raise Refused("corrupt")
+        a["box"].append(box)
+    a["normals"], a["nbits"], a["cc"], a["cbits"] = u8(), u8(), u8(), u8()
+    if a["normals"] > 1 or a["nbits"] == 1 or a["nbits"] > 16 or a["cc"] not in (0, 3, 4) \
+            or a["cbits"] > 16:
+        raise Refused("corrupt")
+    a["base_wedges"], at = varint(p, at)
+    a["full_wedges"], at = varint(p, at)
+    a["nn"] = 0 if not a["normals"] else 2 if a["nbits"] else 3
+    a["stride"] = 2 * a["sets"] + a["nn"] + a["cc"]
+    if a["base_wedges"] > a["full_wedges"] or a["full_wedges"] > 3 * h["full_faces"] \
+            or (a["stride"] == 0 and a["full_wedges"] != 0):
+        raise Refused("corrupt")
+    string()  # material_library
+    count, at = varint(p, at)
+    if count > 65536:
+        raise Refused("corrupt")
+    for _ in range(count):
+        string(), string(), string(), f32s(4)
+    a["materials"] = count
+    return a
 
 
 def nxt(h):
@@ -367,6 +421,200 @@ def positions(c, h):  # section 5
     return b"".join(out)
 
 
+class Attributes:
+    """Section 14: a-wedges per corner (aw), their vertices (wv) and values (val), materials."""
+
+    def __init__(self, a):
+        self.a, self.aw, self.wv, self.val, self.mat, self.W = a, [], [], [], [], 0
+        self.reference = [[SmallModel() for _ in range(3)] for _ in range(2)]  # Appendix A
+        self.escape = UIntModel()
+        self.tex = [[UIntModel(), UIntModel()], [UIntModel(), UIntModel()]]
+        self.normal = [UIntModel() for _ in range(3)]
+        self.color = [UIntModel() for _ in range(4)]
+        self.material = [SmallModel() for _ in range(4)]
+        self.material_escape = UIntModel()
+
+    @staticmethod
+    def opposite(m, h):  # the corner across the edge opposite h, or None
+        g = m.E.get((m.F[prv(h)], m.F[nxt(h)]))
+        return None if g is None else prv(g)
+
+    def assigned(self, h):
+        return h is not None and h < len(self.aw) and self.aw[h] is not None
+
+    def corner(self, m, rc, c, uc):  # 14.3
+        a, x = self.a, m.F[c]
+        o1, o2 = self.opposite(m, prv(c)), self.opposite(m, nxt(c))
+        cand = []
+        for h in (prv(o1) if o1 is not None else None, nxt(o2) if o2 is not None else None):
+            if self.assigned(h) and (not cand or cand[0] != self.aw[h]):
+                cand.append(self.aw[h])
+        nc = len(cand)
+        r = decode_small(rc, self.reference[uc][nc])
+        if r < nc:
+            self.aw[c] = cand[r]
+            return
+        if r == nc + 1:
+            b = rc.uint(self.escape)
+            if b >= self.W or self.wv[self.W - 1 - b] != x:
+                raise Refused("corrupt")
+            self.aw[c] = self.W - 1 - b
+            return
+        if r > nc + 1 or self.W >= a["full_wedges"]:
+            raise Refused("corrupt")
+        wa = self.aw[nxt(c)] if self.assigned(nxt(c)) else None
+        wb = self.aw[prv(c)] if self.assigned(prv(c)) else None
+        ref = cand[0] if nc else wa if wa is not None else wb
+        P = list(self.val[ref]) if ref is not None else [0] * a["stride"]
+        fm = 0
+        if a["sets"] and a["tbits"] and wa is not None and wb is not None:
+            px, pa, pb = m.c[x], m.c[m.F[nxt(c)]], m.c[m.F[prv(c)]]
+            e = [float(pb[k]) - float(pa[k]) for k in range(3)]
+            d = [float(px[k]) - float(pa[k]) for k in range(3)]
+            ee = e[0] * e[0] + e[1] * e[1] + e[2] * e[2]
+            if ee > 0:
+                along = (d[0] * e[0] + d[1] * e[1] + d[2] * e[2]) / ee
+                hh = 0.0
+                for k in range(3):
+                    rr = d[k] - along * e[k]
+                    hh = hh + rr * rr
+                across = math.sqrt(hh / ee)
+                fm, top = 1, float((1 << a["tbits"]) - 1)
+                A, B = self.val[wa], self.val[wb]
+                for t in range(a["sets"]):
+                    ua, va = float(A[2 * t]), float(A[2 * t + 1])
+                    du, dv = float(B[2 * t]) - ua, float(B[2 * t + 1]) - va
+                    pu = ua + along * du - across * dv
+                    pv = va + along * dv + across * du
+                    P[2 * t] = int(min(max(math.floor(pu + 0.5), 0.0), top))
+                    P[2 * t + 1] = int(min(max(math.floor(pv + 0.5), 0.0), top))
+        value = []
+        for i in range(a["stride"]):
+            j = i - 2 * a["sets"]
+            M = self.tex[fm][i % 2] if j < 0 else self.normal[j] if j < a["nn"] else \
+                self.color[min(j - a["nn"], 3)]
+            value.append(s32(P[i] + unzigzag(rc.uint(M))))
+        self.wv.append(x)
+        self.val.append(value)
+        self.aw[c] = self.W
+        self.W += 1
+
+    def face_material(self, m, rc, f):  # 14.3, face material
+        if self.a["materials"] < 2:
+            self.mat[f] = 0
+            return
+        cand = []
+        for k in range(3):
+            o = self.opposite(m, 3 * f + k)
+            if o is None or o // 3 >= len(self.mat) or self.mat[o // 3] is None:
+                continue
+            if self.mat[o // 3] not in cand:
+                cand.append(self.mat[o // 3])
+        r = decode_small(rc, self.material[len(cand)])
+        if r < len(cand):
+            self.mat[f] = cand[r]
+        elif r == len(cand):
+            self.mat[f] = rc.uint(self.material_escape)
+            if self.mat[f] >= self.a["materials"]:
+                raise Refused("corrupt")
+        else:
+            raise Refused("corrupt")
+
+    def base(self, m, rc):  # 14.4
+        nf = len(m.F) // 3
+        self.aw, self.mat = [None] * (3 * nf), [None] * nf
+        for f in range(nf):
+            if self.a["materials"]:
+                self.face_material(m, rc, f)
+            if self.a["stride"]:
+                for k in range(3):
+                    self.corner(m, rc, 3 * f + k, 0)
+        if rc.past or self.W != self.a["base_wedges"]:
+            raise Refused("corrupt")
+
+    def split(self, m, rc, u, new_faces, sector):  # 14.5
+        self.aw += [None] * (len(m.F) - len(self.aw))
+        self.mat += [None] * (len(m.F) // 3 - len(self.mat))
+        if self.a["materials"]:
+            for f in new_faces:
+                self.face_material(m, rc, f)
+        if self.a["stride"]:
+            order = []
+            for f in new_faces:  # v, vl in L = (u, v, vl); v, vr in R = (v, u, vr)
+                order += [3 * f + 1, 3 * f + 2] if m.F[3 * f] == u else [3 * f, 3 * f + 2]
+            order += [3 * f for f in new_faces if m.F[3 * f] == u] + list(sector)
+            order += [3 * f + 1 for f in new_faces if m.F[3 * f] != u]
+            prior = {h: self.aw[h] for h in sector}
+            for h in order:
+                self.aw[h] = None
+            for h in order:
+                self.corner(m, rc, h, 1 if m.F[h] == u else 0)
+            # Undoing by the collapse rule must give the sector corners back their a-wedges.
+            L = [f for f in new_faces if m.F[3 * f] == u]
+            R = [f for f in new_faces if m.F[3 * f] != u]
+            arc = 0
+            if L and not R:
+                arc = len(sector)
+            elif L:
+                while arc < len(sector) and self.aw[sector[arc]] == self.aw[3 * L[0]]:
+                    arc += 1
+            for i, h in enumerate(sector):  # undoing must restore each sector corner's a-wedge
+                if (self.aw[3 * L[0] + 1] if i < arc else self.aw[3 * R[0]]) != prior[h]:
+                    raise Refused("corrupt")
+        if rc.past:
+            raise Refused("corrupt")
+
+    def hash_bytes(self, m, head):  # the README's level hash, attribute part
+        a, out = self.a, []
+        u32 = lambda x: struct.pack("<I", x)
+        if self.W:
+            out += [u32(x) for x in self.wv[: self.W]] + [u32(x) for x in self.aw]
+            for t in range(a["sets"]):
+                lo, hi = a["box"][t][0:2], a["box"][t][2:4]
+                size = max(f32(f32(hi[k]) - f32(lo[k])) for k in range(2))
+                size = max(size, 0.0)
+                top = (1 << a["tbits"]) - 1
+                scale = f32(size / f32(float(top))) if a["tbits"] and size > 0 else 0.0
+                for w in range(self.W):
+                    for k in range(2):
+                        q = self.val[w][2 * t + k]
+                        out.append(ordered(q) if not a["tbits"] else
+                                   struct.pack("<f", f32(lo[k] + f32(f32(float(q)) * scale))))
+            o = 2 * a["sets"]
+            if a["normals"]:
+                for w in range(self.W):
+                    q = self.val[w][o : o + a["nn"]]
+                    if not a["nbits"]:
+                        out += [ordered(x) for x in q]
+                        continue
+                    top = float((1 << a["nbits"]) - 1)
+                    x, y = q[0] / top * 2 - 1, q[1] / top * 2 - 1
+                    z = 1 - abs(x) - abs(y)
+                    if z < 0:
+                        x, y = (1 - abs(y)) * (-1 if x < 0 else 1), (1 - abs(x)) * (-1 if y < 0 else 1)
+                    n = math.sqrt(x * x + y * y + z * z)
+                    out += [struct.pack("<f", f32(t / n)) for t in (x, y, z)]
+            o += a["nn"]
+            for w in range(self.W):
+                for q in self.val[w][o : o + a["cc"]]:
+                    out.append(ordered(q) if not a["cbits"] else
+                               struct.pack("<f", f32(q / float((1 << a["cbits"]) - 1))))
+        if a["materials"]:
+            out += [u32(x) for x in self.mat]
+        return b"".join(out)
+
+
+def ordered(v):  # section 5's lossless pattern -> the f32's bytes
+    return struct.pack("<i", v ^ 0x7FFFFFFF if v < 0 else v)
+
+
+class BaseMesh:  # the base mesh's faces and edges, for the base ATTR (14.4)
+    def __init__(self, base):
+        self.c = [tuple(x) for x in base[0]]
+        self.F = list(base[1])
+        self.E = {(self.F[h], self.F[nxt(h)]): h for h in range(len(self.F))}
+
+
 def level0(data):
     """(stream status, HEAD, level-0 mesh, SPLT chunks) for the whole input (sections 3, 4, 7,
     8); HEAD and the mesh are None when not decoded."""
@@ -375,6 +623,7 @@ def level0(data):
     if len(data) < 8:
         return "truncated", None, None, []
     at, head, base, splits, done, first = 8, None, None, 0, False, True
+    geometry, awaited = None, False  # with attributes: BASE awaiting its ATTR; SPLT awaiting its
     group_size, group_near = UIntModel(), Model()  # created once per stream (section 8)
     chunks = []  # per SPLT chunk: connectivity and geometry decoders, group table
     try:
@@ -396,12 +645,27 @@ def level0(data):
                     raise Refused("corrupt")
                 head = read_head(payload)
             elif typ == 2:
-                if base is not None:
+                if base is not None or geometry is not None:
                     raise Refused("corrupt")
-                base = decode_base(payload, head["base_vertices"], head["base_faces"])
-            elif typ == 3:
+                geometry = decode_base(payload, head["base_vertices"], head["base_faces"])
+                if head["attr"] is None:
+                    base = geometry
+            elif typ == 5 and head["attr"] is not None:  # section 14.1
+                if geometry is None:
+                    raise Refused("corrupt")
                 if base is None:
+                    attrs = Attributes(head["attr"])
+                    attrs.base(BaseMesh(geometry), RangeDecoder(payload))
+                    base = geometry + (attrs,)
+                elif awaited:
+                    chunks[-1] = chunks[-1][:3] + (RangeDecoder(payload),)
+                    awaited = False
+                else:
                     raise Refused("corrupt")
+            elif typ == 3:
+                if base is None or awaited:
+                    raise Refused("corrupt")
+                awaited = head["attr"] is not None
                 count, q = varint(payload, 0)
                 if count == 0 or count > head["total_splits"] - splits:
                     raise Refused("corrupt")
@@ -418,17 +682,18 @@ def level0(data):
                     total += group
                 if rc.past:
                     raise Refused("corrupt")
-                chunks.append((rc, RangeDecoder(payload[q + conn_size :]), groups))
+                chunks.append((rc, RangeDecoder(payload[q + conn_size :]), groups, None))
                 splits += count
             elif typ == 4:
-                if base is None or splits != head["total_splits"]:
+                if base is None or splits != head["total_splits"] or awaited:
                     raise Refused("corrupt")
                 done = True
             first = False
             at = p + 4 + size
     except Refused as e:
-        return str(e), head, base, chunks
-    return ("ok" if done else "truncated"), head, base, chunks
+        return str(e), head, base, [ch for ch in chunks if head.get("attr") is None or ch[3]]
+    return ("ok" if done else "truncated"), head, base, [
+        ch for ch in chunks if head.get("attr") is None or ch[3]]
 
 
 def bitlen(x):
@@ -457,6 +722,7 @@ class Splits:
         for h, x in enumerate(self.F):
             self.corner[x] = h
         self.chunks = chunks
+        self.attrs = base[2] if len(base) > 2 else None
         bits = head["position_bits"]
         self.ushift = 16 if bits == 0 else bits - 16 if bits > 16 else 0
         n = len(self.c)
@@ -541,7 +807,7 @@ class Splits:
             self.E[(self.F[h], self.F[nxt(h)])] = h
             self.corner[self.F[h]] = h
 
-    def apply(self, v, conn, geom):
+    def apply(self, v, conn, geom, attr_rc=None):
         """9.4 to 9.8; raises Refused("corrupt") for an invalid split."""
         fan = self.fan(v)
         if fan is None or len(fan[0]) < 2:
@@ -675,6 +941,10 @@ class Splits:
         pn = pred[tn] - rnd(n[t0] * r[0] + n[t1] * r[1], n[tn]) if n[tn] != 0 else pred[tn]
         cu[tn] = s32(pn + r[2])
         self.c.append(tuple(cu))
+        if self.attrs:  # 14.5
+            nf = len(self.F) // 3
+            new_faces = list(range(nf - (vl is not None) - (vr is not None), nf))
+            self.attrs.split(self, attr_rc, u, new_faces, sector)
         # 9.8
         self.degree[v] = k - nr + 2 + (vl is not None) + (vr is not None)
         self.degree.append(nr)
@@ -714,7 +984,7 @@ class Splits:
         if 0 in levels:
             hashes[0] = self.hash()
         try:
-            for conn, geom, groups in self.chunks:
+            for conn, geom, groups, attr_rc in self.chunks:
                 for size, near in groups:
                     previous, self.noted = self.noted, []
                     nv = len(self.c)
@@ -745,7 +1015,7 @@ class Splits:
                         if j >= len(st["vs"]):
                             raise Refused("corrupt")
                         v = st["vs"][j]
-                        ring = self.apply(v, conn, geom)
+                        ring = self.apply(v, conn, geom, attr_rc)
                         st["excluded"].update([v] + ring)
                         applied += 1
                         if applied in levels:
@@ -757,6 +1027,8 @@ class Splits:
 
     def hash(self):
         blob = positions(self.c, self.head) + b"".join(struct.pack("<I", x) for x in self.F)
+        if self.attrs:
+            blob += self.attrs.hash_bytes(self, self.head)
         return (len(self.c), len(self.F) // 3, hashlib.sha256(blob).hexdigest())
 
 

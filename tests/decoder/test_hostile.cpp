@@ -232,6 +232,15 @@ void expect_valid(const pmz::Decoder& d) {
   if (d.info().base_done) {
     ASSERT_EQ(d.vertex_count(), d.info().base_vertices + d.splits_applied());
   }
+  // Attribute wedges (spec section 14): every corner names an a-wedge of its own vertex.
+  for (uint32_t c = 0; c < d.face_count() * 3 && d.wedge_count(); ++c) {
+    ASSERT_LT(d.wedge_indices()[c], d.wedge_count());
+    ASSERT_EQ(d.wedge_vertices()[d.wedge_indices()[c]], d.indices()[c]);
+  }
+  if (d.face_materials()) {
+    for (uint32_t f = 0; f < d.face_count(); ++f)
+      ASSERT_LT(d.face_materials()[f], d.material_count());
+  }
 }
 
 // The frame of the chunk at p, if its header parses (spec section 2).
@@ -1087,6 +1096,105 @@ void corrupt_every_byte(const Bytes& file, bool repair_crc) {
 TEST(Hostile, EveryByteCorruptedKeepsAValidMesh) { corrupt_every_byte(small_file(), false); }
 TEST(Hostile, EveryByteCorruptedPastTheChecksumKeepsAValidMesh) {
   corrupt_every_byte(small_file(), true);
+}
+
+Bytes read_vector(const char* name) {
+  Bytes b;
+  if (FILE* fp = std::fopen(
+          (std::string(PMZ_SOURCE_DIR "/tests/conformance/vectors/") + name).c_str(), "rb")) {
+    b.resize(1 << 20);
+    b.resize(std::fread(b.data(), 1, b.size(), fp));
+    std::fclose(fp);
+  }
+  return b;
+}
+
+// Attributes: the HEAD fields, the ATTR chunks and their a-wedge references, corrupted
+// everywhere (with and without the checksums repaired): a valid mesh with valid a-wedges stays.
+TEST(Hostile, EveryByteOfAnAttributeStream) {
+  const Bytes b = read_vector("seamed-coarse.pmz");
+  ASSERT_FALSE(b.empty());
+  corrupt_every_byte(b, false);
+  corrupt_every_byte(b, true);
+}
+
+// Out-of-range attribute fields in HEAD are corrupt (spec section 14.1).
+TEST(Hostile, AttributeFieldsOutOfRangeAreCorrupt) {
+  const Bytes file = read_vector("seamed-q.pmz");
+  ASSERT_FALSE(file.empty());
+  pmz::ChunkFrame f;
+  ASSERT_TRUE(frame_at(file, 8, f));
+  pmz::FileHeader h;
+  size_t fixed = 0;
+  ASSERT_TRUE(pmz::read_head_payload(&file[8 + f.header_size], size_t(f.payload_size), h, &fixed));
+  ASSERT_EQ(h.flags, 1u);
+  const size_t at = 8 + f.header_size + fixed;  // texcoord_sets, texcoord_bits, boxes, ...
+  const size_t normals = at + 2 + 16;           // one texture coordinate set
+  struct Case {
+    size_t offset;
+    uint8_t value;
+    const char* what;
+  } cases[] = {
+      {at, 9, "9 texture coordinate sets"}, {at + 1, 25, "25 texture coordinate bits"},
+      {normals, 2, "normals flag 2"},       {normals + 1, 1, "1 normal bit"},
+      {normals + 1, 17, "17 normal bits"},  {normals + 2, 2, "2 colour components"},
+      {normals + 3, 17, "17 colour bits"},  {normals + 4, 0xFF, "base wedges beyond full wedges"}};
+  for (const Case& c : cases) {
+    Bytes b = file;
+    b[c.offset] = c.value;
+    fix_crc(b, 8);
+    pmz::Decoder d;
+    EXPECT_EQ(d.feed(b.data(), b.size()), pmz::Status::corrupt) << c.what;
+    EXPECT_NE(d.error_message().find("attributes"), std::string::npos) << d.error_message();
+  }
+  // An unknown flag bit beside the attributes' is corrupt too.
+  Bytes b = file;
+  b[8 + f.header_size + 2] = 3;  // flags varint (one byte)
+  fix_crc(b, 8);
+  pmz::Decoder d;
+  EXPECT_EQ(d.feed(b.data(), b.size()), pmz::Status::corrupt);
+}
+
+// ATTR chunks only where section 14.1 puts them: dropped, doubled or moved ones are corrupt,
+// and a SPLT chunk's splits wait for its ATTR chunk.
+TEST(Hostile, AttributeChunksOutOfPlaceAreCorrupt) {
+  const Bytes file = read_vector("seamed-q.pmz");
+  ASSERT_FALSE(file.empty());
+  const std::vector<size_t> at = chunk_offsets(file);
+  ASSERT_GE(at.size(), 6u);  // HEAD BASE ATTR SPLT ATTR ... END
+  auto chunk = [&](size_t i) {
+    const size_t end = i + 1 < at.size() ? at[i + 1] : file.size();
+    return Bytes(file.begin() + std::ptrdiff_t(at[i]), file.begin() + std::ptrdiff_t(end));
+  };
+  auto without = [&](size_t i) {
+    Bytes b(file.begin(), file.begin() + std::ptrdiff_t(at[i]));
+    const Bytes rest(file.begin() + std::ptrdiff_t(at[i]) + std::ptrdiff_t(chunk(i).size()),
+                     file.end());
+    b.insert(b.end(), rest.begin(), rest.end());
+    return b;
+  };
+  for (size_t drop : {size_t(2), size_t(4)}) {  // the base ATTR, the first SPLT's ATTR
+    const Bytes b = without(drop);
+    pmz::Decoder d;
+    EXPECT_EQ(d.feed(b.data(), b.size()), pmz::Status::corrupt) << "without chunk " << drop;
+    expect_valid(d);
+  }
+  {  // an ATTR chunk twice after a SPLT
+    Bytes b(file.begin(), file.begin() + std::ptrdiff_t(at[5]));
+    const Bytes twice = chunk(4);
+    b.insert(b.end(), twice.begin(), twice.end());
+    b.insert(b.end(), file.begin() + std::ptrdiff_t(at[5]), file.end());
+    pmz::Decoder d;
+    EXPECT_EQ(d.feed(b.data(), b.size()), pmz::Status::corrupt);
+  }
+  {  // a SPLT chunk without its ATTR yet: no split available, nothing decoded from it
+    const Bytes b(file.begin(), file.begin() + std::ptrdiff_t(at[4]));
+    pmz::Decoder d;
+    ASSERT_EQ(d.feed(b.data(), b.size()), pmz::Status::ok);
+    EXPECT_EQ(d.splits_available(), 0u);
+    EXPECT_GT(d.wedge_count(), 0u);
+    EXPECT_EQ(d.finish(), pmz::Status::truncated);
+  }
 }
 
 TEST(Hostile, EveryByteOfTheSampleFile) {

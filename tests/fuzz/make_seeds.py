@@ -93,6 +93,11 @@ def main():
     sample = os.path.join(root, 'tests', 'data', 'sample.pmz')
     if os.path.exists(sample):
         files['sample'] = open(sample, 'rb').read()
+    # Streams with attributes (format 8.0: HEAD attribute fields, ATTR chunks), committed.
+    for name in ('seamed-coarse', 'seamed-lossless'):
+        vector = os.path.join(root, 'tests', 'conformance', 'vectors', name + '.pmz')
+        if os.path.exists(vector):
+            files[name] = open(vector, 'rb').read()
     if encoder and os.access(encoder, os.X_OK):
         shifted = sphere(4, 6)
         shifted = ([(x + 3, y, z) for x, y, z in shifted[0]], shifted[1])

@@ -50,9 +50,20 @@ struct MeshChanges {
   // a renderer simply draws face_count() faces.
   uint32_t vertex_begin = 0;
   uint32_t face_begin = 0;
+  // Attribute wedges [wedge_begin, wedge_count()) are new. A face listed in modified_faces or at
+  // or above face_begin has its wedge_indices() rewritten too (the two change together).
+  uint32_t wedge_begin = 0;
   // Faces below face_begin whose indices were rewritten (may repeat; unsorted).
   std::vector<uint32_t> modified_faces;
   bool all = false;  // everything should be re-uploaded (e.g. first base mesh)
+};
+
+// A material as the file states it (OBJ's MTL, glTF's materials): carried, not interpreted.
+struct MaterialInfo {
+  std::string name;
+  std::string base_color_texture;  // file name or URI (MTL map_Kd, glTF baseColorTexture)
+  std::string normal_texture;      // MTL norm / map_Bump, glTF normalTexture
+  float base_color[4] = {1, 1, 1, 1};
 };
 
 class PMZ_API Decoder {
@@ -91,6 +102,28 @@ class PMZ_API Decoder {
   // For geomorphs: the vertex each vertex was split from (UINT32_MAX for base vertices).
   // Valid for all vertices below vertex_count().
   const uint32_t* split_parents() const;
+
+  // Attributes (format 8.0, spec/format.md section 13). A render vertex is an attribute wedge:
+  // one combination of attribute values at one position vertex (a vertex on a texture seam or
+  // normal crease has several). Without attributes in the file (or before BASE): wedge_count()
+  // 0 and nullptr from the array accessors. Arrays hold wedge_count() wedges and face_count()
+  // faces, are valid until the next call that changes the level, and change only where
+  // changes() says.
+  uint32_t wedge_count() const;
+  const uint32_t* wedge_vertices() const;  // wedge -> position vertex index
+  const float* wedge_positions() const;    // xyz per wedge: positions()[wedge_vertices()[w]]
+  const uint32_t* wedge_indices() const;   // three wedges per face, the corners of indices()
+  uint32_t texcoord_set_count() const;
+  const float* texcoords(uint32_t set) const;  // u, v per wedge (nullptr for set >= count)
+  const float* normals() const;                // xyz per wedge, unit length, or nullptr
+  uint32_t color_components() const;           // 0, 3 (RGB) or 4 (RGBA)
+  const float* colors() const;                 // color_components() per wedge, or nullptr
+  // Materials: per face an index into the table (nullptr when the file has no materials; a
+  // file with one material reports 0 for every face).
+  const uint32_t* face_materials() const;
+  uint32_t material_count() const;
+  const MaterialInfo* material(uint32_t i) const;  // nullptr for i >= material_count()
+  const std::string& material_library() const;     // OBJ mtllib name, or empty
 
   const MeshChanges& changes() const;
   void clear_changes();

@@ -82,9 +82,36 @@ typedef struct pmz_changes {
   const uint32_t* modified_faces;
   size_t modified_count;
   uint32_t all;
+  uint32_t wedge_begin; /* attribute wedges [wedge_begin, wedge_count) are new; a face's wedge
+                           indices change exactly when its vertex indices do */
 } pmz_changes;
 PMZ_API void pmz_decoder_changes(const pmz_decoder* d, pmz_changes* out);
 PMZ_API void pmz_decoder_clear_changes(pmz_decoder* d);
+
+/* Attributes (format 8.0, spec/format.md section 13), as pmz::Decoder's accessors: a render
+   vertex is an attribute wedge (one combination of attribute values at one position vertex).
+   Without attributes: wedge count 0 and NULL arrays. Arrays hold wedge_count wedges and
+   face_count faces and stay valid until the next call that changes the level. */
+PMZ_API uint32_t pmz_decoder_wedge_count(const pmz_decoder* d);
+PMZ_API const uint32_t* pmz_decoder_wedge_vertices(const pmz_decoder* d); /* -> vertex index */
+PMZ_API const float* pmz_decoder_wedge_positions(const pmz_decoder* d);   /* 3 per wedge */
+PMZ_API const uint32_t* pmz_decoder_wedge_indices(const pmz_decoder* d);  /* 3 per face */
+PMZ_API uint32_t pmz_decoder_texcoord_set_count(const pmz_decoder* d);
+PMZ_API const float* pmz_decoder_texcoords(const pmz_decoder* d, uint32_t set); /* u, v */
+PMZ_API const float* pmz_decoder_normals(const pmz_decoder* d);                 /* xyz */
+PMZ_API uint32_t pmz_decoder_color_components(const pmz_decoder* d);            /* 0, 3, 4 */
+PMZ_API const float* pmz_decoder_colors(const pmz_decoder* d);
+/* Per face an index into the material table; NULL without materials. */
+PMZ_API const uint32_t* pmz_decoder_face_materials(const pmz_decoder* d);
+PMZ_API uint32_t pmz_decoder_material_count(const pmz_decoder* d);
+typedef struct pmz_material {
+  const char* name;               /* strings owned by the decoder, never NULL */
+  const char* base_color_texture; /* file name or URI, "" when none */
+  const char* normal_texture;
+  float base_color[4];
+} pmz_material;
+/* Fills *out and returns 1, or returns 0 when i >= material count. */
+PMZ_API int pmz_decoder_material(const pmz_decoder* d, uint32_t i, pmz_material* out);
 
 #ifdef __cplusplus
 }

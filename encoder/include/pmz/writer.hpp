@@ -12,6 +12,9 @@ struct WriteOptions {
   uint32_t position_bits = 14;  // 0 = lossless float32; else quantized over the largest extent
   uint64_t base_faces = 0;      // 0: as small as the sequence goes
   bool symbol_stats = false;    // fill WriteStats::symbol_bits
+  // Attributes (when the mesh has them; spec section 13), bits per component, 0 = lossless:
+  // texture coordinates over each set's bounding box, normals octahedral, colours over [0, 1].
+  uint32_t texcoord_bits = 12, normal_bits = 10, color_bits = 8;
 };
 
 // The kinds of SPLT symbols (pmz::SymbolKind, format.hpp: groups, choice, wedge count, wedge
@@ -20,6 +23,7 @@ inline constexpr int kWriteSymbolKinds = 7;
 
 struct WriteStats {
   uint64_t header_bytes = 0, base_bytes = 0, split_bytes = 0;
+  uint64_t attribute_bytes = 0;  // the ATTR chunks (within base_bytes and split_bytes)
   // Coded size of the SPLT streams over all splits: groups, vertex choice and wedges
   // (connectivity); position residuals (geometry).
   uint64_t connectivity_bits = 0, geometry_bits = 0;

@@ -11,7 +11,7 @@
 namespace pmz {
 
 inline constexpr uint8_t kSignature[8] = {0x89, 'P', 'M', 'Z', 0x0D, 0x0A, 0x1A, 0x0A};
-inline constexpr uint32_t kVersionMajor = 7;
+inline constexpr uint32_t kVersionMajor = 8;
 inline constexpr uint32_t kVersionMinor = 0;
 
 // Chunk = u8 type | varint payload_size | u32le crc32(type, size varint, payload) | payload
@@ -57,7 +57,7 @@ enum SymbolKind : int {
   kSymbolKinds
 };
 
-inline constexpr uint32_t kKnownFlags = 0;  // HEAD flags: none defined
+inline constexpr uint32_t kKnownFlags = 1;  // HEAD flags: bit 0 attributes (attribute_codec.hpp)
 
 // HEAD (spec section 4). full_vertices is not stored: base_vertices + total_splits.
 struct FileHeader {
@@ -79,7 +79,8 @@ void write_head_payload(std::vector<uint8_t>& out, const FileHeader& h);
 // Parses the fields (bytes after them are ignored: later minors may append fields); false when
 // the payload ends early, a varint is malformed or a field exceeds its range (flags and counts
 // uint32). Semantic checks (version, counts) are the caller's.
-bool read_head_payload(const uint8_t* p, size_t size, FileHeader& h);
+// consumed (optional): the bytes the fields took (format 8.0's attribute fields follow them).
+bool read_head_payload(const uint8_t* p, size_t size, FileHeader& h, size_t* consumed = nullptr);
 // Appends a framed chunk (header + payload) to out.
 void append_chunk(std::vector<uint8_t>& out, uint8_t type, const std::vector<uint8_t>& payload);
 

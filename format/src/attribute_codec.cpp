@@ -1,0 +1,381 @@
+#include "pmz/attribute_codec.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "pmz/coding.hpp"
+
+namespace pmz {
+
+namespace {
+
+void put_string(std::vector<uint8_t>& out, const std::string& s) {
+  put_varint(out, s.size());
+  out.insert(out.end(), s.begin(), s.end());
+}
+
+bool read_string(ByteReader& r, std::string& s) {
+  const uint64_t n = r.varint();
+  if (!r.ok || n > kMaxMaterialString) return false;
+  const uint8_t* p = r.bytes(size_t(n));
+  if (!p) return false;
+  s.assign(reinterpret_cast<const char*>(p), size_t(n));
+  return true;
+}
+
+// Up to two candidate wedges of corner c (spec section 13.3): the wedges of c's vertex in the
+// faces across c's two edges at that vertex (first the edge to next(c)), when assigned, distinct.
+uint32_t candidates(const ProgressiveMesh& pm, const AttributeState& s, uint32_t c,
+                    uint32_t out[2]) {
+  uint32_t n = 0;
+  const uint32_t o1 = pm.opposite[prev_corner(c)], o2 = pm.opposite[next_corner(c)];
+  const uint32_t across[2] = {o1 == kNoCorner ? kNoCorner : prev_corner(o1),
+                              o2 == kNoCorner ? kNoCorner : next_corner(o2)};
+  for (uint32_t a : across) {
+    if (a == kNoCorner || a >= s.corner_wedge.size()) continue;
+    const uint32_t w = s.corner_wedge[a];
+    if (w >= s.wedge_count || (n == 1 && out[0] == w)) continue;
+    out[n++] = w;
+  }
+  return n;
+}
+
+// The assigned wedge at corner a (kNoCorner / pending: none).
+uint32_t wedge_at(const AttributeState& s, uint32_t a) {
+  return a < s.corner_wedge.size() && s.corner_wedge[a] < s.wedge_count ? s.corner_wedge[a]
+                                                                        : kNoCorner;
+}
+
+// The prediction of a new wedge's values at corner c (spec section 13.3). kinds[i] = 1 where a
+// texture coordinate came from the face map.
+void predict(const ProgressiveMesh& pm, const int32_t* coords, const AttributeState& s, uint32_t c,
+             const uint32_t* cand, uint32_t n, int32_t* pred, uint8_t* face_map) {
+  const AttributeHeader& h = s.head;
+  const uint32_t wa = wedge_at(s, next_corner(c)), wb = wedge_at(s, prev_corner(c));
+  const uint32_t ref = n ? cand[0] : wa != kNoCorner ? wa : wb;
+  for (uint32_t i = 0; i < s.stride; ++i)
+    pred[i] = ref == kNoCorner ? 0 : s.values[size_t(ref) * s.stride + i];
+  *face_map = 0;
+  if (!h.texcoord_sets || !h.texcoord_bits || wa == kNoCorner || wb == kNoCorner) return;
+  // The face's map from positions to texture coordinates, applied to c's vertex: x = a +
+  // s (b - a) + t perp(b - a) in both spaces, perp a quarter turn counter-clockwise. Binary64,
+  // each operation rounded in this order (no fused multiply-add).
+  const int32_t* px = coords + size_t(pm.corner_vertex[c]) * 3;
+  const int32_t* pa = coords + size_t(pm.corner_vertex[next_corner(c)]) * 3;
+  const int32_t* pb = coords + size_t(pm.corner_vertex[prev_corner(c)]) * 3;
+  double e[3], d[3];
+  for (int k = 0; k < 3; ++k) {
+    e[k] = double(pb[k]) - double(pa[k]);
+    d[k] = double(px[k]) - double(pa[k]);
+  }
+  const double ee = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+  if (!(ee > 0)) return;
+  const double along = (d[0] * e[0] + d[1] * e[1] + d[2] * e[2]) / ee;
+  double hh = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double r = d[k] - along * e[k];
+    hh = hh + r * r;
+  }
+  const double across = std::sqrt(hh / ee);
+  *face_map = 1;
+  for (uint32_t t = 0; t < h.texcoord_sets; ++t) {
+    const double max_q = double((1u << h.texcoord_bits) - 1);
+    const double ua = s.values[size_t(wa) * s.stride + 2 * t],
+                 va = s.values[size_t(wa) * s.stride + 2 * t + 1];
+    const double du = s.values[size_t(wb) * s.stride + 2 * t] - ua,
+                 dv = s.values[size_t(wb) * s.stride + 2 * t + 1] - va;
+    const double u = ua + along * du - across * dv, v = va + along * dv + across * du;
+    pred[2 * t] = int32_t(std::clamp(std::floor(u + 0.5), 0.0, max_q));
+    pred[2 * t + 1] = int32_t(std::clamp(std::floor(v + 0.5), 0.0, max_q));
+  }
+}
+
+UIntModel& residual_model(AttributeModels& m, const AttributeHeader& h, uint32_t i,
+                          uint8_t face_map) {
+  if (i < 2 * h.texcoord_sets) return m.texcoord[face_map][i & 1];
+  i -= 2 * h.texcoord_sets;
+  if (i < h.normal_components()) return m.normal[i];
+  return m.color[std::min(i - h.normal_components(), 3u)];
+}
+
+void push_wedge(AttributeState& s, uint32_t vertex, const int32_t* v) {
+  const uint32_t w = s.wedge_count++;
+  if (s.wedge_vertex.size() > w) {  // an undone split's wedge: overwritten (the same values)
+    s.wedge_vertex[w] = vertex;
+    std::copy(v, v + s.stride, s.values.begin() + std::ptrdiff_t(size_t(w) * s.stride));
+    return;
+  }
+  s.wedge_vertex.push_back(vertex);
+  s.values.insert(s.values.end(), v, v + s.stride);
+}
+
+uint32_t material_candidates(const ProgressiveMesh& pm, const AttributeState& s, uint32_t f,
+                             uint32_t out[3]) {
+  uint32_t n = 0;
+  for (uint32_t k = 0; k < 3; ++k) {
+    const uint32_t o = pm.opposite[f * 3 + k];
+    if (o == kNoCorner || o / 3 >= s.face_material.size()) continue;
+    const uint32_t mat = s.face_material[o / 3];
+    if (mat >= s.head.materials.size() || std::find(out, out + n, mat) != out + n) continue;
+    out[n++] = mat;
+  }
+  return n;
+}
+
+}  // namespace
+
+void write_attribute_header(std::vector<uint8_t>& out, const AttributeHeader& a) {
+  out.push_back(uint8_t(a.texcoord_sets));
+  out.push_back(uint8_t(a.texcoord_bits));
+  for (uint32_t t = 0; t < a.texcoord_sets; ++t) {
+    put_f32le(out, a.texcoord_min[t][0]);
+    put_f32le(out, a.texcoord_min[t][1]);
+    put_f32le(out, a.texcoord_max[t][0]);
+    put_f32le(out, a.texcoord_max[t][1]);
+  }
+  out.push_back(a.normals ? 1 : 0);
+  out.push_back(uint8_t(a.normal_bits));
+  out.push_back(uint8_t(a.color_components));
+  out.push_back(uint8_t(a.color_bits));
+  put_varint(out, a.base_wedges);
+  put_varint(out, a.full_wedges);
+  put_string(out, a.material_library);
+  put_varint(out, a.materials.size());
+  for (const FileMaterial& m : a.materials) {
+    put_string(out, m.name);
+    put_string(out, m.base_color_texture);
+    put_string(out, m.normal_texture);
+    for (float c : m.base_color) put_f32le(out, c);
+  }
+}
+
+bool read_attribute_header(ByteReader& r, AttributeHeader& a, std::string& error) {
+  a.texcoord_sets = r.u8();
+  a.texcoord_bits = r.u8();
+  if (a.texcoord_sets > kMaxTexcoordSets || a.texcoord_bits > kMaxAttributeBits)
+    return error = "texture coordinate sets or bits out of range", false;
+  for (uint32_t t = 0; t < a.texcoord_sets; ++t) {
+    for (float& x : a.texcoord_min[t]) x = r.f32le();
+    for (float& x : a.texcoord_max[t]) x = r.f32le();
+    for (int k = 0; k < 2; ++k)
+      if (!std::isfinite(a.texcoord_min[t][k]) || !std::isfinite(a.texcoord_max[t][k]) ||
+          a.texcoord_min[t][k] > a.texcoord_max[t][k])
+        return error = "bad texture coordinate box", false;
+  }
+  const uint32_t normals = r.u8();
+  a.normal_bits = r.u8();
+  a.color_components = r.u8();
+  a.color_bits = r.u8();
+  if (normals > 1 || a.normal_bits == 1 || a.normal_bits > 16 ||
+      (a.color_components != 0 && a.color_components != 3 && a.color_components != 4) ||
+      a.color_bits > 16)
+    return error = "normal or colour fields out of range", false;
+  a.normals = normals == 1;
+  const uint64_t base = r.varint(), full = r.varint();
+  if (base > full || full > 0xFFFFFFF0u || (!a.has_wedges() && full != 0))
+    return error = "attribute wedge counts out of range", false;
+  a.base_wedges = uint32_t(base);
+  a.full_wedges = uint32_t(full);
+  if (!read_string(r, a.material_library)) return error = "material library name", false;
+  const uint64_t materials = r.varint();
+  if (!r.ok || materials > kMaxMaterials || materials > r.remaining() / 19)
+    return error = "material count out of range", false;
+  a.materials.resize(size_t(materials));
+  for (FileMaterial& m : a.materials) {
+    if (!read_string(r, m.name) || !read_string(r, m.base_color_texture) ||
+        !read_string(r, m.normal_texture))
+      return error = "material strings malformed", false;
+    for (float& c : m.base_color) c = r.f32le();
+  }
+  if (!r.ok) return error = "attribute fields end early", false;
+  return true;
+}
+
+void AttributeQuantizer::init(const AttributeHeader& a) {
+  for (uint32_t t = 0; t < a.texcoord_sets; ++t) {
+    const float lo[3] = {a.texcoord_min[t][0], a.texcoord_min[t][1], 0},
+                hi[3] = {a.texcoord_max[t][0], a.texcoord_max[t][1], 0};
+    texcoord[t].init(a.texcoord_bits, lo, hi);
+  }
+  normal_bits = a.normal_bits;
+  color_bits = a.color_bits;
+}
+
+// Octahedral: the unit vector projected onto |x| + |y| + |z| = 1, the lower half folded over
+// the diagonals, each of x and y in [-1, 1] quantized to 0 .. 2^bits - 1.
+void AttributeQuantizer::quantize_normal(const float n[3], int32_t* q) const {
+  if (!normal_bits) {
+    for (int k = 0; k < 3; ++k) q[k] = float_to_ordered(n[k]);
+    return;
+  }
+  double x = n[0], y = n[1], z = n[2];
+  const double l1 = std::fabs(x) + std::fabs(y) + std::fabs(z);
+  if (!(l1 > 0))
+    x = 0, y = 0, z = 1;
+  else
+    x /= l1, y /= l1, z /= l1;
+  if (z < 0) {
+    const double fx = (1 - std::fabs(y)) * (x < 0 ? -1 : 1),
+                 fy = (1 - std::fabs(x)) * (y < 0 ? -1 : 1);
+    x = fx, y = fy;
+  }
+  const double max_q = double((1u << normal_bits) - 1);
+  q[0] = int32_t(std::clamp(std::floor((x * 0.5 + 0.5) * max_q + 0.5), 0.0, max_q));
+  q[1] = int32_t(std::clamp(std::floor((y * 0.5 + 0.5) * max_q + 0.5), 0.0, max_q));
+}
+
+void AttributeQuantizer::dequantize_normal(const int32_t* q, float n[3]) const {
+  if (!normal_bits) {
+    for (int k = 0; k < 3; ++k) n[k] = ordered_to_float(q[k]);
+    return;
+  }
+  const double max_q = double((1u << normal_bits) - 1);
+  double x = double(q[0]) / max_q * 2 - 1, y = double(q[1]) / max_q * 2 - 1;
+  double z = 1 - std::fabs(x) - std::fabs(y);
+  if (z < 0) {
+    const double fx = (1 - std::fabs(y)) * (x < 0 ? -1 : 1),
+                 fy = (1 - std::fabs(x)) * (y < 0 ? -1 : 1);
+    x = fx, y = fy;
+  }
+  const double len = std::sqrt(x * x + y * y + z * z);
+  n[0] = float(x / len);
+  n[1] = float(y / len);
+  n[2] = float(z / len);
+}
+
+int32_t AttributeQuantizer::quantize_color(float c) const {
+  if (!color_bits) return float_to_ordered(c);
+  const double max_q = double((1u << color_bits) - 1);
+  return int32_t(std::clamp(std::floor(double(c) * max_q + 0.5), 0.0, max_q));
+}
+
+float AttributeQuantizer::dequantize_color(int32_t q) const {
+  if (!color_bits) return ordered_to_float(q);
+  return float(double(q) / double((1u << color_bits) - 1));
+}
+
+void split_corners(const ProgressiveMesh& pm, bool has_l, bool has_r, std::vector<uint32_t>& out) {
+  out.clear();
+  const uint32_t new_faces = (has_l ? 1u : 0u) + (has_r ? 1u : 0u);
+  const uint32_t f0 = pm.face_count() - new_faces;
+  const uint32_t fl = f0, fr = f0 + (has_l ? 1u : 0u);
+  const uint32_t u = pm.vertex_count() - 1;
+  if (has_l) out.insert(out.end(), {fl * 3 + 1, fl * 3 + 2});  // L = (u, v, vl)
+  if (has_r) out.insert(out.end(), {fr * 3 + 0, fr * 3 + 2});  // R = (v, u, vr)
+  if (has_l) out.push_back(fl * 3);
+  for (uint32_t f : pm.sector_faces())
+    for (uint32_t k = 0; k < 3; ++k)
+      if (pm.corner_vertex[f * 3 + k] == u) out.push_back(f * 3 + k);
+  if (has_r) out.push_back(fr * 3 + 1);
+}
+
+void encode_corner_wedge(RangeEncoder& rc, AttributeModels& m, const ProgressiveMesh& pm,
+                         const int32_t* coords, AttributeState& s, uint32_t c, bool u_corner,
+                         uint32_t wedge, const int32_t* fresh) {
+  uint32_t cand[2];
+  const uint32_t n = candidates(pm, s, c, cand);
+  SmallModel& ref = m.reference[u_corner ? 1 : 0][std::min(n, 2u)];
+  if (wedge < s.wedge_count) {
+    const uint32_t at = uint32_t(std::find(cand, cand + n, wedge) - cand);
+    encode_small(rc, ref, at < n ? at : n + 1);
+    if (at == n) encode_uint(rc, m.escape, s.wedge_count - 1 - wedge);
+    s.corner_wedge[c] = wedge;
+    return;
+  }
+  encode_small(rc, ref, n);
+  int32_t pred[kMaxTexcoordSets * 2 + 7];
+  uint8_t face_map;
+  predict(pm, coords, s, c, cand, n, pred, &face_map);
+  for (uint32_t i = 0; i < s.stride; ++i)
+    encode_uint(rc, residual_model(m, s.head, i, face_map),
+                zigzag_encode(int32_t(uint32_t(fresh[i]) - uint32_t(pred[i]))));
+  s.corner_wedge[c] = s.wedge_count;
+  push_wedge(s, pm.corner_vertex[c], fresh);
+}
+
+bool decode_corner_wedge(RangeState& rc, AttributeModels& m, const ProgressiveMesh& pm,
+                         const int32_t* coords, AttributeState& s, uint32_t c, bool u_corner) {
+  uint32_t cand[2];
+  const uint32_t n = candidates(pm, s, c, cand);
+  uint32_t sym;
+  if (!decode_small(rc, m.reference[u_corner ? 1 : 0][std::min(n, 2u)], sym) || sym > n + 1)
+    return false;
+  const uint32_t x = pm.corner_vertex[c];
+  if (sym < n) {
+    s.corner_wedge[c] = cand[sym];
+    return true;
+  }
+  if (sym == n + 1) {
+    uint32_t back;
+    if (!decode_uint(rc, m.escape, back) || back >= s.wedge_count) return false;
+    const uint32_t w = s.wedge_count - 1 - back;
+    if (s.wedge_vertex[w] != x) return false;  // another vertex's wedge
+    s.corner_wedge[c] = w;
+    return true;
+  }
+  if (s.wedge_count >= s.head.full_wedges) return false;  // more wedges than HEAD announced
+  int32_t pred[kMaxTexcoordSets * 2 + 7], value[kMaxTexcoordSets * 2 + 7];
+  uint8_t face_map;
+  predict(pm, coords, s, c, cand, n, pred, &face_map);
+  for (uint32_t i = 0; i < s.stride; ++i) {
+    uint32_t z;
+    if (!decode_uint(rc, residual_model(m, s.head, i, face_map), z)) return false;
+    value[i] = int32_t(uint32_t(pred[i]) + uint32_t(zigzag_decode(z)));
+  }
+  s.corner_wedge[c] = s.wedge_count;
+  push_wedge(s, x, value);
+  return rc.ok;
+}
+
+void encode_face_material(RangeEncoder& rc, AttributeModels& m, const ProgressiveMesh& pm,
+                          AttributeState& s, uint32_t f, uint32_t material) {
+  uint32_t cand[3];
+  const uint32_t n = material_candidates(pm, s, f, cand);
+  const uint32_t at = uint32_t(std::find(cand, cand + n, material) - cand);
+  encode_small(rc, m.material[std::min(n, 3u)], at);
+  if (at == n) encode_uint(rc, m.material_escape, material);
+  s.face_material[f] = material;
+}
+
+bool decode_face_material(RangeState& rc, AttributeModels& m, const ProgressiveMesh& pm,
+                          AttributeState& s, uint32_t f) {
+  uint32_t cand[3], sym, material;
+  const uint32_t n = material_candidates(pm, s, f, cand);
+  if (!decode_small(rc, m.material[std::min(n, 3u)], sym) || sym > n) return false;
+  if (sym < n) {
+    material = cand[sym];
+  } else if (!decode_uint(rc, m.material_escape, material) || material >= s.head.materials.size()) {
+    return false;
+  }
+  s.face_material[f] = material;
+  return true;
+}
+
+void undo_split_wedges(const ProgressiveMesh& pm, uint32_t v, bool has_l, bool has_r,
+                       AttributeState& s, uint32_t wedges_before) {
+  const uint32_t f = pm.face_count();  // the new faces were f (L, if any) and the next
+  const uint32_t fl = f, fr = f + (has_l ? 1u : 0u);
+  if (!s.corner_wedge.empty()) {
+    const uint32_t u_l = has_l ? s.corner_wedge[fl * 3] : 0;
+    const uint32_t v_l = has_l ? s.corner_wedge[fl * 3 + 1] : 0;
+    const uint32_t v_r = has_r ? s.corner_wedge[fr * 3] : 0;
+    // The sector corners are v's again; their wedges are still u's (the collapse rule).
+    std::vector<uint32_t>& corners = s.scratch_corners;
+    std::vector<uint32_t>& wedges = s.scratch_wedges;
+    corners.clear();
+    wedges.clear();
+    for (uint32_t face : pm.sector_faces())
+      for (uint32_t k = 0; k < 3; ++k)
+        if (pm.corner_vertex[face * 3 + k] == v) {
+          corners.push_back(face * 3 + k);
+          wedges.push_back(s.corner_wedge[face * 3 + k]);
+        }
+    const uint32_t arc = collapse_left_arc(wedges, u_l, has_l, has_r);
+    for (uint32_t i = 0; i < corners.size(); ++i) s.corner_wedge[corners[i]] = i < arc ? v_l : v_r;
+    s.corner_wedge.resize(size_t(f) * 3);
+  }
+  if (!s.face_material.empty()) s.face_material.resize(f);
+  s.wedge_count = wedges_before;
+}
+
+}  // namespace pmz
