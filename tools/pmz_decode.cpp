@@ -1,44 +1,33 @@
 // pmz-decode: decode a .pmz stream (or its first N bytes, as a partial download would) to
-// OBJ/PLY/OFF at a chosen level of detail. Reads a file or stdin (-); the level goes to meshio's
-// writer as an IndexedMesh (decoder -> IndexedMesh -> write_mesh_to) into a safe output
-// (tool_common: temporary + rename, or stdout with -). No OpenMesh.
+// OBJ (+MTL)/PLY/glb with its attributes, or OFF, at a chosen level of detail. Reads a file or
+// stdin (-); the level goes to meshio's writer as an IndexedMesh (decoder -> IndexedMesh ->
+// write_mesh_to) into a safe output (tool_common: temporary + rename, or stdout with -). No
+// OpenMesh.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
 #include <string>
 #include <vector>
 
+#include "decoded_mesh.hpp"
 #include "pmz/decoder.hpp"
 #include "pmz/mesh.hpp"
 #include "tool_common.hpp"
 #include "tool_mesh.hpp"
 
-namespace {
-
 namespace tool = pmz::tool;
-
-// The decoder's current level as a mesh for meshio's writer (the one writer of every tool).
-pmz::IndexedMesh current_mesh(const pmz::Decoder& d) {
-  pmz::IndexedMesh m;
-  const size_t nv = d.vertex_count(), nf = d.face_count();
-  if (nv) m.positions.assign(d.positions(), d.positions() + nv * 3);
-  if (nf) m.indices.assign(d.indices(), d.indices() + nf * 3);
-  return m;
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   tool::init("pmz-decode");
   CLI::App app{
-      "pmz-decode: decode a .pmz stream (or its first N bytes) to OBJ/PLY/OFF at a chosen level of "
-      "detail",
+      "pmz-decode: decode a .pmz stream (or its first N bytes) to OBJ/PLY/OFF/glb at a chosen "
+      "level of detail",
       "pmz-decode"};
   std::string input, output, format;
   uint64_t faces = 0, vertices = 0, bytes = 0;
   double ratio = 1;
   app.add_option("input", input, "input .pmz (- for stdin)")->required();
-  app.add_option("-o,--output", output, "output mesh (.obj, .ply or .off; - for stdout)")
+  app.add_option("-o,--output", output, "output mesh (.obj, .ply, .glb or .off; - for stdout)")
       ->required();
   app.add_option("--format", format, "output format (default: the output's extension)")
       ->check(CLI::IsMember({"obj", "ply", "off"}));
@@ -63,11 +52,12 @@ int main(int argc, char** argv) {
   if (int rc = tool::parse(app, argc, argv); rc >= 0) return rc;
 
   if (format.empty()) format = tool::extension(output);
-  if (format != "obj" && format != "ply" && format != "off") {
-    tool::print_error(output == "-" ? "writing to stdout needs --format obj|ply|off (see --help)"
-                                    : output +
-                                          ": output must end in .obj, .ply or .off, or give "
-                                          "--format (see --help)");
+  if (format != "obj" && format != "ply" && format != "off" && format != "glb") {
+    tool::print_error(output == "-"
+                          ? "writing to stdout needs --format obj|ply|off|glb (see --help)"
+                          : output +
+                                ": output must end in .obj, .ply, .off or .glb, or give "
+                                "--format (see --help)");
     return tool::kExitUsage;
   }
   if (tool::same_file(input, output)) {
@@ -79,7 +69,7 @@ int main(int argc, char** argv) {
   // error and on SIGINT/SIGTERM) exists while the input streams in.
   tool::OutputFile out;
   std::string error;
-  if (!out.open(output, format == "ply", error)) {
+  if (!out.open(output, format == "ply" || format == "glb", error)) {
     tool::print_error(error);
     return tool::kExitFailure;
   }
@@ -146,7 +136,9 @@ int main(int argc, char** argv) {
                           std::to_string(d.vertex_count()) +
                           (all_available ? "" : " of " + std::to_string(info.full_vertices)) +
                           ": writing those");
-  if (!tool::write_mesh_into(out, format, current_mesh(d), error) || !out.commit(error)) {
+  const pmz::IndexedMesh level = tool::decoded_mesh(d);
+  tool::warn_if_attributes_lost(output, format, level);
+  if (!tool::write_mesh_into(out, format, level, error) || !out.commit(error)) {
     tool::print_error(error);
     return tool::kExitFailure;
   }

@@ -89,14 +89,8 @@ int main(int argc, char** argv) {
     tool::print_error(error);
     return tool::kExitFailure;
   }
-  {  // never a silent loss: OFF and STL hold geometry only
-    const std::string ext = format.empty() ? output.substr(output.find_last_of('.') + 1) : format;
-    if (!mesh.attributes.empty() && (ext == "off" || ext == "stl"))
-      std::fprintf(stderr,
-                   "pmz-simplify: %s: .%s holds positions and triangles only; the attributes "
-                   "(%s) are not written (use .obj, .ply or .glb)\n",
-                   output.c_str(), ext.c_str(), mesh.attributes.describe().c_str());
-  }
+  tool::warn_if_attributes_lost(
+      output, format.empty() ? output.substr(output.find_last_of('.') + 1) : format, mesh);
   const uint64_t in_faces = mesh.face_count();
   options.target_faces =
       faces_opt->count() ? faces

@@ -1,6 +1,7 @@
 #include "tool_mesh.hpp"
 
 #include <cstdio>
+#include <filesystem>
 #include <vector>
 
 #include "tool_common.hpp"
@@ -45,13 +46,31 @@ bool write_mesh_into(OutputFile& out, const std::string& format, const IndexedMe
   const MeshSink sink = [&](const void* data, size_t size) {
     return out.write(data, size) || (refused = true, false);
   };
-  if (write_mesh_to(out.path() == "-" ? "stdout" : out.path(), format, mesh, sink, error))
+  // OBJ materials: the MTL goes beside the output first, named after it (mtllib names it
+  // relative to the OBJ). On stdout there is no "beside": the usemtl lines stay, no MTL.
+  std::string mtl;
+  if (format == "obj" && !mesh.attributes.materials.empty() && out.path() != "-") {
+    const std::filesystem::path target(out.path());
+    mtl = target.stem().string() + ".mtl";
+    if (!write_material_library((target.parent_path() / mtl).string(), mesh.attributes.materials,
+                                error))
+      return false;
+  }
+  if (write_mesh_to(out.path() == "-" ? "stdout" : out.path(), format, mesh, sink, error, mtl))
     return true;
   // A refused write: OutputFile remembered its errno, and commit() fails with that reason (and
   // removes the temporary). Otherwise the mesh was refused before anything was written.
   std::string reason;
   if (refused && !out.commit(reason)) error = reason;
   return false;
+}
+
+void warn_if_attributes_lost(const std::string& output, const std::string& format,
+                             const IndexedMesh& mesh) {
+  if (!mesh.attributes.empty() && (format == "off" || format == "stl"))
+    print_error(output == "-" ? "stdout" : output,
+                "." + format + " holds positions and triangles only; the attributes (" +
+                    mesh.attributes.describe() + ") are not written (use .obj, .ply or .glb)");
 }
 
 bool write_mesh_output(const std::string& path, const std::string& format, const IndexedMesh& mesh,

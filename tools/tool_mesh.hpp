@@ -21,8 +21,14 @@ bool read_mesh_input(const std::string& path, const std::string& stdin_format, I
 bool write_mesh_output(const std::string& path, const std::string& format, const IndexedMesh& mesh,
                        std::string& error);
 
+// Never a silent loss: one line on stderr when `format` (off, stl) cannot hold the mesh's
+// attributes.
+void warn_if_attributes_lost(const std::string& output, const std::string& format,
+                             const IndexedMesh& mesh);
+
 // The same into an output already open (opened before the work, so an unwritable output fails
-// first): meshio's writer straight into it (format: obj, off, ply, stl, glb). The caller commits.
+// first): meshio's writer straight into it (format: obj, off, ply, stl, glb; an OBJ with
+// materials gets its MTL beside it, unless it goes to stdout). The caller commits.
 bool write_mesh_into(OutputFile& out, const std::string& format, const IndexedMesh& mesh,
                      std::string& error);
 

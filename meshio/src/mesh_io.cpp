@@ -1517,7 +1517,7 @@ bool check_writable(const std::string& path, const std::string& ext, const Index
 }  // namespace
 
 bool write_mesh_to(const std::string& name, const std::string& format, const IndexedMesh& mesh,
-                   const MeshSink& sink, std::string& error) {
+                   const MeshSink& sink, std::string& error, const std::string& mtl_name) {
   const std::string ext = "." + format;
   if (!check_writable(name, ext, mesh, error)) return false;
   Writer w(sink);
@@ -1529,11 +1529,17 @@ bool write_mesh_to(const std::string& name, const std::string& format, const Ind
     }
     w.put(bytes.data(), bytes.size());
   } else {
-    write_body(w, ext, mesh, "");
+    write_body(w, ext, mesh, ext == ".obj" ? mtl_name : "");
   }
   if (w.finish()) return true;
   error = name + ": write failed";
   return false;
+}
+
+bool write_material_library(const std::string& path, const std::vector<Material>& materials,
+                            std::string& error) {
+  return write_atomic(
+      path, [&](Writer& w) { write_mtl(w, materials); }, error);
 }
 
 bool write_mesh(const std::string& path, const IndexedMesh& mesh, std::string& error) {
@@ -1553,8 +1559,8 @@ bool write_mesh(const std::string& path, const IndexedMesh& mesh, std::string& e
     // The MTL goes first, beside the OBJ, named after it (mtllib names it relative to the OBJ).
     std::filesystem::path target(path);
     mtl = target.stem().string() + ".mtl";
-    if (!write_atomic((target.parent_path() / mtl).string(),
-                      [&](Writer& w) { write_mtl(w, mesh.attributes.materials); }, error))
+    if (!write_material_library((target.parent_path() / mtl).string(), mesh.attributes.materials,
+                                error))
       return false;
   }
   return write_atomic(

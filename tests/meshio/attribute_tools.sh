@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Tool behaviour with attributes and bad attribute input (ctest encode_attribute_tools):
-# pmz-encode says which attributes it encoded, pmz-simplify keeps them (and says so when the
+# pmz-encode says which attributes it encoded, pmz-decode and pmz-simplify keep them (and says so when the
 # output format cannot), both report
 # triangulation, and refuse a bad glTF with one line naming it, writing nothing.
 # usage: attribute_tools.sh PMZ_ENCODE PMZ_SIMPLIFY WORK_DIR
@@ -34,10 +34,28 @@ grep -qx "pmz: quad.obj: triangulated 1 polygon into 2 triangles" encode.err ||
 grep -q "; attributes: texture coordinates, normals, 1 material, [0-9]* bytes$" encode.out ||
   fail "no attribute summary: $(cat encode.out)"
 if grep -q attributes encode.err; then fail "attribute warning: $(cat encode.err)"; fi
+# pmz-decode writes them back: OBJ with its MTL beside it, PLY, glb; OFF says what it drops.
+decode=$(dirname "$encode")/pmz-decode
+"$decode" quad.pmz -o back.obj 2> decode.err || fail "pmz-decode back.obj: $(cat decode.err)"
+grep -q "^mtllib back.mtl" back.obj && grep -q "^usemtl paper" back.obj &&
+  grep -q "^vt " back.obj && grep -q "^vn " back.obj || fail "back.obj lost its attributes"
+grep -q "^map_Kd paper.png" back.mtl || fail "back.mtl: $(cat back.mtl 2>&1)"
+"$decode" quad.pmz -o back.ply 2> decode.err || fail "pmz-decode back.ply: $(cat decode.err)"
+grep -aq "^property float texture_u" back.ply && grep -aq "^property float nx" back.ply ||
+  fail "back.ply lost its attributes"
+"$decode" quad.pmz -o back.glb 2> decode.err || fail "pmz-decode back.glb: $(cat decode.err)"
+[ "$(head -c 4 back.glb)" = glTF ] || fail "back.glb is not a glb"
+"$decode" quad.pmz -o back.off 2> decode.err || fail "pmz-decode back.off: $(cat decode.err)"
+grep -qx "pmz-decode: back.off: .off holds positions and triangles only; the attributes (texture coordinates, normals, 1 material) are not written (use .obj, .ply or .glb)" decode.err ||
+  fail "no pmz-decode .off attribute line: $(cat decode.err)"
+"$decode" quad.pmz -o - --format obj > stdout.obj 2> decode.err || fail "pmz-decode to stdout"
+grep -q "^usemtl paper" stdout.obj || fail "stdout.obj lost its materials"
+
 # pmz-simplify keeps the attributes (simplified along its seams); OFF cannot hold them: one line.
 "$simplify" quad.obj -o small.obj --faces 2 2> simplify.err || fail "pmz-simplify: $(cat simplify.err)"
 if grep -q "attributes" simplify.err; then fail "pmz-simplify attribute line for .obj: $(cat simplify.err)"; fi
-grep -q "^vt " small.obj && grep -q "^vn " small.obj && grep -q "^usemtl paper" small.obj ||
+grep -q "^vt " small.obj && grep -q "^vn " small.obj && grep -q "^usemtl paper" small.obj &&
+  grep -q "^mtllib small.mtl" small.obj && grep -q "^map_Kd paper.png" small.mtl ||
   fail "small.obj lost its attributes"
 "$simplify" quad.obj -o small.off --faces 2 2> simplify.err || fail "pmz-simplify: $(cat simplify.err)"
 grep -qx "pmz-simplify: small.off: .off holds positions and triangles only; the attributes (texture coordinates, normals, 1 material) are not written (use .obj, .ply or .glb)" simplify.err ||

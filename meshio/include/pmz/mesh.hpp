@@ -139,9 +139,13 @@ bool write_mesh(const std::string& path, const IndexedMesh& mesh, std::string& e
 using MeshSink = std::function<bool(const void* data, size_t size)>;
 // The same bytes as write_mesh, in `format` (obj, off, ply, stl, glb), handed to `sink` instead
 // of a file: for outputs that are not plain files (stdout, pipes, devices; the tools' safe
-// output). OBJ materials get no MTL and no mtllib line here. `name` names the output in
+// output). OBJ materials get no MTL here; with `mtl_name` the OBJ names it in its mtllib line
+// (the caller writes it, e.g. with write_material_library). `name` names the output in
 // messages; a refused write gives "name: write failed" (the sink knows why).
 bool write_mesh_to(const std::string& name, const std::string& format, const IndexedMesh& mesh,
-                   const MeshSink& sink, std::string& error);
+                   const MeshSink& sink, std::string& error, const std::string& mtl_name = "");
+// An MTL file of these materials (Kd, d, map_Kd, norm), atomic like write_mesh.
+bool write_material_library(const std::string& path, const std::vector<Material>& materials,
+                            std::string& error);
 
 }  // namespace pmz
