@@ -19,6 +19,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <future>
 #include <string>
 #include <thread>
 
@@ -59,17 +60,43 @@ int fail(const std::string& message) {
   return 1;
 }
 
-// Reads the material table's textures and hands them to the renderer; each texture that cannot
-// be read is one warning line and its material is drawn with its base colour only.
-void use_materials(Renderer& renderer, const std::string& source,
-                   const std::vector<ViewMaterial>& materials, const std::string& directory,
-                   bool texcoord_origin_top) {
-  std::vector<Image> images;
+struct Textures {
+  std::vector<Image> images;  // per material; empty: untextured
   std::vector<std::string> warnings;
-  load_textures(materials, directory, images, warnings);
-  for (const std::string& w : warnings)
+};
+
+Textures read_textures(const std::vector<ViewMaterial>& materials, const std::string& directory) {
+  Textures t;
+  load_textures(materials, directory, t.images, t.warnings);
+  return t;
+}
+
+// Hands the textures to the renderer; each texture that could not be read is one warning line
+// and its material is drawn with its base colour only.
+void use_materials(Renderer& renderer, const std::string& source,
+                   const std::vector<ViewMaterial>& materials, const Textures& textures,
+                   bool texcoord_origin_top) {
+  for (const std::string& w : textures.warnings)
     std::fprintf(stderr, "pmz-view: warning: %s: %s\n", source.c_str(), w.c_str());
-  renderer.set_materials(materials, images, texcoord_origin_top);
+  renderer.set_materials(materials, textures.images, texcoord_origin_top);
+}
+
+// A stream's material table and where its texture names are relative to: beside the .pmz
+// (file or URL, and its OBJ's mtllib folder), the working directory for stdin. Call with the
+// decoder locked, once its base mesh is in.
+void stream_materials(const pmz::Decoder& decoder, const std::string& source,
+                      std::vector<ViewMaterial>& materials, std::string& directory) {
+  materials.clear();
+  for (uint32_t i = 0; i < decoder.material_count(); ++i) {
+    const pmz::MaterialInfo* m = decoder.material(i);
+    ViewMaterial v;
+    v.name = m->name;
+    std::copy(m->base_color, m->base_color + 4, v.base_color);
+    v.texture = m->base_color_texture;
+    materials.push_back(v);
+  }
+  directory =
+      (source == "-" ? "" : directory_of(source)) + directory_of(decoder.material_library());
 }
 
 // "attributes: texture coordinates, normals, 2 materials" for the overlay ("" when none).
@@ -306,10 +333,16 @@ int main(int argc, char** argv) {
     }
     const auto t0 = Clock::now();
     size_t material_count = 0;
+    // A stream's materials, read once its base mesh is in.
+    std::vector<ViewMaterial> stream_material_table;
+    std::string texture_directory;
+    bool stream_materials_read = false;
+    std::future<Textures> textures_pending;
     if (is_static) {
       const std::vector<ViewMaterial> materials =
           view_materials(static_mesh.mesh.attributes.materials);
-      use_materials(renderer, o.source, materials, static_mesh.texture_directory,
+      use_materials(renderer, o.source, materials,
+                    read_textures(materials, static_mesh.texture_directory),
                     static_mesh.texcoord_origin_top);
       material_count = materials.size();
       mirror.sync(static_mesh.frame(), 0, 0);
@@ -355,9 +388,13 @@ int main(int argc, char** argv) {
               state.lod.faces = uint64_t(std::llround(o.ratio * double(decoder.info().full_faces)));
             stepper.step(decoder, state.lod, -1);
             mirror.sync(decoder, 0, 0);
+            stream_materials(decoder, o.source, stream_material_table, texture_directory);
           }
           read_stats(decoder, stats, info);
         }
+        use_materials(renderer, o.source, stream_material_table,
+                      read_textures(stream_material_table, texture_directory), false);
+        stats.attributes_line = describe_attributes(mirror, stream_material_table.size());
         if (!stats.base_done) {
           rc = fail(o.bytes ? "the first " + std::to_string(o.bytes) +
                                   " bytes do not hold the base mesh"
@@ -409,10 +446,26 @@ int main(int argc, char** argv) {
             mirror.sync(decoder, now, morph_seconds);
           }
           read_stats(decoder, stats, info);
+          const bool read_materials_now = stats.base_done && !stream_materials_read;
+          if (read_materials_now)
+            stream_materials(decoder, o.source, stream_material_table, texture_directory);
           stream.mutex.unlock();
+          if (read_materials_now) {
+            // Base colours now; the textures are read (or fetched) on their own thread and
+            // drawn once they are in, so neither the stream nor the frames wait for them.
+            renderer.set_materials(stream_material_table, {}, false);
+            textures_pending = std::async(std::launch::async, read_textures, stream_material_table,
+                                          texture_directory);
+            stream_materials_read = true;
+          }
+          stats.attributes = mirror.has_wedges;
+          stats.attributes_line = describe_attributes(mirror, stream_material_table.size());
         } else {
           ++lock_misses;
         }
+        if (textures_pending.valid() &&
+            textures_pending.wait_for(std::chrono::seconds(0)) == std::future_status::ready)
+          use_materials(renderer, o.source, stream_material_table, textures_pending.get(), false);
         renderer.upload(mirror);
         window_update_ms = std::max(window_update_ms, seconds_since(update_start) * 1000);
         stats.bytes = stream.bytes_received();

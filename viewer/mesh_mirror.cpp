@@ -57,6 +57,17 @@ MeshFrame frame_of(const pmz::Decoder& decoder) {
   f.face_begin = changes.face_begin;
   f.modified_faces = changes.modified_faces.data();
   f.modified_face_count = changes.modified_faces.size();
+  f.wedge_begin = changes.wedge_begin;
+  f.wedge_count = decoder.wedge_count();
+  if (f.wedge_count) {
+    f.wedge_vertices = decoder.wedge_vertices();
+    f.wedge_indices = decoder.wedge_indices();
+    f.texcoords = decoder.texcoord_set_count() ? decoder.texcoords(0) : nullptr;
+    f.normals = decoder.normals();
+    f.colors = decoder.colors();
+    f.color_components = decoder.color_components();
+    f.face_materials = decoder.face_materials();
+  }
   return f;
 }
 

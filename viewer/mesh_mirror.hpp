@@ -104,7 +104,7 @@ struct MeshMirror {
   std::vector<uint32_t> modified_;
 };
 
-// The decoder's current mesh and change report (geometry only until the decoder has wedges).
+// The decoder's current mesh, change report and attribute wedges (texture coordinate set 0).
 MeshFrame frame_of(const pmz::Decoder& decoder);
 
 }  // namespace pmzview

@@ -72,40 +72,54 @@ double normal_mismatch(const float* a, const float* b) {
   return 1 - (double(a[0]) * b[0] + double(a[1]) * b[1] + double(a[2]) * b[2]) / (la * lb + 1e-300);
 }
 
+// Feeds `bytes` in random slices while moving the level of detail at random (refine, coarsen,
+// face targets), at least `min_steps` times; after each move, `after_step(step)` syncs and
+// checks. Returns false (with a gtest failure) when the decoder rejects the stream.
+template <typename AfterStep>
+bool stream_at_random(const std::vector<uint8_t>& bytes, unsigned seed, int min_steps,
+                      pmz::Decoder& decoder, AfterStep after_step) {
+  std::mt19937 rng(seed);
+  size_t at = 0;
+  for (int step = 0; at < bytes.size() || step < min_steps; ++step) {
+    if (at < bytes.size()) {
+      size_t n = std::min<size_t>(bytes.size() - at, 1 + rng() % 1500);  // streaming arrival
+      if (decoder.feed(bytes.data() + at, n) != pmz::Status::ok) {
+        ADD_FAILURE() << decoder.error_message();
+        return false;
+      }
+      at += n;
+    }
+    if (!decoder.info().base_done) continue;
+    uint64_t n = rng() % 2000;
+    switch (rng() % 5) {
+      case 0:
+      case 1:
+        decoder.refine(n);
+        break;
+      case 2:
+      case 3:
+        decoder.coarsen(n);
+        break;
+      default:
+        decoder.set_face_target(rng() % (decoder.info().full_faces + 1));
+        break;
+    }
+    after_step(step);
+  }
+  return decoder.finish() == pmz::Status::ok;
+}
+
 TEST(MeshMirror, IncrementalSyncEqualsFullRebuild) {
   const std::vector<uint8_t>& bytes = sample_stream();
   ASSERT_GT(bytes.size(), 1000u);
   for (unsigned seed = 1; seed <= 4; ++seed) {
-    std::mt19937 rng(seed);
     pmz::Decoder decoder;
     MeshMirror mirror;
     Shadow shadow;
-    size_t at = 0;
-    for (int step = 0; at < bytes.size() || step < 400; ++step) {
-      if (at < bytes.size()) {
-        size_t n = std::min<size_t>(bytes.size() - at, 1 + rng() % 1500);  // streaming arrival
-        ASSERT_EQ(decoder.feed(bytes.data() + at, n), pmz::Status::ok) << decoder.error_message();
-        at += n;
-      }
-      if (!decoder.info().base_done) continue;
-      uint64_t n = rng() % 2000;
-      switch (rng() % 5) {
-        case 0:
-        case 1:
-          decoder.refine(n);
-          break;
-        case 2:
-        case 3:
-          decoder.coarsen(n);
-          break;
-        default:
-          decoder.set_face_target(rng() % (decoder.info().full_faces + 1));
-          break;
-      }
+    ASSERT_TRUE(stream_at_random(bytes, seed, 400, decoder, [&](int step) {
       mirror.sync(decoder, float(step), 0.5f);
       shadow.apply(mirror);
-    }
-    ASSERT_EQ(decoder.finish(), pmz::Status::ok);
+    }));
 
     MeshMirror fresh;
     fresh.sync(decoder, 0, 0);
@@ -314,6 +328,17 @@ struct WedgeShadow {
   }
 };
 
+// A mirror's (or the uploaded shadow's) wedge arrays equal a fresh mirror's.
+template <typename Wedges>
+void expect_wedges_equal(const Wedges& got, const MeshMirror& fresh, const std::string& what) {
+  EXPECT_EQ(got.wedge_vertices, fresh.wedge_vertices) << what;
+  EXPECT_EQ(got.texcoords, fresh.texcoords) << what;
+  EXPECT_EQ(got.colors, fresh.colors) << what;
+  EXPECT_EQ(got.wedge_normals, fresh.wedge_normals) << what;
+  EXPECT_EQ(got.wedge_indices, fresh.wedge_indices) << what;
+  EXPECT_EQ(got.face_materials, fresh.face_materials) << what;
+}
+
 TEST(MeshMirror, WedgeArraysFollowGrowRewriteAndShrink) {
   for (unsigned seed = 1; seed <= 6; ++seed) {
     ScriptedWedgeStream stream(seed);
@@ -343,16 +368,8 @@ TEST(MeshMirror, WedgeArraysFollowGrowRewriteAndShrink) {
     ASSERT_EQ(mirror.wedge_count, fresh.wedge_count) << "seed " << seed;
     ASSERT_EQ(mirror.face_count, fresh.face_count);
     EXPECT_EQ(mirror.indices, fresh.indices);
-    auto expect_wedges_equal = [&](const auto& got, const char* what) {
-      EXPECT_EQ(got.wedge_vertices, fresh.wedge_vertices) << what << ", seed " << seed;
-      EXPECT_EQ(got.texcoords, fresh.texcoords) << what;
-      EXPECT_EQ(got.colors, fresh.colors) << what;
-      EXPECT_EQ(got.wedge_normals, fresh.wedge_normals) << what;
-      EXPECT_EQ(got.wedge_indices, fresh.wedge_indices) << what;
-      EXPECT_EQ(got.face_materials, fresh.face_materials) << what;
-    };
-    expect_wedges_equal(mirror, "mirror");
-    expect_wedges_equal(shadow, "uploaded");
+    expect_wedges_equal(mirror, fresh, "mirror, seed " + std::to_string(seed));
+    expect_wedges_equal(shadow, fresh, "uploaded, seed " + std::to_string(seed));
     // RGB colours are widened to RGBA with alpha 1.
     for (uint32_t w = 0; w < fresh.wedge_count; ++w) {
       EXPECT_EQ(fresh.colors[4 * w + 3], 1.0f);
@@ -371,6 +388,82 @@ TEST(MeshMirror, WedgeAndVertexIdsOutOfRangeAreClamped) {
   EXPECT_EQ(mirror.wedge_indices[3], 0u);  // the whole face falls back to wedge 0
   EXPECT_EQ(mirror.wedge_indices[4], 0u);
   EXPECT_EQ(mirror.wedge_indices[5], 0u);
+}
+
+// The sample mesh with attribute wedges: six box-projection charts (texture coordinates with
+// seams where they meet), a normal per wedge, an RGB colour per wedge, two materials.
+pmz::IndexedMesh textured_sample_mesh() {
+  pmz::IndexedMesh mesh = pmz::make_sample_mesh(6000);
+  pmz::MeshAttributes& a = mesh.attributes;
+  a.texcoords.resize(1);
+  std::vector<uint32_t> wedge_of(size_t(mesh.vertex_count()) * 6, UINT32_MAX);
+  for (uint32_t f = 0; f < mesh.face_count(); ++f) {
+    const uint32_t* t = &mesh.indices[3 * size_t(f)];
+    const float* p[3] = {&mesh.positions[3 * size_t(t[0])], &mesh.positions[3 * size_t(t[1])],
+                         &mesh.positions[3 * size_t(t[2])]};
+    float e1[3], e2[3], n[3];
+    for (int i = 0; i < 3; ++i) e1[i] = p[1][i] - p[0][i], e2[i] = p[2][i] - p[0][i];
+    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    int axis = 0;
+    for (int i = 1; i < 3; ++i)
+      if (std::fabs(n[i]) > std::fabs(n[axis])) axis = i;
+    const uint32_t chart = uint32_t(2 * axis + (n[axis] < 0));
+    for (int k = 0; k < 3; ++k) {
+      uint32_t& w = wedge_of[6 * size_t(t[k]) + chart];
+      if (w == UINT32_MAX) {
+        w = a.wedge_count();
+        a.wedge_vertices.push_back(t[k]);
+        const float* q = p[k];
+        a.texcoords[0].push_back(q[(axis + 1) % 3]);
+        a.texcoords[0].push_back(q[(axis + 2) % 3]);
+        for (int i = 0; i < 3; ++i)
+          a.normals.push_back(i == axis ? (n[axis] < 0 ? -1.f : 1.f) : 0.f);
+        for (int i = 0; i < 3; ++i) a.colors.push_back(float(chart + i) / 8);
+      }
+      a.corner_wedges.push_back(w);
+    }
+    a.face_materials.push_back(axis == 2 ? 1 : 0);
+  }
+  a.color_components = 3;
+  a.materials.resize(2);
+  a.materials[0].name = "side";
+  a.materials[1].name = "cap";
+  a.materials[1].base_color_texture = "cap.png";
+  return mesh;
+}
+
+TEST(MeshMirror, DecodedWedgesFollowTheStream) {
+  pmz::CollapseSequence seq;
+  std::string error;
+  std::vector<uint8_t> bytes;
+  ASSERT_TRUE(pmz::simplify(textured_sample_mesh(), {}, seq, error)) << error;
+  ASSERT_TRUE(pmz::write_pmz(seq, {}, bytes, error)) << error;
+  for (unsigned seed = 1; seed <= 3; ++seed) {
+    pmz::Decoder decoder;
+    MeshMirror mirror;
+    WedgeShadow shadow;
+    ASSERT_TRUE(stream_at_random(bytes, seed, 300, decoder, [&](int step) {
+      mirror.sync(decoder, float(step), 0.5f);
+      shadow.apply(mirror);
+    }));
+    ASSERT_GT(decoder.wedge_count(), 0u);
+    ASSERT_EQ(decoder.material_count(), 2u);
+
+    MeshMirror fresh;
+    fresh.sync(pmzview::frame_of(decoder), 0, 0);
+    ASSERT_TRUE(fresh.has_wedges && fresh.has_texcoords && fresh.has_normals && fresh.has_colors &&
+                fresh.has_face_materials);
+    ASSERT_EQ(mirror.wedge_count, decoder.wedge_count());
+    ASSERT_EQ(mirror.face_count, decoder.face_count());
+    EXPECT_EQ(mirror.indices, fresh.indices);
+    expect_wedges_equal(mirror, fresh, "mirror, seed " + std::to_string(seed));
+    expect_wedges_equal(shadow, fresh, "uploaded, seed " + std::to_string(seed));
+    // The render vertex is the wedge: every face's wedges sit on that face's vertices.
+    for (size_t c = 0; c < fresh.indices.size(); ++c)
+      ASSERT_EQ(fresh.wedge_vertices[fresh.wedge_indices[c]], fresh.indices[c]) << "corner " << c;
+  }
 }
 
 TEST(MeshMirror, GeometryOnlyStreamsHaveNoWedgeArrays) {
