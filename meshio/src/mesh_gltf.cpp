@@ -315,8 +315,9 @@ class Reader {
       }
       for (size_t s = 0; s < texcoords_.size(); ++s) {
         bool has = int(s) < sets && tex[s].count;
+        // glTF's v runs down the image; pmz keeps OBJ's (up), as MeshAttributes says.
         float t[2] = {has ? float(tex[s].value(i, 0)) : 0.0f,
-                      has ? float(tex[s].value(i, 1)) : 0.0f};
+                      has ? 1.0f - float(tex[s].value(i, 1)) : 0.0f};
         if (!std::isfinite(t[0]) || !std::isfinite(t[1]))
           return fail(
               where + " vertex " + std::to_string(i) + " has a NaN or infinite texture coordinate",
@@ -569,9 +570,12 @@ bool write_glb(const IndexedMesh& mesh, std::string& bytes, std::string& error) 
     attributes["NORMAL"] =
         add_accessor(&values, nullptr, TINYGLTF_TYPE_VEC3, TINYGLTF_TARGET_ARRAY_BUFFER);
   }
-  for (size_t s = 0; s < a.texcoords.size(); ++s)
+  for (size_t s = 0; s < a.texcoords.size(); ++s) {
+    values.assign(a.texcoords[s].begin(), a.texcoords[s].end());
+    for (size_t i = 1; i < values.size(); i += 2) values[i] = 1.0f - values[i];  // v down
     attributes["TEXCOORD_" + std::to_string(s)] =
-        add_accessor(&a.texcoords[s], nullptr, TINYGLTF_TYPE_VEC2, TINYGLTF_TARGET_ARRAY_BUFFER);
+        add_accessor(&values, nullptr, TINYGLTF_TYPE_VEC2, TINYGLTF_TARGET_ARRAY_BUFFER);
+  }
   if (a.color_components) {
     values.resize(a.colors.size());
     for (size_t i = 0; i < a.colors.size(); ++i) values[i] = std::clamp(a.colors[i], 0.0f, 1.0f);

@@ -27,13 +27,15 @@ struct Material {
 // several wedges, and the corners around it each name theirs. Positions stay per vertex, so
 // the geometry (IndexedMesh::positions / indices) is the same with or without attributes.
 struct MeshAttributes {
-  std::vector<uint32_t> corner_wedges;        // wedge per corner (3 per face), or empty
-  std::vector<uint32_t> wedge_vertices;       // position vertex of each wedge
-  std::vector<std::vector<float>> texcoords;  // per set (TEXCOORD_n): u, v per wedge
-  std::vector<float> normals;                 // xyz per wedge, or empty
-  std::vector<float> colors;                  // color_components per wedge (0..1), or empty
-  uint32_t color_components = 0;              // 0, 3 (RGB) or 4 (RGBA)
-  std::vector<uint32_t> face_materials;       // material id per face, or empty
+  std::vector<uint32_t> corner_wedges;   // wedge per corner (3 per face), or empty
+  std::vector<uint32_t> wedge_vertices;  // position vertex of each wedge
+  // Per set (TEXCOORD_n): u, v per wedge, v up the image as in OBJ and PLY (glTF's v, which runs
+  // down, is flipped on reading and on writing).
+  std::vector<std::vector<float>> texcoords;
+  std::vector<float> normals;            // xyz per wedge, or empty
+  std::vector<float> colors;             // color_components per wedge (0..1), or empty
+  uint32_t color_components = 0;         // 0, 3 (RGB) or 4 (RGBA)
+  std::vector<uint32_t> face_materials;  // material id per face, or empty
   std::vector<Material> materials;
   std::string material_library;  // OBJ mtllib file name as written in the file
   uint32_t wedge_count() const { return uint32_t(wedge_vertices.size()); }
