@@ -168,7 +168,10 @@ void build_wedges(const SoupAttributes& in, const std::vector<uint32_t>& source,
     auto put = [&](const std::vector<float>& pool, uint32_t index, size_t n) {
       for (size_t k = 0; k < n; ++k) *r++ = index == kNoAttribute ? 0.0f : pool[index * n + k];
     };
-    for (size_t s = 0; s < sets; ++s) put(in.texcoords[s], in.corner_texcoords[s][c], 2);
+    // A set no corner names (its corner list empty) reads as zeros, like a missing value.
+    for (size_t s = 0; s < sets; ++s)
+      put(in.texcoords[s],
+          in.corner_texcoords[s].empty() ? kNoAttribute : in.corner_texcoords[s][c], 2);
     if (normals) put(in.normals, in.corner_normals[c], 3);
     if (colors) put(in.colors, in.corner_colors[c], a.color_components);
   };

@@ -619,3 +619,28 @@ TEST(MeshAttributes, FuzzPlyHugeCountWithNormalsIsRefused) {
   EXPECT_FALSE(error.empty());
   EXPECT_EQ(error.find('\n'), std::string::npos) << error;
 }
+
+// fuzz_mesh_ply (the 30-minute reader run) found a PLY whose header declares a texture
+// coordinate set that no corner names: repair indexed that set's empty corner list (null + 12).
+// Whatever the reader makes of it, parsing and repairing it must not touch memory it does not own
+// (the fuzz stage's sanitizers check that; here: no crash, every face kept).
+TEST(MeshAttributes, FuzzPlyTexcoordSetWithoutCornersIsSafe) {
+  const fs::path file = fs::path(PMZ_SOURCE_DIR) / "tests" / "data" / "fuzz-regressions" /
+                        "ply-texcoord-set-without-corners.ply";
+  std::ifstream in(file, std::ios::binary);
+  ASSERT_TRUE(in) << file;
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  pmz::PolygonSoup soup;
+  std::string error;
+  if (!pmz::parse_polygon_soup("x.ply", bytes, soup, error)) {
+    EXPECT_EQ(error.find('\n'), std::string::npos) << error;
+    return;
+  }
+  pmz::IndexedMesh mesh;
+  pmz::MeshRepairStats stats;
+  pmz::repair_mesh(soup, mesh, stats);
+  EXPECT_EQ(mesh.face_count() + stats.degenerate_faces_dropped,
+            stats.triangles_from_polygons + stats.input_faces - stats.polygons_triangulated);
+  for (const auto& set : mesh.attributes.texcoords)
+    EXPECT_EQ(set.size(), size_t(mesh.attributes.wedge_count()) * 2);
+}
