@@ -27,7 +27,7 @@ fi
 
 # The decoder library's sources: standard C++ only. Everything is one translation unit list
 # linked with LTO, so the writer-side code in format/ is dropped.
-sources=(decoder/src/decoder.cpp decoder/src/c_api.cpp format/src/*.cpp)
+sources=(decoder/src/*.cpp format/src/*.cpp)
 exports=$(sed -n 's/^[a-zA-Z][^(]* \**\(pmz_[a-z_]*\)(.*/"_\1"/p' decoder/include/pmz/pmz.h | paste -sd,)
 opt=${PMZ_WASM_OPT:--O3}
 out=web/build
