@@ -588,15 +588,19 @@ TEST(MeshAttributes, AssimpTestModels) {
   std::printf("assimp-testmodels: %d read, %d refused\n", read, refused);
 }
 
+// The bytes of tests/data/fuzz-regressions/NAME (PMZ_SOURCE_DIR, not __FILE__: ccache's
+// CCACHE_BASEDIR makes __FILE__ relative); empty when the file cannot be read.
+static std::string fuzz_regression_bytes(const std::string& name) {
+  std::ifstream in(fs::path(PMZ_SOURCE_DIR) / "tests" / "data" / "fuzz-regressions" / name,
+                   std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
 // fuzz_mesh_ply (CI fuzz stage) found a PLY whose attribute pools and corner indices disagree:
 // repair read past a pool (heap-buffer-overflow in build_wedges). The reader now refuses it.
 TEST(MeshAttributes, FuzzPlyAttributeIndexOverflowIsRefused) {
-  // PMZ_SOURCE_DIR, not __FILE__: ccache's CCACHE_BASEDIR makes __FILE__ relative.
-  const fs::path file = fs::path(PMZ_SOURCE_DIR) / "tests" / "data" / "fuzz-regressions" /
-                        "ply-attribute-index-overflow.ply";
-  std::ifstream in(file, std::ios::binary);
-  ASSERT_TRUE(in) << file;
-  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string bytes = fuzz_regression_bytes("ply-attribute-index-overflow.ply");
+  ASSERT_FALSE(bytes.empty()) << "ply-attribute-index-overflow.ply";
   pmz::PolygonSoup soup;
   std::string error;
   EXPECT_FALSE(pmz::parse_polygon_soup("x.ply", bytes, soup, error));
@@ -608,11 +612,8 @@ TEST(MeshAttributes, FuzzPlyAttributeIndexOverflowIsRefused) {
 // 3.3e17 vertices: the normals were reserved before the count was checked (std::length_error,
 // an abort). The count is now bounded by the bytes left, and the file refused with one line.
 TEST(MeshAttributes, FuzzPlyHugeCountWithNormalsIsRefused) {
-  const fs::path file = fs::path(PMZ_SOURCE_DIR) / "tests" / "data" / "fuzz-regressions" /
-                        "ply-normals-huge-count.ply";
-  std::ifstream in(file, std::ios::binary);
-  ASSERT_TRUE(in) << file;
-  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string bytes = fuzz_regression_bytes("ply-normals-huge-count.ply");
+  ASSERT_FALSE(bytes.empty()) << "ply-normals-huge-count.ply";
   pmz::PolygonSoup soup;
   std::string error;
   EXPECT_FALSE(pmz::parse_polygon_soup("x.ply", bytes, soup, error));
@@ -625,11 +626,8 @@ TEST(MeshAttributes, FuzzPlyHugeCountWithNormalsIsRefused) {
 // Whatever the reader makes of it, parsing and repairing it must not touch memory it does not own
 // (the fuzz stage's sanitizers check that; here: no crash, every face kept).
 TEST(MeshAttributes, FuzzPlyTexcoordSetWithoutCornersIsSafe) {
-  const fs::path file = fs::path(PMZ_SOURCE_DIR) / "tests" / "data" / "fuzz-regressions" /
-                        "ply-texcoord-set-without-corners.ply";
-  std::ifstream in(file, std::ios::binary);
-  ASSERT_TRUE(in) << file;
-  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string bytes = fuzz_regression_bytes("ply-texcoord-set-without-corners.ply");
+  ASSERT_FALSE(bytes.empty()) << "ply-texcoord-set-without-corners.ply";
   pmz::PolygonSoup soup;
   std::string error;
   if (!pmz::parse_polygon_soup("x.ply", bytes, soup, error)) {
