@@ -131,7 +131,7 @@ TEST(WriterRoundTrip, SampleMeshLossless) { round_trip(pmz::make_sample_mesh(300
 TEST(WriterRoundTrip, SampleMeshFewBits) { round_trip(pmz::make_sample_mesh(2000), 6); }
 TEST(WriterRoundTrip, BaseFacesOption) { round_trip(pmz::make_sample_mesh(2000), 12, 500); }
 
-TEST(WriterRoundTrip, OpenMeshWithBoundary) {
+TEST(WriterRoundTrip, GridWithBoundary) {
   // A height-field grid: boundary splits on both sides.
   pmz::IndexedMesh m;
   const int n = 24;

@@ -1,6 +1,4 @@
 // Repair of raw input into a manifold-with-boundary triangle mesh, one test per input case.
-#include <OpenMesh/Core/IO/MeshIO.hh>
-#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <cmath>
 #include <random>
 
@@ -226,17 +224,13 @@ TEST(MeshInputRepair, ReadMeshPrintsTheSummaryOnStderr) {
   EXPECT_EQ(m.face_count(), 2u);
 }
 
-// OpenMesh's own mesh building (what mesh_io used before) loses one triangle of a quad that
-// meets a non-manifold edge; pmz keeps all four triangles.
-TEST(MeshInputRepair, KeepsTheFaceOpenMeshLosesOnANonManifoldEdge) {
+// A quad meeting a non-manifold edge: OpenMesh's own mesh building (what mesh_io used before;
+// OpenMesh 9.0's read_mesh gives 3 faces) loses one of its triangles; pmz keeps all four.
+TEST(MeshInputRepair, KeepsEveryFaceAtANonManifoldEdge) {
   TempDir dir;
   auto path = dir.write(
       "fin.off",
       "OFF\n6 3 0\n0 0 0\n1 0 0\n0 1 0\n0 -1 0\n0 0 1\n1 1 1\n3 0 1 2\n3 1 0 3\n4 0 1 5 4\n");
-  OpenMesh::TriMesh_ArrayKernelT<> om;
-  ASSERT_TRUE(OpenMesh::IO::read_mesh(om, path));
-  EXPECT_EQ(om.n_faces(), 3u) << "OpenMesh behaviour changed: it no longer drops the triangle";
-
   pmz::IndexedMesh m;
   pmz::MeshRepairStats st;
   std::string err;
