@@ -63,10 +63,15 @@ echo "web: $(ls web/dist/*.tgz), $viewer/index.html; wasm $wasm_bytes + glue $gl
 
 if [ "$mode" = test ]; then
   bin=${PMZ_BIN:-$root/build/bin}
-  if [ ! -x "$bin/pmz-decode" ] || [ ! -x "$bin/pmz-demo" ]; then
-    cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-    cmake --build build -j "$(nproc)" --target pmz-decode pmz-demo
-  fi
+  # pmz-encode and pmz-dump-arrays: the attribute tests' streams and native reference arrays.
+  tools=(pmz-decode pmz-demo pmz-encode pmz-dump-arrays)
+  for t in "${tools[@]}"; do
+    if [ ! -x "$bin/$t" ]; then
+      cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+      cmake --build build -j "$(nproc)" --target "${tools[@]}"
+      break
+    fi
+  done
   sample=web/build/demo/sample.pmz
   if [ ! -f "$sample" ] || [ "$bin/pmz-demo" -nt "$sample" ]; then
     "$bin/pmz-demo" web/build/demo >/dev/null

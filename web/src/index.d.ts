@@ -41,6 +41,19 @@ export interface MeshChanges {
   modifiedFaces: Uint32Array;
   /** Everything should be uploaded (e.g. the first base mesh). */
   all: boolean;
+  /** Attribute wedges [wedgeBegin, wedgeCount) are new; a face's wedgeIndices() and
+   * faceMaterials() entries change exactly when its indices() do. */
+  wedgeBegin: number;
+}
+
+/** A material as the file states it (OBJ's MTL, glTF's materials): carried, not interpreted. */
+export interface PmzMaterial {
+  name: string;
+  /** Linear RGBA. */
+  baseColor: [number, number, number, number];
+  /** File name or URI of the base colour texture (relative to the .pmz), '' when none. */
+  baseColorTexture: string;
+  normalTexture: string;
 }
 
 export interface DecoderOptions {
@@ -82,6 +95,29 @@ export declare class Decoder {
   indices(): Uint32Array;
   /** The vertex each vertex was split from (0xFFFFFFFF for base vertices), for geomorphs. */
   splitParents(): Uint32Array;
+  /** Attributes (format 8.0): a render vertex is an attribute wedge. 0 without attributes. */
+  readonly wedgeCount: number;
+  readonly texcoordSetCount: number;
+  /** 0 (no colours), 3 (RGB) or 4 (RGBA). */
+  readonly colorComponents: number;
+  readonly materialCount: number;
+  /** Wedge -> position vertex index. Like every attribute view below: zero-copy, valid like
+   * positions(), empty without attributes. */
+  wedgeVertices(): Uint32Array;
+  /** xyz per wedge (positions() of wedgeVertices()). */
+  wedgePositions(): Float32Array;
+  /** Three wedges per face: the corners of indices(). */
+  wedgeIndices(): Uint32Array;
+  /** u, v per wedge for texture coordinate set `set` (default 0; v up, as in OBJ). */
+  texcoords(set?: number): Float32Array;
+  /** Unit xyz per wedge. */
+  normals(): Float32Array;
+  /** colorComponents floats per wedge. */
+  colors(): Float32Array;
+  /** Per face an index into materials(). */
+  faceMaterials(): Uint32Array;
+  /** The material table (copies). */
+  materials(): PmzMaterial[];
   /** What changed since the last clearChanges(). */
   changes(): MeshChanges;
   clearChanges(): void;

@@ -64,7 +64,7 @@ export class Decoder {
     this._dead = null;  // the error line once the WebAssembly instance aborted
     this._ptr = module._pmz_decoder_create(toU64(options.maxVertices ?? 0),
                                            toU64(options.maxFaces ?? 0));
-    // Scratch for pmz_stream_info (104 bytes) and pmz_changes (20 bytes).
+    // Scratch for pmz_stream_info (104 bytes), pmz_changes (24) and pmz_material (28).
     this._scratch = module._malloc(128);
     this._input = 0;
     this._inputSize = 0;
@@ -191,22 +191,89 @@ export class Decoder {
       m._pmz_decoder_split_parents(this._ptr), this.vertexCount), new Uint32Array(0));
   }
 
+  // Attributes (format 8.0): a render vertex is an attribute wedge (one combination of
+  // texture coordinates, normal and colour at one position vertex). Without attributes in the
+  // stream (or before the base mesh) wedgeCount is 0 and the views below are empty. The views
+  // are zero-copy like positions(), valid until the next call that changes the mesh.
+  get wedgeCount() { return this._call((m) => m._pmz_decoder_wedge_count(this._ptr) >>> 0, 0); }
+  get texcoordSetCount() {
+    return this._call((m) => m._pmz_decoder_texcoord_set_count(this._ptr) >>> 0, 0);
+  }
+  get colorComponents() {  // 0, 3 or 4
+    return this._call((m) => m._pmz_decoder_color_components(this._ptr) >>> 0, 0);
+  }
+  get materialCount() {
+    return this._call((m) => m._pmz_decoder_material_count(this._ptr) >>> 0, 0);
+  }
+  // A view of `per` elements per item over `count` items at the pointer fn returns (empty for
+  // a null pointer).
+  _view(Type, fn, per, count) {
+    return this._call((m) => {
+      const ptr = fn(m);
+      return ptr ? new Type(m.HEAPU8.buffer, ptr, per * count) : new Type(0);
+    }, new Type(0));
+  }
+  wedgeVertices() {  // wedge -> position vertex index
+    return this._view(Uint32Array, (m) => m._pmz_decoder_wedge_vertices(this._ptr), 1, this.wedgeCount);
+  }
+  wedgePositions() {  // xyz per wedge: positions() of wedgeVertices()
+    return this._view(Float32Array, (m) => m._pmz_decoder_wedge_positions(this._ptr), 3, this.wedgeCount);
+  }
+  wedgeIndices() {  // three wedges per face: the corners of indices()
+    return this._view(Uint32Array, (m) => m._pmz_decoder_wedge_indices(this._ptr), 3,
+                      this.wedgeCount ? this.faceCount : 0);
+  }
+  texcoords(set = 0) {  // u, v per wedge (v up, as in OBJ)
+    if (!(set >= 0 && set < this.texcoordSetCount)) return new Float32Array(0);
+    return this._view(Float32Array, (m) => m._pmz_decoder_texcoords(this._ptr, set >>> 0), 2,
+                      this.wedgeCount);
+  }
+  normals() {  // unit xyz per wedge
+    return this._view(Float32Array, (m) => m._pmz_decoder_normals(this._ptr), 3, this.wedgeCount);
+  }
+  colors() {  // colorComponents floats per wedge
+    return this._view(Float32Array, (m) => m._pmz_decoder_colors(this._ptr), this.colorComponents,
+                      this.wedgeCount);
+  }
+  faceMaterials() {  // per face an index into materials()
+    return this._view(Uint32Array, (m) => m._pmz_decoder_face_materials(this._ptr), 1, this.faceCount);
+  }
+  // The material table as the file states it: {name, baseColor: [r, g, b, a],
+  // baseColorTexture, normalTexture} (texture file names or URIs, '' when none).
+  materials() {
+    return this._call((m) => {
+      const out = [], s = this._scratch;
+      for (let i = 0; m._pmz_decoder_material(this._ptr, i, s); ++i) {
+        const v = new DataView(m.HEAPU8.buffer, s, 28);
+        out.push({
+          name: cString(m, v.getUint32(0, true)),
+          baseColorTexture: cString(m, v.getUint32(4, true)),
+          normalTexture: cString(m, v.getUint32(8, true)),
+          baseColor: [0, 1, 2, 3].map((k) => v.getFloat32(12 + 4 * k, true)),
+        });
+      }
+      return out;
+    }, []);
+  }
+
   // What changed since the last clearChanges(), for partial GPU uploads: vertices
   // [vertexBegin, vertexCount) and faces [faceBegin, faceCount) are new or rewritten,
   // modifiedFaces (a heap view, may repeat) lists rewritten faces below faceBegin; all asks
-  // for a full upload.
+  // for a full upload. Wedges [wedgeBegin, wedgeCount) are new; a face's wedgeIndices() and
+  // faceMaterials() entries change exactly when its indices() do.
   changes() {
     return this._call((m) => {
       const s = this._scratch;
       m._pmz_decoder_changes(this._ptr, s);
-      const v = new DataView(m.HEAPU8.buffer, s, 20);
+      const v = new DataView(m.HEAPU8.buffer, s, 24);
       return {
         vertexBegin: v.getUint32(0, true),
         faceBegin: v.getUint32(4, true),
         modifiedFaces: new Uint32Array(m.HEAPU8.buffer, v.getUint32(8, true), v.getUint32(12, true)),
         all: v.getUint32(16, true) !== 0,
+        wedgeBegin: v.getUint32(20, true),
       };
-    }, { vertexBegin: 0, faceBegin: 0, modifiedFaces: new Uint32Array(0), all: true });
+    }, { vertexBegin: 0, faceBegin: 0, modifiedFaces: new Uint32Array(0), all: true, wedgeBegin: 0 });
   }
   clearChanges() { this._call((m) => m._pmz_decoder_clear_changes(this._ptr)); }
 

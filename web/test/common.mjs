@@ -2,10 +2,11 @@
 // `npm install ./web/dist/pmz-decoder-*.tgz`, then `import ... from 'pmz-decoder'`), the native
 // tools, and the sample streams.
 import { execFileSync } from 'node:child_process';
-import { mkdtempSync, readdirSync, readFileSync, symlinkSync, writeFileSync } from 'node:fs';
+import { existsSync, mkdtempSync, readdirSync, readFileSync, symlinkSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import path from 'node:path';
 import { fileURLToPath, pathToFileURL } from 'node:url';
+import zlib from 'node:zlib';
 
 export const webDir = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..');
 export const rootDir = path.resolve(webDir, '..');
@@ -69,4 +70,128 @@ export function sameBits(a, b) {
   const x = new Uint8Array(a.buffer, a.byteOffset, a.byteLength);
   const y = new Uint8Array(b.buffer, b.byteOffset, b.byteLength);
   return Buffer.compare(x, y) === 0;
+}
+
+// The native decoder's arrays through the C API (tests/web/pmz_dump_arrays.c), whole file or at
+// a face target: {header (counts, materials), arrays: {name: Uint8Array}}.
+export function nativeArrays(file, faces) {
+  const out = execFileSync(path.join(binDir, 'pmz-dump-arrays'),
+    faces === undefined ? [file] : [file, String(faces)],
+    { stdio: ['ignore', 'pipe', 'pipe'], maxBuffer: 1 << 30 });
+  const eol = out.indexOf(10);
+  const header = JSON.parse(out.subarray(0, eol).toString('utf8'));
+  const arrays = {};
+  let at = eol + 1;
+  for (const [name, bytes] of header.arrays) {
+    arrays[name] = new Uint8Array(out.buffer, out.byteOffset + at, bytes);
+    at += bytes;
+  }
+  if (at !== out.length) throw new Error(`pmz-dump-arrays ${file}: ${out.length - at} bytes left`);
+  return { header, arrays };
+}
+
+// Encodes a mesh file with the native encoder (pmz-encode, default options).
+export function encodeNative(input, output) {
+  execFileSync(path.join(binDir, 'pmz-encode'), [input, '-o', output],
+    { stdio: ['ignore', 'ignore', 'inherit'] });
+  return output;
+}
+
+// 8-bit RGB PNG (filter 0 rows), for test textures.
+export function pngBytes(width, height, pixel) {
+  const crcTable = Array.from({ length: 256 }, (_, n) => {
+    let c = n;
+    for (let k = 0; k < 8; ++k) c = c & 1 ? 0xedb88320 ^ (c >>> 1) : c >>> 1;
+    return c >>> 0;
+  });
+  const crc = (b) => {
+    let c = 0xffffffff;
+    for (const x of b) c = crcTable[(c ^ x) & 0xff] ^ (c >>> 8);
+    return (c ^ 0xffffffff) >>> 0;
+  };
+  const chunk = (type, body) => {
+    const b = Buffer.alloc(12 + body.length);
+    b.writeUInt32BE(body.length, 0);
+    b.write(type, 4, 'latin1');
+    body.copy(b, 8);
+    b.writeUInt32BE(crc(b.subarray(4, 8 + body.length)), 8 + body.length);
+    return b;
+  };
+  const raw = Buffer.alloc(height * (1 + 3 * width));
+  for (let y = 0; y < height; ++y)
+    for (let x = 0; x < width; ++x) raw.set(pixel(x, y), y * (1 + 3 * width) + 1 + 3 * x);
+  const ihdr = Buffer.alloc(13);
+  ihdr.writeUInt32BE(width, 0);
+  ihdr.writeUInt32BE(height, 4);
+  ihdr.set([8, 2, 0, 0, 0], 8);
+  return Buffer.concat([Buffer.from([0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a]),
+    chunk('IHDR', ihdr), chunk('IDAT', zlib.deflateSync(raw)), chunk('IEND', Buffer.alloc(0))]);
+}
+
+// The two colours of checker.png (tests/viewer/viewer_test.py's textured torus, same colours).
+export const CHECKER_RED = [230, 40, 30], CHECKER_BLUE = [30, 60, 230];
+
+// A rippled torus with texture coordinates wrapping in u and v (a seam: the vertices there get
+// two wedges), an MTL naming `texture`, and a red / blue checkerboard PNG: textured.obj in dir.
+export function writeTexturedTorus(dir, { texture = 'checker.png', rings = 96, segments = 48 } = {}) {
+  const point = (a, b) => {
+    const r = 0.35 * (1 + 0.18 * Math.sin(5 * a) * Math.cos(3 * b));
+    return [(1 + r * Math.cos(b)) * Math.cos(a), r * Math.sin(b), (1 + r * Math.cos(b)) * Math.sin(a)];
+  };
+  const lines = ['mtllib textured.mtl', 'usemtl checker'];
+  for (let i = 0; i < rings; ++i)
+    for (let j = 0; j < segments; ++j)
+      lines.push('v ' + point(2 * Math.PI * i / rings, 2 * Math.PI * j / segments).map((x) => x.toFixed(6)).join(' '));
+  for (let i = 0; i <= rings; ++i)
+    for (let j = 0; j <= segments; ++j)
+      lines.push(`vt ${(4 * i / rings).toFixed(6)} ${(2 * j / segments).toFixed(6)}`);
+  for (let i = 0; i < rings; ++i) {
+    for (let j = 0; j < segments; ++j) {
+      const corners = [[i, j], [i, j + 1], [i + 1, j + 1], [i + 1, j]];
+      const v = corners.map(([a, b]) => 1 + (a % rings) * segments + (b % segments));
+      const t = corners.map(([a, b]) => 1 + a * (segments + 1) + b);
+      lines.push(`f ${v[0]}/${t[0]} ${v[1]}/${t[1]} ${v[2]}/${t[2]}`);
+      lines.push(`f ${v[0]}/${t[0]} ${v[2]}/${t[2]} ${v[3]}/${t[3]}`);
+    }
+  }
+  writeFileSync(path.join(dir, 'textured.obj'), lines.join('\n') + '\n');
+  writeFileSync(path.join(dir, 'textured.mtl'), `newmtl checker\nKd 1 1 1\nmap_Kd ${texture}\n`);
+  writeFileSync(path.join(dir, 'checker.png'),
+    pngBytes(64, 64, (x, y) => ((x >> 3) + (y >> 3)) % 2 ? CHECKER_RED : CHECKER_BLUE));
+  return path.join(dir, 'textured.obj');
+}
+
+// A textured asset of Debian's assimp-testmodels (scripts/fetch_assimp_models.sh puts them in
+// corpus-assimp/), or null when they are not there.
+export function assimpTextured() {
+  const file = path.join(rootDir, 'corpus-assimp', 'OBJ', 'spider.obj');
+  return existsSync(file) ? file : null;
+}
+
+// The same torus as an ASCII PLY with a normal and an RGB colour per vertex (colours varying
+// smoothly around it): colours and normals through the stream.
+export function writeColoredTorus(dir, { rings = 64, segments = 32 } = {}) {
+  const lines = [];
+  for (let i = 0; i < rings; ++i) {
+    for (let j = 0; j < segments; ++j) {
+      const a = 2 * Math.PI * i / rings, b = 2 * Math.PI * j / segments;
+      const p = [(1 + 0.35 * Math.cos(b)) * Math.cos(a), 0.35 * Math.sin(b), (1 + 0.35 * Math.cos(b)) * Math.sin(a)];
+      const n = [Math.cos(b) * Math.cos(a), Math.sin(b), Math.cos(b) * Math.sin(a)];
+      const c = [128 + 100 * Math.cos(a), 128 + 100 * Math.sin(a), 128 + 100 * Math.cos(b)].map(Math.round);
+      lines.push([...p, ...n].map((x) => x.toFixed(6)).join(' ') + ' ' + c.join(' '));
+    }
+  }
+  for (let i = 0; i < rings; ++i) {
+    for (let j = 0; j < segments; ++j) {
+      const v = (a, b) => (a % rings) * segments + (b % segments);
+      lines.push(`3 ${v(i, j)} ${v(i, j + 1)} ${v(i + 1, j + 1)}`, `3 ${v(i, j)} ${v(i + 1, j + 1)} ${v(i + 1, j)}`);
+    }
+  }
+  const header = ['ply', 'format ascii 1.0', `element vertex ${rings * segments}`,
+    ...['x', 'y', 'z', 'nx', 'ny', 'nz'].map((p) => `property float ${p}`),
+    ...['red', 'green', 'blue'].map((p) => `property uchar ${p}`),
+    `element face ${2 * rings * segments}`, 'property list uchar int vertex_indices', 'end_header'];
+  const file = path.join(dir, 'colored.ply');
+  writeFileSync(file, header.concat(lines).join('\n') + '\n');
+  return file;
 }
