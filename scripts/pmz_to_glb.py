@@ -164,7 +164,7 @@ def main():
         fail(args.input, str(e))
     with tempfile.TemporaryDirectory() as tmp:
         ply = os.path.join(tmp, "base.ply")
-        # The level with base_vertices vertices is the base mesh (spec section 9).
+        # The level with base_vertices vertices is the base mesh (spec/format.md section 9).
         run = subprocess.run([args.decoder, args.input, "-o", ply, "--vertices",
                               str(max(head["base_vertices"], 1))], capture_output=True, text=True)
         if run.returncode != 0:

@@ -1,4 +1,4 @@
-// Internal: the decoder's attribute wedges (spec/format.md section 13). The ATTR chunks are
+// Internal: the decoder's attribute wedges (spec/format.md section 14). The ATTR chunks are
 // decoded lazily like the SPLT symbols: a split's wedges when it is first applied; what it
 // assigned is kept so re-applying it after coarsening reads no bytes, and undoing it follows
 // the collapse rule. A file without attributes never gets here (one branch per split).

@@ -122,7 +122,7 @@ struct Decoder::Impl {
     // one starts at split lazy_first.
     std::deque<SplitChunkReader> lazy;
     std::unique_ptr<SplitModels>
-        models;  // the file's context models (spec section 8: carried across chunks)
+        models;  // the file's context models (spec/format.md section 8: carried across chunks)
     uint64_t lazy_first = 0, decoded = 0;
     WedgeScratch wedge_scratch;
     uint32_t wedge_scratch_ring = 0;  // wedge_scratch has room for rings up to this size
@@ -169,8 +169,8 @@ struct Decoder::Impl {
     FanPrefetcher fans;
   } level;
 
-  // Attributes (spec section 14): null for a stream without them, so their cost there is one
-  // branch per split. base_geometry: BASE decoded, its ATTR chunk awaited (stage stays base);
+  // Attributes (spec/format.md section 14): null for a stream without them, so their cost there is
+  // one branch per split. base_geometry: BASE decoded, its ATTR chunk awaited (stage stays base);
   // attr_awaited: the last SPLT chunk's ATTR chunk has not arrived (its splits are not
   // available yet).
   std::unique_ptr<AttributeStream> attrs;
@@ -325,7 +325,7 @@ size_t Decoder::Impl::parse(const uint8_t* p, size_t n) {
   }
   while (stage != Stage::failed) {
     if (stage == Stage::complete)
-      return n;  // bytes after END are ignored, framed or not (spec section 3)
+      return n;  // bytes after END are ignored, framed or not (spec/format.md section 3)
     ChunkFrame f;
     const FrameStatus fs = parse_chunk_frame(p + at, n - at, f);
     input.chunk_offset = input.parse_base + at;
@@ -408,7 +408,7 @@ Status Decoder::Impl::head(const uint8_t* p, size_t n) {
       return fail(Status::corrupt, "bad bounding box");
   if (h.base_faces > h.full_faces || h.full_faces > uint64_t(h.base_faces) + 2ull * h.total_splits)
     return fail(Status::corrupt, "inconsistent counts in HEAD");
-  // Vertex ids are uint32 with 0xFFFFFFFF for none, whatever the limits (spec section 4).
+  // Vertex ids are uint32 with 0xFFFFFFFF for none, whatever the limits (spec/format.md section 4).
   if (h.full_vertices() > 0xFFFFFFFFu)
     return fail(Status::corrupt,
                 std::to_string(h.full_vertices()) + " vertices in HEAD (2^32 or more)");

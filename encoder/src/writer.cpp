@@ -30,8 +30,8 @@ constexpr uint32_t kFirstChunkSplits = 256, kMaxChunkSplits = 16384;
 // A group larger than this is cut (the rest starts a group in the next chunk, whose vertices
 // are then chosen among all vertices: slow to decode, spec "Vertex choice").
 constexpr uint32_t kMaxGroupPiece = 4 * kMaxChunkSplits;
-// HEAD (curvature, fine_curvature) pairs the writer tries (eighths; spec section 6): those
-// best on some corpus mesh out of a wider set (plus no offset at all).
+// HEAD (curvature, fine_curvature) pairs the writer tries (eighths; spec/format.md section 13):
+// those best on some corpus mesh out of a wider set (plus no offset at all).
 struct Curvatures {
   uint32_t curvature, fine;
 };
@@ -63,7 +63,7 @@ bool find_ranks(const ProgressiveMesh& pm, uint32_t vl, uint32_t vr, uint32_t& r
   return (vl == kNoVertex || rl != kNoRank) && (vr == kNoVertex || rr != kNoRank);
 }
 
-// HEAD's bounding box and the quantizer over the whole input (spec section 3).
+// HEAD's bounding box and the quantizer over the whole input (spec/format.md section 5).
 void file_quantizer(const IndexedMesh& mesh, uint32_t bits, FileHeader& h, Quantizer& quant) {
   h.position_bits = bits;
   for (int a = 0; a < 3; ++a) {
@@ -111,7 +111,7 @@ bool make_plan(const CollapseSequence& seq, const WriteOptions& opt, Plan& plan,
     base_faces.insert(base_faces.end(), t, t + 3);
   }
   const uint32_t base_face_n = uint32_t(base_faces.size() / 3);
-  // Base order (spec section 2, "BASE"): the base coder numbers vertices and faces in its
+  // Base order (spec/format.md section 7): the base coder numbers vertices and faces in its
   // traversal order (components started from the faces in input order), then the vertices
   // without faces in ascending input id.
   std::vector<uint32_t> gid(n, kNoVertex), input_of_gid(n);
@@ -251,7 +251,7 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
   h.base_faces = uint32_t(plan.base_faces.size() / 3);
   h.full_faces = mesh.face_count();
   h.total_splits = splits;
-  // Attributes (spec section 13): the ATTR chunks follow BASE and each SPLT chunk.
+  // Attributes (spec/format.md section 14.1): the ATTR chunks follow BASE and each SPLT chunk.
   std::unique_ptr<AttributeWriter> attrs;
   if (!mesh.attributes.empty()) {
     attrs = std::make_unique<AttributeWriter>();
@@ -261,7 +261,7 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
 
   // Splits: replay in final order with the decoder's core to get ranks and predictions. The
   // curvature weight (HEAD) is the file's: one replay codes the splits once per candidate
-  // (only the residuals differ) and the smallest is kept (spec section 6).
+  // (only the residuals differ) and the smallest is kept (spec/format.md section 13).
   constexpr size_t kCandidates = std::size(kCurvatureCandidates);
   ProgressiveMesh pm;
   std::vector<uint8_t> trial[kCandidates];

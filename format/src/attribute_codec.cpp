@@ -23,8 +23,9 @@ bool read_string(ByteReader& r, std::string& s) {
   return true;
 }
 
-// Up to two candidate wedges of corner c (spec section 13.3): the wedges of c's vertex in the
-// faces across c's two edges at that vertex (first the edge to next(c)), when assigned, distinct.
+// Up to two candidate wedges of corner c (spec/format.md section 14.3): the wedges of c's vertex in
+// the faces across c's two edges at that vertex (first the edge to next(c)), when assigned,
+// distinct.
 uint32_t candidates(const ProgressiveMesh& pm, const AttributeState& s, uint32_t c,
                     uint32_t out[2]) {
   uint32_t n = 0;
@@ -46,8 +47,8 @@ uint32_t wedge_at(const AttributeState& s, uint32_t a) {
                                                                         : kNoCorner;
 }
 
-// The prediction of a new wedge's values at corner c (spec section 13.3). kinds[i] = 1 where a
-// texture coordinate came from the face map.
+// The prediction of a new wedge's values at corner c (spec/format.md section 14.3). kinds[i] = 1
+// where a texture coordinate came from the face map.
 void predict(const ProgressiveMesh& pm, const int32_t* coords, const AttributeState& s, uint32_t c,
              const uint32_t* cand, uint32_t n, int32_t* pred, uint8_t* face_map) {
   const AttributeHeader& h = s.head;

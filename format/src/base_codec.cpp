@@ -13,12 +13,12 @@ namespace pmz {
 namespace {
 
 constexpr uint32_t kNone = 0xFFFFFFFFu;
-// Counts a stream of S bytes can hold (spec section 12): a face costs at least two adaptive
-// decisions, a vertex at least 12 (four length decisions per residual), and S bytes decode at
-// most 755.8 (S + 1) of them (the decoder reads up to 4 zero bytes past the end, spec
+// Counts a stream of S bytes can hold (spec/format.md section 12): a face costs at least two
+// adaptive decisions, a vertex at least 12 (four length decisions per residual), and S bytes decode
+// at most 755.8 (S + 1) of them (the decoder reads up to 4 zero bytes past the end, spec/format.md
 // section 11.2): bounds are per (S + 1).
 constexpr uint64_t kFacesPerByte = 384, kVerticesPerByte = 64;
-// Open-edge list scans (spec section 7): at most this much per half-edge, plus slack.
+// Open-edge list scans (spec/format.md section 7): at most this much per half-edge, plus slack.
 constexpr uint64_t kWorkPerHalfEdge = 16, kWorkSlack = uint64_t(1) << 22;
 
 inline uint64_t edge_key(uint32_t a, uint32_t b) { return uint64_t(a) << 32 | b; }
@@ -174,7 +174,7 @@ struct DecodeIO {
   bool ok() const { return s.ok; }
 };
 
-// The traversal (spec section 7), coding or decoding each value in turn: IO::kEncode
+// The traversal (spec/format.md section 7), coding or decoding each value in turn: IO::kEncode
 // takes the values from the oracle, otherwise from the stream.
 template <class IO>
 Status code_base(IO& io, uint32_t n, uint32_t fn, uint32_t midpoint, Oracle* oracle, BaseMesh& mesh,

@@ -7,14 +7,14 @@
 
 namespace pmz {
 
-// ---- Wedge candidates (spec section 9.4) ----
+// ---- Wedge candidates (spec/format.md section 9.4) ----
 
 namespace {
 
 constexpr uint32_t kMaxScoredRing = 1u << 24;  // larger rings: all scores 0 (order by index)
 constexpr uint32_t kTopSelect = 16;            // ranks below: insertion into the best rank + 1
 
-// End weights (spec section 9.4): m = 4, 3, 2 for degree <= 4, 5, more, and r = 12 / m (a
+// End weights (spec/format.md section 9.4): m = 4, 3, 2 for degree <= 4, 5, more, and r = 12 / m (a
 // negative G is ordered by G / (m_a m_b)), by degree clamped to 7; a missing end as degree 7.
 constexpr uint8_t kWeight[8][2] = {{4, 3}, {4, 3}, {4, 3}, {4, 3}, {4, 3}, {3, 4}, {2, 6}, {2, 6}};
 
@@ -42,7 +42,7 @@ bool ring_narrow(const int32_t* coords, const ProgressiveMesh& pm, const int32_t
 // tracking the best two scores (s.confident) and the first best candidate (s.best, rank 0).
 // G = |E|^2 + c (4 S - c T) with E = 2 * interior + both ends, S the interior's |e|^2, T = 2 or 4
 // times the ends' |e|^2 (0 for a missing end); key = G m_a m_b when G >= 0, else G r_a r_b with
-// r = 12 / m (spec section 9.4).
+// r = 12 / m (spec/format.md section 9.4).
 template <class I, class U>
 void score_wedges(const int32_t* coords, const uint32_t* degree, const ProgressiveMesh& pm,
                   uint32_t count, const int32_t* cv, std::vector<I>& qbuf, std::vector<I>& score,

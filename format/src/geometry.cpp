@@ -111,9 +111,9 @@ namespace {
   if (before(ax[1], ax[0])) std::swap(ax[0], ax[1]);
   if (before(ax[2], ax[1])) std::swap(ax[1], ax[2]);
   if (before(ax[1], ax[0])) std::swap(ax[0], ax[1]);
-  // The curvature offsets' projections on n (spec section 9.6, step 4): v's umbrella vector over
-  // its ring before the split, L = k c[v] - sum of that ring, and over u's other neighbours,
-  // E = (m - 1) c[v] - their sum = (m + 1) c[v] - sum. |L|, |E| < 2^56 (k, m <= 2^24).
+  // The curvature offsets' projections on n (spec/format.md section 9.6, step 4): v's umbrella
+  // vector over its ring before the split, L = k c[v] - sum of that ring, and over u's other
+  // neighbours, E = (m - 1) c[v] - their sum = (m + 1) c[v] - sum. |L|, |E| < 2^56 (k, m <= 2^24).
   basis.l_dot_n = basis.e_dot_n = 0;
   const uint32_t k = uint32_t(v_ring.size());
   if (with_l && k && k <= (1u << 24)) {

@@ -35,8 +35,8 @@ bool ProgressiveMesh::build(uint32_t n, const uint32_t* indices, size_t faces, s
                                [&](uint32_t x, uint64_t key) { return edges[x] < key; });
     if (it != order.end() && edges[*it] == twin) opposite[c] = *it;
   }
-  // Each vertex's faces must form one fan (spec sections 6 and 7: a vertex in several fans is
-  // refused): the fan walked from its stored corner holds all of its corners.
+  // Each vertex's faces must form one fan (spec/format.md sections 6 and 7: a vertex in several
+  // fans is refused): the fan walked from its stored corner holds all of its corners.
   std::vector<uint32_t> corners_at(n, 0);
   for (uint32_t c = 0; c < faces * 3; ++c) ++corners_at[corner_vertex[c]];
   for (uint32_t v = 0; v < n; ++v) {

@@ -35,8 +35,8 @@ void encode_split_chunk(const std::vector<GroupCode>& groups, const std::vector<
       encode_uint(cn, m->groups, g.size - 1);
       cn.bit(m->near, g.near ? 1 : 0);
     }
-    // Then each group in the decoder's order of reads (the schedule, spec section 9.3): its
-    // choice bits up to its scan_at_group_start()-th vertex, then per split j the wedge symbols
+    // Then each group in the decoder's order of reads (the schedule, spec/format.md section 9.3):
+    // its choice bits up to its scan_at_group_start()-th vertex, then per split j the wedge symbols
     // and the choice bits up to the group's scan_after_split(j)-th vertex (those the decoder
     // finds once split j is applied); the residuals in their own stream.
     size_t bit = 0, at = 0;

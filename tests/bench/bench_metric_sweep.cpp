@@ -1,5 +1,5 @@
 // bench-metric-sweep [--eps E] [--c0 C] [--wt W] [--mem M] [--bw B] [--ratio R]... MESH...
-// The experiment of spec/algorithm.md section 4, in process: for each mesh and face ratio
+// The experiment of docs/algorithm-notes.md section 4, in process: for each mesh and face ratio
 // (default 0.1 and 0.02), simplify to round(R * F) faces with multifeature (the given
 // parameters, defaults otherwise) and with qem, then pmz::compare each result with the input
 // (default samples). Prints one line per mesh and ratio (mean and max symmetric error / bbox

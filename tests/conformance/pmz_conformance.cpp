@@ -110,8 +110,8 @@ std::string mesh_hash(const pmz::Decoder& d) {
     put(u);
   }
   for (size_t i = 0; i < size_t(d.face_count()) * 3; ++i) put(d.indices()[i]);
-  // With attributes (spec section 14), then: the a-wedges' vertices, the faces' a-wedges, the
-  // texture coordinates set by set, the normals, the colours (f32 bit patterns) and the faces'
+  // With attributes (spec/format.md section 14), then: the a-wedges' vertices, the faces' a-wedges,
+  // the texture coordinates set by set, the normals, the colours (f32 bit patterns) and the faces'
   // materials.
   const uint32_t w = d.wedge_count();
   auto floats = [&](const float* p, size_t n) {
@@ -133,7 +133,7 @@ std::string mesh_hash(const pmz::Decoder& d) {
   return sha.hex();
 }
 
-// Section 12's status names (the README's; pmz::status_name gives prose).
+// spec/format.md section 12's status names (the README's; pmz::status_name gives prose).
 const char* status_token(pmz::Status s) {
   switch (s) {
     case pmz::Status::ok:
@@ -395,9 +395,9 @@ std::string obj_text(const Mesh& m, const std::string& what) {
   return s;
 }
 
-// A bumpy n x n grid with every attribute section 14 codes: a texture seam down column `seam`
-// (two charts, the right one mirrored), normals with a crease along the seam, RGB vertex
-// colours, and two materials (left and right of the seam), as OBJ with its MTL.
+// A bumpy n x n grid with every attribute spec/format.md section 14 codes: a texture seam down
+// column `seam` (two charts, the right one mirrored), normals with a crease along the seam, RGB
+// vertex colours, and two materials (left and right of the seam), as OBJ with its MTL.
 std::string seamed_obj(uint32_t n, uint32_t seam) {
   std::string s = "# bumpy grid with a texture seam, a normal crease, colours, 2 materials\n";
   s += "mtllib seamed.mtl\n";

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""A second .pmz decoder, in Python, written by following spec/format.md's text (sections 2
-to 11: container, HEAD, BASE, SPLT group tables, the choice scan, wedge symbols and scores, the
+"""A second .pmz decoder, in Python, written by following the text of spec/format.md sections 2
+to 11 (container, HEAD, BASE, SPLT group tables, the choice scan, wedge symbols and scores, the
 split, the position prediction, the per-vertex state, range coding), checked against the
 conformance vectors: for every .expected, the stream status after feeding the whole file, the
 status and split count after applying every split, and every level's vertex count, face count
@@ -22,7 +22,7 @@ class Refused(Exception):
     pass
 
 
-def varint(b, at):  # section 2
+def varint(b, at):  # spec/format.md section 2
     v = 0
     for i in range(10):
         if at + i >= len(b):
@@ -45,7 +45,7 @@ def s32(x):  # modulo 2^32, signed
     return x - (1 << 32) if x >= 1 << 31 else x
 
 
-class Model:  # section 11.1
+class Model:  # spec/format.md section 11.1
     def __init__(self):
         self.p, self.cnt = 16384, 0
 
@@ -59,14 +59,14 @@ class Model:  # section 11.1
         self.cnt = min(c + 1, 127)
 
 
-class UIntModel:  # section 11.3
+class UIntModel:  # spec/format.md section 11.3
     def __init__(self):
         self.length = [Model() for _ in range(16)]
         self.escape = [Model() for _ in range(32)]
         self.high = [[Model() for _ in range(4)] for _ in range(33)]
 
 
-class RangeDecoder:  # section 11.2
+class RangeDecoder:  # spec/format.md section 11.2
     def __init__(self, s):
         self.s, self.at, self.past = s, 0, False
         self.range = 0xFFFFFFFF
@@ -138,7 +138,7 @@ class RangeDecoder:  # section 11.2
         return x
 
 
-class SmallModel:  # section 11.3
+class SmallModel:  # spec/format.md section 11.3
     def __init__(self):
         self.tree = [Model() for _ in range(8)]
         self.rest = UIntModel()
@@ -157,7 +157,7 @@ def decode_small(rc, m):
     return x
 
 
-def decode_mixed(rc, m, m2):  # section 11.3, mixed: the uint procedure with two models
+def decode_mixed(rc, m, m2):  # spec/format.md section 11.3, mixed: uint with two models
     def bit(a, b):
         x = rc.bit_p((a.p + b.p) // 2)
         a.adapt(x)
@@ -186,7 +186,7 @@ def decode_mixed(rc, m, m2):  # section 11.3, mixed: the uint procedure with two
     return x
 
 
-def read_head(p):  # section 4
+def read_head(p):  # spec/format.md section 4
     if len(p) < 2:
         raise Refused("corrupt")
     h = {"major": p[0], "minor": p[1]}
@@ -221,7 +221,7 @@ def read_head(p):  # section 4
     return h
 
 
-def read_attribute_fields(p, at, h):  # section 14.1
+def read_attribute_fields(p, at, h):  # spec/format.md section 14.1
     def u8():
         nonlocal at
         if at >= len(p):
@@ -282,7 +282,7 @@ def prv(h):
     return h - 1 if h % 3 > 0 else h + 2
 
 
-def decode_base(payload, nv, nf):  # section 7
+def decode_base(payload, nv, nf):  # spec/format.md section 7
     if nf > 384 * (len(payload) + 1) or nv > 64 * (len(payload) + 1):
         raise Refused("corrupt")
     rc = RangeDecoder(payload)
@@ -375,7 +375,7 @@ def decode_base(payload, nv, nf):  # section 7
         new_vertex(last(), jump)
     if rc.past:
         raise Refused("corrupt")
-    # Validity (section 6): no repeated directed edge, one fan per vertex.
+    # Validity (spec/format.md section 6): no repeated directed edge, one fan per vertex.
     edges = {}
     for h in range(len(F)):
         e = (F[h], F[nxt(h)])
@@ -405,7 +405,7 @@ def f32(x):
     return struct.unpack("<f", struct.pack("<f", x))[0]
 
 
-def positions(c, h):  # section 5
+def positions(c, h):  # spec/format.md section 5
     out = []
     bits = h["position_bits"]
     if bits == 0:
@@ -422,7 +422,8 @@ def positions(c, h):  # section 5
 
 
 class Attributes:
-    """Section 14: a-wedges per corner (aw), their vertices (wv) and values (val), materials."""
+    """spec/format.md section 14: a-wedges per corner (aw), their vertices (wv) and values (val),
+    materials."""
 
     def __init__(self, a):
         self.a, self.aw, self.wv, self.val, self.mat, self.W = a, [], [], [], [], 0
@@ -604,7 +605,7 @@ class Attributes:
         return b"".join(out)
 
 
-def ordered(v):  # section 5's lossless pattern -> the f32's bytes
+def ordered(v):  # spec/format.md section 5's lossless pattern -> the f32's bytes
     return struct.pack("<i", v ^ 0x7FFFFFFF if v < 0 else v)
 
 
@@ -616,15 +617,15 @@ class BaseMesh:  # the base mesh's faces and edges, for the base ATTR (14.4)
 
 
 def level0(data):
-    """(stream status, HEAD, level-0 mesh, SPLT chunks) for the whole input (sections 3, 4, 7,
-    8); HEAD and the mesh are None when not decoded."""
+    """(stream status, HEAD, level-0 mesh, SPLT chunks) for the whole input
+    (spec/format.md sections 3, 4, 7, 8); HEAD and the mesh are None when not decoded."""
     if data[:8] != SIGNATURE[: len(data[:8])]:
         return "bad_magic", None, None, []
     if len(data) < 8:
         return "truncated", None, None, []
     at, head, base, splits, done, first = 8, None, None, 0, False, True
     geometry, awaited = None, False  # with attributes: BASE awaiting its ATTR; SPLT awaiting its
-    group_size, group_near = UIntModel(), Model()  # created once per stream (section 8)
+    group_size, group_near = UIntModel(), Model()  # once per stream (spec/format.md section 8)
     chunks = []  # per SPLT chunk: connectivity and geometry decoders, group table
     try:
         while at < len(data) and not done:
@@ -650,7 +651,7 @@ def level0(data):
                 geometry = decode_base(payload, head["base_vertices"], head["base_faces"])
                 if head["attr"] is None:
                     base = geometry
-            elif typ == 5 and head["attr"] is not None:  # section 14.1
+            elif typ == 5 and head["attr"] is not None:  # spec/format.md section 14.1
                 if geometry is None:
                     raise Refused("corrupt")
                 if base is None:
@@ -672,7 +673,7 @@ def level0(data):
                 conn_size, q = varint(payload, q)
                 if conn_size > len(payload) - q or count > 64 * len(payload):
                     raise Refused("corrupt")
-                # The group table (section 8), with the stream's two group models.
+                # The group table (spec/format.md section 8), with the stream's two group models.
                 rc, total, groups = RangeDecoder(payload[q : q + conn_size]), 0, []
                 while total < count:
                     group = rc.uint(group_size) + 1
@@ -704,14 +705,15 @@ def ctx(x):
     return min(bitlen(x), 20)
 
 
-def rnd(x, y):  # round(x / y), section 1
+def rnd(x, y):  # round(x / y), spec/format.md section 1
     if y < 0:
         x, y = -x, -y
     return (2 * x + y) // (2 * y)
 
 
 class Splits:
-    """Section 9 on the mesh of section 6: vertices c, faces F, directed edges E."""
+    """spec/format.md section 9 on the mesh of spec/format.md section 6: vertices c, faces F,
+    directed edges E."""
 
     def __init__(self, head, base, chunks):
         self.head = head
@@ -763,7 +765,8 @@ class Splits:
         return 0 if 64 * d2 < l2 else 1 if 16 * d2 < l2 else 2
 
     def fan(self, x):
-        """(canonical ring, fan corners at x in canonical order, closed) or None (section 6)."""
+        """(canonical ring, fan corners at x in canonical order, closed) or None
+        (spec/format.md section 6)."""
         if x not in self.corner:
             return None
         F, E = self.F, self.E

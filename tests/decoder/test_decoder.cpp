@@ -47,7 +47,7 @@ void expect_valid(const pmz::Decoder& d) {
   }
 }
 
-// The frame of the chunk at chunk_at (spec section 2: type, varint size, CRC).
+// The frame of the chunk at chunk_at (spec/format.md section 3: type, varint size, CRC).
 pmz::ChunkFrame frame_at(const std::vector<uint8_t>& b, size_t chunk_at) {
   pmz::ChunkFrame f;
   EXPECT_EQ(pmz::parse_chunk_frame(b.data() + chunk_at, b.size() - chunk_at, f),
@@ -318,9 +318,9 @@ TEST_F(DecoderTest, AbsurdCountsHitLimitsBeforeAllocating) {
   EXPECT_EQ(a.feed(b.data(), b.size()), pmz::Status::limit_exceeded);
 }
 
-// The chunk frame (spec section 2): a varint size of more than 10 bytes is malformed, a CRC that
-// does not cover type, size and payload is refused, and a frame header cut anywhere across two
-// feed() calls decodes as the whole.
+// The chunk frame (spec/format.md section 3): a varint size of more than 10 bytes is malformed, a
+// CRC that does not cover type, size and payload is refused, and a frame header cut anywhere across
+// two feed() calls decodes as the whole.
 TEST_F(DecoderTest, ChunkFrameFields) {
   const size_t head_end = 8 + frame_at(file, 8).header_size + frame_at(file, 8).payload_size;
   std::vector<uint8_t> b(file.begin(), file.begin() + ptrdiff_t(head_end));

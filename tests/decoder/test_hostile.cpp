@@ -232,7 +232,7 @@ void expect_valid(const pmz::Decoder& d) {
   if (d.info().base_done) {
     ASSERT_EQ(d.vertex_count(), d.info().base_vertices + d.splits_applied());
   }
-  // Attribute wedges (spec section 14): every corner names an a-wedge of its own vertex.
+  // Attribute wedges (spec/format.md section 14): every corner names an a-wedge of its own vertex.
   for (uint32_t c = 0; c < d.face_count() * 3 && d.wedge_count(); ++c) {
     ASSERT_LT(d.wedge_indices()[c], d.wedge_count());
     ASSERT_EQ(d.wedge_vertices()[d.wedge_indices()[c]], d.indices()[c]);
@@ -243,7 +243,7 @@ void expect_valid(const pmz::Decoder& d) {
   }
 }
 
-// The frame of the chunk at p, if its header parses (spec section 2).
+// The frame of the chunk at p, if its header parses (spec/format.md section 3).
 bool frame_at(const Bytes& b, size_t p, pmz::ChunkFrame& f) {
   return p < b.size() && pmz::parse_chunk_frame(&b[p], b.size() - p, f) == pmz::FrameStatus::ok;
 }
@@ -295,7 +295,8 @@ TEST(Hostile, BytesAfterEndAreIgnoredEvenMalformed) {
   }
 }
 
-// HEAD curvature and fine_curvature (spec section 5): 0..8; 9 and above are refused, 8 decodes.
+// HEAD curvature and fine_curvature (spec/format.md section 4): 0..8; 9 and above are refused, 8
+// decodes.
 TEST(Hostile, CurvatureAboveEightIsRefused) {
   for (uint32_t value : {8u, 9u, 255u, 8u | 0x100u, 9u | 0x100u, 255u | 0x100u}) {
     const uint32_t curvature = value & 0xFF;
@@ -319,8 +320,8 @@ TEST(Hostile, CurvatureAboveEightIsRefused) {
   }
 }
 
-// HEAD's varint fields (spec section 2): a payload cut anywhere before bbox_max ends, or a
-// flags / count varint of 2^32 or more (or of 11 bytes), is corrupt; bytes after bbox_max are
+// HEAD's varint fields (spec/format.md section 4): a payload cut anywhere before bbox_max ends, or
+// a flags / count varint of 2^32 or more (or of 11 bytes), is corrupt; bytes after bbox_max are
 // ignored, and a varint written longer than needed reads as its value.
 TEST(Hostile, HeadVarintsCutShortOrBeyondUint32AreCorrupt) {
   Bytes payload;
@@ -373,7 +374,8 @@ TEST(Hostile, HeadVarintsCutShortOrBeyondUint32AreCorrupt) {
 // ---- counts beyond the limits ----
 
 // Vertex ids are uint32 (0xFFFFFFFF is "none"): base_vertices + total_splits must stay below
-// 2^32 whatever the limits allow (spec section 2, HEAD; format 6.0 stored full_vertices as a u32).
+// 2^32 whatever the limits allow (spec/format.md section 4; format 6.0 stored full_vertices as a
+// u32).
 TEST(Hostile, FullVerticesBeyondUint32AreCorruptWhateverTheLimits) {
   pmz::DecoderLimits limits;
   limits.max_vertices = ~uint64_t(0);
@@ -477,8 +479,8 @@ TEST(Hostile, ChunkOverTheLimitIsRefusedFromItsHeader) {
     }
 }
 
-// BASE counts far beyond what its bytes can hold (spec section 7: at most 384 faces and 64
-// vertices per byte of the range-coded stream): refused before the per-vertex and per-face
+// BASE counts far beyond what its bytes can hold (spec/format.md section 7: at most 384 faces and
+// 64 vertices per byte of the range-coded stream): refused before the per-vertex and per-face
 // arrays are allocated. The same counts are fine for the limits, so only that check stops them.
 TEST(Hostile, BaseCountsBeyondItsBytesDoNotAllocate) {
   for (const auto& [nv, nf] : {std::pair<uint32_t, uint32_t>{1000000, 8}, {6, 4000000}}) {
@@ -699,7 +701,8 @@ TEST(Hostile, ManyTinyChunksDecodeInLinearTime) {
 // shrinks to ~1 byte per 8 splits (measured at c8f2892: 4000 splits 0.07 s CPU, 16000 splits
 // 1.16 s). The decoder must refuse (limit_exceeded) or stay linear. The work is counted: the
 // valence of each split's vertex just before its split (faces around it, kept up to date here
-// from the decoder's change report), summed; spec section 7 bounds it by 64 splits + 2^22.
+// from the decoder's change report), summed; spec/format.md section 12 bounds it by 64 splits +
+// 2^22.
 TEST(Hostile, SplitsPilingOnOneVertexStayLinear) {
   auto make = [](uint32_t n) {
     Bytes f = signature();
@@ -821,8 +824,8 @@ TEST(Hostile, WedgeSymbolsAtUint32MaxAreInvalid) {
   }
 }
 
-// Vertex choice exclusion (spec section 2) acts kChoiceLag splits behind: a group that splits
-// two adjacent vertices closer than that (0, then 2 in 0's ring on the octahedron; a writer
+// Vertex choice exclusion (spec/format.md section 9.2) acts kChoiceLag splits behind: a group that
+// splits two adjacent vertices closer than that (0, then 2 in 0's ring on the octahedron; a writer
 // never codes it) is within the syntax and decodes consistently, split after split: the mesh
 // stays valid and levels reproduce both ways.
 TEST(Hostile, VertexChoiceAdjacentWithinTheLagDecodesConsistently) {
@@ -866,8 +869,8 @@ TEST(Hostile, VertexChoiceAdjacentWithinTheLagDecodesConsistently) {
   EXPECT_EQ(std::vector<uint32_t>(d.indices(), d.indices() + d.face_count() * 3), full);
 }
 
-// Vertex choice (spec section 2): a group whose candidates run out before its splits are all
-// found (a near group with no previous group; no candidate bit set among all vertices; none
+// Vertex choice (spec/format.md section 9.2): a group whose candidates run out before its splits
+// are all found (a near group with no previous group; no candidate bit set among all vertices; none
 // set among a near list) passes the chunk checks, and is refused when its first split is
 // applied: status corrupt, the mesh at the split before, which stays usable.
 TEST(Hostile, VertexChoiceRunningOutOfCandidatesIsRefused) {
@@ -1118,7 +1121,7 @@ TEST(Hostile, EveryByteOfAnAttributeStream) {
   corrupt_every_byte(b, true);
 }
 
-// Out-of-range attribute fields in HEAD are corrupt (spec section 14.1).
+// Out-of-range attribute fields in HEAD are corrupt (spec/format.md section 14.1).
 TEST(Hostile, AttributeFieldsOutOfRangeAreCorrupt) {
   const Bytes file = read_vector("seamed-q.pmz");
   ASSERT_FALSE(file.empty());
@@ -1155,8 +1158,8 @@ TEST(Hostile, AttributeFieldsOutOfRangeAreCorrupt) {
   EXPECT_EQ(d.feed(b.data(), b.size()), pmz::Status::corrupt);
 }
 
-// ATTR chunks only where section 14.1 puts them: dropped, doubled or moved ones are corrupt,
-// and a SPLT chunk's splits wait for its ATTR chunk.
+// ATTR chunks only where spec/format.md section 14.1 puts them: dropped, doubled or moved ones are
+// corrupt, and a SPLT chunk's splits wait for its ATTR chunk.
 TEST(Hostile, AttributeChunksOutOfPlaceAreCorrupt) {
   const Bytes file = read_vector("seamed-q.pmz");
   ASSERT_FALSE(file.empty());

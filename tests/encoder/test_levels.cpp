@@ -4,9 +4,9 @@
 //    applied splits is always closed under the splits they depend on, so the collapses left are
 //    a valid subset, and at each window boundary they are a prefix of the greedy order);
 //  - every byte prefix of a file decodes to the full decode's mesh at the number of splits its
-//    complete SPLT chunks hold (counted here from the chunk frames of spec section 2);
-//  - decoded positions are within half a quantization step of the *input* (spec section 3),
-//    not of the quantizer's own output.
+//    complete SPLT chunks hold (counted here from the chunk frames of spec/format.md section 3);
+//  - decoded positions are within half a quantization step of the *input*
+//    (spec/format.md section 5), not of the quantizer's own output.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -79,8 +79,8 @@ std::vector<Face> faces_after(const pmz::CollapseSequence& seq,
   return out;
 }
 
-// |decoded - input| <= half a step per coordinate, the step from spec section 3 (range / max_q,
-// range the largest extent of the input's bounding box); lossless: bit-identical.
+// |decoded - input| <= half a step per coordinate, the step from spec/format.md section 5 (range /
+// max_q, range the largest extent of the input's bounding box); lossless: bit-identical.
 void expect_positions_near_input(const pmz::Decoder& d, const Encoded& e) {
   const auto& pos = e.seq.mesh.positions;
   const uint32_t bits = e.options.position_bits;
@@ -164,8 +164,8 @@ pmz::IndexedMesh height_field(int n) {
   return m;
 }
 
-// Number of splits in the SPLT chunks entirely inside the first n bytes (spec section 2: type,
-// varint payload_size, u32 CRC, payload; a SPLT payload starts with varint split_count).
+// Number of splits in the SPLT chunks entirely inside the first n bytes (spec/format.md section 3:
+// type, varint payload_size, u32 CRC, payload; a SPLT payload starts with varint split_count).
 uint64_t splits_in_prefix(const std::vector<uint8_t>& b, size_t n) {
   auto varint = [&](size_t& at) {
     uint64_t v = 0;
@@ -262,9 +262,9 @@ TEST(Levels, EveryPrefixIsTheFullDecodeAtItsSplitCount) {
 }
 
 // Committed files decoded by this decoder against the meshes they were written from: every
-// decoded vertex within half a quantization step (spec section 3) of a distinct source vertex.
-// A change to both writer and decoder that keeps round trips intact (a residual coded one off on
-// both sides) decodes the committed bytes wrongly and lands a vertex a step or more away.
+// decoded vertex within half a quantization step (spec/format.md section 5) of a distinct source
+// vertex. A change to both writer and decoder that keeps round trips intact (a residual coded one
+// off on both sides) decodes the committed bytes wrongly and lands a vertex a step or more away.
 TEST(Levels, CommittedFilesDecodeWithinHalfAStepOfTheirSources) {
   const std::pair<const char*, const char*> files[] = {
       {"tests/data/sample.pmz", "tests/data/sample.obj"},

@@ -80,7 +80,8 @@ TEST(ZigZag, RoundTrips) {
   EXPECT_EQ(zigzag_encode(1), 2u);
 }
 
-// Spec section 8's adaptation, written out from the text: probability and count kept apart.
+// spec/format.md section 11.1's adaptation, written out from the text: probability and count kept
+// apart.
 struct SpecModel {
   uint32_t p = 16384, count = 0;
   void update(uint32_t b) {
@@ -161,12 +162,12 @@ TEST(RangeCoder, ReachableProbabilitiesStayInBounds) {
 // Encoder and decoder are inverses at every probability a model can hold: per p in [240, 32528],
 // a run of bits at that p (the first after a 1 at p = 16384, so the range is not 2^32 - 1),
 // then the ending.
-// Spec section 7's count bounds: S bytes hold at most 755.8 (S + 1) adaptive decisions. The
-// cheapest decision is a 1 at p = 240 (the rounding of range >> 15 favours it over a 0 at
+// spec/format.md section 12's count bounds: S bytes hold at most 755.8 (S + 1) adaptive decisions.
+// The cheapest decision is a 1 at p = 240 (the rounding of range >> 15 favours it over a 0 at
 // 32528): a stream of only those reaches 754.46 per byte of the interval (its ending aside), and
 // decodes back. (The BASE bounds, 384 faces and 64 vertices per byte, rest on 755.8 / 2 and
 // 755.8 / 12.)
-TEST(RangeCoder, CheapestDecisionsPerByteAreTheSection7Bound) {
+TEST(RangeCoder, CheapestDecisionsPerByteAreTheCountBound) {
   const uint32_t decisions = 400000;
   std::vector<uint8_t> out;
   {
@@ -252,9 +253,9 @@ TEST(RangeCoder, BitsDirectBitsAndValuesRoundTrip) {
   EXPECT_EQ(std::memcmp(enc_models, dec_models, sizeof enc_models), 0);
 }
 
-// Spec section 8, "Mixed unsigned value", decoded by a reference written from the text: the
-// value's binarization (bit length through the 4-level tree, the escape's 5-level tree, two
-// mantissa bits), every modeled bit with the mean (rounded down) of both models' probabilities
+// spec/format.md section 11.3, "Mixed unsigned value", decoded by a reference written from the
+// text: the value's binarization (bit length through the 4-level tree, the escape's 5-level tree,
+// two mantissa bits), every modeled bit with the mean (rounded down) of both models' probabilities
 // at the same node, both adapting; the rest direct.
 TEST(RangeCoder, MixedValuesAreTheSpecRule) {
   struct Ref {
@@ -346,8 +347,9 @@ TEST(RangeCoder, MixedValuesAreTheSpecRule) {
   for (int b = 0; b < kSecond; ++b) EXPECT_TRUE(same(dec_second[b], ref_second[b])) << b;
 }
 
-// Spec section 8's ending: the value in [low, low + range) with the most trailing zero bits, the
-// stream without its first byte (0) and up to 4 trailing zero bytes; bytes past the end read as 0.
+// spec/format.md section 11.4's ending: the value in [low, low + range) with the most trailing zero
+// bits, the stream without its first byte (0) and up to 4 trailing zero bytes; bytes past the end
+// read as 0.
 TEST(RangeCoder, StreamEndingIsTheShortestValue) {
   std::vector<uint8_t> out;
   {
@@ -442,11 +444,11 @@ void for_each_fan(uint32_t max_k, Body body) {
     }
 }
 
-// Wedge symbols (spec section 4): every valid wedge of a fan maps to (count, rank) and back,
-// on closed and open fans, random and degenerate (all scores tied) geometry, and lossless-range
-// coordinates (the scores need 128 bits there).
-// Unsigned values (spec section 8): the bytes equal the binarization written out by hand
-// (min(n, 15) through a 4-level tree, n - 15 through a 5-level escape tree, two modeled bits
+// Wedge symbols (spec/format.md section 9.4): every valid wedge of a fan maps to (count, rank)
+// and back, on closed and open fans, random and degenerate (all scores tied) geometry, and
+// lossless-range coordinates (the scores need 128 bits there).
+// Unsigned values (spec/format.md section 11.3): the bytes equal the binarization written out by
+// hand (min(n, 15) through a 4-level tree, n - 15 through a 5-level escape tree, two modeled bits
 // below the leading one per n, the rest direct), at the edges of the tree and of the escape;
 // they round-trip; an escape above 17 (n > 32) is corrupt.
 TEST(UIntModel, RoundTripsAndIsTheSpecBinarization) {
@@ -530,9 +532,9 @@ TEST(UIntModel, RoundTripsAndIsTheSpecBinarization) {
   }
 }
 
-// Small values (spec section 8): round trip at the edges of the tree and of the escape, and the
-// bytes of values below 7 equal three tree bits written out by hand (node from 1, most
-// significant first); the escape is the tree's 7 then the uint model.
+// Small values (spec/format.md section 11.3): round trip at the edges of the tree and of the
+// escape, and the bytes of values below 7 equal three tree bits written out by hand (node from 1,
+// most significant first); the escape is the tree's 7 then the uint model.
 TEST(SmallModel, RoundTripsAndIsTheSpecTree) {
   const uint32_t values[] = {0,  1,  2,  3,  4,    6,           7,           8,          9,
                              14, 15, 16, 22, 1000, 0xFFFFFFF8u, 0xFFFFFFFEu, 0xFFFFFFFFu};
@@ -624,7 +626,7 @@ TEST(WedgeSymbols, EveryWedgeRoundTrips) {
   });
 }
 
-// The wedge order of spec/format.md section 4 written out directly (a second reading of the
+// The wedge order of spec/format.md section 9.4 written out directly (a second reading of the
 // formula, not the codec's prefix sums and packed weights): per candidate, in 128 bits, E = 2 *
 // (sum of e over the interior) + e_a + e_b, S = sum of |e|^2 over the interior, T = 2 (|e_a|^2 +
 // |e_b|^2) with both ends, 4 |e|^2 of the one end, 0 without; G = |E|^2 + 4 c S - c^2 T; weight
@@ -799,10 +801,10 @@ TEST(WedgeSymbols, HandComputedScore) {
   EXPECT_EQ(scratch.score64[1], 68 * 16);
 }
 
-// Position prediction (spec section 5), recomputed here from the spec's words with different
-// arithmetic: the Newell normal over every edge of the closed polygon (the codec skips the
-// terms that are 0), floor division as quotient-and-remainder, rounding half up as
-// "remainder at least half the divisor", the axis order by a full sort.
+// Position prediction (spec/format.md section 9.6), recomputed here from the spec's words with
+// different arithmetic: the Newell normal over every edge of the closed polygon (the codec skips
+// the terms that are 0), floor division as quotient-and-remainder, rounding half up as "remainder
+// at least half the divisor", the axis order by a full sort.
 namespace spec {
 
 using I128 = Int128;
@@ -1120,7 +1122,7 @@ TEST(WedgeSymbols, OrderMatchesSpecReference) {
     }
 }
 
-// ---- Vertex choice (spec section 2, "Vertex choice") ----
+// ---- Vertex choice (spec/format.md section 9.2) ----
 
 namespace {
 // Octahedron (closed) or the octahedron less one face (open: a boundary of three edges).
@@ -1490,7 +1492,7 @@ TEST(VertexChoice, ModelPriorsAreTheSpecTable) {
   }
 }
 
-// ---- BASE (spec section 2, "BASE") ----
+// ---- BASE (spec/format.md section 7) ----
 
 namespace {
 
@@ -1532,8 +1534,8 @@ void base_round_trip(const std::vector<int32_t>& coords, const std::vector<uint3
   EXPECT_EQ(want, got);
   // Counts the stream cannot hold are refused. Every shorter stream is refused or decodes to
   // another base: the stream ends at the last nonzero byte of the shortest value of its final
-  // interval (spec section 8), so a cut value lies outside that interval; the zero bytes read
-  // past the end can make it decode (the chunk's CRC is what catches a cut chunk).
+  // interval (spec/format.md section 11.4), so a cut value lies outside that interval; the zero
+  // bytes read past the end can make it decode (the chunk's CRC is what catches a cut chunk).
   EXPECT_EQ(decode_base(stream.data(), stream.size(), n + 1, fn, dec, error), Status::corrupt);
   size_t refused = 0;
   for (size_t cut = 0; cut < stream.size(); ++cut) {
@@ -1582,9 +1584,9 @@ TEST(BaseCodec, RoundTripsComponentsBoundariesAndVerticesWithoutFaces) {
                   {0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5});
 }
 
-// The cheapest vertices (spec section 7): without faces and all at one point, each codes only
-// its residuals' 12 length decisions, 60.4 per byte: more than 48 per byte (the bound when
-// a length took six decisions), within the decoder's 64.
+// The cheapest vertices (spec/format.md section 7): without faces and all at one point, each codes
+// only its residuals' 12 length decisions, 60.4 per byte: more than 48 per byte (the bound when a
+// length took six decisions), within the decoder's 64.
 TEST(BaseCodec, CheapestVerticesFitTheCountBound) {
   const uint32_t n = 100000;
   const std::vector<int32_t> coords(size_t(n) * 3, 7);
@@ -1613,7 +1615,7 @@ TEST(BaseCodec, WriterRefusesWhatIsNotEdgeManifold) {
   EXPECT_FALSE(encode_base(coords.data(), 4, range, 1, stream, given_of, out, error));
 }
 
-// The symbols of two faces coded by hand, in the order and with the models spec section 2
+// The symbols of two faces coded by hand, in the order and with the models spec/format.md section 7
 // gives: the predictor bit (0: parallelogram), the first face (0, 1, 2) with three new
 // vertices, then across the first gate, 0 -> 1, a face whose third vertex is new (3); nothing
 // after the last face. Then a stream whose second vertex refers to an earlier vertex past the
@@ -1667,8 +1669,8 @@ TEST(BaseCodec, HandCodedStreamIsTheSpec) {
   EXPECT_NE(error.find("malformed"), std::string::npos) << error;
 }
 
-// A SPLT payload coded by hand in the order spec section 2 ("SPLT") gives: split_count, the
-// connectivity stream's size, the connectivity stream (the groups; then the group's choice bits
+// A SPLT payload coded by hand in the order spec/format.md sections 8 and 9.3 give: split_count,
+// the connectivity stream's size, the connectivity stream (the groups; then the group's choice bits
 // through its 9th vertex; per split j its wedge count, rank bit and rank - 1, then the choice bits
 // through the group's (j + 10)-th vertex), the geometry stream (per split the residual slots t0,
 // t1, n). A group of 12 on an 11 x 11 grid (even-even vertices: pairwise non-adjacent), so the
@@ -1807,7 +1809,7 @@ TEST(SplitChunk, HandCodedPayloadIsTheSpecOrder) {
   EXPECT_NE(error.find("groups"), std::string::npos) << error;
 }
 
-// The wedge symbols' contexts, table against spec section 2 ("SPLT" streams table): wedge_count
+// The wedge symbols' contexts, table against spec/format.md's Appendix A: wedge_count
 // by `2 min(k, 8) + closed` (18 models), wedge_rank by `2 closed + confident` (4 of each). A
 // clamp moved on both writer and decoder changes no round trip, only these values.
 TEST(WedgeSymbols, ContextsAreTheSpecTable) {

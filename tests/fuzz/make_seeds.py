@@ -140,7 +140,7 @@ def main():
         put('decoder', name + '-mixed', bytes([4, 7, 5 << 2 | 1, 200, 9 << 2 | 2, 31, 3 << 2 | 3, 130, 2 << 2]) + data)
         # fuzz_coding: whole BASE payloads (part 7, after the counts HEAD gives them) and whole
         # SPLT payloads (part 6, with 256 vertices before, a generous split budget and a context
-        # seed). Chunks: u8 type, varint size, u32 CRC, payload (spec section 2).
+        # seed). Chunks: u8 type, varint size, u32 CRC, payload (spec/format.md section 3).
         at = 8
         counts = b''
         while at < len(data):

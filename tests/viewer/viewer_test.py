@@ -248,7 +248,7 @@ class QuietHandler(http.server.SimpleHTTPRequestHandler):
 
 
 def split_chunks(data):
-    """Number of SPLT chunks in a .pmz (spec/format.md section 2: u8 type, varint payload_size,
+    """Number of SPLT chunks in a .pmz (spec/format.md section 3: u8 type, varint payload_size,
     u32 CRC, payload; SPLT is type 3, END type 4)."""
     pos, count = 8, 0
     while pos < len(data):

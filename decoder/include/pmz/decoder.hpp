@@ -35,7 +35,7 @@ struct StreamInfo {
   uint32_t version_major = 0, version_minor = 0;
   uint32_t flags = 0;
   uint32_t position_bits = 0;  // 0 = lossless float32
-  uint32_t curvature = 0;      // position prediction offset weights in eighths (spec section 9.6)
+  uint32_t curvature = 0;      // prediction offset weights, eighths (spec/format.md section 9.6)
   uint32_t fine_curvature = 0;
   uint64_t base_vertices = 0, base_faces = 0;
   uint64_t full_vertices = 0, full_faces = 0;
@@ -103,7 +103,7 @@ class PMZ_API Decoder {
   // Valid for all vertices below vertex_count().
   const uint32_t* split_parents() const;
 
-  // Attributes (format 8.0, spec/format.md section 13). A render vertex is an attribute wedge:
+  // Attributes (format 8.0, spec/format.md section 14). A render vertex is an attribute wedge:
   // one combination of attribute values at one position vertex (a vertex on a texture seam or
   // normal crease has several). Without attributes in the file (or before BASE): wedge_count()
   // 0 and nullptr from the array accessors. Arrays hold wedge_count() wedges and face_count()

@@ -88,7 +88,7 @@ typedef struct pmz_changes {
 PMZ_API void pmz_decoder_changes(const pmz_decoder* d, pmz_changes* out);
 PMZ_API void pmz_decoder_clear_changes(pmz_decoder* d);
 
-/* Attributes (format 8.0, spec/format.md section 13), as pmz::Decoder's accessors: a render
+/* Attributes (format 8.0, spec/format.md section 14), as pmz::Decoder's accessors: a render
    vertex is an attribute wedge (one combination of attribute values at one position vertex).
    Without attributes: wedge count 0 and NULL arrays. Arrays hold wedge_count wedges and
    face_count faces and stay valid until the next call that changes the level. */

@@ -12,8 +12,9 @@ struct WriteOptions {
   uint32_t position_bits = 14;  // 0 = lossless float32; else quantized over the largest extent
   uint64_t base_faces = 0;      // 0: as small as the sequence goes
   bool symbol_stats = false;    // fill WriteStats::symbol_bits
-  // Attributes (when the mesh has them; spec section 13), bits per component, 0 = lossless:
-  // texture coordinates over each set's bounding box, normals octahedral, colours over [0, 1].
+  // Attributes (when the mesh has them; spec/format.md section 14), bits per component, 0 =
+  // lossless: texture coordinates over each set's bounding box, normals octahedral, colours over
+  // [0, 1].
   uint32_t texcoord_bits = 12, normal_bits = 10, color_bits = 8;
 };
 

@@ -1,4 +1,4 @@
-// Attribute wedges in the .pmz format (spec/format.md, section 13; format 8.0): the HEAD
+// Attribute wedges in the .pmz format (spec/format.md section 14; format 8.0): the HEAD
 // fields, the per-corner wedge state writer and decoder keep in step, and the coding of a
 // corner's wedge reference and a new wedge's values (ATTR chunks). Writer and decoder share it.
 //
@@ -23,7 +23,7 @@ inline constexpr uint32_t kMaxTexcoordSets = 8, kMaxAttributeBits = 24, kMaxMate
 inline constexpr uint32_t kMaxMaterialString = 4096;
 inline constexpr uint32_t kPendingWedge = 0xFFFFFFFEu;  // a corner whose wedge is being coded
 
-// The collapse rule (encoder/src/attr_collapse.hpp, spec section 13.5): how many leading
+// The collapse rule (encoder/src/attr_collapse.hpp, spec/format.md section 14.5): how many leading
 // sector corners (u's wedges, in order from L's side) take v's wedge in L; the rest take v's
 // wedge in R. The decoder undoes a split with it.
 inline uint32_t collapse_left_arc(std::span<const uint32_t> sector_u_wedges, uint32_t u_wedge_l,
@@ -61,7 +61,7 @@ void write_attribute_header(std::vector<uint8_t>& out, const AttributeHeader& a)
 // False with a message when a field is malformed or out of range.
 bool read_attribute_header(ByteReader& r, AttributeHeader& a, std::string& error);
 
-// Quantization of each attribute (spec section 13.2), both directions.
+// Quantization of each attribute (spec/format.md section 14.2), both directions.
 struct AttributeQuantizer {
   Quantizer texcoord[kMaxTexcoordSets];
   uint32_t normal_bits = 0, color_bits = 0;
@@ -100,7 +100,7 @@ struct AttributeState {
   bool has_materials() const { return !head.materials.empty(); }
 };
 
-// The corners a split assigns wedges to, in coding order (spec section 13.4), right after
+// The corners a split assigns wedges to, in coding order (spec/format.md section 14.5), right after
 // ProgressiveMesh::split_gathered() or resplit(): L's v and vl corners, R's v and vr corners,
 // then u's corners in L, in the sector faces in order, in R.
 void split_corners(const ProgressiveMesh& pm, bool has_l, bool has_r, std::vector<uint32_t>& out);

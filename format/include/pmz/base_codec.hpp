@@ -1,4 +1,4 @@
-// Coding of the BASE mesh (spec/format.md, section 7): one range-coded stream holding a face
+// Coding of the BASE mesh (spec/format.md section 7): one range-coded stream holding a face
 // traversal (each face after a component's first is attached to an open edge of the faces
 // coded before; its third vertex is new, a neighbour on the front, or an earlier vertex) and
 // the positions of new vertices, predicted by the parallelogram across that edge. Writer and
@@ -29,8 +29,8 @@ bool encode_base(const int32_t* coords, uint32_t n, const uint32_t* faces, uint3
                  std::string& error);
 
 // Decodes a stream of `size` bytes holding n vertices and fn faces. Checks the counts against
-// the stream size before allocating (spec sections 7 and 12), every reference, and the end of
-// input; edge-manifoldness of the result is left to ProgressiveMesh::build. Status::ok, or
+// the stream size before allocating (spec/format.md sections 7 and 12), every reference, and the
+// end of input; edge-manifoldness of the result is left to ProgressiveMesh::build. Status::ok, or
 // corrupt / limit_exceeded with a one-line message in error.
 Status decode_base(const uint8_t* p, size_t size, uint32_t n, uint32_t fn, BaseMesh& out,
                    std::string& error);

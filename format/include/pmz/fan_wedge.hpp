@@ -1,4 +1,4 @@
-// Fan wedges (spec/format.md, sections 9.4 and 9.5): where a split's two new faces go in v's
+// Fan wedges (spec/format.md sections 9.4 and 9.5): where a split's two new faces go in v's
 // ring, coded as the wedge's interior vertex count and its rank among the candidates of that
 // count, ordered by a geometric score. The chunk codec (split_chunk.hpp) codes the two symbols
 // with the contexts defined here.
@@ -27,7 +27,7 @@ struct WedgeScratch {
   std::vector<uint32_t> order;
   bool narrow = true;
   uint32_t n = 0;         // candidates scored last
-  bool confident = true;  // their best score is over twice the second (spec section 9.4)
+  bool confident = true;  // their best score is over twice the second (spec/format.md section 9.4)
   uint32_t best = 0;      // the candidate at rank 0
   // Optional, set by the caller: a bound on |c[w] - c[v]| (per axis) over all vertex pairs, e.g.
   // the largest side of the coordinates' bounding box. When k (extent + 1) < 2^26 the scores

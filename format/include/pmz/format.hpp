@@ -15,7 +15,7 @@ inline constexpr uint32_t kVersionMajor = 8;
 inline constexpr uint32_t kVersionMinor = 0;
 
 // Chunk = u8 type | varint payload_size | u32le crc32(type, size varint, payload) | payload
-// (spec section 3). Types other than these four are skipped (forward compatibility).
+// (spec/format.md section 3). Types other than these four are skipped (forward compatibility).
 inline constexpr uint8_t kChunkHead = 1, kChunkBase = 2, kChunkSplits = 3, kChunkEnd = 4;
 inline constexpr size_t kMaxChunkHeader = 1 + 10 + 4;  // a varint has at most 10 bytes
 
@@ -38,7 +38,7 @@ void repair_chunk_crc(uint8_t* frame, const ChunkFrame& f);
 // Chunks before format 7.0 began with four ASCII type bytes, the first being "HEAD".
 inline constexpr uint8_t kOldHeadType[4] = {'H', 'E', 'A', 'D'};
 
-// Streams of one SPLT chunk, in payload order (spec section 8).
+// Streams of one SPLT chunk, in payload order (spec/format.md section 8).
 enum SplitStream : int {
   kStreamConnectivity =
       0,            // the groups, then vertex choice and wedge symbols in the decoder's order
@@ -49,9 +49,9 @@ enum SplitStream : int {
 enum SymbolKind : int {
   kSymbolGroups = 0,  // per group: splits - 1, near flag
   kSymbolChoice,      // per candidate vertex of a group: whether it splits
-  kSymbolWedgeCount,  // wedge: interior count (spec section 9.4)
+  kSymbolWedgeCount,  // wedge: interior count (spec/format.md section 9.4)
   kSymbolWedgeRank,   // wedge: rank among the candidates of that count
-  kSymbolResidualT0,  // position residual slot 0 (first tangent axis; spec section 9.6)
+  kSymbolResidualT0,  // position residual slot 0 (first tangent axis; spec/format.md section 9.6)
   kSymbolResidualT1,  // slot 1 (second tangent axis)
   kSymbolResidualN,   // slot 2 (normal axis, predicted from the tangent plane)
   kSymbolKinds
@@ -59,13 +59,13 @@ enum SymbolKind : int {
 
 inline constexpr uint32_t kKnownFlags = 1;  // HEAD flags: bit 0 attributes (attribute_codec.hpp)
 
-// HEAD (spec section 4). full_vertices is not stored: base_vertices + total_splits.
+// HEAD (spec/format.md section 4). full_vertices is not stored: base_vertices + total_splits.
 struct FileHeader {
   uint32_t version_major = kVersionMajor, version_minor = kVersionMinor;
   uint32_t flags = 0;
   uint32_t position_bits = 14;  // 0 = lossless float32
   uint32_t curvature =
-      0;  // prediction offset weights, 0..kMaxCurvature (eighths; spec section 9.6)
+      0;  // prediction offset weights, 0..kMaxCurvature (eighths; spec/format.md section 9.6)
   uint32_t fine_curvature = 0;
   uint32_t base_vertices = 0, base_faces = 0, full_faces = 0;
   uint32_t total_splits = 0;

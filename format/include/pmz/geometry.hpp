@@ -1,4 +1,4 @@
-// Position of a new vertex (spec/format.md, section 9.6), shared by writer and decoder: the
+// Position of a new vertex (spec/format.md section 9.6), shared by writer and decoder: the
 // prediction from u's ring with a curvature offset, the axis order (two tangent axes, then the
 // normal axis predicted from the tangent plane) and the residual contexts.
 #pragma once
@@ -9,9 +9,9 @@
 namespace pmz {
 
 inline constexpr uint32_t kResidualContexts = 21;  // per residual slot
-// Second contexts of the residual slots (spec section 9.6, step 5): the ring's largest offset
-// from p at half-octave resolution for the tangent slots, v's distance from the plane for the
-// normal.
+// Second contexts of the residual slots (spec/format.md section 9.6, step 5): the ring's largest
+// offset from p at half-octave resolution for the tangent slots, v's distance from the plane for
+// the normal.
 inline constexpr uint32_t kMixTangentContexts = 42, kMixNormalContexts = 21;
 inline constexpr uint32_t kMaxCurvature =
     8;  // HEAD curvature and fine_curvature: weights in eighths
@@ -41,7 +41,7 @@ struct PositionPrediction {
   int64_t n[3];         // scaled normal of u's ring
   uint8_t axis[3];      // coding order: two tangent axes (smallest |n| first), then the normal axis
   uint32_t context[3];  // residual context per slot (coding order)
-  uint32_t mix[3];      // second context per slot, mixed with the first (spec section 9.6)
+  uint32_t mix[3];  // second context per slot, mixed with the first (spec/format.md section 9.6)
 };
 
 // What the prediction needs from the rings whatever the curvature weights: the centroid sums,

@@ -1,6 +1,6 @@
 // The progressive-mesh core shared by writer and decoder: a corner table over flat arrays with
 // vertex split and its exact inverse. The writer replays this very code to compute wedge ranks
-// and predictions, so what it writes is what the decoder does (spec/format.md, sections 6 and 9.5).
+// and predictions, so what it writes is what the decoder does (spec/format.md sections 6 and 9.5).
 #pragma once
 
 #include <cstddef>
@@ -13,8 +13,8 @@ namespace pmz {
 
 inline constexpr uint32_t kNoCorner = 0xFFFFFFFFu;
 inline constexpr uint32_t kNoRank = 0xFFFFFFFFu;  // wedge side on the boundary
-// Corner c = 3 * face + k: the face's next and previous corners, counter-clockwise (spec section
-// 6).
+// Corner c = 3 * face + k: the face's next and previous corners, counter-clockwise
+// (spec/format.md section 6).
 inline uint32_t next_corner(uint32_t c) { return c % 3 == 2 ? c - 2 : c + 1; }
 inline uint32_t prev_corner(uint32_t c) { return c % 3 == 0 ? c + 2 : c - 1; }
 

@@ -1,5 +1,5 @@
 // Adaptive binary range coder (LZMA's, 15-bit probabilities, adaptation shift 2 growing to 6) and
-// the binarization of unsigned integers used by SPLT streams (spec/format.md, section 11).
+// the binarization of unsigned integers used by SPLT streams (spec/format.md section 11).
 // Header-only so the per-bit work inlines into the stream loops.
 #pragma once
 #include <cmath>
@@ -16,10 +16,10 @@ inline constexpr uint32_t kStreamPad = 4;
 // A bit model (Prob) is one uint32: the 15-bit probability of a 0 in bits 0..14, and from bit 16
 // how many bits it has coded, saturating at 127. The adaptation shift grows with that count: 2
 // for the model's first 8 bits, 3 for the next 8, 4 for the next 32, 5 for the next 79, then 6
-// (spec section 11.1). A step moves p toward kProbMin or kProbMax, not 0 or 1, so p stays within
-// [kProbMin, kProbMax] whatever the bits (the range coders' one-shift normalisation relies on
-// it) and a decision costs at least log2(32768 / 32528) > 0.01 bit (the count bounds of spec
-// section 12). kProbInit is the initial model (probability 1/2, count 0).
+// (spec/format.md section 11.1). A step moves p toward kProbMin or kProbMax, not 0 or 1, so p stays
+// within [kProbMin, kProbMax] whatever the bits (the range coders' one-shift normalisation relies
+// on it) and a decision costs at least log2(32768 / 32528) > 0.01 bit (the count bounds of
+// spec/format.md section 12). kProbInit is the initial model (probability 1/2, count 0).
 using Prob = uint32_t;
 inline constexpr uint32_t kProbMin = 240, kProbMax = kProbOne - kProbMin, kProbInit = kProbOne / 2;
 inline constexpr uint32_t kCountShift = 16, kProbMask = (1u << kCountShift) - 1, kMaxCount = 127;
@@ -67,7 +67,8 @@ class RangeEncoder {
     code(p & kProbMask, b);
     p = adapt(p, b);
   }
-  // A bit with the mean of two models' probabilities (both adapt): spec section 11.3, "mixed".
+  // A bit with the mean of two models' probabilities (both adapt): spec/format.md section 11.3,
+  // "mixed".
   void bit2(Prob& p, Prob& q, uint32_t b) {
     code(mix_probability(p, q), b);
     p = adapt(p, b);
@@ -85,8 +86,8 @@ class RangeEncoder {
   }
   // Ends the stream with the value in [low, low + range) that has the most trailing zero bits
   // (range >= 2^24 here, so at least 24), flushes it, then drops the stream's first byte (always
-  // 0) and up to kStreamPad trailing zero bytes, which the decoder reads back as zeros (spec
-  // section 11.4).
+  // 0) and up to kStreamPad trailing zero bytes, which the decoder reads back as zeros
+  // (spec/format.md section 11.4).
   void finish() {
     for (uint32_t k = 32;; --k) {
       const uint64_t mask = (uint64_t(1) << k) - 1, v = (low_ + mask) & ~mask;
@@ -225,8 +226,8 @@ class RangeDecoder {
 // An adaptive model for uint32 values: the bit length n (0..32) as min(n, 15) through a
 // 4-level binary tree; n >= 15 (an escape: residuals of 14-bit positions stay below it) then
 // n - 15 (0..17) through a 5-level tree; then the two bits below the leading one adaptively
-// (per n), the rest direct (spec section 11.3). Without the escape, the top levels of a 6-level
-// tree would code bits that are almost always 0, each still costing about 0.01 bit.
+// (per n), the rest direct (spec/format.md section 11.3). Without the escape, the top levels of a
+// 6-level tree would code bits that are almost always 0, each still costing about 0.01 bit.
 inline constexpr uint32_t kLengthEscape = 15;
 struct UIntModel {
   Prob length[16];
@@ -313,9 +314,9 @@ inline void encode_uint(RangeEncoder& rc, UIntModel& m, uint32_t x) {
   return ok;
 }
 
-// A uint32 coded with two uint models (the position residuals, spec section 11.3, "mixed"): the
-// binarization of encode_uint, every modeled bit with the mean of m's and m2's probabilities at
-// the same node, both adapting; the direct bits as there.
+// A uint32 coded with two uint models (the position residuals, spec/format.md section 11.3,
+// "mixed"): the binarization of encode_uint, every modeled bit with the mean of m's and m2's
+// probabilities at the same node, both adapting; the direct bits as there.
 inline void encode_uint_mixed(RangeEncoder& rc, UIntModel& m, UIntModel& m2, uint32_t x) {
   encode_uint_with(rc, x, [&](auto at, uint32_t b) { rc.bit2(at(m), at(m2), b); });
 }

@@ -1,5 +1,5 @@
 // Coding of one SPLT chunk: groups of vertex splits into two range-coded streams with adaptive
-// context models (spec/format.md, sections 8 and 9): connectivity (groups, vertex choice, wedges)
+// context models (spec/format.md sections 8 and 9): connectivity (groups, vertex choice, wedges)
 // and geometry (position residuals). Writer and decoder share this code.
 //
 // Groups (sizes and near flags) are decoded when the chunk arrives. Which vertices split (the
@@ -51,7 +51,7 @@ struct SplitModels {
   Prob rank_zero[kRankContexts] = {kProbInit, kProbInit, kProbInit, kProbInit};  // rank > 0
   SmallModel wedge_rank[kRankContexts];  // rank - 1 when rank > 0
   UIntModel residual[3][kResidualContexts];
-  // The second model of each residual bit (spec section 9.6): tangent slots by
+  // The second model of each residual bit (spec/format.md section 9.6): tangent slots by
   // PositionPrediction::mix (kMixTangentContexts), the normal slot likewise (kMixNormalContexts).
   UIntModel mix_tangent[2][kMixTangentContexts];
   UIntModel mix_normal[kMixNormalContexts];
@@ -67,7 +67,7 @@ struct GroupCode {
   bool near;
 };
 
-// The split symbol schedule (spec section 9.3), defined here once for the writer
+// The split symbol schedule (spec/format.md section 9.3), defined here once for the writer
 // (encode_split_chunk), the decoder (Decoder::Impl::apply) and SplitChunkReader::group_symbols:
 // a group's choice bits are read until its first scan_at_group_start() vertices are found, and
 // after its split j (0-based) is first applied until scan_after_split(j) are (1-based counts,
@@ -89,9 +89,9 @@ void encode_split_chunk(const std::vector<GroupCode>& groups, const std::vector<
 // Decoder side of one SPLT chunk. open() copies the payload, decodes the groups (sizes summing
 // to the split count, at most max_splits) and validates them. models (the file's, see
 // SplitModels) must outlive the reader. Then, in stream order and in the decoder's schedule
-// (spec section 9.3: the choice, wedge_count and wedge_rank calls read one stream): begin_group()
-// and find() the vertices of each group, wedge_count(), wedge_rank() and residuals() the
-// symbols of each split, with the contexts the caller computes from its mesh; false when a
+// (spec/format.md section 9.3: the choice, wedge_count and wedge_rank calls read one stream):
+// begin_group() and find() the vertices of each group, wedge_count(), wedge_rank() and residuals()
+// the symbols of each split, with the contexts the caller computes from its mesh; false when a
 // stream is malformed or exhausted, or a group's candidates run out.
 class SplitChunkReader {
  public:

@@ -1,4 +1,4 @@
-// Which vertices split (spec/format.md, sections 9.1 and 9.2): the vertex choice state the writer
+// Which vertices split (spec/format.md sections 9.1 and 9.2): the vertex choice state the writer
 // and the decoder keep in step (degrees, umbrella sums, the near list, exclusion), the choice
 // contexts, and the scan over a group's candidates. The chunk codec (split_chunk.hpp) codes the
 // choice bits this scan asks for.
@@ -16,7 +16,7 @@ namespace pmz {
 
 class ProgressiveMesh;
 
-// Vertex choice contexts (spec section 9.2): density x near x degree x umbrella
+// Vertex choice contexts (spec/format.md section 9.2): density x near x degree x umbrella
 // class.
 inline constexpr uint32_t kChoiceDensities = 21, kChoiceDegrees = 9, kChoiceShapes = 3;
 inline constexpr uint32_t kChoiceKeys =
@@ -33,13 +33,13 @@ inline uint32_t bitlen_quotient(uint64_t D, uint64_t m) {
 }
 
 // Initial probability of a 0 (scaled to 32768) of the choice models of expected-gap class d
-// (spec section 9.2 and Appendix A): a 1 has probability about 1 / (1.5 * 2^(d - 1)) there. Models
-// with d >= 1 start at count kPriorCount (primed_model, spec section 11.1).
+// (spec/format.md section 9.2 and Appendix A): a 1 has probability about 1 / (1.5 * 2^(d - 1))
+// there. Models with d >= 1 start at count kPriorCount (primed_model, spec/format.md section 11.1).
 inline uint32_t choice_prior(uint32_t d) {
   return d == 0 ? kProbInit : std::min(32768u - 131072u / (3u << d), 31744u);
 }
 
-// The umbrella sums of a vertex w (spec section 9.1): over w's ring as the degree rule
+// The umbrella sums of a vertex w (spec/format.md section 9.1): over w's ring as the degree rule
 // counts it, with c' = c >> umbrella_shift (per axis) and the spokes e = c'[x] - c'[w], the sum
 // D of the spokes per axis and the sum L of their lengths |e_x| + |e_y| + |e_z|, modulo 2^32
 // (D two's complement).
@@ -65,13 +65,13 @@ inline uint32_t umbrella_class(const RingSums& s) {
   return d2 < ((l2 + 63) >> 6) ? 0 : d2 < ((l2 + 15) >> 4) ? 1 : 2;
 }
 
-// Exclusion lag (spec section 9.2): a group's j-th split excludes its closed one-ring from
-// the group's candidates once kChoiceLag more splits of the group are found, so the decoder
+// Exclusion lag (spec/format.md section 9.2): a group's j-th split excludes its closed one-ring
+// from the group's candidates once kChoiceLag more splits of the group are found, so the decoder
 // can find the group's vertices kChoiceLag + 1 splits ahead of the split it applies (for the
 // fan prefetching) and take each ring from that split's own ring walk.
 inline constexpr uint32_t kChoiceLag = 8;
 
-// Which vertices split (spec/format.md, sections 9.1 and 9.2): the state the writer and the decoder
+// Which vertices split (spec/format.md sections 9.1 and 9.2): the state the writer and the decoder
 // keep in step, updated at every first application of a split, in stream order.
 // - degree of every vertex: base vertices their ring size, then per split the rule of
 //   applied() (the ring sizes on a manifold mesh);
