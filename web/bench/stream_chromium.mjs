@@ -3,7 +3,8 @@
 // requestAnimationFrame timestamps: the first frame drawn with the object after the first body
 // bytes arrived, and the gaps between frames until the stream is complete; from the Long Tasks
 // API the page's main-thread tasks over 50 ms in that time (what blocks the page itself, apart
-// from frames waiting on SwiftShader's rendering in the GPU process).
+// from frames waiting on SwiftShader's rendering in the GPU process); and for comparison the
+// median gap over 3 s of the finished mesh drawn while nothing changes (rendering alone).
 //
 //   node web/bench/stream_chromium.mjs MESH.pmz [RATE=2000000] [RUNS=3] [WIDTHxHEIGHT=640x480]
 //                                     [WORKER=1]   (0: decode on the page's thread)
@@ -21,6 +22,7 @@ const worker = workerArg !== '0';
 const rate = Number(rateArg || 2e6), runs = Number(runsArg || 3);
 const [width, height] = (sizeArg || '640x480').split('x').map(Number);
 const server = await serveViewer(path.join(here, '..', 'dist', 'viewer'), { 'mesh.pmz': path.resolve(file) }, rate);
+const STATIC_MS = 3000;  // frames of the finished mesh, for static_gap_median_ms
 const results = [];
 for (let r = 0; r < runs; ++r) {
   const profile = mkdtempSync(path.join(tmpdir(), 'pmz-bench-chromium-'));
@@ -31,6 +33,8 @@ for (let r = 0; r < runs; ++r) {
   await page.goto(`http://127.0.0.1:${server.address().port}/index.html?src=/stream/mesh.pmz${worker ? '' : '&worker=0'}`);
   await page.waitForFunction(() => window.pmzStatus.complete || window.pmzStatus.error,
     { timeout: 600000, polling: 200 });
+  // The same full mesh drawn while nothing changes: what rendering alone costs per frame.
+  await new Promise((r) => setTimeout(r, STATIC_MS + 500));
   const s = await page.evaluate(() => ({ status: window.pmzStatus, timing: window.pmzTiming,
     frames: window.pmzFrames, longTasks: window.pmzLongTasks }));
   await browser.close();
@@ -40,11 +44,14 @@ for (let r = 0; r < runs; ++r) {
   const during = s.frames.filter((f) => f.t >= firstBytes && (!done || f.t <= done.t));
   const gaps = during.slice(1).map((f, i) => f.t - during[i].t).sort((a, b) => a - b);
   const q = (p) => gaps.length ? +gaps[Math.min(gaps.length - 1, Math.floor(p * gaps.length))].toFixed(1) : null;
+  const still = done ? s.frames.filter((f) => f.t > done.t + 500) : [];
+  const stillGaps = still.slice(1).map((f, i) => f.t - still[i].t).sort((a, b) => a - b);
   results.push({ faces: s.status.faces, error: s.status.error,
     first_object_ms: +(firstObjectFrame - firstBytes).toFixed(1),
     complete_ms: done ? +(done.t - firstBytes).toFixed(1) : null, frames: during.length,
     gap_median_ms: q(0.5), gap_p95_ms: q(0.95), gap_max_ms: gaps.length ? +gaps[gaps.length - 1].toFixed(1) : null,
     gaps_over_50ms: gaps.filter((g) => g > 50).length,
+    static_gap_median_ms: stillGaps.length ? +stillGaps[stillGaps.length >> 1].toFixed(1) : null,
     // The page's own JS per frame: update() (applying the worker's ranges, or refining here)
     // and the render() call (queuing GL commands; SwiftShader draws in the GPU process).
     update_max_ms: +Math.max(0, ...during.map((f) => f.work)).toFixed(1),

@@ -1,5 +1,6 @@
-import { BufferGeometry, Loader, LoadingManager, Material } from 'three';
-import { Decoder, DecoderOptions, PmzStatus, StreamInfo } from './index.js';
+import { BufferGeometry, Loader, LoadingManager, Material, MeshStandardMaterial,
+  MeshStandardMaterialParameters, TextureLoader } from 'three';
+import { Decoder, DecoderOptions, PmzMaterial, PmzStatus, StreamInfo } from './index.js';
 
 export interface PMZOptions extends DecoderOptions {
   /** Keep a pmzMorph attribute (parent position, birth time) for geomorphMaterial(). */
@@ -16,6 +17,14 @@ export interface PMZOptions extends DecoderOptions {
 export interface PMZSnapshot {
   positions: Float32Array;
   indices: Uint32Array;
+  /** What the geometry draws: the position vertices, or with attributes the wedges. */
+  render: {
+    positions: Float32Array;
+    indices: Uint32Array;
+    /** By three.js attribute name: uv, uv1, normal, color. */
+    attributes: Record<string, Float32Array>;
+    layout: [string, number][];
+  };
 }
 
 /** What both streams have: one stream's geometry, updated in place (changed ranges only). */
@@ -33,6 +42,10 @@ export interface PMZStreamState {
   readonly vertexCount: number;
   readonly splitsApplied: number;
   info(): StreamInfo;
+  /** The stream's URL when opened from one (texture references resolve against it). */
+  url?: string;
+  /** The material table ([] without one, or before the base mesh). */
+  materials(): PmzMaterial[];
   /** A copy of the decoder's current mesh. */
   snapshot(): Promise<PMZSnapshot>;
   feed(bytes: Uint8Array): PmzStatus;
@@ -70,6 +83,20 @@ export declare function geomorphMaterial(
   material: Material,
   seconds?: number,
 ): (() => void) & { uniforms: { pmzTime: { value: number }; pmzDuration: { value: number } } };
+
+/** three.js materials indexed like the stream's material table (one plain material without a
+ * table): base colour, base colour texture (resolved against the .pmz URL), vertex colours,
+ * smooth shading with decoded normals. Call once the base mesh is in. */
+export declare function pmzMaterials(
+  stream: PMZStream | PMZWorkerStream,
+  options?: {
+    baseUrl?: string;
+    parameters?: MeshStandardMaterialParameters;
+    color?: number;
+    textureLoader?: TextureLoader;
+    onTextureError?: (url: string, error: unknown) => void;
+  },
+): MeshStandardMaterial[];
 
 export declare class PMZLoader extends Loader<BufferGeometry> {
   constructor(manager?: LoadingManager, options?: PMZOptions);

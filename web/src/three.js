@@ -1,13 +1,18 @@
 // three.js loader for pmz: a BufferGeometry updated in place as the stream arrives and refines.
-// Only the changed ranges are uploaded (BufferAttribute.addUpdateRange, three r159+).
-import { Box3, BufferAttribute, BufferGeometry, Loader, Sphere, Vector3 } from 'three';
+// Only the changed ranges are uploaded (BufferAttribute.addUpdateRange, three r159+). With
+// attributes (format 8.0) a render vertex is an attribute wedge (as in the native viewer): uv,
+// uv1, normal and color attributes beside position, and a group per run of faces of one
+// material when the stream has several (pmzMaterials() makes the three.js materials).
+import { Box3, BufferAttribute, BufferGeometry, Color, DoubleSide, Loader, MeshStandardMaterial,
+  Sphere, SRGBColorSpace, TextureLoader, Vector3 } from 'three';
 import { createDecoder, feedStream } from './index.js';
+import { renderArrays, renderUpdate } from './render_update.js';
 
 const RUNS_MAX = 64;  // more rewritten-face runs than this upload as one span
 const MODIFIED_LIST_MAX = 1 << 16;  // rewritten faces listed per frame; more: one span
 
 // Update ranges for rewritten faces: sorted runs, or one span when there are many.
-function addFaceRuns(index, modifiedFaces) {
+function addFaceRuns(attributes, modifiedFaces, perFace) {
   const faces = Uint32Array.from(modifiedFaces).sort();
   const runs = [];
   for (const f of faces) {
@@ -16,17 +21,18 @@ function addFaceRuns(index, modifiedFaces) {
     else runs.push([f, f + 1]);
   }
   if (runs.length > RUNS_MAX) runs.splice(0, runs.length, [runs[0][0], runs[runs.length - 1][1]]);
-  for (const [a, b] of runs) index.addUpdateRange(3 * a, 3 * (b - a));
+  for (const [a, b] of runs) attributes.addUpdateRange(perFace * a, perFace * (b - a));
 }
 
-// Index, position and (optional) pmzMorph attributes with room for what is needed, grown 4x at
-// a time up to the header's full counts, contents kept. Not the full mesh at once: a new
-// attribute is uploaded whole, and the first frame of a 1.2M-face stream then moved 31 MB
-// (3.9 s to the first frame in SwiftShader).
-function allocateGeometry(g, info, vertices, faces, caps, geomorph) {
+// Room for what is needed, grown 4x at a time up to the header's full counts (render vertices
+// with attributes: wedges, which the header does not count), contents kept. Not the full mesh
+// at once: a new attribute is uploaded whole, and the first frame of a 1.2M-face stream then
+// moved 31 MB (3.9 s to the first frame in SwiftShader).
+function allocateGeometry(g, info, vertices, faces, caps, spec) {
   const room = (need, cap, full, least) =>
     Math.max(need, Math.min(Math.max(full, need), Math.max(4 * cap, 2 * need, least)));
-  const vcap = room(vertices, caps.vertices, info.fullVertices, 1 << 15);
+  const fullVertices = spec.layout.length ? 2 * info.fullVertices : info.fullVertices;
+  const vcap = room(vertices, caps.vertices, fullVertices, 1 << 15);
   const fcap = room(faces, caps.faces, info.fullFaces, 1 << 16);
   const grow = (name, old, size, itemSize, Type) => {
     const a = new BufferAttribute(new Type(size * itemSize), itemSize);
@@ -36,11 +42,17 @@ function allocateGeometry(g, info, vertices, faces, caps, geomorph) {
   };
   if (vertices > caps.vertices) {
     grow('position', g.getAttribute('position'), vcap, 3, Float32Array);
-    if (geomorph) grow('pmzMorph', g.getAttribute('pmzMorph'), vcap, 4, Float32Array);
+    for (const [name, size] of spec.layout) grow(name, g.getAttribute(name), vcap, size, Float32Array);
+    if (spec.geomorph) grow('pmzMorph', g.getAttribute('pmzMorph'), vcap, 4, Float32Array);
     caps.vertices = vcap;
   }
   if (faces > caps.faces) {
     g.setIndex(grow(null, g.getIndex(), 3 * fcap, 1, Uint32Array));  // itemSize 1: three counts indices
+    if (spec.groups) {
+      const m = new Uint32Array(fcap);
+      m.set(spec.faceMaterials.subarray(0, Math.min(fcap, spec.faceMaterials.length)));
+      spec.faceMaterials = m;
+    }
     caps.faces = fcap;
   }
   const box = new Box3(new Vector3(...info.bboxMin), new Vector3(...info.bboxMax));
@@ -48,11 +60,114 @@ function allocateGeometry(g, info, vertices, faces, caps, geomorph) {
   g.boundingSphere = box.getBoundingSphere(new Sphere());
 }
 
+// A geometry kept equal to a decoder's render arrays by applying renderUpdate()s (views on the
+// page, copies posted by the worker). The update ranges of all updates applied in one frame
+// are merged.
+class GeometryMirror {
+  constructor(geomorph) {
+    this.geometry = new BufferGeometry();
+    this.spec = { geomorph, layout: null, groups: false, faceMaterials: new Uint32Array(0) };
+    this.caps = { vertices: 0, faces: 0 };
+    this.faces = 0;
+    this.clock = typeof performance === 'object' ? performance : Date;
+  }
+
+  // Applies the updates in order; true when the geometry changed.
+  apply(updates, info) {
+    const g = this.geometry, spec = this.spec;
+    let vmin = Infinity, vmax = 0, fmin = Infinity, fmax = 0, mmin = Infinity;
+    const modified = [];  // rewritten faces, or with manyModified only their span
+    let modMin = Infinity, modMax = -1, manyModified = false, changed = false;
+    for (const u of updates) {
+      if (!spec.layout) {
+        spec.layout = u.layout;
+        spec.groups = !!u.faceMaterials;
+      }
+      let all = u.all;
+      if (u.count > this.caps.vertices || u.faces > this.caps.faces) {
+        if (this.caps.faces) all = true;  // reallocated: whatever came before is in, kept
+        allocateGeometry(g, info, u.count, u.faces, this.caps, spec);
+        vmin = 0; vmax = Math.max(vmax, u.count); fmin = 0; fmax = Math.max(fmax, u.faces);
+      }
+      const vb = u.vertexBegin, fb = u.faceBegin;
+      g.getAttribute('position').array.set(u.positions, 3 * vb);
+      for (const [name, size] of spec.layout) g.getAttribute(name).array.set(u.attributes[name], size * vb);
+      const index = g.getIndex().array;
+      index.set(u.indices, 3 * fb);
+      if (spec.groups && u.faceMaterials) spec.faceMaterials.set(u.faceMaterials, fb);
+      vmin = Math.min(vmin, vb); vmax = Math.max(vmax, u.count);
+      fmin = Math.min(fmin, fb); fmax = Math.max(fmax, u.faces);
+      if (all) { vmin = 0; fmin = 0; }
+      if (u.modified) {  // (face, a, b, c); element copies: a subarray per face was seconds
+        const mm = u.modified;
+        for (let i = 0; i < mm.length; i += 4) {
+          const f = mm[i];
+          index[3 * f] = mm[i + 1];
+          index[3 * f + 1] = mm[i + 2];
+          index[3 * f + 2] = mm[i + 3];
+          if (f < modMin) modMin = f;
+          if (f > modMax) modMax = f;
+          if (modified.length < MODIFIED_LIST_MAX) modified.push(f);
+          else manyModified = true;
+        }
+        if (spec.groups && u.modifiedMaterials)
+          for (let i = 0; i < u.modifiedMaterials.length; ++i) spec.faceMaterials[mm[4 * i]] = u.modifiedMaterials[i];
+      }
+      if (u.morph && spec.geomorph) {
+        const morph = g.getAttribute('pmzMorph').array;
+        const now = u.all ? -1e6 : this.clock.now() / 1000;
+        for (let v = u.morphBegin, i = 0; v < u.count; ++v, i += 3) {
+          morph[4 * v] = u.morph[i];
+          morph[4 * v + 1] = u.morph[i + 1];
+          morph[4 * v + 2] = u.morph[i + 2];
+          morph[4 * v + 3] = now;
+        }
+        mmin = Math.min(mmin, u.morphBegin);
+      }
+      this.faces = u.faces;
+      changed = true;
+    }
+    if (!changed) return false;
+    if (vmin < vmax) {
+      for (const name of ['position', ...spec.layout.map(([n]) => n)]) {
+        const a = g.getAttribute(name);
+        a.addUpdateRange(a.itemSize * vmin, a.itemSize * (vmax - vmin));
+        a.needsUpdate = true;
+      }
+    }
+    if (spec.geomorph && Math.min(mmin, vmin) < vmax) {
+      const morph = g.getAttribute('pmzMorph'), from = Math.min(mmin, vmin);
+      morph.addUpdateRange(4 * from, 4 * (vmax - from));
+      morph.needsUpdate = true;
+    }
+    const index = g.getIndex();
+    if (fmin < fmax) index.addUpdateRange(3 * fmin, 3 * (fmax - fmin));
+    if (manyModified) index.addUpdateRange(3 * modMin, 3 * (modMax + 1 - modMin));
+    else if (modified.length) addFaceRuns(index, modified, 3);
+    index.needsUpdate = true;
+    g.setDrawRange(0, 3 * this.faces);
+    if (spec.groups) this._groups();
+    return true;
+  }
+
+  // One group per run of faces of one material (materialIndex: the material table's index).
+  _groups() {
+    const g = this.geometry, m = this.spec.faceMaterials, nf = this.faces;
+    g.clearGroups();
+    for (let f = 0; f < nf;) {
+      const start = f, id = m[f];
+      while (f < nf && m[f] === id) ++f;
+      g.addGroup(3 * start, 3 * (f - start), id);
+    }
+  }
+}
+
 // The geometry of one stream and the decoder behind it. update() each animation frame.
 export class PMZStream {
   constructor(decoder, options = {}) {
     this.decoder = decoder;
-    this.geometry = new BufferGeometry();
+    this._mirror = new GeometryMirror(options.geomorph ?? false);
+    this.geometry = this._mirror.geometry;
     this.geomorph = options.geomorph ?? false;
     this.frameBudgetMs = options.frameBudgetMs ?? 8;
     this.faceTarget = null;  // null: follow the stream to its finest level
@@ -61,10 +176,7 @@ export class PMZStream {
     this.status = 'ok';
     this.complete = false;  // see update()
     this._finished = false;
-    this._vertexCap = 0;
-    this._faceCap = 0;
-    this._shownVertices = 0;
-    this._clock = typeof performance === 'object' ? performance : Date;
+    this._renderState = { shownVertices: 0 };
   }
 
   get error() { return this.status === 'ok' ? '' : this.decoder.error; }
@@ -72,9 +184,13 @@ export class PMZStream {
   get vertexCount() { return this.decoder.vertexCount; }
   get splitsApplied() { return this.decoder.splitsApplied; }
   info() { return this.decoder.info(); }
-  // The decoder's current mesh (copies), e.g. to check the geometry against.
+  // The material table ([] without materials): see Decoder.materials().
+  materials() { return this.decoder.materials(); }
+  // The decoder's current mesh (copies), e.g. to check the geometry against, and the render
+  // arrays (render_update.js: the wedges' with attributes).
   async snapshot() {
-    return { positions: this.decoder.positions().slice(), indices: this.decoder.indices().slice() };
+    const d = this.decoder;
+    return { positions: d.positions().slice(), indices: d.indices().slice(), render: renderArrays(d) };
   }
 
   feed(bytes) {
@@ -105,72 +221,15 @@ export class PMZStream {
     return this._sync();
   }
 
-  _allocate(vertices, faces) {
-    const caps = { vertices: this._vertexCap, faces: this._faceCap };
-    allocateGeometry(this.geometry, this.decoder.info(), vertices, faces, caps, this.geomorph);
-    this._vertexCap = caps.vertices;
-    this._faceCap = caps.faces;
-  }
-
   _sync() {
-    const d = this.decoder, g = this.geometry;
-    const nv = d.vertexCount, nf = d.faceCount;
+    const d = this.decoder;
+    const u = renderUpdate(d, this._renderState, { geomorph: this.geomorph });
     const c = d.changes();
-    let all = c.all;
-    if (nv > this._vertexCap || nf > this._faceCap) {
-      this._allocate(nv, nf);
-      all = true;
-    }
-    const pos = g.getAttribute('position'), index = g.getIndex();
-    const vb = all ? 0 : c.vertexBegin, fb = all ? 0 : c.faceBegin;
-    let changed = false;
-    if (vb < nv) {
-      const p = d.positions();
-      pos.array.set(p.subarray(3 * vb, 3 * nv), 3 * vb);
-      pos.addUpdateRange(3 * vb, 3 * (nv - vb));
-      pos.needsUpdate = true;
-      if (this.geomorph) this._morph(Math.max(vb, this._shownVertices), nv, all);
-      changed = true;
-    }
-    const t = d.indices();
-    if (fb < nf) {
-      index.array.set(t.subarray(3 * fb, 3 * nf), 3 * fb);
-      index.addUpdateRange(3 * fb, 3 * (nf - fb));
-      changed = true;
-    }
-    if (!all && c.modifiedFaces.length) {
-      for (const f of c.modifiedFaces) index.array.set(t.subarray(3 * f, 3 * f + 3), 3 * f);
-      addFaceRuns(index, c.modifiedFaces);
-      changed = true;
-    }
-    if (changed) index.needsUpdate = true;
-    if (nf !== g.drawRange.count / 3) {
-      g.setDrawRange(0, 3 * nf);
-      changed = true;
-    }
-    this._shownVertices = nv;
+    const nothing = !c.all && u.vertexBegin >= u.count && u.faceBegin >= u.faces && !u.modified &&
+      u.faces === this._mirror.faces;
+    const changed = !nothing && this._mirror.apply([u], d.info());
     d.clearChanges();
     return changed;
-  }
-
-  // New vertices start at their parent's position and glide to their own (see
-  // geomorphMaterial): pmzMorph = parent xyz, birth time in seconds.
-  _morph(from, to, all) {
-    const morph = this.geometry.getAttribute('pmzMorph');
-    const p = this.decoder.positions(), parents = this.decoder.splitParents();
-    const now = all ? -1e6 : this._clock.now() / 1000;
-    for (let v = from; v < to; ++v) {
-      const u = parents[v];
-      const src = u === 0xffffffff || all ? v : u;
-      morph.array[4 * v] = p[3 * src];
-      morph.array[4 * v + 1] = p[3 * src + 1];
-      morph.array[4 * v + 2] = p[3 * src + 2];
-      morph.array[4 * v + 3] = now;
-    }
-    if (to > from) {
-      morph.addUpdateRange(4 * from, 4 * (to - from));
-      morph.needsUpdate = true;
-    }
   }
 
   dispose() {
@@ -184,7 +243,8 @@ export class PMZStream {
 // animation frame applies what arrived since the last one (budgetMs is not needed here).
 export class PMZWorkerStream {
   constructor(options = {}) {
-    this.geometry = new BufferGeometry();
+    this._mirror = new GeometryMirror(options.geomorph ?? false);
+    this.geometry = this._mirror.geometry;
     this.geomorph = options.geomorph ?? false;
     this.faceTarget = null;
     this.bytes = 0;
@@ -196,12 +256,11 @@ export class PMZWorkerStream {
     this.splitsApplied = 0;
     this._error = '';
     this._info = { headerDone: false, baseDone: false, complete: false };
-    this._caps = { vertices: 0, faces: 0 };
+    this._materials = [];
     this._pending = [];
     this._sentTarget = null;
     this._snapshots = new Map();
     this.firstBytesTime = null;
-    this._clock = typeof performance === 'object' ? performance : Date;
     const { worker: _, ...cloneable } = options;
     this.worker = new Worker(new URL('./worker.js', import.meta.url), { type: 'module' });
     this.worker.postMessage({ type: 'init', options: cloneable });
@@ -216,6 +275,7 @@ export class PMZWorkerStream {
           this.firstBytesTime = m.firstBytesAt - performance.timeOrigin;
         this.bytes = m.bytes;
         this.totalBytes = m.totalBytes || this.totalBytes;
+        if (m.materials) this._materials = m.materials;
       } else if (m.type === 'done') {
         this._done = m;
         settle.resolve(m.status);
@@ -231,6 +291,8 @@ export class PMZWorkerStream {
 
   get error() { return this.status === 'ok' ? '' : this._error; }
   info() { return this._info; }
+  // The material table ([] without materials, or before the base mesh).
+  materials() { return this._materials; }
   // The worker's current mesh (copies), e.g. to check the geometry against.
   snapshot() {
     const id = this._snapshots.size + Math.random();
@@ -264,73 +326,17 @@ export class PMZWorkerStream {
       this._sentTarget = this.faceTarget;
       this.worker.postMessage({ type: 'target', faces: this.faceTarget });
     }
-    const g = this.geometry;
-    let changed = false, vmin = Infinity, vmax = 0, fmin = Infinity, fmax = 0, mmin = Infinity;
-    const modified = [];  // rewritten faces, or with manyModified only their span
-    let modMin = Infinity, modMax = -1, manyModified = false;
+    const updates = [];
     for (const m of this._pending) {
       Object.assign(this, { faceCount: m.faces, vertexCount: m.vertices,
         splitsApplied: m.splitsApplied, status: m.status });
       this._error = m.error;
       this._info = m.info;
-      if (!m.positions) continue;
-      let all = m.all;
-      if (m.vertices > this._caps.vertices || m.faces > this._caps.faces) {
-        if (this._caps.faces) all = true;  // reallocated: whatever came before is in, kept
-        allocateGeometry(g, m.info, m.vertices, m.faces, this._caps, this.geomorph);
-        vmin = 0; vmax = Math.max(vmax, m.vertices); fmin = 0; fmax = Math.max(fmax, m.faces);
-      }
-      g.getAttribute('position').array.set(m.positions, 3 * m.vertexBegin);
-      g.getIndex().array.set(m.indices, 3 * m.faceBegin);
-      vmin = Math.min(vmin, m.vertexBegin); vmax = Math.max(vmax, m.vertices);
-      fmin = Math.min(fmin, m.faceBegin); fmax = Math.max(fmax, m.faces);
-      if (all) { vmin = 0; fmin = 0; }
-      if (m.modified) {  // (face, a, b, c); element copies: a subarray per face was seconds
-        const index = g.getIndex().array, mm = m.modified;
-        for (let i = 0; i < mm.length; i += 4) {
-          const f = mm[i];
-          index[3 * f] = mm[i + 1];
-          index[3 * f + 1] = mm[i + 2];
-          index[3 * f + 2] = mm[i + 3];
-          if (f < modMin) modMin = f;
-          if (f > modMax) modMax = f;
-          if (modified.length < MODIFIED_LIST_MAX) modified.push(f);
-          else manyModified = true;
-        }
-      }
-      if (m.morph) {
-        const morph = g.getAttribute('pmzMorph').array;
-        const now = m.all ? -1e6 : this._clock.now() / 1000;
-        for (let v = m.morphBegin, i = 0; v < m.vertices; ++v, i += 3) {
-          morph[4 * v] = m.morph[i];
-          morph[4 * v + 1] = m.morph[i + 1];
-          morph[4 * v + 2] = m.morph[i + 2];
-          morph[4 * v + 3] = now;
-        }
-        mmin = Math.min(mmin, m.morphBegin);
-      }
-      changed = true;
+      if (m.render) updates.push(m.render);
     }
     this._pending.length = 0;
-    if (changed) {
-      const pos = g.getAttribute('position'), index = g.getIndex();
-      if (vmin < vmax) {
-        pos.addUpdateRange(3 * vmin, 3 * (vmax - vmin));
-        pos.needsUpdate = true;
-        if (this.geomorph && Math.min(mmin, vmin) < vmax) {
-          const morph = g.getAttribute('pmzMorph'), from = Math.min(mmin, vmin);
-          morph.addUpdateRange(4 * from, 4 * (vmax - from));
-          morph.needsUpdate = true;
-        }
-      }
-      if (fmin < fmax) index.addUpdateRange(3 * fmin, 3 * (fmax - fmin));
-      if (manyModified) index.addUpdateRange(3 * modMin, 3 * (modMax + 1 - modMin));
-      else if (modified.length) addFaceRuns(index, modified);
-      index.needsUpdate = true;
-      g.setDrawRange(0, 3 * this.faceCount);
-    }
+    const changed = updates.length > 0 && this._mirror.apply(updates, this._info);
     this.complete = !!this._done && this._done.status === 'ok' && this.status === 'ok' &&
-      this._pending.length === 0 &&
       (this.faceTarget !== null || this.splitsApplied === this._info.totalSplits);
     return changed;
   }
@@ -360,6 +366,46 @@ export function geomorphMaterial(material, seconds = 0.4) {
   const tick = () => { uniforms.pmzTime.value = clock.now() / 1000; };
   tick.uniforms = uniforms;  // pmzTime (seconds, performance.now() / 1000), pmzDuration
   return tick;
+}
+
+// A texture reference (a file name or URI as the file states it, OBJ's backslashes too)
+// resolved against the stream's URL.
+function textureUrl(uri, base) {
+  const u = uri.replace(/\\/g, '/');
+  try {
+    return base ? new URL(u, base).href : u;
+  } catch (e) {
+    return u;
+  }
+}
+
+// three.js materials for a stream, indexed like its material table (the geometry's groups'
+// materialIndex), one plain material without a table: MeshStandardMaterial with the base
+// colour, the base colour texture (resolved relative to the .pmz URL, options.baseUrl or the
+// stream's), vertex colours when the geometry has them, and smooth shading with decoded
+// normals (flat without). Call once the base mesh is in (the geometry has its attributes).
+// options: parameters (more MeshStandardMaterial parameters), color (without a table),
+// textureLoader, onTextureError(url, error).
+export function pmzMaterials(stream, options = {}) {
+  const g = stream.geometry;
+  const has = (name) => !!g.getAttribute(name);
+  const base = options.baseUrl ?? stream.url ?? (typeof location === 'object' ? location.href : undefined);
+  const loader = options.textureLoader ?? new TextureLoader();
+  const make = (params) => new MeshStandardMaterial({ side: DoubleSide, roughness: 0.7,
+    flatShading: !has('normal'), vertexColors: has('color'), ...options.parameters, ...params });
+  const table = stream.materials();
+  if (!table.length) return [make({ color: has('color') ? 0xffffff : options.color ?? 0xd8c8a8 })];
+  return table.map((m) => {
+    const material = make({ name: m.name, color: new Color(m.baseColor[0], m.baseColor[1], m.baseColor[2]),
+      opacity: m.baseColor[3], transparent: m.baseColor[3] < 1 });
+    if (m.baseColorTexture && has('uv')) {
+      const url = textureUrl(m.baseColorTexture, base);
+      material.map = loader.load(url, undefined, undefined,
+        (e) => (options.onTextureError ? options.onTextureError(url, e) : console.warn(`pmz: texture ${url} not loaded`)));
+      material.map.colorSpace = SRGBColorSpace;
+    }
+    return material;
+  });
 }
 
 // three.js loader: load(url, onLoad, onProgress, onError) calls onLoad(geometry, stream) once
@@ -405,6 +451,14 @@ export class PMZLoader extends Loader {
     const auto = opts.autoUpdate !== false && typeof requestAnimationFrame === 'function';
     const inWorker = opts.worker && typeof Worker === 'function';
     const s = inWorker ? new PMZWorkerStream(opts) : new PMZStream(await createDecoder(opts), opts);
+    // Texture references resolve against it (pmzMaterials()).
+    if (typeof source === 'string' || source instanceof URL) {
+      try {
+        s.url = new URL(source, typeof location === 'object' ? location.href : undefined).href;
+      } catch (e) {  // a relative URL without a page (node)
+        s.url = String(source);
+      }
+    }
     const tick = () => {
       s.update();
       if (onUpdate) onUpdate(s);

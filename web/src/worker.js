@@ -6,8 +6,9 @@
 //               {type: 'finish'} | {type: 'target', faces} (null: follow the stream) |
 //               {type: 'snapshot', id} | {type: 'close'}
 // Messages out: {type: 'update', ...} (see post()), {type: 'done', status, error},
-//               {type: 'snapshot', id, positions, indices}, {type: 'failed', error}
+//               {type: 'snapshot', id, positions, indices, render}, {type: 'failed', error}
 import { createDecoder } from './index.js';
+import { renderArrays, renderUpdate, transferables } from './render_update.js';
 
 const SLICE_MS = 8;  // refinement between two updates (and between two reads of the network)
 
@@ -17,7 +18,8 @@ let faceTarget = null;
 let bytes = 0, totalBytes = 0;
 let firstBytesAt = null;  // ms since the epoch (timeOrigin + now: comparable across threads)
 let finished = false, doneSent = false;
-let shownVertices = 0;
+let renderState = { shownVertices: 0 };
+let materialsPosted = false;
 let basePosted = false;
 let scheduled = false;
 let queue = [];  // messages that arrived before the decoder was created
@@ -86,52 +88,23 @@ function work() {
   }
 }
 
-// The state and the changed ranges since the last post: positions [vertexBegin, vertices),
-// indices [faceBegin, faces), rewritten faces below faceBegin as (face, a, b, c), and for
-// geomorphs each new vertex's parent position (its own for base vertices and full uploads).
+// The state and, once the base mesh is in, the changed ranges since the last post
+// (render_update.js: copies, transferred), with the material table in the first.
 function post(info) {
   const d = decoder;
-  const nv = d.vertexCount, nf = d.faceCount;
-  const c = d.changes();
-  const all = c.all;
-  const vb = all ? 0 : Math.min(c.vertexBegin, nv), fb = all ? 0 : Math.min(c.faceBegin, nf);
   const msg = {
-    type: 'update', vertices: nv, faces: nf, bytes, totalBytes, status: d.status,
-    error: d.status === 'ok' ? '' : d.error, splitsApplied: d.splitsApplied, info, all, firstBytesAt,
-    vertexBegin: vb, faceBegin: fb, positions: null, indices: null, modified: null, morph: null,
+    type: 'update', vertices: d.vertexCount, faces: d.faceCount, bytes, totalBytes,
+    status: d.status, error: d.status === 'ok' ? '' : d.error, splitsApplied: d.splitsApplied,
+    info, firstBytesAt, render: null, materials: null,
   };
-  const transfer = [];
+  let transfer = [];
   if (info.baseDone) {
-    const p = d.positions();
-    msg.positions = p.slice(3 * vb, 3 * nv);
-    msg.indices = d.indices().slice(3 * fb, 3 * nf);
-    if (!all && c.modifiedFaces.length) {
-      const t = d.indices(), faces = c.modifiedFaces, m = new Uint32Array(4 * faces.length);
-      for (let i = 0; i < faces.length; ++i) {
-        const f = faces[i];
-        m[4 * i] = f;
-        m[4 * i + 1] = t[3 * f];
-        m[4 * i + 2] = t[3 * f + 1];
-        m[4 * i + 3] = t[3 * f + 2];
-      }
-      msg.modified = m;
-      transfer.push(m.buffer);
+    if (!materialsPosted) {
+      materialsPosted = true;
+      msg.materials = d.materials();
     }
-    if (options.geomorph) {
-      const from = all ? 0 : Math.max(vb, Math.min(shownVertices, nv));
-      const parents = d.splitParents(), morph = new Float32Array(3 * (nv - from));
-      for (let v = from, i = 0; v < nv; ++v, i += 3) {
-        const u = parents[v], src = 3 * (u === 0xffffffff || all ? v : u);
-        morph[i] = p[src];
-        morph[i + 1] = p[src + 1];
-        morph[i + 2] = p[src + 2];
-      }
-      msg.morph = morph;
-      msg.morphBegin = from;
-      transfer.push(morph.buffer);
-    }
-    transfer.push(msg.positions.buffer, msg.indices.buffer);
-    shownVertices = nv;
+    msg.render = renderUpdate(d, renderState, { copy: true, geomorph: options.geomorph });
+    transfer = transferables(msg.render);
     d.clearChanges();
   }
   self.postMessage(msg, transfer);
@@ -150,7 +123,7 @@ async function handle(msg) {
     case 'target': faceTarget = msg.faces; schedule(); break;
     case 'snapshot':
       self.postMessage({ type: 'snapshot', id: msg.id, positions: decoder.positions().slice(),
-        indices: decoder.indices().slice() });
+        indices: decoder.indices().slice(), render: renderArrays(decoder) });
       break;
     case 'close': decoder.dispose(); decoder = null; self.close(); break;
   }

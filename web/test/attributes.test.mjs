@@ -8,8 +8,8 @@ import { tmpdir } from 'node:os';
 import path from 'node:path';
 import { test } from 'node:test';
 
-import { assimpTextured, encodeNative, importPackage, nativeArrays, rootDir, sameBits,
-  writeColoredTorus, writeTexturedTorus } from './common.mjs';
+import { assimpTextured, encodeNative, importPackage, importThreeLoader, nativeArrays, rootDir,
+  sameBits, writeColoredTorus, writeTexturedTorus } from './common.mjs';
 
 const work = mkdtempSync(path.join(tmpdir(), 'pmz-web-attr-'));
 const once = (f) => { let r; return () => (r === undefined ? (r = f()) : r); };
@@ -169,3 +169,89 @@ test('a geometry-only stream gives empty attribute arrays', async () => {
   assert.equal(d.changes().wedgeBegin, 0);
   d.dispose();
 });
+
+// The geometry as the loader keeps it against the decoder's render arrays (the wedges).
+function assertGeometryMatches(s, what) {
+  const d = s.decoder, g = s.geometry, nw = d.wedgeCount, nf = d.faceCount;
+  const prefix = (name, n) => g.getAttribute(name).array.subarray(0, n);
+  assert.ok(sameBits(prefix('position', 3 * nw), d.wedgePositions()), `${what}: positions`);
+  assert.ok(sameBits(g.getIndex().array.subarray(0, 3 * nf), d.wedgeIndices()), `${what}: indices`);
+  assert.equal(g.drawRange.count, 3 * nf, `${what}: draw range`);
+  const expected = { uv: d.texcoords(0), normal: d.normals(), color: d.colors() };
+  for (const [name, a] of Object.entries(expected)) {
+    if (!a.length) { assert.equal(g.getAttribute(name), undefined, `${what}: ${name}`); continue; }
+    assert.ok(sameBits(prefix(name, a.length), a), `${what}: ${name}`);
+  }
+  if (d.materialCount > 1) {  // groups: consecutive runs covering every face, one material each
+    const fm = d.faceMaterials();
+    let next = 0;
+    for (const group of g.groups) {
+      assert.equal(group.start, 3 * next, `${what}: groups leave a gap`);
+      for (let f = next; f < next + group.count / 3; ++f) assert.equal(fm[f], group.materialIndex);
+      next += group.count / 3;
+    }
+    assert.equal(next, nf, `${what}: groups cover ${next} of ${nf} faces`);
+  } else {
+    assert.equal(g.groups.length, 0);
+  }
+}
+
+for (const [name, make] of Object.entries(streams)) {
+  test(`${name}: PMZStream's geometry draws the wedges, updated in place`, async (t) => {
+    const file = make();
+    if (!file) return t.skip('corpus-assimp/ missing (scripts/fetch_assimp_models.sh)');
+    const { createDecoder } = await importPackage();
+    const { PMZStream, pmzMaterials } = await importThreeLoader();
+    const s = new PMZStream(await createDecoder(), { geomorph: true });
+    const bytes = readFileSync(file);
+    let checks = 0;
+    for (let at = 0; at < bytes.length; at += 2048) {
+      assert.equal(s.feed(bytes.subarray(at, at + 2048)), 'ok');
+      s.update(0.2);  // a few splits at a time
+      if (s.decoder.wedgeCount) { assertGeometryMatches(s, `at byte ${at}`); ++checks; }
+    }
+    assert.equal(s.finish(), 'ok');
+    while (!s.complete) s.update(5);
+    assertGeometryMatches(s, 'complete');
+    // Geomorphs per wedge: a wedge streamed with its new vertex starts at the vertex's split
+    // parent; others (base, full uploads, new wedges of older vertices) where they are.
+    {
+      const d = s.decoder, p = d.positions(), parents = d.splitParents(), wv = d.wedgeVertices();
+      const morph = s.geometry.getAttribute('pmzMorph').array;
+      const at = (w, v) => [0, 1, 2].every((k) => morph[4 * w + k] === p[3 * v + k]);
+      let gliding = 0;
+      for (let w = 0; w < d.wedgeCount; ++w) {
+        const v = wv[w], born = morph[4 * w + 3] > -1e5;
+        if (born && parents[v] !== 0xffffffff && at(w, parents[v])) ++gliding;
+        else assert.ok(at(w, v), `wedge ${w} starts neither at its vertex nor at its parent`);
+      }
+      assert.ok(gliding > d.wedgeCount / 4, `${gliding} of ${d.wedgeCount} wedges glide`);
+    }
+    s.faceTarget = Math.floor(s.faceCount / 3);
+    s.update();
+    assertGeometryMatches(s, 'coarsened');
+    s.faceTarget = null;
+    while (s.update(5)) { /* refine back */ }
+    assert.equal(s.faceCount, s.info().fullFaces);
+    assertGeometryMatches(s, 'refined again');
+    assert.ok(checks > 1);
+
+    // Materials: one per table entry, textures resolved against the stream's URL.
+    s.url = 'http://example.test/models/stream.pmz';
+    const urls = [];
+    const loader = { load: (url) => { urls.push(url); return { colorSpace: '' }; } };
+    const materials = pmzMaterials(s, { textureLoader: loader });
+    const table = s.materials();
+    assert.equal(materials.length, Math.max(1, table.length));
+    assert.equal(materials[0].flatShading, !s.decoder.normals().length);
+    assert.equal(materials[0].vertexColors, s.decoder.colorComponents > 0);
+    const textured = table.filter((m) => m.baseColorTexture);
+    assert.equal(urls.length, textured.length);
+    for (const [i, m] of textured.entries()) {
+      const expected = new URL(m.baseColorTexture.replace(/\\/g, '/'), s.url).href;
+      assert.equal(urls[i], expected);
+      assert.ok(expected.startsWith('http://example.test/models/'), expected);
+    }
+    s.dispose();
+  });
+}

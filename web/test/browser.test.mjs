@@ -9,14 +9,20 @@ import path from 'node:path';
 import { after, before, test } from 'node:test';
 import puppeteer from 'puppeteer-core';
 
-import { demoPmz, nativeDecode, webDir } from './common.mjs';
+import { CHECKER_BLUE, CHECKER_RED, demoPmz, encodeNative, nativeArrays, nativeDecode, webDir,
+  writeTexturedTorus } from './common.mjs';
 import { CHROMIUM_ARGS, serveViewer } from './serve.mjs';
 
 const RATE = 10 * 1024;  // bytes per second: the 80 KB sample takes about 8 s (frames are slow on a loaded machine)
 let server, browser, profile;
 
+let textured;  // the seamed textured torus (red / blue checkerboard) as .pmz, checker.png beside it
+
 before(async () => {
-  server = await serveViewer(path.join(webDir, 'dist', 'viewer'), { 'sample.pmz': demoPmz() }, RATE);
+  const work = mkdtempSync(path.join(tmpdir(), 'pmz-web-textured-'));
+  textured = encodeNative(writeTexturedTorus(work), path.join(work, 'textured.pmz'));
+  server = await serveViewer(path.join(webDir, 'dist', 'viewer'), { 'sample.pmz': demoPmz(),
+    'textured.pmz': textured, 'checker.png': path.join(work, 'checker.png') }, RATE);
   profile = mkdtempSync(path.join(tmpdir(), 'pmz-chromium-'));
   browser = await puppeteer.launch({ executablePath: process.env.PMZ_CHROMIUM || '/usr/bin/chromium',
     headless: true, args: [...CHROMIUM_ARGS, `--user-data-dir=${profile}`] });
@@ -152,3 +158,65 @@ test('the viewer reports a bad stream as a one-line error', async () => {
   assert.equal(s.complete, false);
   await page.close();
 });
+
+// Among the pixels that show the object: the shares where the checkerboard's red or blue
+// dominates (as tests/viewer/viewer_test.py measures the native viewer's textured shots).
+function checkerShares(shot) {
+  const bg = [shot.pixels[0], shot.pixels[1], shot.pixels[2]];
+  let shown = 0, red = 0, blue = 0;
+  for (let i = 0; i < shot.pixels.length; i += 4) {
+    const [r, g, b] = [shot.pixels[i], shot.pixels[i + 1], shot.pixels[i + 2]];
+    if (Math.max(Math.abs(r - bg[0]), Math.abs(g - bg[1]), Math.abs(b - bg[2])) <= 24) continue;
+    ++shown;
+    if (r > b + 60) ++red;
+    if (b > r + 60) ++blue;
+  }
+  return { covered: shown / (shot.pixels.length / 4), red: red / Math.max(1, shown), blue: blue / Math.max(1, shown) };
+}
+
+for (const worker of [true, false]) {
+  test(`a textured stream shows its texture's colours, coarse and final${worker ? '' : ' (?worker=0)'}`, async () => {
+    assert.ok(CHECKER_RED[0] > CHECKER_RED[2] + 60 && CHECKER_BLUE[2] > CHECKER_BLUE[0] + 60);
+    const page = await browser.newPage();
+    const messages = [];
+    page.on('console', (m) => messages.push(m.text()));
+    page.on('pageerror', (e) => messages.push(String(e)));
+    await page.setViewport({ width: 480, height: 360 });
+    const { port } = server.address();
+    await page.goto(`http://127.0.0.1:${port}/index.html?src=/stream/textured.pmz${worker ? '' : '&worker=0'}`);
+    await page.waitForFunction(() => window.pmzStatus && (window.pmzStatus.complete || window.pmzStatus.error),
+      { timeout: 60000, polling: 100 });
+    const s = await page.evaluate(() => ({ ...window.pmzStatus }));
+    assert.equal(s.error, '', messages.join('\n'));
+    const native = nativeArrays(textured).header;
+    assert.equal(s.faces, native.faces);
+    assert.deepEqual(await page.evaluate(() => window.pmzAttributes), { names: ['uv'], materials: 1 });
+    // The texture arrives after the mesh (its own request): wait for its colours.
+    const look = async (name) => {
+      let shot, shares;
+      for (let i = 0; i < 50; ++i) {
+        await page.evaluate(() => { document.getElementById('morph').checked = false; });
+        await sleep(200);
+        shot = await page.evaluate(() => window.pmzSnapshot());
+        shares = checkerShares(shot);
+        if (shares.red > 0.15 && shares.blue > 0.15) break;
+      }
+      if (process.env.PMZ_WEB_SCREENSHOTS)
+        await page.screenshot({ path: path.join(process.env.PMZ_WEB_SCREENSHOTS, `web-${name}.png`) });
+      assert.ok(shares.covered > 0.05, `${name}: coverage ${shares.covered}`);
+      assert.ok(shares.red > 0.15 && shares.blue > 0.15,
+        `${name}: the checkerboard is not visible (red ${shares.red}, blue ${shares.blue}) ${messages}`);
+      // The geometry updated in place draws what one built afresh from the decoder draws.
+      const reference = await page.evaluate(() => window.pmzReferenceSnapshot());
+      assert.ok(differingShare(shot, reference) < 0.002, `${name}: in-place geometry differs from a fresh one`);
+      return shot;
+    };
+    const fine = await look('textured-final');
+    await page.evaluate((f) => window.pmzSetFaces(f), Math.round(native.faces / 20));
+    await page.waitForFunction((f) => window.pmzStatus.faces < f, {}, native.faces / 10);
+    const coarse = await look('textured-coarse');
+    assert.ok(differingShare(coarse, fine) > 0.01, 'coarse and final views do not differ');
+    assert.ok(!messages.some((m) => /texture .* not loaded/.test(m)), messages.join('\n'));
+    await page.close();
+  });
+}

@@ -1,11 +1,12 @@
-// A static server for web/dist/viewer on 127.0.0.1 whose /stream/NAME.pmz responses are
+// A static server for web/dist/viewer on 127.0.0.1 whose /stream/NAME responses (streams and
+// the textures beside them) are
 // throttled to `bytesPerSecond` (chunks every 10 ms), with Content-Length.
 import { createReadStream, readFileSync, statSync } from 'node:fs';
 import http from 'node:http';
 import path from 'node:path';
 
 const TYPES = { '.html': 'text/html', '.js': 'text/javascript', '.mjs': 'text/javascript',
-  '.wasm': 'application/wasm', '.json': 'application/json' };
+  '.wasm': 'application/wasm', '.json': 'application/json', '.png': 'image/png' };
 
 export function serveViewer(viewerDir, streams, bytesPerSecond) {
   const server = http.createServer((req, res) => {
@@ -13,7 +14,7 @@ export function serveViewer(viewerDir, streams, bytesPerSecond) {
     const name = decodeURIComponent(url.pathname);
     if (name.startsWith('/stream/') && streams[name.slice(8)]) {
       const bytes = readFileSync(streams[name.slice(8)]);
-      res.writeHead(200, { 'content-type': 'application/octet-stream',
+      res.writeHead(200, { 'content-type': TYPES[path.extname(name)] || 'application/octet-stream',
         'content-length': bytes.length, 'cache-control': 'no-store' });
       const tick = 10;
       let at = 0;

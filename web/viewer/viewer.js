@@ -2,7 +2,7 @@
 // scene and refines it while the bytes arrive, within a per-frame time budget.
 import * as THREE from 'three';
 import { OrbitControls } from './vendor/OrbitControls.js';
-import { PMZLoader, geomorphMaterial } from 'pmz-decoder/three';
+import { PMZLoader, geomorphMaterial, pmzMaterials } from 'pmz-decoder/three';
 
 // Decoding runs in a Web Worker (?worker=0: on this thread, REFINE_BUDGET_MS of splits per frame).
 const REFINE_BUDGET_MS = 8;  // of a 16.7 ms frame: rendering and feeding keep the rest
@@ -68,7 +68,23 @@ if (typeof PerformanceObserver === 'function' &&
   }).observe({ type: 'longtask' });
 }
 
-let current = null;  // { stream, mesh, fitted }
+// Streams with attributes (texture coordinates, normals, colours, materials) are drawn with
+// pmzMaterials(): textured, lit with their normals; each with a geomorph twin.
+function dress(stream) {
+  const plain = pmzMaterials(stream, {
+    onTextureError: (url) => console.warn(`pmz viewer: texture ${url} not loaded; drawn untextured`),
+  });
+  const morphing = plain.map((m) => {
+    const twin = m.clone();
+    morphTicks.push(geomorphMaterial(twin));
+    return twin;
+  });
+  const one = (a) => (a.length === 1 ? a[0] : a);  // an array draws only the geometry's groups
+  return { plain: one(plain), morph: one(morphing) };
+}
+let morphTicks = [];  // geomorph clocks of the dressed materials
+
+let current = null;  // { stream, mesh, fitted, materials }
 let faceTarget = null;  // null: follow the stream; else the LOD slider's face count
 lod.addEventListener('input', () => {
   const v = Number(lod.value);
@@ -85,8 +101,15 @@ async function open(source) {
   if (current) {
     scene.remove(current.mesh);
     current.stream.dispose();
+    if (current.materials && current.materials.plain !== plainMaterial) {
+      for (const m of [current.materials.plain, current.materials.morph].flat()) {
+        if (m.map) m.map.dispose();
+        m.dispose();
+      }
+    }
     current = null;
   }
+  morphTicks = [];
   Object.assign(status, { faces: 0, vertices: 0, bytes: 0, totalBytes: 0, complete: false, error: '' });
   window.pmzTiming = { firstBytes: null, firstObjectFrame: null };
   window.pmzFrames = [];
@@ -102,7 +125,7 @@ async function open(source) {
     const mesh = new THREE.Mesh(stream.geometry, morph.checked ? material : plainMaterial);
     mesh.frustumCulled = false;
     scene.add(mesh);
-    current = { stream, mesh, fitted: false };
+    current = { stream, mesh, fitted: false, materials: null };
     const result = await stream.done;
     if (result !== 'ok') setError(stream.error || result);
   } catch (e) {
@@ -138,15 +161,26 @@ function frame(t) {
     const t0 = performance.now();
     s.update(REFINE_BUDGET_MS);
     work = performance.now() - t0;
+    const g = s.geometry;
+    if (!current.materials && g.getAttribute('position')) {
+      const attributes = ['uv', 'normal', 'color'].some((n) => g.getAttribute(n)) || s.materials().length > 1;
+      current.materials = attributes ? dress(s) : { plain: plainMaterial, morph: material };
+      // Tests: the attributes the geometry draws with, and how many materials.
+      window.pmzAttributes = { names: ['uv', 'uv1', 'normal', 'color'].filter((n) => g.getAttribute(n)),
+        materials: s.materials().length };
+    }
     rate.splits += Math.max(0, s.splitsApplied - before);
     if (window.pmzTiming.firstBytes === null && s.firstBytesTime != null)
       window.pmzTiming.firstBytes = s.firstBytesTime;
     Object.assign(status, { bytes: s.bytes, totalBytes: s.totalBytes });
     Object.assign(status, { faces: s.faceCount, vertices: s.vertexCount, complete: s.complete });
     if (s.status !== 'ok') setError(s.error);
-    current.mesh.material = morph.checked ? material : plainMaterial;
+    if (current.materials) current.mesh.material = morph.checked ? current.materials.morph : current.materials.plain;
   }
-  if (morphTime === null) morphClock();
+  if (morphTime === null) {
+    morphClock();
+    for (const tick of morphTicks) tick();
+  }
   controls.update();
   const t0r = performance.now();
   renderer.render(scene, camera);
@@ -201,12 +235,14 @@ window.pmzSnapshot = () => {
 // The same view drawn from a geometry built afresh from the decoder's current buffers: what
 // the in-place updated geometry must look like.
 window.pmzReferenceSnapshot = async () => {
-  const d = await current.stream.snapshot(), streamed = current.mesh.geometry;
+  const d = (await current.stream.snapshot()).render, streamed = current.mesh.geometry;
   const fresh = new THREE.BufferGeometry();
   fresh.setAttribute('position', new THREE.BufferAttribute(d.positions, 3));
+  for (const [name, size] of d.layout) fresh.setAttribute(name, new THREE.BufferAttribute(d.attributes[name], size));
   fresh.setIndex(new THREE.BufferAttribute(d.indices, 1));
+  for (const group of streamed.groups) fresh.addGroup(group.start, group.count, group.materialIndex);
   current.mesh.geometry = fresh;
-  current.mesh.material = plainMaterial;
+  current.mesh.material = current.materials ? current.materials.plain : plainMaterial;
   renderer.render(scene, camera);
   const shot = snapshot();
   current.mesh.geometry = streamed;
