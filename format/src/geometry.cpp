@@ -153,7 +153,20 @@ namespace {
     if (use_l) t = basis.l_dot_n * (int64_t(curvature) * mm);
     if (use_e) t += basis.e_dot_n * (int64_t(fine) * kk);
     const Int128 den = Int128(8 * kk * mm) * q;
-    for (int a = 0; a < 3; ++a) out.p[a] += round_div(t * out.n[a], den);
+    // |n[a]| <= 2^16: below these bounds every t n[a] and den fit round_div's 64-bit path, so it
+    // is taken once for the three axes instead of range-checking each 128-bit product.
+    constexpr int64_t kNarrowT = int64_t(1) << 44, kNarrowDen = int64_t(1) << 60;
+    if (t > -kNarrowT && t < kNarrowT && den > 0 && den < kNarrowDen) {
+      const int64_t t64 = int64_t(t), dd = 2 * int64_t(den);
+      for (int a = 0; a < 3; ++a) {
+        const int64_t x = 2 * t64 * out.n[a] + int64_t(den);
+        int64_t r = x / dd;
+        if (x % dd != 0 && x < 0) --r;  // floor, not truncation
+        out.p[a] += r;
+      }
+    } else {
+      for (int a = 0; a < 3; ++a) out.p[a] += round_div(t * out.n[a], den);
+    }
   }
   // Contexts: tangent slots from the ring's spread along their axis; the normal slot from the
   // ring's spread off the plane through p, in units of the normal axis. Every |c[w] - p| is
