@@ -1,4 +1,5 @@
-// pmz-compare ORIGINAL OTHER [--samples N] [--json]: Metro-style symmetric Hausdorff distance,
+// pmz-compare ORIGINAL OTHER [--format F] [--samples N] [--json] (either mesh may be - for
+// stdin): Metro-style symmetric Hausdorff distance,
 // where the maximum is, and the attribute error at corresponding surface points when both meshes
 // have attributes.
 #include <CLI/CLI.hpp>
@@ -38,12 +39,16 @@ int main(int argc, char** argv) {
       "interpolated at both compared (texture coordinates: |delta uv| of set 0 in texture\n"
       "units; normals: angle in degrees; colours: |delta rgb(a)|, channels 0..1).",
       "pmz-compare"};
-  std::string original_path, other_path;
+  std::string original_path, other_path, format;
   pmz::CompareOptions options;
   bool json = false, one_sided = false;
   bool no_attributes = false;
-  app.add_option("ORIGINAL", original_path, "reference mesh (OBJ/OFF/PLY/STL/glTF)")->required();
-  app.add_option("OTHER", other_path, "mesh to measure against it")->required();
+  app.add_option("ORIGINAL", original_path,
+                 "reference mesh (OBJ/OFF/PLY/STL/glTF; - for stdin with --format)")
+      ->required();
+  app.add_option("OTHER", other_path, "mesh to measure against it (- for stdin with --format)")
+      ->required();
+  tool::add_stdin_format_option(app, format);
   app.add_option(
       "--samples", options.samples,
       "face samples per direction (default: 10x the larger face count, within [200k, 2M])");
@@ -55,13 +60,16 @@ int main(int argc, char** argv) {
   app.add_flag("--json", json, "print one JSON object");
   tool::set_footer(app);
   if (int rc = tool::parse(app, argc, argv); rc >= 0) return rc;
+  if (const std::string problem = tool::stdin_input_problem({original_path, other_path}, format);
+      !problem.empty())
+    return tool::usage_error(problem);
   options.both_directions = !one_sided;
   options.attributes = !no_attributes;
 
   pmz::IndexedMesh original, other;
   std::string error;
-  if (!tool::read_mesh_input(original_path, "", original, error) ||
-      !tool::read_mesh_input(other_path, "", other, error)) {
+  if (!tool::read_mesh_input(original_path, format, original, error) ||
+      !tool::read_mesh_input(other_path, format, other, error)) {
     tool::print_error(error);
     return tool::kExitFailure;
   }
@@ -107,8 +115,8 @@ int main(int argc, char** argv) {
     return 0;
   }
   std::printf("original: %s (%u faces)\nother:    %s (%u faces)\nbbox diagonal of original: %.9g\n",
-              original_path.c_str(), original.face_count(), other_path.c_str(), other.face_count(),
-              r.diag);
+              original_path == "-" ? "stdin" : original_path.c_str(), original.face_count(),
+              other_path == "-" ? "stdin" : other_path.c_str(), other.face_count(), r.diag);
   std::printf("%-22s %14s %14s %14s %14s %14s %14s %10s\n", "direction", "max", "mean", "rms",
               "max_abs", "mean_abs", "rms_abs", "samples");
   auto row = [&](const char* name, const pmz::DistanceStats& s) {

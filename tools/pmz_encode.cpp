@@ -25,9 +25,7 @@ namespace {
 namespace tool = pmz::tool;
 
 struct EncodeSettings {
-  pmz::Metric metric = pmz::Metric::multifeature;
-  pmz::AttributeMode attributes = pmz::AttributeMode::full;
-  float attribute_weight = pmz::MetricParams{}.attribute_weight;
+  pmz::SimplifyOptions simplify;  // metric, attribute mode, parameters (no target: all the way)
   pmz::WriteOptions write;
   std::string stdin_format;  // extension for a mesh read from stdin
 };
@@ -49,10 +47,7 @@ bool encode(const std::string& input, const std::string& output, const EncodeSet
     if (progress) progress->clear();
     return false;
   }
-  pmz::SimplifyOptions sopt;
-  sopt.metric = settings.metric;
-  sopt.attributes = settings.attributes;
-  sopt.params.attribute_weight = settings.attribute_weight;
+  pmz::SimplifyOptions sopt = settings.simplify;
   if (progress) sopt.progress = [&](double f) { progress->update("simplifying", f); };
   pmz::CollapseSequence seq;
   std::vector<uint8_t> bytes;
@@ -104,10 +99,11 @@ int main(int argc, char** argv) {
       ".pmz stream",
       "pmz-encode"};
   std::vector<std::string> inputs;
-  std::string output, out_dir, metric = "guarded", format, attribute_mode = "full";
+  std::string output, out_dir, format;
   unsigned jobs = std::max(1u, std::thread::hardware_concurrency());
   bool quiet = false, force_progress = false;
   EncodeSettings settings;
+  tool::SimplifierCli simplifier;
   app.add_option("inputs", inputs, "input meshes (OBJ/OFF/PLY/STL); - reads one from stdin")
       ->required()
       ->type_name("MESH...");
@@ -118,15 +114,8 @@ int main(int argc, char** argv) {
   app.add_option("-j,--jobs", jobs, "assets encoded at once with --out-dir (default: cores)")
       ->check(CLI::Range(1u, 1024u))
       ->capture_default_str();
-  app.add_option("--format", format, "format of a mesh read from stdin")
-      ->check(CLI::IsMember({"obj", "off", "ply", "stl"}));
-  app.add_option("--metric", metric,
-                 "guarded: the paper's multi-feature metric plus the Hausdorff guard "
-                 "(spec/algorithm.md section 6); multifeature: the paper's metric alone; qem: "
-                 "plain QEM (QSlim)")
-      ->check(CLI::IsMember({"guarded", "multifeature", "qem"}))
-      ->capture_default_str();
-  tool::add_attribute_options(app, attribute_mode, settings.attribute_weight);
+  tool::add_stdin_format_option(app, format);
+  simplifier.add_to(app);
   app.add_option("--position-bits", settings.write.position_bits,
                  "quantization bits (0 = lossless float32)")
       ->check(CLI::Range(0, 30))
@@ -153,23 +142,16 @@ int main(int argc, char** argv) {
   tool::set_footer(app);
   if (int rc = tool::parse(app, argc, argv); rc >= 0) return rc;
 
-  auto usage = [](const std::string& what) {
-    tool::print_error(what + " (see --help)");
-    return tool::kExitUsage;
-  };
+  auto usage = tool::usage_error;
   if (out_opt->count() == 0 && dir_opt->count() == 0)
     return usage("give -o FILE (one input) or --out-dir DIR");
   if (out_opt->count() && inputs.size() > 1)
     return usage("several inputs need --out-dir DIR, not -o");
-  if (std::count(inputs.begin(), inputs.end(), "-") > 1) return usage("stdin given twice");
-  if (std::count(inputs.begin(), inputs.end(), "-") && format.empty())
-    return usage("a mesh read from stdin needs --format obj|off|ply|stl");
+  if (const std::string problem = tool::stdin_input_problem(inputs, format); !problem.empty())
+    return usage(problem);
   if (dir_opt->count() && std::count(inputs.begin(), inputs.end(), "-"))
     return usage("a mesh read from stdin needs -o FILE (it has no name for --out-dir)");
-  settings.metric = metric == "qem"            ? pmz::Metric::qem
-                    : metric == "multifeature" ? pmz::Metric::multifeature
-                                               : pmz::Metric::guarded;
-  settings.attributes = tool::attribute_mode(attribute_mode);
+  simplifier.apply(settings.simplify);
   settings.stdin_format = format;
 
   std::vector<std::string> outputs;

@@ -19,55 +19,27 @@ int main(int argc, char** argv) {
       "pmz-simplify: simplify a triangle mesh by half-edge collapses (multi-feature metric or "
       "QEM)",
       "pmz-simplify"};
-  std::string input, output, metric_name = "guarded", format, attribute_mode = "full";
+  std::string input, output, format;
   double ratio = -1;
   uint64_t faces = 0;
   bool verbose = false, quiet = false, force_progress = false;
-  pmz::SimplifyOptions options;
+  tool::SimplifierCli simplifier;
   app.add_option("input", input, "input mesh (OBJ, OFF, PLY, STL; - for stdin with --format)")
       ->required();
   app.add_option("-o,--output", output,
                  "output mesh (.obj, .ply, .glb with attributes; .off, .stl; - for stdout)")
       ->required();
-  app.add_option("--format", format, "format of stdin and stdout (default: by extension)")
-      ->check(CLI::IsMember({"obj", "off", "ply", "stl"}));
+  tool::add_stdin_format_option(app, format, "format of stdin and stdout (default: by extension)");
   auto* ratio_opt =
       app.add_option("--ratio", ratio, "target face count as a fraction of the input's (0..1]");
   auto* faces_opt = app.add_option("--faces", faces, "target face count");
   ratio_opt->excludes(faces_opt);
-  app.add_option("--metric", metric_name,
-                 "guarded: the paper's multi-feature metric plus the Hausdorff guard "
-                 "(spec/algorithm.md section 6); multifeature: the paper's metric alone; qem: "
-                 "plain QEM (QSlim)")
-      ->check(CLI::IsMember({"guarded", "multifeature", "qem"}))
-      ->capture_default_str();
-  tool::add_attribute_options(app, attribute_mode, options.params.attribute_weight);
-  app.add_option("--epsilon", options.params.epsilon, "torsion threshold epsilon (eq. 2)")
-      ->capture_default_str();
-  app.add_option("--quadric-floor", options.params.quadric_floor,
-                 "c0 in (c0 + C_norm + w_T * sigma * T) * Q")
-      ->capture_default_str();
-  app.add_option("--torsion-weight", options.params.torsion_weight,
-                 "weight w_T of sigma * T in the quadric's factor")
-      ->capture_default_str();
-  app.add_option("--boundary-weight", options.params.boundary_weight, "weight of boundary quadrics")
-      ->capture_default_str();
-  app.add_option(
-         "--quadric-memory", options.params.quadric_memory,
-         "multifeature: weight of the accumulated (QSlim) quadric added to the current mesh's")
-      ->capture_default_str();
-  app.add_option("--guard-slack", options.params.guard_slack,
-                 "guarded: collapses whose bound exceeds this times the worst bound so far are "
-                 "penalised")
-      ->capture_default_str();
+  simplifier.add_to(app);
   app.add_flag("-v,--verbose", verbose, "print where the time went");
   tool::add_progress_options(app, quiet, force_progress);
   tool::set_footer(app);
   if (int rc = tool::parse(app, argc, argv); rc >= 0) return rc;
-  auto usage = [](const std::string& what) {
-    tool::print_error(what + " (see --help)");
-    return tool::kExitUsage;
-  };
+  auto usage = tool::usage_error;
   if (ratio_opt->count() == 0 && faces_opt->count() == 0)
     return usage("give --ratio R or --faces N");
   if (ratio_opt->count() && !(ratio > 0 && ratio <= 1)) return usage("--ratio must be in (0, 1]");
@@ -78,10 +50,8 @@ int main(int argc, char** argv) {
     tool::print_error(output, "is the input file; not overwriting it");
     return tool::kExitFailure;
   }
-  options.metric = metric_name == "qem"            ? pmz::Metric::qem
-                   : metric_name == "multifeature" ? pmz::Metric::multifeature
-                                                   : pmz::Metric::guarded;
-  options.attributes = tool::attribute_mode(attribute_mode);
+  pmz::SimplifyOptions options;
+  simplifier.apply(options);
 
   std::string error;
   pmz::IndexedMesh mesh;
@@ -120,7 +90,7 @@ int main(int argc, char** argv) {
                input == "-" ? "stdin" : input.c_str(), (unsigned long long)in_faces,
                (unsigned long long)result.face_count(), (unsigned long long)options.target_faces,
                result.face_count() == options.target_faces ? "" : "; no legal collapse gets closer",
-               metric_name.c_str(), seconds);
+               simplifier.metric.c_str(), seconds);
   if (verbose)
     std::fprintf(
         report,

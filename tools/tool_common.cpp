@@ -101,10 +101,14 @@ int parse(CLI::App& app, int argc, char** argv) {
     app.exit(e);
     return kExitOk;
   } catch (const CLI::ParseError& e) {
-    print_error(std::string(e.what()) + " (see --help)");
-    return kExitUsage;
+    return usage_error(e.what());
   }
   return -1;
+}
+
+int usage_error(const std::string& what) {
+  print_error(what + " (see --help)");
+  return kExitUsage;
 }
 
 void set_footer(CLI::App& app, const std::string& extra) {

@@ -35,6 +35,8 @@ std::string library_message(const std::string& message);
 // Parses; on --help prints it and returns kExitOk, on a usage error prints "tool: what (see
 // --help)" and returns kExitUsage; returns -1 when the tool should go on.
 int parse(CLI::App& app, int argc, char** argv);
+// A usage error found after parsing: prints "tool: what (see --help)", returns kExitUsage.
+int usage_error(const std::string& what);
 // The footer every tool's --help ends with (exit codes), after `extra` if any.
 void set_footer(CLI::App& app, const std::string& extra = "");
 

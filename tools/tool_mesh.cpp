@@ -1,5 +1,6 @@
 #include "tool_mesh.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <vector>
@@ -38,6 +39,18 @@ bool read_mesh_input(const std::string& path, const std::string& stdin_format, I
   const std::string summary = stats.summary();
   if (ok && !summary.empty()) std::fprintf(stderr, "pmz: %s: %s\n", shown.c_str(), summary.c_str());
   return ok;
+}
+
+CLI::Option* add_stdin_format_option(CLI::App& app, std::string& format, const std::string& help) {
+  return app.add_option("--format", format, help)
+      ->check(CLI::IsMember({"obj", "off", "ply", "stl"}));
+}
+
+std::string stdin_input_problem(const std::vector<std::string>& inputs, const std::string& format) {
+  const auto n = std::count(inputs.begin(), inputs.end(), "-");
+  if (n > 1) return "stdin given twice";
+  if (n == 1 && format.empty()) return "a mesh read from stdin needs --format obj|off|ply|stl";
+  return "";
 }
 
 bool write_mesh_into(OutputFile& out, const std::string& format, const IndexedMesh& mesh,

@@ -1,7 +1,9 @@
 // The mesh side of the tools' shared behaviour (tool_common.hpp): a mesh read from a file or
 // stdin, a mesh written to any output tool_common::OutputFile handles. Needs the mesh module.
 #pragma once
+#include <CLI/CLI.hpp>
 #include <string>
+#include <vector>
 
 #include "pmz/mesh.hpp"
 
@@ -14,6 +16,14 @@ class OutputFile;
 // ("stdin" for -).
 bool read_mesh_input(const std::string& path, const std::string& stdin_format, IndexedMesh& mesh,
                      std::string& error);
+
+// --format FORMAT (obj, off, ply, stl): how a mesh read from stdin (-) is parsed; `help` says
+// what else it applies to.
+CLI::Option* add_stdin_format_option(CLI::App& app, std::string& format,
+                                     const std::string& help = "format of a mesh read from stdin");
+// The usage error of `inputs` reading stdin: "-" given twice, or without --format (`format`).
+// "" when there is none.
+std::string stdin_input_problem(const std::vector<std::string>& inputs, const std::string& format);
 
 // Writes `mesh` as `format` (obj, off, ply, stl; "": by the extension) to `path` ("-": stdout)
 // through an OutputFile: symlinks keep pointing at the updated file, devices and FIFOs are

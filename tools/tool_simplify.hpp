@@ -1,4 +1,6 @@
-// The simplifier options pmz-encode and pmz-simplify share: how attributes steer the engine.
+// The simplifier's options, defined once for pmz-encode and pmz-simplify: the metric, how
+// attributes steer it, and the metric's parameters (defaults: pmz::MetricParams), so both tools
+// simplify alike for the same command line.
 #pragma once
 #include <CLI/CLI.hpp>
 #include <string>
@@ -7,26 +9,62 @@
 
 namespace pmz::tool {
 
-// --attributes geometry-only|seams|full (default full) and --attribute-weight W.
-inline void add_attribute_options(CLI::App& app, std::string& mode, float& weight) {
-  app.add_option("--attributes", mode,
-                 "how texture coordinates, normals, colours and materials steer the "
-                 "simplification (spec/algorithm.md section 7): full: seams and material "
-                 "boundaries kept as discontinuity curves, attribute error added to the cost; "
-                 "seams: the curves only; geometry-only: ignored (the geometric metric alone). A "
-                 "mesh without attributes simplifies the same in every mode")
-      ->check(CLI::IsMember({"full", "seams", "geometry-only"}))
-      ->capture_default_str();
-  app.add_option("--attribute-weight", weight,
-                 "full: weight of the attribute error against the geometric cost")
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
-}
+struct SimplifierCli {
+  std::string metric = "guarded";
+  std::string attributes = "full";
+  MetricParams params;
 
-inline AttributeMode attribute_mode(const std::string& name) {
-  return name == "geometry-only" ? AttributeMode::geometry_only
-         : name == "seams"       ? AttributeMode::seams
-                                 : AttributeMode::full;
-}
+  // --metric, --attributes, --attribute-weight, then the parameters (--epsilon ...
+  // --guard-slack), each --help line with its default.
+  void add_to(CLI::App& app) {
+    app.add_option("--metric", metric,
+                   "guarded: the paper's multi-feature metric plus the Hausdorff guard "
+                   "(spec/algorithm.md section 6); multifeature: the paper's metric alone; qem: "
+                   "plain QEM (QSlim)")
+        ->check(CLI::IsMember({"guarded", "multifeature", "qem"}))
+        ->capture_default_str();
+    app.add_option("--attributes", attributes,
+                   "how texture coordinates, normals, colours and materials steer the "
+                   "simplification (spec/algorithm.md section 7): full: seams and material "
+                   "boundaries kept as discontinuity curves, attribute error added to the cost; "
+                   "seams: the curves only; geometry-only: ignored (the geometric metric alone). "
+                   "A mesh without attributes simplifies the same in every mode")
+        ->check(CLI::IsMember({"full", "seams", "geometry-only"}))
+        ->capture_default_str();
+    app.add_option("--attribute-weight", params.attribute_weight,
+                   "full: weight of the attribute error against the geometric cost")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    app.add_option("--epsilon", params.epsilon, "torsion threshold epsilon (eq. 2)")
+        ->capture_default_str();
+    app.add_option("--quadric-floor", params.quadric_floor,
+                   "c0 in (c0 + C_norm + w_T * sigma * T) * Q")
+        ->capture_default_str();
+    app.add_option("--torsion-weight", params.torsion_weight,
+                   "weight w_T of sigma * T in the quadric's factor")
+        ->capture_default_str();
+    app.add_option("--boundary-weight", params.boundary_weight, "weight of boundary quadrics")
+        ->capture_default_str();
+    app.add_option(
+           "--quadric-memory", params.quadric_memory,
+           "multifeature: weight of the accumulated (QSlim) quadric added to the current mesh's")
+        ->capture_default_str();
+    app.add_option("--guard-slack", params.guard_slack,
+                   "guarded: collapses whose bound exceeds this times the worst bound so far are "
+                   "penalised")
+        ->capture_default_str();
+  }
+
+  // The parsed values into the engine's options (metric, attribute mode, parameters).
+  void apply(SimplifyOptions& options) const {
+    options.metric = metric == "qem"            ? Metric::qem
+                     : metric == "multifeature" ? Metric::multifeature
+                                                : Metric::guarded;
+    options.attributes = attributes == "geometry-only" ? AttributeMode::geometry_only
+                         : attributes == "seams"       ? AttributeMode::seams
+                                                       : AttributeMode::full;
+    options.params = params;
+  }
+};
 
 }  // namespace pmz::tool

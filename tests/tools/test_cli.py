@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
 """The tools' command-line conventions (issue 14, item 2 and 4), one check per case:
-`-` for stdin/stdout, outputs through symlinks / onto devices and FIFOs / onto the input,
+`-` for stdin/stdout (pmz-encode, pmz-decode, pmz-compare), outputs through symlinks / onto devices and FIFOs / onto the input,
 temporaries removed on error and on signals, one-line errors with the reason, exit codes
 (0 ok, 1 failure, 2 usage), defaults in --help, the progress bar, pmz-info without decoding
 and on truncated files, unreachable decode targets, --faces 0 / --ratio 0 as the base mesh,
-batch encoding with --out-dir and -j.
+batch encoding with --out-dir and -j, one definition of the simplifier's options (pmz-encode and
+pmz-simplify).
 
 usage: test_cli.py BIN_DIR SAMPLE_OBJ SAMPLE_PMZ WORK_DIR [CASE...]
 BIN_DIR holds pmz-encode, pmz-decode, pmz-info, pmz-simplify, pmz-compare (pmz-view optional).
@@ -116,6 +117,74 @@ def case_encode_from_stdin():
     check(r.returncode == 1 and err_text(r).startswith("pmz-encode: stdin: "),
           f"bad mesh on stdin: expected exit 1 and 'pmz-encode: stdin: ...', got "
           f"{r.returncode}: {err_text(r)}")
+
+
+def case_compare_from_stdin():
+    d = fresh("compare_stdin")
+    half = os.path.join(d, "half.obj")
+    r = run([tool("pmz-simplify"), SAMPLE_OBJ, "--ratio", "0.5", "-o", half])
+    check(r.returncode == 0, f"pmz-simplify: rc={r.returncode} {err_text(r)}")
+
+    def measured(args, stdin=None):
+        r = run([tool("pmz-compare"), "--json"] + args, input=stdin)
+        check(r.returncode == 0, f"pmz-compare {args}: rc={r.returncode} {err_text(r)}")
+        j = json.loads(r.stdout)
+        j.pop("seconds")
+        return j
+
+    ref = measured([SAMPLE_OBJ, half])
+    check(ref["max"] > 0, f"the halved mesh measured no error: {ref}")
+    check(measured(["-", half, "--format", "obj"], open(SAMPLE_OBJ, "rb").read()) == ref,
+          "ORIGINAL from stdin measured another result than from the file")
+    check(measured([SAMPLE_OBJ, "-", "--format", "obj"], open(half, "rb").read()) == ref,
+          "OTHER from stdin measured another result than from the file")
+    r = run([tool("pmz-compare"), SAMPLE_OBJ, "-", "--format", "obj"], input=open(half, "rb").read())
+    check(r.returncode == 0 and "other:    stdin (" in r.stdout.decode(),
+          f"the text report does not name stdin: {r.stdout.decode()[:200]!r}")
+    r = run([tool("pmz-compare"), SAMPLE_OBJ, "-"], input=open(half, "rb").read())
+    check(r.returncode == 2 and err_text(r).startswith("pmz-compare: ") and b"--format" in r.stderr,
+          f"- without --format: expected exit 2 naming --format, got {r.returncode}: {err_text(r)}")
+    r = run([tool("pmz-compare"), "-", "-", "--format", "obj"], input=b"")
+    check(r.returncode == 2 and "stdin given twice" in err_text(r),
+          f"- twice: expected exit 2, got {r.returncode}: {err_text(r)}")
+    r = run([tool("pmz-compare"), SAMPLE_OBJ, "-", "--format", "obj"], input=b"v 0 0 nan\n")
+    check(r.returncode == 1 and err_text(r).startswith("pmz-compare: stdin: "),
+          f"bad mesh on stdin: expected exit 1 and 'pmz-compare: stdin: ...', got "
+          f"{r.returncode}: {err_text(r)}")
+
+
+# ---- one definition of the simplifier's options ----
+
+def simplifier_option_lines(name):
+    r = run([tool(name), "--help"])
+    check(r.returncode == 0, f"{name} --help: rc={r.returncode}")
+    lines = r.stdout.decode().splitlines()
+    names = ["--metric", "--attributes", "--attribute-weight", "--epsilon", "--quadric-floor",
+             "--torsion-weight", "--boundary-weight", "--quadric-memory", "--guard-slack"]
+    start = next((i for i, l in enumerate(lines) if l.strip().startswith("--metric")), None)
+    end = next((i for i, l in enumerate(lines) if l.strip().startswith("--guard-slack")), None)
+    check(start is not None and end is not None, f"{name} --help lacks --metric or --guard-slack")
+    block = lines[start:end + 1]
+    for n in names:
+        check(any(l.strip().startswith(n + " ") for l in block), f"{name} --help lacks {n}")
+    return block
+
+
+def case_simplifier_options_shared():
+    encode, simplify = (simplifier_option_lines(n) for n in ("pmz-encode", "pmz-simplify"))
+    check(encode == simplify, "pmz-encode and pmz-simplify describe the simplifier's options "
+          f"differently:\n{encode}\n{simplify}")
+    d = fresh("simplifier_options")
+    outs = {}
+    for key, extra in [("default", []), ("explicit", ["--epsilon", "0.3", "--guard-slack", "0.8"]),
+                       ("epsilon", ["--epsilon", "0.9"]), ("qem", ["--metric", "qem"])]:
+        outs[key] = os.path.join(d, key + ".pmz")
+        r = run([tool("pmz-encode"), SAMPLE_OBJ, "-o", outs[key]] + extra)
+        check(r.returncode == 0, f"pmz-encode {extra}: rc={r.returncode} {err_text(r)}")
+    data = {k: open(p, "rb").read() for k, p in outs.items()}
+    check(data["explicit"] == data["default"], "the defaults given explicitly changed the stream")
+    check(data["epsilon"] != data["default"], "pmz-encode --epsilon did not reach the simplifier")
+    check(data["qem"] != data["default"], "pmz-encode --metric qem did not reach the simplifier")
 
 
 # ---- where outputs go ----
