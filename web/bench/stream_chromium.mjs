@@ -4,10 +4,14 @@
 // bytes arrived, and the gaps between frames until the stream is complete; from the Long Tasks
 // API the page's main-thread tasks over 50 ms in that time (what blocks the page itself, apart
 // from frames waiting on SwiftShader's rendering in the GPU process); and for comparison the
-// median gap over 3 s of the finished mesh drawn while nothing changes (rendering alone).
+// median gap over 3 s of the finished mesh while nothing changes. The viewer draws only when
+// something changed: gap_* are the page's frames (requestAnimationFrame, drawn or not: how
+// responsive the page stays), redraw_gap_* the intervals between frames that drew the object,
+// worst_gaps the three longest gaps with what the frame before each did.
 //
 //   node web/bench/stream_chromium.mjs MESH.pmz [RATE=2000000] [RUNS=3] [WIDTHxHEIGHT=640x480]
 //                                     [WORKER=1]   (0: decode on the page's thread)
+//                                     [QUERY]      (more viewer parameters, e.g. aa=1)
 import { mkdtempSync, rmSync } from 'node:fs';
 import { loadavg, tmpdir } from 'node:os';
 import path from 'node:path';
@@ -17,7 +21,7 @@ import puppeteer from 'puppeteer-core';
 import { CHROMIUM_ARGS, serveViewer } from '../test/serve.mjs';
 
 const here = path.dirname(fileURLToPath(import.meta.url));
-const [file, rateArg, runsArg, sizeArg, workerArg] = process.argv.slice(2);
+const [file, rateArg, runsArg, sizeArg, workerArg, extraQuery] = process.argv.slice(2);
 const worker = workerArg !== '0';
 const rate = Number(rateArg || 2e6), runs = Number(runsArg || 3);
 const [width, height] = (sizeArg || '640x480').split('x').map(Number);
@@ -30,7 +34,8 @@ for (let r = 0; r < runs; ++r) {
     args: [...CHROMIUM_ARGS, `--user-data-dir=${profile}`] });
   const page = await browser.newPage();
   await page.setViewport({ width, height });
-  await page.goto(`http://127.0.0.1:${server.address().port}/index.html?src=/stream/mesh.pmz${worker ? '' : '&worker=0'}`);
+  await page.goto(`http://127.0.0.1:${server.address().port}/index.html?src=/stream/mesh.pmz${worker ? '' : '&worker=0'}` +
+    (extraQuery ? `&${extraQuery}` : ''));
   await page.waitForFunction(() => window.pmzStatus.complete || window.pmzStatus.error,
     { timeout: 600000, polling: 200 });
   // The same full mesh drawn while nothing changes: what rendering alone costs per frame.
@@ -44,6 +49,13 @@ for (let r = 0; r < runs; ++r) {
   const during = s.frames.filter((f) => f.t >= firstBytes && (!done || f.t <= done.t));
   const gaps = during.slice(1).map((f, i) => f.t - during[i].t).sort((a, b) => a - b);
   const q = (p) => gaps.length ? +gaps[Math.min(gaps.length - 1, Math.floor(p * gaps.length))].toFixed(1) : null;
+  // Frames that drew (the viewer redraws only on changes): the redraw interval while decoding.
+  const drawn = during.filter((f) => f.drawn !== false);
+  const redraws = drawn.slice(1).map((f, i) => f.t - drawn[i].t).sort((a, b) => a - b);
+  // The three longest gaps, with the frame that ended each (what it did).
+  const worst = during.slice(1).map((f, i) => ({ gap: +(f.t - during[i].t).toFixed(1), at: +(f.t - firstBytes).toFixed(1),
+    faces: during[i].faces, work: +during[i].work.toFixed(1), render: +during[i].render.toFixed(1), drawn: during[i].drawn }))
+    .sort((a, b) => b.gap - a.gap).slice(0, 3);
   const still = done ? s.frames.filter((f) => f.t > done.t + 500) : [];
   const stillGaps = still.slice(1).map((f, i) => f.t - still[i].t).sort((a, b) => a - b);
   results.push({ faces: s.status.faces, error: s.status.error,
@@ -51,6 +63,8 @@ for (let r = 0; r < runs; ++r) {
     complete_ms: done ? +(done.t - firstBytes).toFixed(1) : null, frames: during.length,
     gap_median_ms: q(0.5), gap_p95_ms: q(0.95), gap_max_ms: gaps.length ? +gaps[gaps.length - 1].toFixed(1) : null,
     gaps_over_50ms: gaps.filter((g) => g > 50).length,
+    redraws: drawn.length, redraw_gap_median_ms: redraws.length ? +redraws[redraws.length >> 1].toFixed(1) : null,
+    redraw_gap_max_ms: redraws.length ? +redraws[redraws.length - 1].toFixed(1) : null, worst_gaps: worst,
     static_gap_median_ms: stillGaps.length ? +stillGaps[stillGaps.length >> 1].toFixed(1) : null,
     // The page's own JS per frame: update() (applying the worker's ranges, or refining here)
     // and the render() call (queuing GL commands; SwiftShader draws in the GPU process).
@@ -61,5 +75,5 @@ for (let r = 0; r < runs; ++r) {
       (!done || x.start <= done.t)).map((x) => x.duration)).toFixed(1) });
 }
 server.close();
-console.log(JSON.stringify({ file: path.basename(file), rate, width, height, worker,
+console.log(JSON.stringify({ file: path.basename(file), rate, width, height, worker, query: extraQuery || '',
   loadavg: loadavg().map((x) => +x.toFixed(1)), runs: results }, null, 1));

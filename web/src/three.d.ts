@@ -1,5 +1,5 @@
 import { BufferGeometry, Loader, LoadingManager, Material, MeshStandardMaterial,
-  MeshStandardMaterialParameters, TextureLoader } from 'three';
+  MeshStandardMaterialParameters, Texture, TextureLoader } from 'three';
 import { Decoder, DecoderOptions, PmzMaterial, PmzStatus, StreamInfo } from './index.js';
 
 export interface PMZOptions extends DecoderOptions {
@@ -94,6 +94,7 @@ export declare function pmzMaterials(
     parameters?: MeshStandardMaterialParameters;
     color?: number;
     textureLoader?: TextureLoader;
+    onTextureLoad?: (texture: Texture) => void;
     onTextureError?: (url: string, error: unknown) => void;
   },
 ): MeshStandardMaterial[];

@@ -24,16 +24,18 @@ function addFaceRuns(attributes, modifiedFaces, perFace) {
   for (const [a, b] of runs) attributes.addUpdateRange(perFace * a, perFace * (b - a));
 }
 
-// Room for what is needed, grown 4x at a time up to the header's full counts (render vertices
-// with attributes: wedges, which the header does not count), contents kept. Not the full mesh
-// at once: a new attribute is uploaded whole, and the first frame of a 1.2M-face stream then
-// moved 31 MB (3.9 s to the first frame in SwiftShader).
+// Room for what is needed, contents kept: first a small size for the base mesh, at the next
+// growth the header's full counts (render vertices with attributes: wedges, which the header
+// does not count: 1.5x its vertices, then doubling). Not the full mesh at once: a new
+// attribute is uploaded whole, and the first frame of a 1.2M-face stream then moved 31 MB
+// (3.9 s to the first frame in SwiftShader); nor 4x steps: each step re-uploads everything
+// (65k, 262k, 1M, 1.2M faces: 2.1x the full mesh's bytes in uploads).
 function allocateGeometry(g, info, vertices, faces, caps, spec) {
   const room = (need, cap, full, least) =>
-    Math.max(need, Math.min(Math.max(full, need), Math.max(4 * cap, 2 * need, least)));
-  const fullVertices = spec.layout.length ? 2 * info.fullVertices : info.fullVertices;
-  const vcap = room(vertices, caps.vertices, fullVertices, 1 << 15);
-  const fcap = room(faces, caps.faces, info.fullFaces, 1 << 16);
+    cap === 0 ? Math.max(need, Math.min(full, Math.max(2 * need, least))) : Math.max(full, 2 * need);
+  const fullVertices = spec.layout.length ? Math.ceil(1.5 * info.fullVertices) : info.fullVertices;
+  const vcap = room(vertices, caps.vertices, fullVertices, 1 << 16);
+  const fcap = room(faces, caps.faces, info.fullFaces, 1 << 17);  // (75k faces: all at once)
   const grow = (name, old, size, itemSize, Type) => {
     const a = new BufferAttribute(new Type(size * itemSize), itemSize);
     if (old) a.array.set(old.array.subarray(0, Math.min(old.array.length, a.array.length)));
@@ -385,7 +387,7 @@ function textureUrl(uri, base) {
 // stream's), vertex colours when the geometry has them, and smooth shading with decoded
 // normals (flat without). Call once the base mesh is in (the geometry has its attributes).
 // options: parameters (more MeshStandardMaterial parameters), color (without a table),
-// textureLoader, onTextureError(url, error).
+// textureLoader, onTextureLoad(texture) (e.g. to redraw), onTextureError(url, error).
 export function pmzMaterials(stream, options = {}) {
   const g = stream.geometry;
   const has = (name) => !!g.getAttribute(name);
@@ -400,7 +402,7 @@ export function pmzMaterials(stream, options = {}) {
       opacity: m.baseColor[3], transparent: m.baseColor[3] < 1 });
     if (m.baseColorTexture && has('uv')) {
       const url = textureUrl(m.baseColorTexture, base);
-      material.map = loader.load(url, undefined, undefined,
+      material.map = loader.load(url, options.onTextureLoad, undefined,
         (e) => (options.onTextureError ? options.onTextureError(url, e) : console.warn(`pmz: texture ${url} not loaded`)));
       material.map.colorSpace = SRGBColorSpace;
     }

@@ -10,7 +10,22 @@ const params = new URLSearchParams(location.search);
 const useWorker = params.get('worker') !== '0' && typeof Worker === 'function';
 const BACKGROUND = 0x20242a;
 
-const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+// MSAA about doubles a frame's cost in a software renderer (SwiftShader, 75k-face bunny at load
+// 15: median frame gap 283 ms with, 117 ms without): off there, on elsewhere; ?aa=0/1 decides.
+function softwareRenderer() {
+  try {
+    const gl = document.createElement('canvas').getContext('webgl2');
+    const info = gl && gl.getExtension('WEBGL_debug_renderer_info');
+    const name = info ? String(gl.getParameter(info.UNMASKED_RENDERER_WEBGL)) : '';
+    const lose = gl && gl.getExtension('WEBGL_lose_context');
+    if (lose) lose.loseContext();
+    return /swiftshader|llvmpipe|softpipe|software/i.test(name);
+  } catch (e) {
+    return false;
+  }
+}
+const antialias = params.has('aa') ? params.get('aa') !== '0' : !softwareRenderer();
+const renderer = new THREE.WebGLRenderer({ antialias, preserveDrawingBuffer: true });
 renderer.setPixelRatio(window.devicePixelRatio);
 renderer.setSize(window.innerWidth, window.innerHeight);
 renderer.setClearColor(BACKGROUND);
@@ -24,28 +39,43 @@ const light = new THREE.DirectionalLight(0xffffff, 2.0);
 light.position.set(1, 1.5, 2);
 camera.add(light);
 const controls = new OrbitControls(camera, renderer.domElement);
+// Frames are drawn when something changed (geometry, view, material, a texture arrived, new
+// vertices still gliding): redrawing an unchanged scene only takes CPU from the decoder, and
+// a software renderer needs a good part of a second for a large mesh on a loaded machine.
+let redraw = true, glideUntil = 0;
+const requestRedraw = () => { redraw = true; };
+controls.addEventListener('change', requestRedraw);
 
 const material = new THREE.MeshStandardMaterial({ color: 0xd8c8a8, flatShading: true,
   side: THREE.DoubleSide, roughness: 0.7 });
-const morphClock = geomorphMaterial(material);
+const GLIDE_SECONDS = 0.4;
+const morphClock = geomorphMaterial(material, GLIDE_SECONDS);
 let morphTime = null;  // tests: a fixed geomorph time instead of the clock
 const plainMaterial = new THREE.MeshStandardMaterial({ color: 0xd8c8a8, flatShading: true,
   side: THREE.DoubleSide, roughness: 0.7 });
 
 // Both materials' shader programs are compiled before a stream is opened (in parallel where
 // the browser has KHR_parallel_shader_compile): compiling on the first frame with the object
-// blocked the page for seconds in SwiftShader.
+// blocked the page for seconds in SwiftShader. Then one tiny triangle is drawn with each, as
+// the streams are (indexed, 32-bit indices): SwiftShader generates its drawing code for a
+// state at its first draw, which should not be the first frame with the object.
 const shadersReady = (async () => {
   const dummy = new THREE.BufferGeometry();
-  dummy.setAttribute('position', new THREE.BufferAttribute(new Float32Array(9), 3));
+  dummy.setAttribute('position', new THREE.BufferAttribute(new Float32Array([0, 0, 0, 1e-4, 0, 0, 0, 1e-4, 0]), 3));
   dummy.setAttribute('pmzMorph', new THREE.BufferAttribute(new Float32Array(12), 4));
+  dummy.setIndex(new THREE.BufferAttribute(new Uint32Array([0, 1, 2]), 1));
   const meshes = [material, plainMaterial].map((m) => new THREE.Mesh(dummy, m));
-  for (const m of meshes) scene.add(m);
+  for (const m of meshes) {
+    m.frustumCulled = false;
+    scene.add(m);
+  }
   try {
     await renderer.compileAsync(scene, camera);
+    renderer.render(scene, camera);
   } finally {
     for (const m of meshes) scene.remove(m);
     dummy.dispose();
+    redraw = true;
   }
 })();
 
@@ -72,11 +102,12 @@ if (typeof PerformanceObserver === 'function' &&
 // pmzMaterials(): textured, lit with their normals; each with a geomorph twin.
 function dress(stream) {
   const plain = pmzMaterials(stream, {
+    onTextureLoad: requestRedraw,
     onTextureError: (url) => console.warn(`pmz viewer: texture ${url} not loaded; drawn untextured`),
   });
   const morphing = plain.map((m) => {
     const twin = m.clone();
-    morphTicks.push(geomorphMaterial(twin));
+    morphTicks.push(geomorphMaterial(twin, GLIDE_SECONDS));
     return twin;
   });
   const one = (a) => (a.length === 1 ? a[0] : a);  // an array draws only the geometry's groups
@@ -108,6 +139,7 @@ async function open(source) {
       }
     }
     current = null;
+    redraw = true;
   }
   morphTicks = [];
   Object.assign(status, { faces: 0, vertices: 0, bytes: 0, totalBytes: 0, complete: false, error: '' });
@@ -125,6 +157,7 @@ async function open(source) {
     const mesh = new THREE.Mesh(stream.geometry, morph.checked ? material : plainMaterial);
     mesh.frustumCulled = false;
     scene.add(mesh);
+    redraw = true;
     current = { stream, mesh, fitted: false, materials: null };
     const result = await stream.done;
     if (result !== 'ok') setError(stream.error || result);
@@ -159,7 +192,10 @@ function frame(t) {
     const before = s.splitsApplied;
     s.faceTarget = faceTarget;
     const t0 = performance.now();
-    s.update(REFINE_BUDGET_MS);
+    if (s.update(REFINE_BUDGET_MS)) {
+      redraw = true;
+      glideUntil = performance.now() + 1000 * GLIDE_SECONDS + 50;
+    }
     work = performance.now() - t0;
     const g = s.geometry;
     if (!current.materials && g.getAttribute('position')) {
@@ -175,7 +211,11 @@ function frame(t) {
     Object.assign(status, { bytes: s.bytes, totalBytes: s.totalBytes });
     Object.assign(status, { faces: s.faceCount, vertices: s.vertexCount, complete: s.complete });
     if (s.status !== 'ok') setError(s.error);
-    if (current.materials) current.mesh.material = morph.checked ? current.materials.morph : current.materials.plain;
+    const m = current.materials && (morph.checked ? current.materials.morph : current.materials.plain);
+    if (m && current.mesh.material !== m) {
+      current.mesh.material = m;
+      redraw = true;
+    }
   }
   if (morphTime === null) {
     morphClock();
@@ -183,21 +223,24 @@ function frame(t) {
   }
   controls.update();
   const t0r = performance.now();
-  renderer.render(scene, camera);
+  const drawn = redraw || (morph.checked && t0r < glideUntil);
+  if (drawn) renderer.render(scene, camera);
+  redraw = false;
   const now = performance.now();
-  if (status.faces > 0 && window.pmzTiming.firstObjectFrame === null) window.pmzTiming.firstObjectFrame = now;
+  if (drawn && status.faces > 0 && window.pmzTiming.firstObjectFrame === null) window.pmzTiming.firstObjectFrame = now;
   if (window.pmzFrames.length < 100000)
-    window.pmzFrames.push({ t, faces: status.faces, bytes: status.bytes, work, render: performance.now() - t0r });
+    window.pmzFrames.push({ t, faces: status.faces, bytes: status.bytes, work, render: now - t0r, drawn });
   if (now - rate.t >= 500) {
     rate = { t: now, splits: 0, perSecond: rate.splits / ((now - rate.t) / 1000) };
   }
   const kb = (n) => (n / 1024).toFixed(1) + ' KiB';
-  overlay.textContent = current
+  const text = current
     ? `faces     ${status.faces.toLocaleString()}\nvertices  ${status.vertices.toLocaleString()}\n` +
       `bytes     ${kb(status.bytes)} / ${status.totalBytes ? kb(status.totalBytes) : '?'}\n` +
       `refine    ${Math.round(rate.perSecond).toLocaleString()} splits/s\n` +
       (status.error ? `error     ${status.error}` : status.complete ? 'complete' : 'streaming')
     : overlay.textContent;
+  if (text !== overlay.textContent) overlay.textContent = text;  // no layout for an unchanged text
 }
 requestAnimationFrame(frame);
 
@@ -205,6 +248,7 @@ window.addEventListener('resize', () => {
   camera.aspect = window.innerWidth / window.innerHeight;
   camera.updateProjectionMatrix();
   renderer.setSize(window.innerWidth, window.innerHeight);
+  redraw = true;
 });
 
 // Tests: hold a face count (null follows the stream), and the canvas's coverage (share of
