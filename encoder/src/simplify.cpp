@@ -35,56 +35,66 @@ constexpr float kMinQuality = 0.05f;
 constexpr float kPlaneCos = 0.99999f;
 constexpr float kInfinity = std::numeric_limits<float>::infinity();
 
-// Squared distance from x to the triangle (a, b, c) (Ericson, Real-Time Collision Detection
-// 5.1.5: the closest point by the Voronoi region of x).
-float squared_distance_to_triangle(const float* x, const float* a, const float* b, const float* c) {
-  auto sub = [](const float* p, const float* q, float* r) {
+// Squared distances from points to the triangle (a, b, c) (Ericson, Real-Time Collision
+// Detection 5.1.5: the closest point by the Voronoi region of x). The guard measures several
+// points against each triangle: what depends on the triangle alone is computed once.
+struct DistanceTriangle {
+  const float *a, *b, *c;
+  float ab[3], ac[3];
+  DistanceTriangle(const float* a_, const float* b_, const float* c_) : a(a_), b(b_), c(c_) {
+    sub(b, a, ab), sub(c, a, ac);
+  }
+  static void sub(const float* p, const float* q, float* r) {
     r[0] = p[0] - q[0], r[1] = p[1] - q[1], r[2] = p[2] - q[2];
-  };
-  auto dot = [](const float* p, const float* q) { return p[0] * q[0] + p[1] * q[1] + p[2] * q[2]; };
-  float ab[3], ac[3], ap[3], bp[3], cp[3];
-  sub(b, a, ab), sub(c, a, ac), sub(x, a, ap);
-  auto to = [&](const float* base, const float* dir, float t) {
-    float d[3] = {base[0] + t * dir[0] - x[0], base[1] + t * dir[1] - x[1],
-                  base[2] + t * dir[2] - x[2]};
-    return dot(d, d);
-  };
-  const float d1 = dot(ab, ap), d2 = dot(ac, ap);
-  if (d1 <= 0 && d2 <= 0) return dot(ap, ap);
-  sub(x, b, bp);
-  const float d3 = dot(ab, bp), d4 = dot(ac, bp);
-  if (d3 >= 0 && d4 <= d3) return dot(bp, bp);
-  const float vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return to(a, ab, d1 / (d1 - d3));
-  sub(x, c, cp);
-  const float d5 = dot(ab, cp), d6 = dot(ac, cp);
-  if (d6 >= 0 && d5 <= d6) return dot(cp, cp);
-  const float vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return to(a, ac, d2 / (d2 - d6));
-  const float va = d3 * d6 - d5 * d4;
-  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) {
-    float bc[3];
-    sub(c, b, bc);
-    return to(b, bc, (d4 - d3) / ((d4 - d3) + (d5 - d6)));
   }
-  const float denom = va + vb + vc;
-  if (!(denom > 0)) {  // degenerate triangle: the nearest of its edges
-    float bc[3];
-    sub(c, b, bc);
-    auto segment = [&](const float* base, const float* dir) {
-      const float len = dot(dir, dir);
-      float d[3];
-      sub(x, base, d);
-      const float t = len > 0 ? std::clamp(dot(d, dir) / len, 0.f, 1.f) : 0.f;
-      return to(base, dir, t);
+  static float dot(const float* p, const float* q) {
+    return p[0] * q[0] + p[1] * q[1] + p[2] * q[2];
+  }
+  float squared_distance(const float* x) const {
+    float ap[3], bp[3], cp[3];
+    sub(x, a, ap);
+    auto to = [&](const float* base, const float* dir, float t) {
+      float d[3] = {base[0] + t * dir[0] - x[0], base[1] + t * dir[1] - x[1],
+                    base[2] + t * dir[2] - x[2]};
+      return dot(d, d);
     };
-    return std::min({segment(a, ab), segment(a, ac), segment(b, bc)});
+    const float d1 = dot(ab, ap), d2 = dot(ac, ap);
+    if (d1 <= 0 && d2 <= 0) return dot(ap, ap);
+    sub(x, b, bp);
+    const float d3 = dot(ab, bp), d4 = dot(ac, bp);
+    if (d3 >= 0 && d4 <= d3) return dot(bp, bp);
+    const float vc = d1 * d4 - d3 * d2;
+    if (vc <= 0 && d1 >= 0 && d3 <= 0) return to(a, ab, d1 / (d1 - d3));
+    sub(x, c, cp);
+    const float d5 = dot(ab, cp), d6 = dot(ac, cp);
+    if (d6 >= 0 && d5 <= d6) return dot(cp, cp);
+    const float vb = d5 * d2 - d1 * d6;
+    if (vb <= 0 && d2 >= 0 && d6 <= 0) return to(a, ac, d2 / (d2 - d6));
+    const float va = d3 * d6 - d5 * d4;
+    if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) {
+      float bc[3];
+      sub(c, b, bc);
+      return to(b, bc, (d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    const float denom = va + vb + vc;
+    if (!(denom > 0)) {  // degenerate triangle: the nearest of its edges
+      float bc[3];
+      sub(c, b, bc);
+      auto segment = [&](const float* base, const float* dir) {
+        const float len = dot(dir, dir);
+        float d[3];
+        sub(x, base, d);
+        const float t = len > 0 ? std::clamp(dot(d, dir) / len, 0.f, 1.f) : 0.f;
+        return to(base, dir, t);
+      };
+      return std::min({segment(a, ab), segment(a, ac), segment(b, bc)});
+    }
+    const float v = vb / denom, w = vc / denom;
+    const float d[3] = {a[0] + ab[0] * v + ac[0] * w - x[0], a[1] + ab[1] * v + ac[1] * w - x[1],
+                        a[2] + ab[2] * v + ac[2] * w - x[2]};
+    return dot(d, d);
   }
-  const float v = vb / denom, w = vc / denom;
-  const float d[3] = {a[0] + ab[0] * v + ac[0] * w - x[0], a[1] + ab[1] * v + ac[1] * w - x[1],
-                      a[2] + ab[2] * v + ac[2] * w - x[2]};
-  return dot(d, d);
-}
+};
 
 // Min-heap of vertices keyed by their cheapest collapse: 4-ary with the keys inline, so a sift
 // walks one array (the heap dominated the profile when keys were a separate array).
@@ -317,6 +327,11 @@ class Engine {
   // and v to the faces v will have after the collapse; the farthest of these points in
   // next_witness, which keep_witnesses(v) makes v's after the collapse.
   float guard_bound(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb);
+  void prefetch_witnesses(uint32_t v) const {  // 48 bytes: one or two cache lines
+    const float* w = &witness[size_t(v) * 3 * kWitnesses];
+    __builtin_prefetch(w);
+    __builtin_prefetch(w + 3 * kWitnesses - 1);
+  }
   void keep_witnesses(uint32_t v) {
     std::copy(next_witness, next_witness + 3 * kWitnesses, &witness[size_t(v) * 3 * kWitnesses]);
   }
@@ -354,20 +369,34 @@ float Engine::guard_bound(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb) {
     points[1 + i] = &witness[(size_t(u) * kWitnesses + i) * 3];
     points[1 + kWitnesses + i] = &witness[(size_t(v) * kWitnesses + i) * 3];
   }
+  // The distances of the distinct points only: the same point gives the same distance, and
+  // most vertices carry few distinct points (at the start the nine are two: p_u and p_v).
+  int first_equal[kBoundPoints], distinct[kBoundPoints], distinct_count = 0;
+  for (int i = 0; i < kBoundPoints; ++i) {
+    first_equal[i] = i;
+    for (int j = 0; j < distinct_count; ++j)
+      if (std::equal(points[i], points[i] + 3, points[distinct[j]])) {
+        first_equal[i] = distinct[j];
+        break;
+      }
+    if (first_equal[i] == i) distinct[distinct_count++] = i;
+  }
   float nearest[kBoundPoints];
   std::fill(nearest, nearest + kBoundPoints, kInfinity);
   const float* pv = m.p(v);
   auto fan = [&](uint32_t centre) {
     for_each_outgoing(m, centre, [&](uint32_t h) {
       if (HalfEdgeMesh::face(h) == fa || HalfEdgeMesh::face(h) == fb) return;
-      const float* b = m.p(m.dest(h));
-      const float* c = m.p(m.vert[HalfEdgeMesh::prev(h)]);
-      for (int i = 0; i < kBoundPoints; ++i)
-        nearest[i] = std::min(nearest[i], squared_distance_to_triangle(points[i], pv, b, c));
+      const DistanceTriangle t(pv, m.p(m.dest(h)), m.p(m.vert[HalfEdgeMesh::prev(h)]));
+      for (int k = 0; k < distinct_count; ++k) {
+        const int i = distinct[k];
+        nearest[i] = std::min(nearest[i], t.squared_distance(points[i]));
+      }
     });
   };
   fan(u);
   fan(v);
+  for (int i = 0; i < kBoundPoints; ++i) nearest[i] = nearest[first_equal[i]];
   // The kWitnesses farthest distinct points, ties in the order above (deterministic); when fewer
   // are distinct (at the start every witness of a vertex is the vertex), the farthest repeats.
   int order[kBoundPoints];
@@ -818,6 +847,7 @@ void Engine::run(const SimplifyOptions& options) {
     prefetch_quadric(quad, v);
     prefetch_quadric(accumulated, u);
     prefetch_quadric(accumulated, v);
+    if (guard) prefetch_witnesses(u), prefetch_witnesses(v);
     pair.resize(2), pair[0] = u, pair[1] = v;
     prefetch_fans(m, pair, walk, [&](uint32_t x) { __builtin_prefetch(m.p(x)); });
     uint32_t ha, hb;
