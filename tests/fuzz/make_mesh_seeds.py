@@ -1,15 +1,18 @@
 #!/usr/bin/env python3
-"""Seed corpora for the mesh reader fuzz targets (fuzz_mesh_obj, _off, _ply, _stl, _gltf).
+"""Seed corpora for the mesh reader fuzz targets (fuzz_mesh_obj, _off, _ply, _stl, _gltf) and
+the repair pass's (fuzz_mesh_repair).
 
 usage: make_mesh_seeds.py OUT_DIR
 
 Writes OUT_DIR/mesh_{obj,off,ply,stl,gltf}/: a small cube with a texture seam, normals, colours
 and two materials in every layout each reader knows (ascii and binary, polygons, glTF with an
-embedded data: URI and as .glb, indexed and not), a few hundred bytes each.
+embedded data: URI and as .glb, indexed and not), a few hundred bytes each; OUT_DIR/mesh_repair/:
+fixed pseudo-random byte strings (the target builds a soup from any bytes).
 """
 import base64
 import json
 import os
+import random
 import struct
 import sys
 
@@ -138,10 +141,15 @@ def gltf_seeds():
     return {'cube-embedded': text, 'cube-glb': glb, 'strip': json.dumps(strip)}
 
 
+def repair_seeds():
+    rng = random.Random(14)
+    return {'random-%d' % n: bytes(rng.randrange(256) for _ in range(n)) for n in (64, 512, 4096)}
+
+
 def main():
     out_dir = sys.argv[1]
     for fmt, seeds in (('obj', obj_seeds()), ('off', off_seeds()), ('ply', ply_seeds()),
-                       ('stl', stl_seeds()), ('gltf', gltf_seeds())):
+                       ('stl', stl_seeds()), ('gltf', gltf_seeds()), ('repair', repair_seeds())):
         d = os.path.join(out_dir, 'mesh_' + fmt)
         os.makedirs(d, exist_ok=True)
         for name, data in seeds.items():
