@@ -598,8 +598,11 @@ bool Decoder::Impl::apply() {
   {  // the position, then what re-applying the split needs
     PositionPrediction pred;
     int32_t residual[3], c[3];
+    // (v's ring offsets: summed by the wedge scores over the same ring and coordinates.)
+    const WedgeScratch& ws = frontier.wedge_scratch;
     predict_position(record.coords.data(), level.mesh.u_ring(), level.mesh.ring(), info.curvature,
-                     info.fine_curvature, pred, frontier.wedge_scratch.extent);
+                     info.fine_curvature, pred, ws.extent,
+                     ws.ring_offsets_ok ? ws.ring_offsets : nullptr);
     if (!frontier.lazy.front().residuals(pred.context, pred.mix, residual)) {
       level.mesh.undo_split(s.v, has_l, has_r);
       return refuse(Status::corrupt,

@@ -62,9 +62,11 @@ void score_wedges(const int32_t* coords, const uint32_t* degree, const Progressi
   I* q = q0;
   uint8_t* wm = w0;
   const int64_t cx = cv[0], cy = cv[1], cz = cv[2];
+  int64_t ox = 0, oy = 0, oz = 0;  // s.ring_offsets (|sum| < 2^57 for rings up to 2^24)
   auto put_vertex = [&](uint32_t w) {
     const int32_t* cw = coords + size_t(w) * 3;
     const int64_t dx = cw[0] - cx, dy = cw[1] - cy, dz = cw[2] - cz;
+    ox += dx, oy += dy, oz += dz;
     q[0] = dx;
     q[1] = dy;
     q[2] = dz;
@@ -86,6 +88,8 @@ void score_wedges(const int32_t* coords, const uint32_t* degree, const Progressi
   if (!closed) put_missing();
   for (uint32_t j = start; j < k; ++j) put_vertex(ring[j]);
   for (uint32_t j = 0; j < start; ++j) put_vertex(ring[j]);
+  s.ring_offsets[0] = ox, s.ring_offsets[1] = oy, s.ring_offsets[2] = oz;
+  s.ring_offsets_ok = true;
   if (closed) {
     for (uint32_t i = 0; i <= count;
          ++i) {  // count + 1 < k: no overlap (a few positions: no memcpy call)
@@ -158,6 +162,7 @@ uint32_t wedge_candidates(const int32_t* coords, const uint32_t* degree, uint32_
   if (k > kMaxScoredRing) {
     const uint32_t n = pm.ring_closed() ? k : k - count + 1;
     s.narrow = true;
+    s.ring_offsets_ok = false;
     s.score64.assign(n, 0);
     s.confident = true;
     s.best = 0;

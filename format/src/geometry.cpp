@@ -51,7 +51,8 @@ namespace {
                                                    std::span<const uint32_t> u_ring,
                                                    std::span<const uint32_t> v_ring, bool with_l,
                                                    bool with_e, RingBasis& basis,
-                                                   bool narrow_known = false) {
+                                                   bool narrow_known = false,
+                                                   const int64_t* v_ring_offsets = nullptr) {
   const uint32_t m = uint32_t(u_ring.size());
   const int32_t* cv = coords + size_t(u_ring[0]) * 3;
   const int64_t vx = cv[0], vy = cv[1], vz = cv[2];
@@ -119,9 +120,13 @@ namespace {
   if (with_l && k && k <= (1u << 24)) {
     const int64_t kk = int64_t(k);
     int64_t L[3] = {kk * vx, kk * vy, kk * vz};
-    for (uint32_t w : v_ring) {
-      const int32_t* cw = coords + size_t(w) * 3;
-      L[0] -= cw[0], L[1] -= cw[1], L[2] -= cw[2];
+    if (v_ring_offsets) {  // the same integers: k c[v] - sum c[w] = -sum (c[w] - c[v])
+      L[0] = -v_ring_offsets[0], L[1] = -v_ring_offsets[1], L[2] = -v_ring_offsets[2];
+    } else {
+      for (uint32_t w : v_ring) {
+        const int32_t* cw = coords + size_t(w) * 3;
+        L[0] -= cw[0], L[1] -= cw[1], L[2] -= cw[2];
+      }
     }
     basis.l_dot_n = Int128(L[0]) * n0 + Int128(L[1]) * n1 + Int128(L[2]) * n2;
   }
@@ -221,10 +226,10 @@ void predict_from_basis(const int32_t* coords, std::span<const uint32_t> u_ring,
 
 void predict_position(const int32_t* coords, std::span<const uint32_t> u_ring,
                       std::span<const uint32_t> v_ring, uint32_t curvature, uint32_t fine,
-                      PositionPrediction& out, uint64_t extent) {
+                      PositionPrediction& out, uint64_t extent, const int64_t* v_ring_offsets) {
   RingBasis basis;
   ring_basis_impl(coords, u_ring, v_ring, curvature != 0, fine != 0, basis,
-                  extent < (uint64_t(1) << 24));
+                  extent < (uint64_t(1) << 24), v_ring_offsets);
   predict_from_basis_impl(coords, u_ring, uint32_t(v_ring.size()), basis, curvature, fine, out);
 }
 

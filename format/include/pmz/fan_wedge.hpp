@@ -33,6 +33,11 @@ struct WedgeScratch {
   // the largest side of the coordinates' bounding box. When k (extent + 1) < 2^26 the scores
   // are computed in 64 bits without checking each ring offset. Unknown: UINT64_MAX.
   uint64_t extent = UINT64_MAX;
+  // Set by the scoring: the sum of c[w] - c[v] over v's ring (per axis), which the position
+  // prediction needs too (its curvature offset L is minus this sum); valid when ring_offsets_ok
+  // (rings too large to score leave it unset).
+  int64_t ring_offsets[3] = {0, 0, 0};
+  bool ring_offsets_ok = false;
   // Room for a ring of k vertices (any count), so scoring it does not allocate.
   void reserve(size_t k) {
     const size_t len = 2 * k + 2;

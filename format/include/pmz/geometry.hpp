@@ -59,10 +59,12 @@ struct RingBasis {
 // before the split (ProgressiveMesh::ring(), any order); curvature and fine: HEAD fields, 0..8.
 // extent (optional): a bound on |c[w] - c[v]| per axis over all vertex pairs, e.g. the largest
 // side of the coordinates' bounding box; below 2^24 the normal's 64-bit range check per ring
-// vertex is skipped (the same results).
+// vertex is skipped (the same results). v_ring_offsets (optional): the sum of c[w] - c[v] over
+// v_ring per axis, when the caller has it (WedgeScratch::ring_offsets): saves a ring walk.
 void predict_position(const int32_t* coords, std::span<const uint32_t> u_ring,
                       std::span<const uint32_t> v_ring, uint32_t curvature, uint32_t fine,
-                      PositionPrediction& out, uint64_t extent = UINT64_MAX);
+                      PositionPrediction& out, uint64_t extent = UINT64_MAX,
+                      const int64_t* v_ring_offsets = nullptr);
 // The same in two steps, for a writer trying several curvature pairs on one split: the ring
 // part once, then per pair the offset and the contexts (results identical to predict_position).
 // with_l / with_e: whether l_dot_n / e_dot_n are wanted (some pair has curvature / fine > 0).
