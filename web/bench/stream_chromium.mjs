@@ -25,7 +25,9 @@ const [file, rateArg, runsArg, sizeArg, workerArg, extraQuery] = process.argv.sl
 const worker = workerArg !== '0';
 const rate = Number(rateArg || 2e6), runs = Number(runsArg || 3);
 const [width, height] = (sizeArg || '640x480').split('x').map(Number);
-const server = await serveViewer(path.join(here, '..', 'dist', 'viewer'), { 'mesh.pmz': path.resolve(file) }, rate);
+// PMZ_VIEWER_DIR: another built viewer (e.g. an older commit's web/dist/viewer) to compare.
+const viewerDir = process.env.PMZ_VIEWER_DIR || path.join(here, '..', 'dist', 'viewer');
+const server = await serveViewer(path.resolve(viewerDir), { 'mesh.pmz': path.resolve(file) }, rate);
 const STATIC_MS = 3000;  // frames of the finished mesh, for static_gap_median_ms
 const results = [];
 for (let r = 0; r < runs; ++r) {
@@ -75,5 +77,5 @@ for (let r = 0; r < runs; ++r) {
       (!done || x.start <= done.t)).map((x) => x.duration)).toFixed(1) });
 }
 server.close();
-console.log(JSON.stringify({ file: path.basename(file), rate, width, height, worker, query: extraQuery || '',
+console.log(JSON.stringify({ file: path.basename(file), viewer: path.resolve(viewerDir), rate, width, height, worker, query: extraQuery || '',
   loadavg: loadavg().map((x) => +x.toFixed(1)), runs: results }, null, 1));
