@@ -25,14 +25,17 @@ struct SimplifierCli {
         ->capture_default_str();
     app.add_option("--attributes", attributes,
                    "how texture coordinates, normals, colours and materials steer the "
-                   "simplification (spec/algorithm.md section 7): full: seams and material "
-                   "boundaries kept as discontinuity curves, attribute error added to the cost; "
-                   "seams: the curves only; geometry-only: ignored (the geometric metric alone). "
-                   "A mesh without attributes simplifies the same in every mode")
+                   "simplification (spec/algorithm.md section 7): full: attribute error added "
+                   "to the cost, material boundaries kept as discontinuity curves, texture and "
+                   "normal seams priced (crossed or their corners moved only where that costs "
+                   "less than the geometric error of the alternatives); seams: strict, texture "
+                   "and normal seams kept like material boundaries (moved along, never across; "
+                   "their corners stay); geometry-only: ignored (the geometric metric alone). A "
+                   "mesh without attributes simplifies the same in every mode")
         ->check(CLI::IsMember({"full", "seams", "geometry-only"}))
         ->capture_default_str();
     app.add_option("--attribute-weight", params.attribute_weight,
-                   "full: weight of the attribute error against the geometric cost")
+                   "full, seams: weight of the attribute error against the geometric cost")
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
     app.add_option("--epsilon", params.epsilon, "torsion threshold epsilon (eq. 2)")

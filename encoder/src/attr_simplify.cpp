@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 
 namespace pmz::detail {
@@ -29,8 +30,13 @@ void AttributeField::init(const HalfEdgeMesh& m, const std::vector<uint32_t>& co
     for (uint32_t f = 0; f < faces; ++f)
       for (uint32_t k = 0; k < 3; ++k)
         wedge[HalfEdgeMesh::half_edge(f, k)] = corner_wedges[size_t(f) * 3 + k];
-  if (materials) material = face_materials;
-  cost_term = mode == AttributeMode::full && weight > 0 && wedges;
+  // One material everywhere has no boundary: left out, so the priced rule skips the walk.
+  if (materials && std::adjacent_find(face_materials.begin(), face_materials.end(),
+                                      std::not_equal_to<>()) != face_materials.end())
+    material = face_materials;
+  cost_term = weight > 0 && wedges;
+  // Without the term nothing would price a seam: it stays locked.
+  priced = mode == AttributeMode::full && cost_term;
   if (!cost_term) return;
 
   // Each attribute kind: source array, components, and whether it is divided by its mean
@@ -82,11 +88,12 @@ void AttributeField::init(const HalfEdgeMesh& m, const std::vector<uint32_t>& co
   scale = double(weight) / (unit * unit);
 }
 
-bool AttributeField::allowed(const HalfEdgeMesh& m, uint32_t u, uint32_t x) const {
+bool AttributeField::seam_rule(const HalfEdgeMesh& m, uint32_t u, uint32_t x) const {
   uint32_t seams = 0;
   bool along = false;
   for_each_neighbour(m, u, [&](uint32_t w, uint32_t h) {
-    if (m.twin[h] == kNone || !is_seam(m, h)) return;
+    const uint32_t t = m.twin[h];
+    if (t == kNone || !(priced ? is_material_boundary(h, t) : is_seam(m, h))) return;
     ++seams;
     along |= w == x;
   });

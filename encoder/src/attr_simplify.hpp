@@ -1,7 +1,9 @@
 // Internal: attribute wedges on the collapse engine's half-edge mesh (spec/algorithm.md section
-// 7). Seams and material boundaries are discontinuity curves: a collapse moves a vertex along a
-// seam or not at all, and seam corners stay. The attribute deviation a collapse causes at the
-// corners it re-points is added to the geometric cost.
+// 7). Material boundaries (and, in AttributeMode::seams, texture and normal seams too) are
+// discontinuity curves: a collapse moves a vertex along one or not at all, and their corners
+// stay. The attribute deviation a collapse causes at the corners it re-points is added to the
+// geometric cost; in AttributeMode::full that price is all that holds a texture or normal seam
+// (a collapse across it, or moving its corner, costs the jump it makes).
 #pragma once
 #include <cstdint>
 #include <utility>
@@ -14,7 +16,10 @@ namespace pmz::detail {
 
 struct AttributeField {
   bool active = false;     // the mesh has wedges or materials and the mode is not geometry_only
-  bool cost_term = false;  // AttributeMode::full with a positive weight
+  bool cost_term = false;  // wedges, a positive weight, and not geometry_only
+  // AttributeMode::full with the cost term: wedge seams are priced, not locked (only material
+  // boundaries keep the seam rule).
+  bool priced = false;
   // Per half-edge slot: the attribute wedge of the corner at its origin (0 everywhere when the
   // mesh has materials but no wedges).
   std::vector<uint32_t> wedge;
@@ -35,12 +40,17 @@ struct AttributeField {
   bool is_seam(const HalfEdgeMesh& m, uint32_t h) const {
     const uint32_t t = m.twin[h];
     return wedge[h] != wedge[HalfEdgeMesh::next(t)] || wedge[HalfEdgeMesh::next(h)] != wedge[t] ||
-           (!material.empty() &&
-            material[HalfEdgeMesh::face(h)] != material[HalfEdgeMesh::face(t)]);
+           is_material_boundary(h, t);
   }
-  // The seam rule for u -> x: u on no seam edge moves anywhere; u on exactly two moves along
-  // one of them; seam ends and corners (one, three or more seam edges) stay.
-  bool allowed(const HalfEdgeMesh& m, uint32_t u, uint32_t x) const;
+  bool is_material_boundary(uint32_t h, uint32_t t) const {
+    return !material.empty() && material[HalfEdgeMesh::face(h)] != material[HalfEdgeMesh::face(t)];
+  }
+  // The seam rule for u -> x, on the curves it holds (every seam; priced: material boundaries
+  // only): u on none moves anywhere; u on exactly two moves along one of them; ends and corners
+  // (one, three or more such edges) stay.
+  bool allowed(const HalfEdgeMesh& m, uint32_t u, uint32_t x) const {
+    return priced && material.empty() ? true : seam_rule(m, u, x);
+  }
   // The attribute term of u -> x (ha: u->x in L, hb: x->u in R, either kNone): infinity when
   // the seam rule forbids it, else scale times the sum over u's surviving faces of
   // area * |A_f(p_x) - a'|^2, A_f the face's linear attribute field (extrapolated in its
@@ -50,6 +60,7 @@ struct AttributeField {
   void collapse(const HalfEdgeMesh& m, uint32_t u, uint32_t ha, uint32_t hb);
 
  private:
+  bool seam_rule(const HalfEdgeMesh& m, uint32_t u, uint32_t x) const;
   // f(h, w) for each corner h of u outside L and R with the wedge w the collapse rule
   // (attr_collapse.hpp) gives it.
   template <class F>

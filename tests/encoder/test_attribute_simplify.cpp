@@ -1,10 +1,12 @@
-// Attribute-aware simplification (spec/algorithm.md section 7): seams and material boundaries
-// are discontinuity curves, the attribute term measures what a collapse does to the field, and
-// a mesh without attributes (or AttributeMode::geometry_only) collapses exactly as before.
+// Attribute-aware simplification (spec/algorithm.md section 7): material boundaries (and in
+// the strict mode, seams) are discontinuity curves, the attribute term measures what a collapse
+// does to the field and prices a seam in the default mode, and a mesh without attributes (or
+// AttributeMode::geometry_only) collapses exactly as before.
 #include <gtest/gtest.h>
 
 #include <array>
 #include <cmath>
+#include <map>
 #include <vector>
 
 #include "../../encoder/src/metric.hpp"
@@ -60,10 +62,26 @@ pmz::IndexedMesh crossing_seams_grid(int n, float bump = 0.05f) {
   return m;
 }
 
+// The edges of the welded mesh (faces as position indices) that only one face holds.
+std::vector<std::array<uint32_t, 2>> boundary_edges(const pmz::IndexedMesh& m) {
+  std::map<std::array<uint32_t, 2>, int> count;
+  for (uint32_t f = 0; f < m.face_count(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = m.indices[f * 3 + k], b = m.indices[f * 3 + (k + 1) % 3];
+      ++count[{std::min(a, b), std::max(a, b)}];
+    }
+  std::vector<std::array<uint32_t, 2>> r;
+  for (const auto& [e, c] : count)
+    if (c == 1) r.push_back(e);
+  return r;
+}
+
+// Strict mode: seams are kept like material boundaries.
 TEST(AttributeSimplify, SeamsAreKeptAndTheirCornersStay) {
   const int n = 24;
   const pmz::IndexedMesh mesh = crossing_seams_grid(n);
-  for (pmz::AttributeMode mode : {pmz::AttributeMode::seams, pmz::AttributeMode::full}) {
+  {
+    const pmz::AttributeMode mode = pmz::AttributeMode::seams;
     pmz::SimplifyOptions options;
     options.attributes = mode;
     options.target_faces = 60;
@@ -111,6 +129,59 @@ TEST(AttributeSimplify, SeamsAreKeptAndTheirCornersStay) {
   }
 }
 
+// The default mode prices texture seams: where the target is reachable along them (the seam's
+// uv jump is a whole chart, 24 edges' change) none is crossed; material boundaries stay strict;
+// asked for as few faces as legal collapses allow, it goes below the strict mode (locked seam
+// corners no longer hold the base mesh up); every level is crack-free (the welded mesh's
+// boundary edges all lie on the grid's border).
+TEST(AttributeSimplify, PricedSeamsHoldWhereAffordable) {
+  const int n = 24;
+  const pmz::IndexedMesh mesh = crossing_seams_grid(n);
+  auto run = [&](pmz::AttributeMode mode, uint64_t target) {
+    pmz::SimplifyOptions options;
+    options.attributes = mode;
+    options.target_faces = target;
+    pmz::CollapseSequence seq;
+    std::string error;
+    EXPECT_TRUE(pmz::simplify(mesh, options, seq, error)) << error;
+    return seq;
+  };
+  auto centroid = [](const pmz::IndexedMesh& r, uint32_t f, int axis) {
+    float c = 0;
+    for (int k = 0; k < 3; ++k) c += r.positions[size_t(r.indices[f * 3 + k]) * 3 + axis] / 3;
+    return c;
+  };
+  const pmz::CollapseSequence priced = run(pmz::AttributeMode::full, 200);
+  const pmz::IndexedMesh result = pmz::mesh_after(priced, priced.collapses.size());
+  ASSERT_LE(result.face_count(), 200u);
+  const pmz::MeshAttributes& a = result.attributes;
+  for (uint32_t f = 0; f < result.face_count(); ++f) {
+    int right = 0;
+    for (int k = 0; k < 3; ++k) right += a.texcoords[0][size_t(a.corner_wedges[f * 3 + k]) * 2] > 1;
+    EXPECT_EQ(right, centroid(result, f, 0) > 0.5f ? 3 : 0) << "face " << f << " straddles";
+    EXPECT_EQ(a.face_materials[f], centroid(result, f, 1) > 0.5f ? 1u : 0u) << "face " << f;
+  }
+  const pmz::CollapseSequence strict_all = run(pmz::AttributeMode::seams, 0);
+  const pmz::CollapseSequence priced_all = run(pmz::AttributeMode::full, 0);
+  EXPECT_LT(priced_all.base_indices.size(), strict_all.base_indices.size());
+  // The grid is a disc: at every level the welded mesh's boundary edges form one loop (a crack
+  // would open a second one).
+  const size_t count = priced_all.collapses.size();
+  for (size_t k : {count / 4, count / 2, count * 3 / 4, count}) {
+    const auto edges = boundary_edges(pmz::mesh_after(priced_all, k));
+    std::map<uint32_t, std::vector<uint32_t>> around;
+    for (const auto& e : edges) around[e[0]].push_back(e[1]), around[e[1]].push_back(e[0]);
+    for (const auto& [x, next] : around) ASSERT_EQ(next.size(), 2u) << "level " << k;
+    size_t length = 1;  // edges walked from edges[0][0]; the loop closes back there
+    for (uint32_t prev = edges[0][0], x = edges[0][1]; x != edges[0][0] && length <= edges.size();
+         ++length) {
+      const uint32_t step = around[x][0] == prev ? around[x][1] : around[x][0];
+      prev = x, x = step;
+    }
+    EXPECT_EQ(length, edges.size()) << "level " << k << ": more than one boundary loop";
+  }
+}
+
 // Without attributes, or with AttributeMode::geometry_only, the collapses are the same bits.
 TEST(AttributeSimplify, GeometryOnlyIsTheGeometryRun) {
   const pmz::IndexedMesh seamed = crossing_seams_grid(20);
@@ -137,7 +208,8 @@ TEST(AttributeSimplify, GeometryOnlyIsTheGeometryRun) {
 }
 
 // The attribute term: zero where the field is linear, positive where a collapse distorts it;
-// a seam vertex's move off its seam is forbidden (infinite) in both attribute modes.
+// a seam vertex's move off its seam is forbidden (infinite) in the strict mode and costs the
+// chart's jump in the default one.
 TEST(AttributeSimplify, AttributeTermMeasuresTheFieldsDistortion) {
   const int n = 8;
   pmz::IndexedMesh flat = crossing_seams_grid(n, 0.f);  // texture coordinates linear in each chart
@@ -160,13 +232,60 @@ TEST(AttributeSimplify, AttributeTermMeasuresTheFieldsDistortion) {
   EXPECT_GT(bent_cost, 1e-3f);
   bent.attributes.texcoords[0][size_t(u) * 2 + 1] += 0.25f / n;  // twice the push
   EXPECT_NEAR(cost(bent, pmz::AttributeMode::full, u, v) / bent_cost, 4.f, 0.05f);
-  EXPECT_EQ(cost(bent, pmz::AttributeMode::seams, u, v), 0.f);  // seams: no attribute term
-  // A seam vertex: along the seam allowed, off it forbidden.
+  EXPECT_EQ(cost(bent, pmz::AttributeMode::seams, u, v),
+            cost(bent, pmz::AttributeMode::full, u, v));
+  // A seam vertex: along the seam free; off it forbidden (strict) or priced by the jump (the
+  // left faces' corner at u takes the right chart's texture coordinate, one uv unit = n edges'
+  // change away), far above the quarter-edge push.
   const uint32_t s = 3 * (n + 1) + n / 2;
   EXPECT_LT(cost(flat, pmz::AttributeMode::full, s, s + (n + 1)), 1e-9f);
-  EXPECT_TRUE(std::isinf(cost(flat, pmz::AttributeMode::full, s, s + 1)));
+  EXPECT_LT(cost(flat, pmz::AttributeMode::seams, s, s + (n + 1)), 1e-9f);
+  const float crossing = cost(flat, pmz::AttributeMode::full, s, s + 1);
+  EXPECT_TRUE(std::isfinite(crossing));
+  EXPECT_GT(crossing, 100 * bent_cost);
+  EXPECT_TRUE(std::isinf(cost(flat, pmz::AttributeMode::seams, s, s + 1)));
   EXPECT_TRUE(std::isinf(cost(flat, pmz::AttributeMode::seams, s, s - 1)));
   EXPECT_EQ(cost(flat, pmz::AttributeMode::geometry_only, s, s + 1), 0.f);
+  // Without the term (weight 0) nothing prices a seam: it is locked in the default mode too.
+  pmz::SimplifyOptions unweighted;
+  unweighted.params.attribute_weight = 0;
+  EXPECT_TRUE(std::isinf(pmz::detail::initial_collapse_cost(flat, unweighted, s, s + 1)));
+}
+
+// A normal-only crease (texture continuous, normals differ across a column): the default mode
+// prices crossing it by the normal jump (the square of the chord between the two normals); the
+// strict mode forbids it.
+TEST(AttributeSimplify, NormalCreaseIsPricedByTheNormalJump) {
+  const int n = 8;
+  const uint32_t s = 3 * (n + 1) + n / 2;  // on the crease column
+  auto creased = [&](float angle) {
+    pmz::IndexedMesh m = crossing_seams_grid(n, 0.f);
+    pmz::MeshAttributes& a = m.attributes;
+    a.face_materials.clear();
+    a.materials.clear();
+    for (uint32_t w = 0; w < a.wedge_count(); ++w) {
+      float& tu = a.texcoords[0][size_t(w) * 2];
+      const bool right = tu > 1;
+      if (right) tu -= 1;  // one chart: the texture is continuous across the column
+      const float t = right ? angle : 0.f;
+      a.normals.insert(a.normals.end(), {std::sin(t), 0.f, std::cos(t)});
+    }
+    return m;
+  };
+  auto cost = [&](const pmz::IndexedMesh& m, pmz::AttributeMode mode, uint32_t a, uint32_t b) {
+    pmz::SimplifyOptions options;
+    options.attributes = mode;
+    return pmz::detail::initial_collapse_cost(m, options, a, b);
+  };
+  const float angle = 0.5f;
+  const pmz::IndexedMesh once = creased(angle), twice = creased(2 * angle);
+  const float c1 = cost(once, pmz::AttributeMode::full, s, s + 1);
+  const float c2 = cost(twice, pmz::AttributeMode::full, s, s + 1);
+  ASSERT_GT(c1, 0.f);
+  const double chord1 = 2 * std::sin(angle / 2), chord2 = 2 * std::sin(angle);
+  EXPECT_NEAR(c2 / c1, chord2 * chord2 / (chord1 * chord1), 0.01);
+  EXPECT_LT(cost(once, pmz::AttributeMode::full, s, s + (n + 1)), 1e-9f);  // along: free
+  EXPECT_TRUE(std::isinf(cost(once, pmz::AttributeMode::seams, s, s + 1)));
 }
 
 }  // namespace

@@ -19,10 +19,13 @@ enum class Metric { multifeature, qem, guarded };
 
 // How attribute wedges (texture coordinates, normals, colours) and materials steer the engine
 // (spec/algorithm.md section 7). geometry_only: ignored, the collapses of a mesh without
-// attributes. seams: seams and material boundaries are discontinuity curves (a vertex moves
-// along its seam or stays; seam corners stay). full (the default): seams plus the attribute
-// deviation of each collapse added to its cost. A mesh without attributes is simplified the
-// same way in every mode.
+// attributes. Both other modes add the attribute deviation of each collapse to its cost and
+// keep material boundaries as discontinuity curves (a vertex moves along one or stays; their
+// corners stay). seams (strict): texture and normal seams are such curves too. full (the
+// default): a texture or normal seam is priced instead: a collapse across it, or one that moves
+// its corner, costs the attribute jump it makes, so it happens only when every alternative
+// costs more geometric error. A mesh without attributes is simplified the same way in every
+// mode.
 enum class AttributeMode { geometry_only, seams, full };
 
 // One half-edge collapse u -> v (v keeps its position; u disappears), in *input* vertex ids.
@@ -47,7 +50,7 @@ struct MetricParams {
   // guarded: a collapse whose bound b exceeds guard_slack times the largest bound of the
   // collapses performed so far has its cost multiplied by (b / (guard_slack * that))^2.
   float guard_slack = 0.8f;
-  // AttributeMode::full: weight of the attribute deviation (in units where one edge's typical
+  // seams, full: weight of the attribute deviation (in units where one edge's typical
   // change of an attribute, moved by one mean edge length, weighs like that much distance).
   float attribute_weight = 0.5f;
 };
