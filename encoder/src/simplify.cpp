@@ -289,10 +289,19 @@ class Engine {
     return std::max(0.0, o.q.error(m.p(x)) * inv_unit4 + self_error[x]);
   }
   float weighted(const Origin& o, double e, float length_ratio) const;
+  float geometric_cost(const Origin& o, uint32_t x, uint32_t h) const {
+    return weighted(o, quadric_error(o, x),
+                    metric == Metric::qem ? 0.f : edge_length_ratio(m, feat, h));
+  }
   float cost(const Origin& o, uint32_t x, uint32_t h) const {
-    const float c = weighted(o, quadric_error(o, x),
-                             metric == Metric::qem ? 0.f : edge_length_ratio(m, feat, h));
+    const float c = geometric_cost(o, x, h);
     return attr.active ? c + attribute_cost(x, h) : c;
+  }
+  // Whether a candidate of geometric cost c can still beat best: the attribute term is never
+  // negative, so once c alone is not cheaper it is not evaluated (most of the attribute-aware
+  // run's time); the same choice as comparing the full costs.
+  static bool may_beat(float c, const Candidate& best) {
+    return best.target == kNone || c < best.cost;
   }
   // The attribute term of the collapse towards x along h (outgoing u->x, or for the last
   // neighbour of a boundary vertex the incoming boundary half-edge x->u).
@@ -441,6 +450,7 @@ Candidate Engine::scan_with_torsion(uint32_t u) {
   for (const Pending& p : pending) {
     ++stats.cost_evaluations;
     float c = weighted(o, p.error, p.length_ratio);
+    if (!may_beat(c, best)) continue;
     if (attr.active) c += attribute_cost(p.x, p.h);
     if (c < best.cost || best.target == kNone) best = {c, p.x};
   }
@@ -532,7 +542,9 @@ Candidate Engine::scan(uint32_t u, uint64_t& evaluations) const {
   for_each_neighbour(m, u, [&](uint32_t x, uint32_t h) {
     if (boundary && m.twin[h] != kNone) return;  // interior directions are never legal for u
     ++evaluations;
-    const float c = cost(o, x, h);
+    float c = geometric_cost(o, x, h);
+    if (!may_beat(c, best)) return;
+    if (attr.active) c += attribute_cost(x, h);
     if (c < best.cost || best.target == kNone) best = {c, x};
   });
   return best;
