@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <vector>
 
 #include "tool_common.hpp"
@@ -53,29 +54,48 @@ std::string stdin_input_problem(const std::vector<std::string>& inputs, const st
   return "";
 }
 
-bool write_mesh_into(OutputFile& out, const std::string& format, const IndexedMesh& mesh,
-                     std::string& error) {
+namespace {
+
+// Into `out` through `write` (a meshio writer taking a sink). A refused write: OutputFile
+// remembered its errno, and commit() fails with that reason (and removes the temporary);
+// otherwise the data was refused before anything was written.
+bool write_through(OutputFile& out, std::string& error,
+                   const std::function<bool(const MeshSink&)>& write) {
   bool refused = false;
   const MeshSink sink = [&](const void* data, size_t size) {
     return out.write(data, size) || (refused = true, false);
   };
+  if (write(sink)) return true;
+  std::string reason;
+  if (refused && !out.commit(reason)) error = reason;
+  return false;
+}
+
+}  // namespace
+
+bool write_mesh_into(OutputFile& out, const std::string& format, const IndexedMesh& mesh,
+                     std::string& error) {
   // OBJ materials: the MTL goes beside the output first, named after it (mtllib names it
-  // relative to the OBJ). On stdout there is no "beside": the usemtl lines stay, no MTL.
+  // relative to the OBJ), as safely as the output itself. On stdout there is no "beside": the
+  // usemtl lines stay, no MTL.
   std::string mtl;
   if (format == "obj" && !mesh.attributes.materials.empty() && out.path() != "-") {
     const std::filesystem::path target(out.path());
     mtl = target.stem().string() + ".mtl";
-    if (!write_material_library((target.parent_path() / mtl).string(), mesh.attributes.materials,
-                                error))
+    const std::string mtl_path = (target.parent_path() / mtl).string();
+    OutputFile mtl_out;
+    if (!mtl_out.open(mtl_path, false, error) ||
+        !write_through(mtl_out, error,
+                       [&](const MeshSink& sink) {
+                         return write_material_library_to(mtl_path, mesh.attributes.materials, sink,
+                                                          error);
+                       }) ||
+        !mtl_out.commit(error))
       return false;
   }
-  if (write_mesh_to(out.path() == "-" ? "stdout" : out.path(), format, mesh, sink, error, mtl))
-    return true;
-  // A refused write: OutputFile remembered its errno, and commit() fails with that reason (and
-  // removes the temporary). Otherwise the mesh was refused before anything was written.
-  std::string reason;
-  if (refused && !out.commit(reason)) error = reason;
-  return false;
+  return write_through(out, error, [&](const MeshSink& sink) {
+    return write_mesh_to(out.path() == "-" ? "stdout" : out.path(), format, mesh, sink, error, mtl);
+  });
 }
 
 void warn_if_attributes_lost(const std::string& output, const std::string& format,

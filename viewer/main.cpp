@@ -10,7 +10,6 @@
 #include <curl/curl.h>
 #include <imgui.h>
 #include <stb/stb_image_write.h>
-#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -166,20 +165,20 @@ void log_line(double t, const Stats& s, const char* note) {
                s.total_splits, s.frames_per_second, s.update_ms, note[0] ? " " : "", note);
 }
 
+// Encoded in memory, then written like every tool's output (tool::write_output: a temporary
+// renamed into place, symlinks kept, devices written directly, removed on error and signals).
 bool write_png(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb,
                std::string& error) {
-  std::string temp = path + ".tmp." + std::to_string(getpid());
-  if (!stbi_write_png(temp.c_str(), width, height, 3, rgb.data(), width * 3)) {
-    std::remove(temp.c_str());
-    error = "cannot write " + path;
+  std::vector<uint8_t> png;
+  const auto append = [](void* context, void* data, int size) {
+    auto* out = static_cast<std::vector<uint8_t>*>(context);
+    out->insert(out->end(), static_cast<uint8_t*>(data), static_cast<uint8_t*>(data) + size);
+  };
+  if (!stbi_write_png_to_func(append, &png, width, height, 3, rgb.data(), width * 3)) {
+    error = path + ": cannot encode the PNG";
     return false;
   }
-  if (std::rename(temp.c_str(), path.c_str()) != 0) {
-    std::remove(temp.c_str());
-    error = "cannot write " + path;
-    return false;
-  }
-  return true;
+  return pmz::tool::write_output(path, png.data(), png.size(), error);
 }
 
 int parse(int argc, char** argv, Options& o) {

@@ -1536,6 +1536,15 @@ bool write_mesh_to(const std::string& name, const std::string& format, const Ind
   return false;
 }
 
+bool write_material_library_to(const std::string& name, const std::vector<Material>& materials,
+                               const MeshSink& sink, std::string& error) {
+  Writer w(sink);
+  write_mtl(w, materials);
+  if (w.finish()) return true;
+  error = name + ": write failed";
+  return false;
+}
+
 bool write_material_library(const std::string& path, const std::vector<Material>& materials,
                             std::string& error) {
   return write_atomic(

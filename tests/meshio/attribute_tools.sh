@@ -40,6 +40,11 @@ decode=$(dirname "$encode")/pmz-decode
 grep -q "^mtllib back.mtl" back.obj && grep -q "^usemtl paper" back.obj &&
   grep -q "^vt " back.obj && grep -q "^vn " back.obj || fail "back.obj lost its attributes"
 grep -q "^map_Kd paper.png" back.mtl || fail "back.mtl: $(cat back.mtl 2>&1)"
+# The MTL is written as safely as the output: through a symlink (kept, its target updated).
+mkdir -p linked && printf 'old\n' > linked/target.mtl && ln -s target.mtl linked/back.mtl
+"$decode" quad.pmz -o linked/back.obj 2> decode.err || fail "pmz-decode linked/back.obj: $(cat decode.err)"
+[ -L linked/back.mtl ] || fail "pmz-decode replaced the symlinked MTL by a file"
+grep -q "^map_Kd paper.png" linked/target.mtl || fail "the MTL's link target was not updated"
 "$decode" quad.pmz -o back.ply 2> decode.err || fail "pmz-decode back.ply: $(cat decode.err)"
 grep -aq "^property float texture_u" back.ply && grep -aq "^property float nx" back.ply ||
   fail "back.ply lost its attributes"

@@ -149,5 +149,8 @@ bool write_mesh_to(const std::string& name, const std::string& format, const Ind
 // An MTL file of these materials (Kd, d, map_Kd, norm), atomic like write_mesh.
 bool write_material_library(const std::string& path, const std::vector<Material>& materials,
                             std::string& error);
+// The same bytes handed to `sink` (the tools' safe output); `name` names it in messages.
+bool write_material_library_to(const std::string& name, const std::vector<Material>& materials,
+                               const MeshSink& sink, std::string& error);
 
 }  // namespace pmz
