@@ -1,18 +1,20 @@
 #include "attribute_stream.hpp"
 
+#include <algorithm>
+
 namespace pmz {
 
-bool AttributeStream::head(const uint8_t* p, size_t n, uint64_t full_faces, std::string& error) {
-  ByteReader r(p, n);
-  AttributeHeader a;
-  if (!read_attribute_header(r, a, error)) return false;
-  // Every wedge is named by a corner of the full mesh.
-  if (a.full_wedges > 3 * full_faces) return error = "more wedges than corners", false;
-  state.init(a);
-  quant.init(a);
-  models = std::make_unique<AttributeModels>();
-  return true;
+namespace {
+
+// Room for `extra` more elements, growing geometrically (a split's reservation must not make
+// every later split reallocate).
+template <class T>
+inline void reserve_more(std::vector<T>& v, size_t extra) {
+  if (v.size() + extra > v.capacity()) [[unlikely]]
+    v.reserve(std::max(v.capacity() * 2, v.size() + extra));
 }
+
+}  // namespace
 
 void AttributeStream::new_wedges(const float* positions) {
   const AttributeHeader& h = state.head;
@@ -33,38 +35,34 @@ void AttributeStream::new_wedges(const float* positions) {
   }
 }
 
-bool AttributeStream::base(const uint8_t* p, size_t n, const ProgressiveMesh& pm,
-                           const int32_t* coords, const float* positions, std::string& error) {
+void AttributeStream::reserve_split(uint32_t faces, uint32_t ring) {
   const AttributeHeader& h = state.head;
-  const uint32_t fn = pm.face_count();
-  if (h.base_wedges > 3ull * fn) return error = "ATTR: more base wedges than corners", false;
-  if (h.has_wedges()) state.corner_wedge.assign(size_t(fn) * 3, kPendingWedge);
+  // split_corners(): 2 per new face, u's in L and R, and u's in the sector (at most the ring);
+  // at most one new wedge per corner.
+  const size_t n = size_t(ring) + 6, faces_after = size_t(faces) + 2;
+  reserve_more(assigned, 2 + 2 * n);
+  reserve_more(assign_begin, 1);
+  reserve_more(wedge_end, 1);
+  reserve_more(corners, n);
+  reserve_more(saved, n);
+  reserve_more(sector_wedges, n);
   if (!h.materials.empty())
-    state.face_material.assign(fn, h.materials.size() > 1 ? kPendingWedge : 0);
-  RangeDecoder dec(p, n);
-  RangeState rc = dec.state();
-  state.wedge_vertex.reserve(h.base_wedges);
-  state.values.reserve(size_t(h.base_wedges) * state.stride);
-  for (uint32_t f = 0; f < fn; ++f) {
-    if (h.materials.size() > 1 && !decode_face_material(rc, *models, pm, state, f))
-      return error = "ATTR: base face " + std::to_string(f) + " material malformed", false;
-    if (!h.has_wedges()) continue;
-    for (uint32_t k = 0; k < 3; ++k)
-      if (state.wedge_count > h.base_wedges ||
-          !decode_corner_wedge(rc, *models, pm, coords, state, f * 3 + k, false))
-        return error = "ATTR: base corner " + std::to_string(f * 3 + k) + " wedge malformed", false;
-  }
-  if (!rc.ok || state.wedge_count != h.base_wedges)
-    return error = "ATTR: base wedges do not match HEAD", false;
-  new_wedges(positions);
-  return true;
+    reserve_more(state.face_material, faces_after - state.face_material.size());
+  if (!h.has_wedges()) return;
+  reserve_more(state.corner_wedge, faces_after * 3 - state.corner_wedge.size());
+  reserve_more(state.wedge_vertex, n);
+  reserve_more(state.values, n * state.stride);
+  reserve_more(wedge_positions, n * 3);
+  for (uint32_t t = 0; t < h.texcoord_sets; ++t) reserve_more(texcoords[t], n * 2);
+  if (h.normals) reserve_more(normals, n * 3);
+  reserve_more(colors, n * h.color_components);
 }
 
 bool AttributeStream::first_apply(const ProgressiveMesh& pm, const int32_t* coords,
                                   const float* positions, bool has_l, bool has_r) {
   const AttributeHeader& h = state.head;
   const uint32_t fn = pm.face_count(), f0 = fn - (has_l ? 1u : 0u) - (has_r ? 1u : 0u);
-  const uint32_t wedges_before = state.wedge_count;
+  const uint32_t wedges_before = state.wedge_count, last_simple = models->last_simple;
   const size_t assigned_before = assigned.size();
   RangeDecoder& dec = *lazy.front();
   RangeState rc = dec.state();
@@ -79,39 +77,37 @@ bool AttributeStream::first_apply(const ProgressiveMesh& pm, const int32_t* coor
   if (ok && h.has_wedges()) {
     split_corners(pm, has_l, has_r, corners);
     state.corner_wedge.resize(size_t(fn) * 3, kPendingWedge);
-    saved.clear();
-    for (uint32_t c : corners) {
-      saved.push_back(state.corner_wedge[c]);
-      state.corner_wedge[c] = kPendingWedge;
+    saved.resize(corners.size());  // reserved: no allocation
+    for (size_t i = 0; i < corners.size(); ++i) {
+      saved[i] = state.corner_wedge[corners[i]];
+      state.corner_wedge[corners[i]] = kPendingWedge;
     }
-    const uint32_t u = pm.vertex_count() - 1;
-    for (uint32_t c : corners) {
-      ok = decode_corner_wedge(rc, *models, pm, coords, state, c, pm.corner_vertex[c] == u);
-      if (!ok) break;
-      assigned.push_back(state.corner_wedge[c]);
-    }
-    if (ok && rc.ok) {
+    ok = decode_split_wedges(rc, *models, pm, coords, state, corners, pm.vertex_count() - 1);
+    if (ok) {
       // Undoing by the collapse rule must give every sector corner back its a-wedge from
       // before the split (so every level stays valid however the stream was damaged).
-      std::vector<uint32_t>& wedges = state.scratch_wedges;
-      wedges.clear();
+      sector_wedges.clear();
       for (uint32_t c : corners)
-        if (c < size_t(f0) * 3) wedges.push_back(state.corner_wedge[c]);
+        if (c < size_t(f0) * 3) sector_wedges.push_back(state.corner_wedge[c]);
       const uint32_t fr = f0 + (has_l ? 1u : 0u);
       const uint32_t arc =
-          collapse_left_arc(wedges, has_l ? state.corner_wedge[f0 * 3] : 0, has_l, has_r);
+          collapse_left_arc(sector_wedges, has_l ? state.corner_wedge[f0 * 3] : 0, has_l, has_r);
       for (size_t i = 0, j = 0; i < corners.size() && ok; ++i) {
         if (corners[i] >= size_t(f0) * 3) continue;
         const uint32_t back =
             j++ < arc ? state.corner_wedge[f0 * 3 + 1] : state.corner_wedge[fr * 3];
         ok = back == saved[i];
       }
-    } else {
-      ok = false;
     }
     if (!ok)  // the sector corners back to v's wedges (the new faces' entries are dropped)
       for (size_t i = 0; i < corners.size(); ++i)
         if (corners[i] < size_t(f0) * 3) state.corner_wedge[corners[i]] = saved[i];
+    const size_t at = assigned.size();
+    assigned.resize(at + 2 * corners.size());  // reserved: no allocation
+    for (size_t i = 0; i < corners.size(); ++i) {
+      assigned[at + 2 * i] = corners[i];
+      assigned[at + 2 * i + 1] = state.corner_wedge[corners[i]];
+    }
   }
   if (!ok || !rc.ok) {
     assigned.resize(assigned_before);
@@ -120,6 +116,7 @@ bool AttributeStream::first_apply(const ProgressiveMesh& pm, const int32_t* coor
     state.wedge_count = wedges_before;
     state.wedge_vertex.resize(wedges_before);
     state.values.resize(size_t(wedges_before) * state.stride);
+    models->last_simple = last_simple;
     return false;
   }
   dec.set_state(rc);
@@ -133,16 +130,41 @@ void AttributeStream::reapply(const ProgressiveMesh& pm, uint64_t i, bool has_l,
   const AttributeHeader& h = state.head;
   const uint32_t fn = pm.face_count(), f0 = fn - (has_l ? 1u : 0u) - (has_r ? 1u : 0u);
   const uint32_t* a = assigned.data() + assign_begin[i];
+  const uint32_t* end = assigned.data() + assign_begin[i + 1];
   if (!h.materials.empty()) {
     state.face_material.resize(fn);
     for (uint32_t f = f0; f < fn; ++f) state.face_material[f] = *a++;
   }
   if (h.has_wedges()) {
-    split_corners(pm, has_l, has_r, corners);
     state.corner_wedge.resize(size_t(fn) * 3);
-    for (uint32_t c : corners) state.corner_wedge[c] = *a++;
+    for (; a != end; a += 2) state.corner_wedge[a[0]] = a[1];
   }
   state.wedge_count = wedge_end[i];
+}
+
+void AttributeStream::undo(const ProgressiveMesh& pm, uint64_t i, bool has_l, bool has_r) {
+  const AttributeHeader& h = state.head;
+  const uint32_t f0 = pm.face_count();  // the new faces were f0 (L, if any) and the next
+  if (h.has_wedges()) {
+    const uint32_t fr = f0 + (has_l ? 1u : 0u);
+    const uint32_t u_l = has_l ? state.corner_wedge[f0 * 3] : 0;
+    const uint32_t v_l = has_l ? state.corner_wedge[f0 * 3 + 1] : 0;
+    const uint32_t v_r = has_r ? state.corner_wedge[fr * 3] : 0;
+    // The sector corners (now v's) still name u's wedges: the collapse rule gives them v's.
+    const uint32_t new_faces = (has_l ? 1u : 0u) + (has_r ? 1u : 0u);
+    const uint32_t* a = assigned.data() + assign_begin[i] + (h.materials.empty() ? 0 : new_faces);
+    const uint32_t* end = assigned.data() + assign_begin[i + 1];
+    sector_wedges.clear();
+    for (const uint32_t* p = a; p != end; p += 2)
+      if (p[0] < size_t(f0) * 3) sector_wedges.push_back(state.corner_wedge[p[0]]);
+    const uint32_t arc = collapse_left_arc(sector_wedges, u_l, has_l, has_r);
+    uint32_t j = 0;
+    for (const uint32_t* p = a; p != end; p += 2)
+      if (p[0] < size_t(f0) * 3) state.corner_wedge[p[0]] = j++ < arc ? v_l : v_r;
+    state.corner_wedge.resize(size_t(f0) * 3);
+  }
+  if (!h.materials.empty()) state.face_material.resize(f0);
+  state.wedge_count = i ? wedge_end[i - 1] : h.base_wedges;
 }
 
 }  // namespace pmz

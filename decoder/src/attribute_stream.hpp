@@ -20,11 +20,12 @@ struct AttributeStream {
   // with the decoder's chunk readers).
   std::deque<std::unique_ptr<RangeDecoder>> lazy;
   // Per first-applied split: the wedge count after it, and where its assignments start in
-  // `assigned` (the new faces' materials, then the wedges of split_corners()).
+  // `assigned` (the new faces' materials, then per corner of split_corners() the corner and its
+  // wedge: re-applying and undoing the split need no walk).
   std::vector<uint32_t> wedge_end;
   std::vector<uint64_t> assign_begin{0};
   std::vector<uint32_t> assigned;
-  std::vector<uint32_t> corners, saved;  // scratch
+  std::vector<uint32_t> corners, saved, sector_wedges;  // scratch
   // Float values per wedge (the public arrays), filled as wedges are first decoded.
   std::vector<float> texcoords[kMaxTexcoordSets], normals, colors, wedge_positions;
 
@@ -35,6 +36,9 @@ struct AttributeStream {
             const float* positions, std::string& error);
   // An ATTR chunk after a SPLT chunk: queued for its splits.
   void chunk(const uint8_t* p, size_t n) { lazy.push_back(std::make_unique<RangeDecoder>(p, n)); }
+  // Before a split's first application (faces: the mesh's now, ring: v's ring size): allocates
+  // what first_apply() may need, so that it cannot fail to allocate after the mesh changed.
+  void reserve_split(uint32_t faces, uint32_t ring);
   // First application of split i (== wedge_end.size()), right after pm.split_gathered() and u's
   // position: decodes its wedges from lazy.front(). False (state as before the split; the caller
   // then undoes the mesh split) on a malformed stream or a wedge reference out of range.
@@ -44,13 +48,12 @@ struct AttributeStream {
   void chunk_done() { lazy.pop_front(); }
   // Split i applied again (ProgressiveMesh::resplit): its assignments from first_apply.
   void reapply(const ProgressiveMesh& pm, uint64_t i, bool has_l, bool has_r);
-  // Split i undone (after ProgressiveMesh::undo_resplit, v its vertex).
-  void undo(const ProgressiveMesh& pm, uint64_t i, uint32_t v, bool has_l, bool has_r) {
-    undo_split_wedges(pm, v, has_l, has_r, state, i ? wedge_end[i - 1] : state.head.base_wedges);
-  }
+  // Split i undone (after ProgressiveMesh::undo_resplit): the sector corners take v's wedges
+  // by the collapse rule, the new faces' entries go.
+  void undo(const ProgressiveMesh& pm, uint64_t i, bool has_l, bool has_r);
 
- private:
-  void new_wedges(const float* positions);  // float arrays for wedges decoded since last call
+  // Float arrays for the wedges decoded since the last call.
+  void new_wedges(const float* positions);
 };
 
 }  // namespace pmz

@@ -578,6 +578,7 @@ bool Decoder::Impl::apply() {
       frontier.wedge_scratch_ring = k;
     }
     frontier.choice.reserve(k);
+    if (attrs) attrs->reserve_split(level.mesh.face_count(), k);
     uint32_t count, rank;
     auto malformed = [&] {
       return refuse(Status::corrupt,
@@ -650,7 +651,7 @@ void Decoder::Impl::undo() {
   level.mesh.undo_resplit(s.v, s.a, s.b, side & kHasLeft, side & kHasRight);
   --level.applied;
   if (attrs) {
-    attrs->undo(level.mesh, level.applied, s.v, side & kHasLeft, side & kHasRight);
+    attrs->undo(level.mesh, level.applied, side & kHasLeft, side & kHasRight);
     level.changes.wedge_begin = std::min(level.changes.wedge_begin, attrs->state.wedge_count);
   }
   level.changes.face_begin = std::min(level.changes.face_begin, level.mesh.face_count());

@@ -105,13 +105,15 @@ bool AttributeWriter::init(const CollapseSequence& seq, size_t used, const Write
   return true;
 }
 
-void AttributeWriter::code_corner(const ProgressiveMesh& pm, const int32_t* coords, uint32_t c,
-                                  bool u_corner, uint32_t input_wedge) {
+uint32_t AttributeWriter::decoded_id(uint32_t input_wedge, uint32_t& fresh_count,
+                                     const int32_t*& fresh) {
   uint32_t& d = decoded_wedge_[input_wedge];
-  const bool fresh = d == kNoCorner;
-  if (fresh) d = state_.wedge_count;
-  encode_corner_wedge(*rc_, models_, pm, coords, state_, c, u_corner, d,
-                      fresh ? &values_[size_t(input_wedge) * state_.stride] : nullptr);
+  fresh = nullptr;
+  if (d == kNoCorner) {  // first corner of a new wedge: numbered in coding order
+    d = state_.wedge_count + fresh_count++;
+    fresh = &values_[size_t(input_wedge) * state_.stride];
+  }
+  return d;
 }
 
 void AttributeWriter::encode_base(const ProgressiveMesh& pm, const int32_t* coords,
@@ -134,7 +136,10 @@ void AttributeWriter::encode_base(const ProgressiveMesh& pm, const int32_t* coor
     for (uint32_t k = 0; k < 3; ++k) {
       uint32_t j = 0;
       while (final_corner_[slot * 3 + j] != t[k]) ++j;
-      code_corner(pm, coords, f * 3 + k, false, final_wedge_[slot * 3 + j]);
+      uint32_t fresh_count = 0;
+      const int32_t* fresh;
+      const uint32_t d = decoded_id(final_wedge_[slot * 3 + j], fresh_count, fresh);
+      encode_corner_wedge(*rc_, models_, pm, coords, state_, f * 3 + k, d, fresh);
     }
   }
   state_.head.base_wedges = state_.wedge_count;
@@ -180,11 +185,17 @@ void AttributeWriter::encode_split(const ProgressiveMesh& pm, const int32_t* coo
   split_corners(pm, has_l, has_r, corners_);
   state_.corner_wedge.resize(size_t(fn) * 3, kPendingWedge);
   for (uint32_t c : corners_) state_.corner_wedge[c] = kPendingWedge;
-  const uint32_t u = pm.vertex_count() - 1;
+  wedges_.clear();
+  fresh_.clear();
+  uint32_t fresh_count = 0;
   for (uint32_t c : corners_) {
     lookup(pm, fan, c / 3, c % 3, wedge, material);
-    code_corner(pm, coords, c, pm.corner_vertex[c] == u, wedge);
+    const int32_t* fresh;
+    wedges_.push_back(decoded_id(wedge, fresh_count, fresh));
+    fresh_.push_back(fresh);
   }
+  encode_split_wedges(*rc_, models_, pm, coords, state_, corners_, pm.vertex_count() - 1,
+                      wedges_.data(), fresh_.data());
 }
 
 void AttributeWriter::finish_chunk(std::vector<uint8_t>& payload) {

@@ -40,8 +40,9 @@ class AttributeWriter {
   // slots and corners).
   bool lookup(const ProgressiveMesh& pm, const CollapseFan& fan, uint32_t f, uint32_t k,
               uint32_t& wedge, uint32_t& material) const;
-  void code_corner(const ProgressiveMesh& pm, const int32_t* coords, uint32_t c, bool u_corner,
-                   uint32_t input_wedge);
+  // The decoded id of an input wedge; a new one (numbered after fresh_count others of the same
+  // split) gets fresh = its values.
+  uint32_t decoded_id(uint32_t input_wedge, uint32_t& fresh_count, const int32_t*& fresh);
   const IndexedMesh* mesh_ = nullptr;
   const std::vector<uint32_t>* input_of_ = nullptr;
   AttributeState state_;
@@ -54,7 +55,8 @@ class AttributeWriter {
   std::map<Face, uint32_t> final_face_;  // canonical face (input ids) -> input face slot
   std::vector<uint8_t> chunk_;
   std::unique_ptr<RangeEncoder> rc_;
-  std::vector<uint32_t> corners_;
+  std::vector<uint32_t> corners_, wedges_;
+  std::vector<const int32_t*> fresh_;
 };
 
 }  // namespace pmz

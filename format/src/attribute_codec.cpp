@@ -23,11 +23,21 @@ bool read_string(ByteReader& r, std::string& s) {
   return true;
 }
 
+// One out-of-line copy of each symbol decoder for this file's few call sites (the decoder
+// library has a size budget; the per-bit work stays inlined inside them).
+[[gnu::noinline]] bool read_uint(RangeState& rc, UIntModel& m, uint32_t& x) {
+  return decode_uint(rc, m, x);
+}
+[[gnu::noinline]] bool read_small(RangeState& rc, SmallModel& m, uint32_t& x) {
+  return decode_small(rc, m, x);
+}
+
 // Up to two candidate wedges of corner c (spec/format.md section 14.3): the wedges of c's vertex in
 // the faces across c's two edges at that vertex (first the edge to next(c)), when assigned,
 // distinct.
-uint32_t candidates(const ProgressiveMesh& pm, const AttributeState& s, uint32_t c,
-                    uint32_t out[2]) {
+[[gnu::always_inline]] inline uint32_t candidates(const ProgressiveMesh& pm,
+                                                  const AttributeState& s, uint32_t c,
+                                                  uint32_t out[2]) {
   uint32_t n = 0;
   const uint32_t o1 = pm.opposite[prev_corner(c)], o2 = pm.opposite[next_corner(c)];
   const uint32_t across[2] = {o1 == kNoCorner ? kNoCorner : prev_corner(o1),
@@ -47,17 +57,39 @@ uint32_t wedge_at(const AttributeState& s, uint32_t a) {
                                                                         : kNoCorner;
 }
 
-// The prediction of a new wedge's values at corner c (spec/format.md section 14.3). kinds[i] = 1
-// where a texture coordinate came from the face map.
-void predict(const ProgressiveMesh& pm, const int32_t* coords, const AttributeState& s, uint32_t c,
-             const uint32_t* cand, uint32_t n, int32_t* pred, uint8_t* face_map) {
+// Octahedral quantization of the direction (x, y, z) (spec/format.md section 14.2), binary64
+// throughout.
+void octahedral(double x, double y, double z, uint32_t bits, int32_t* q) {
+  const double l1 = std::fabs(x) + std::fabs(y) + std::fabs(z);
+  if (!(l1 > 0))
+    x = 0, y = 0, z = 1;
+  else
+    x /= l1, y /= l1, z /= l1;
+  if (z < 0) {
+    const double fx = (1 - std::fabs(y)) * (x < 0 ? -1 : 1),
+                 fy = (1 - std::fabs(x)) * (y < 0 ? -1 : 1);
+    x = fx, y = fy;
+  }
+  const double max_q = double((1u << bits) - 1);
+  q[0] = int32_t(std::clamp(std::floor((x * 0.5 + 0.5) * max_q + 0.5), 0.0, max_q));
+  q[1] = int32_t(std::clamp(std::floor((y * 0.5 + 0.5) * max_q + 0.5), 0.0, max_q));
+}
+
+// Which predictions a new wedge's values had (they select the residual models).
+struct PredictionKind {
+  uint8_t face_map = 0;
+};
+
+// The prediction of a new wedge's values at corner c (spec/format.md section 14.3).
+PredictionKind predict(const ProgressiveMesh& pm, const int32_t* coords, const AttributeState& s,
+                       uint32_t c, const uint32_t* cand, uint32_t n, int32_t* pred) {
   const AttributeHeader& h = s.head;
   const uint32_t wa = wedge_at(s, next_corner(c)), wb = wedge_at(s, prev_corner(c));
   const uint32_t ref = n ? cand[0] : wa != kNoCorner ? wa : wb;
   for (uint32_t i = 0; i < s.stride; ++i)
     pred[i] = ref == kNoCorner ? 0 : s.values[size_t(ref) * s.stride + i];
-  *face_map = 0;
-  if (!h.texcoord_sets || !h.texcoord_bits || wa == kNoCorner || wb == kNoCorner) return;
+  PredictionKind kind;
+  if (!h.texcoord_sets || !h.texcoord_bits || wa == kNoCorner || wb == kNoCorner) return kind;
   // The face's map from positions to texture coordinates, applied to c's vertex: x = a +
   // s (b - a) + t perp(b - a) in both spaces, perp a quarter turn counter-clockwise. Binary64,
   // each operation rounded in this order (no fused multiply-add).
@@ -70,7 +102,7 @@ void predict(const ProgressiveMesh& pm, const int32_t* coords, const AttributeSt
     d[k] = double(px[k]) - double(pa[k]);
   }
   const double ee = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
-  if (!(ee > 0)) return;
+  if (!(ee > 0)) return kind;
   const double along = (d[0] * e[0] + d[1] * e[1] + d[2] * e[2]) / ee;
   double hh = 0;
   for (int k = 0; k < 3; ++k) {
@@ -78,7 +110,7 @@ void predict(const ProgressiveMesh& pm, const int32_t* coords, const AttributeSt
     hh = hh + r * r;
   }
   const double across = std::sqrt(hh / ee);
-  *face_map = 1;
+  kind.face_map = 1;
   for (uint32_t t = 0; t < h.texcoord_sets; ++t) {
     const double max_q = double((1u << h.texcoord_bits) - 1);
     const double ua = s.values[size_t(wa) * s.stride + 2 * t],
@@ -89,11 +121,12 @@ void predict(const ProgressiveMesh& pm, const int32_t* coords, const AttributeSt
     pred[2 * t] = int32_t(std::clamp(std::floor(u + 0.5), 0.0, max_q));
     pred[2 * t + 1] = int32_t(std::clamp(std::floor(v + 0.5), 0.0, max_q));
   }
+  return kind;
 }
 
 UIntModel& residual_model(AttributeModels& m, const AttributeHeader& h, uint32_t i,
-                          uint8_t face_map) {
-  if (i < 2 * h.texcoord_sets) return m.texcoord[face_map][i & 1];
+                          PredictionKind kind) {
+  if (i < 2 * h.texcoord_sets) return m.texcoord[kind.face_map][i & 1];
   i -= 2 * h.texcoord_sets;
   if (i < h.normal_components()) return m.normal[i];
   return m.color[std::min(i - h.normal_components(), 3u)];
@@ -209,20 +242,7 @@ void AttributeQuantizer::quantize_normal(const float n[3], int32_t* q) const {
     for (int k = 0; k < 3; ++k) q[k] = float_to_ordered(n[k]);
     return;
   }
-  double x = n[0], y = n[1], z = n[2];
-  const double l1 = std::fabs(x) + std::fabs(y) + std::fabs(z);
-  if (!(l1 > 0))
-    x = 0, y = 0, z = 1;
-  else
-    x /= l1, y /= l1, z /= l1;
-  if (z < 0) {
-    const double fx = (1 - std::fabs(y)) * (x < 0 ? -1 : 1),
-                 fy = (1 - std::fabs(x)) * (y < 0 ? -1 : 1);
-    x = fx, y = fy;
-  }
-  const double max_q = double((1u << normal_bits) - 1);
-  q[0] = int32_t(std::clamp(std::floor((x * 0.5 + 0.5) * max_q + 0.5), 0.0, max_q));
-  q[1] = int32_t(std::clamp(std::floor((y * 0.5 + 0.5) * max_q + 0.5), 0.0, max_q));
+  octahedral(n[0], n[1], n[2], normal_bits, q);
 }
 
 void AttributeQuantizer::dequantize_normal(const int32_t* q, float n[3]) const {
@@ -270,9 +290,42 @@ void split_corners(const ProgressiveMesh& pm, bool has_l, bool has_r, std::vecto
   if (has_r) out.push_back(fr * 3 + 1);
 }
 
-void encode_corner_wedge(RangeEncoder& rc, AttributeModels& m, const ProgressiveMesh& pm,
-                         const int32_t* coords, AttributeState& s, uint32_t c, bool u_corner,
-                         uint32_t wedge, const int32_t* fresh) {
+namespace {
+
+// A new wedge's values (spec/format.md section 14.3, "New a-wedge"): the residuals from the
+// prediction.
+void encode_new_wedge(RangeEncoder& rc, AttributeModels& m, const ProgressiveMesh& pm,
+                      const int32_t* coords, AttributeState& s, uint32_t c, const uint32_t* cand,
+                      uint32_t n, const int32_t* fresh) {
+  int32_t pred[kMaxTexcoordSets * 2 + 7];
+  const PredictionKind kind = predict(pm, coords, s, c, cand, n, pred);
+  for (uint32_t i = 0; i < s.stride; ++i)
+    encode_uint(rc, residual_model(m, s.head, i, kind),
+                zigzag_encode(int32_t(uint32_t(fresh[i]) - uint32_t(pred[i]))));
+  s.corner_wedge[c] = s.wedge_count;
+  push_wedge(s, pm.corner_vertex[c], fresh);
+}
+
+bool decode_new_wedge(RangeState& rc, AttributeModels& m, const ProgressiveMesh& pm,
+                      const int32_t* coords, AttributeState& s, uint32_t c, const uint32_t* cand,
+                      uint32_t n) {
+  if (s.wedge_count >= s.head.full_wedges) return false;  // more wedges than HEAD announced
+  int32_t pred[kMaxTexcoordSets * 2 + 7], value[kMaxTexcoordSets * 2 + 7];
+  const PredictionKind kind = predict(pm, coords, s, c, cand, n, pred);
+  for (uint32_t i = 0; i < s.stride; ++i) {
+    uint32_t z;
+    if (!read_uint(rc, residual_model(m, s.head, i, kind), z)) return false;
+    value[i] = int32_t(uint32_t(pred[i]) + uint32_t(zigzag_decode(z)));
+  }
+  s.corner_wedge[c] = s.wedge_count;
+  push_wedge(s, pm.corner_vertex[c], value);
+  return rc.ok;
+}
+
+// A corner's reference symbol, then the new wedge or the escape (spec/format.md section 14.3).
+void encode_reference(RangeEncoder& rc, AttributeModels& m, const ProgressiveMesh& pm,
+                      const int32_t* coords, AttributeState& s, uint32_t c, bool u_corner,
+                      uint32_t wedge, const int32_t* fresh) {
   uint32_t cand[2];
   const uint32_t n = candidates(pm, s, c, cand);
   SmallModel& ref = m.reference[u_corner ? 1 : 0][std::min(n, 2u)];
@@ -284,47 +337,104 @@ void encode_corner_wedge(RangeEncoder& rc, AttributeModels& m, const Progressive
     return;
   }
   encode_small(rc, ref, n);
-  int32_t pred[kMaxTexcoordSets * 2 + 7];
-  uint8_t face_map;
-  predict(pm, coords, s, c, cand, n, pred, &face_map);
-  for (uint32_t i = 0; i < s.stride; ++i)
-    encode_uint(rc, residual_model(m, s.head, i, face_map),
-                zigzag_encode(int32_t(uint32_t(fresh[i]) - uint32_t(pred[i]))));
-  s.corner_wedge[c] = s.wedge_count;
-  push_wedge(s, pm.corner_vertex[c], fresh);
+  encode_new_wedge(rc, m, pm, coords, s, c, cand, n, fresh);
 }
 
-bool decode_corner_wedge(RangeState& rc, AttributeModels& m, const ProgressiveMesh& pm,
-                         const int32_t* coords, AttributeState& s, uint32_t c, bool u_corner) {
+bool decode_reference(RangeState& rc, AttributeModels& m, const ProgressiveMesh& pm,
+                      const int32_t* coords, AttributeState& s, uint32_t c, bool u_corner) {
   uint32_t cand[2];
   const uint32_t n = candidates(pm, s, c, cand);
   uint32_t sym;
-  if (!decode_small(rc, m.reference[u_corner ? 1 : 0][std::min(n, 2u)], sym) || sym > n + 1)
+  if (!read_small(rc, m.reference[u_corner ? 1 : 0][std::min(n, 2u)], sym) || sym > n + 1)
     return false;
-  const uint32_t x = pm.corner_vertex[c];
   if (sym < n) {
     s.corner_wedge[c] = cand[sym];
     return true;
   }
   if (sym == n + 1) {
     uint32_t back;
-    if (!decode_uint(rc, m.escape, back) || back >= s.wedge_count) return false;
+    if (!read_uint(rc, m.escape, back) || back >= s.wedge_count) return false;
     const uint32_t w = s.wedge_count - 1 - back;
-    if (s.wedge_vertex[w] != x) return false;  // another vertex's wedge
+    if (s.wedge_vertex[w] != pm.corner_vertex[c]) return false;  // another vertex's wedge
     s.corner_wedge[c] = w;
     return true;
   }
-  if (s.wedge_count >= s.head.full_wedges) return false;  // more wedges than HEAD announced
-  int32_t pred[kMaxTexcoordSets * 2 + 7], value[kMaxTexcoordSets * 2 + 7];
-  uint8_t face_map;
-  predict(pm, coords, s, c, cand, n, pred, &face_map);
-  for (uint32_t i = 0; i < s.stride; ++i) {
-    uint32_t z;
-    if (!decode_uint(rc, residual_model(m, s.head, i, face_map), z)) return false;
-    value[i] = int32_t(uint32_t(pred[i]) + uint32_t(zigzag_decode(z)));
+  return decode_new_wedge(rc, m, pm, coords, s, c, cand, n);
+}
+
+// Whether the "simple" rule (spec/format.md section 14.5: each corner takes its first candidate, a
+// new wedge where it has none) gives the writer's wedges. Tried on s, which is then restored.
+bool simple_rule_fits(const ProgressiveMesh& pm, AttributeState& s,
+                      std::span<const uint32_t> corners, const uint32_t* wedges) {
+  const uint32_t before = s.wedge_count;
+  bool fits = true;
+  for (size_t i = 0; i < corners.size() && fits; ++i) {
+    uint32_t cand[2];
+    const uint32_t n = candidates(pm, s, corners[i], cand);
+    if (n)
+      fits = wedges[i] == cand[0];
+    else if ((fits = wedges[i] == s.wedge_count))
+      ++s.wedge_count;  // the new wedge, assigned from here on
+    s.corner_wedge[corners[i]] = wedges[i];
   }
-  s.corner_wedge[c] = s.wedge_count;
-  push_wedge(s, x, value);
+  for (uint32_t c : corners) s.corner_wedge[c] = kPendingWedge;
+  s.wedge_count = before;
+  return fits;
+}
+
+}  // namespace
+
+void encode_corner_wedge(RangeEncoder& rc, AttributeModels& m, const ProgressiveMesh& pm,
+                         const int32_t* coords, AttributeState& s, uint32_t c, uint32_t wedge,
+                         const int32_t* fresh) {
+  encode_reference(rc, m, pm, coords, s, c, false, wedge, fresh);
+}
+
+bool decode_corner_wedge(RangeState& rc, AttributeModels& m, const ProgressiveMesh& pm,
+                         const int32_t* coords, AttributeState& s, uint32_t c) {
+  return decode_reference(rc, m, pm, coords, s, c, false);
+}
+
+void encode_split_wedges(RangeEncoder& rc, AttributeModels& m, const ProgressiveMesh& pm,
+                         const int32_t* coords, AttributeState& s,
+                         std::span<const uint32_t> corners, uint32_t u, const uint32_t* wedges,
+                         const int32_t* const* fresh) {
+  const uint32_t simple = simple_rule_fits(pm, s, corners, wedges) ? 1 : 0;
+  rc.bit(m.simple[m.last_simple], simple);
+  m.last_simple = simple;
+  for (size_t i = 0; i < corners.size(); ++i) {
+    const uint32_t c = corners[i];
+    if (!simple) {
+      encode_reference(rc, m, pm, coords, s, c, pm.corner_vertex[c] == u, wedges[i], fresh[i]);
+      continue;
+    }
+    uint32_t cand[2];
+    const uint32_t n = candidates(pm, s, c, cand);
+    if (n)
+      s.corner_wedge[c] = cand[0];
+    else
+      encode_new_wedge(rc, m, pm, coords, s, c, cand, n, fresh[i]);
+  }
+}
+
+bool decode_split_wedges(RangeState& rc, AttributeModels& m, const ProgressiveMesh& pm,
+                         const int32_t* coords, AttributeState& s,
+                         std::span<const uint32_t> corners, uint32_t u) {
+  const uint32_t simple = rc.bit(m.simple[m.last_simple]);
+  m.last_simple = simple;
+  for (size_t i = 0; i < corners.size(); ++i) {
+    const uint32_t c = corners[i];
+    if (!simple) {
+      if (!decode_reference(rc, m, pm, coords, s, c, pm.corner_vertex[c] == u)) return false;
+      continue;
+    }
+    uint32_t cand[2];
+    const uint32_t n = candidates(pm, s, c, cand);
+    if (n)
+      s.corner_wedge[c] = cand[0];
+    else if (!decode_new_wedge(rc, m, pm, coords, s, c, cand, n))
+      return false;
+  }
   return rc.ok;
 }
 
@@ -342,41 +452,14 @@ bool decode_face_material(RangeState& rc, AttributeModels& m, const ProgressiveM
                           AttributeState& s, uint32_t f) {
   uint32_t cand[3], sym, material;
   const uint32_t n = material_candidates(pm, s, f, cand);
-  if (!decode_small(rc, m.material[std::min(n, 3u)], sym) || sym > n) return false;
+  if (!read_small(rc, m.material[std::min(n, 3u)], sym) || sym > n) return false;
   if (sym < n) {
     material = cand[sym];
-  } else if (!decode_uint(rc, m.material_escape, material) || material >= s.head.materials.size()) {
+  } else if (!read_uint(rc, m.material_escape, material) || material >= s.head.materials.size()) {
     return false;
   }
   s.face_material[f] = material;
   return true;
-}
-
-void undo_split_wedges(const ProgressiveMesh& pm, uint32_t v, bool has_l, bool has_r,
-                       AttributeState& s, uint32_t wedges_before) {
-  const uint32_t f = pm.face_count();  // the new faces were f (L, if any) and the next
-  const uint32_t fl = f, fr = f + (has_l ? 1u : 0u);
-  if (!s.corner_wedge.empty()) {
-    const uint32_t u_l = has_l ? s.corner_wedge[fl * 3] : 0;
-    const uint32_t v_l = has_l ? s.corner_wedge[fl * 3 + 1] : 0;
-    const uint32_t v_r = has_r ? s.corner_wedge[fr * 3] : 0;
-    // The sector corners are v's again; their wedges are still u's (the collapse rule).
-    std::vector<uint32_t>& corners = s.scratch_corners;
-    std::vector<uint32_t>& wedges = s.scratch_wedges;
-    corners.clear();
-    wedges.clear();
-    for (uint32_t face : pm.sector_faces())
-      for (uint32_t k = 0; k < 3; ++k)
-        if (pm.corner_vertex[face * 3 + k] == v) {
-          corners.push_back(face * 3 + k);
-          wedges.push_back(s.corner_wedge[face * 3 + k]);
-        }
-    const uint32_t arc = collapse_left_arc(wedges, u_l, has_l, has_r);
-    for (uint32_t i = 0; i < corners.size(); ++i) s.corner_wedge[corners[i]] = i < arc ? v_l : v_r;
-    s.corner_wedge.resize(size_t(f) * 3);
-  }
-  if (!s.face_material.empty()) s.face_material.resize(f);
-  s.wedge_count = wedges_before;
 }
 
 }  // namespace pmz

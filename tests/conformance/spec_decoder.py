@@ -205,7 +205,7 @@ def read_head(p):  # spec/format.md section 4
     if any(h[n] >= 1 << 32 for n in ("flags", "base_vertices", "base_faces", "total_splits",
                                      "full_faces")):
         raise Refused("corrupt")
-    if h["major"] != 8:
+    if h["major"] != 9:
         raise Refused("bad_version")
     if h["flags"] & ~1 or h["position_bits"] > 30 or h["curvature"] > 8 or h["fine_curvature"] > 8:
         raise Refused("corrupt")
@@ -434,6 +434,7 @@ class Attributes:
         self.color = [UIntModel() for _ in range(4)]
         self.material = [SmallModel() for _ in range(4)]
         self.material_escape = UIntModel()
+        self.simple, self.last_simple = [Model(), Model()], 0
 
     @staticmethod
     def opposite(m, h):  # the corner across the edge opposite h, or None
@@ -443,7 +444,7 @@ class Attributes:
     def assigned(self, h):
         return h is not None and h < len(self.aw) and self.aw[h] is not None
 
-    def corner(self, m, rc, c, uc):  # 14.3
+    def corner(self, m, rc, c, uc, simple=False):  # 14.3
         a, x = self.a, m.F[c]
         o1, o2 = self.opposite(m, prv(c)), self.opposite(m, nxt(c))
         cand = []
@@ -451,7 +452,10 @@ class Attributes:
             if self.assigned(h) and (not cand or cand[0] != self.aw[h]):
                 cand.append(self.aw[h])
         nc = len(cand)
-        r = decode_small(rc, self.reference[uc][nc])
+        if simple:  # 14.5: candidate 0, or a new a-wedge without a reference symbol
+            r = 0 if nc else nc
+        else:
+            r = decode_small(rc, self.reference[uc][nc])
         if r < nc:
             self.aw[c] = cand[r]
             return
@@ -548,8 +552,10 @@ class Attributes:
             prior = {h: self.aw[h] for h in sector}
             for h in order:
                 self.aw[h] = None
+            simple = rc.bit(self.simple[self.last_simple])
+            self.last_simple = simple
             for h in order:
-                self.corner(m, rc, h, 1 if m.F[h] == u else 0)
+                self.corner(m, rc, h, 1 if m.F[h] == u else 0, simple)
             # Undoing by the collapse rule must give the sector corners back their a-wedges.
             L = [f for f in new_faces if m.F[3 * f] == u]
             R = [f for f in new_faces if m.F[3 * f] != u]

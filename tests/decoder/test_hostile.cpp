@@ -916,6 +916,25 @@ TEST(Hostile, VertexChoiceRunningOutOfCandidatesIsRefused) {
 // level reached, with every count consistent; once memory is back, the decoder still reaches
 // the same full mesh as without the failure (no split applied twice, no symbol lost). With
 // clear_changes() first, the change list grows while refining too.
+// Refines d by `step` with its n-th allocation from now failing; false when none failed (step
+// allocates fewer). The failure is either reported or absorbed (the change list then says
+// everything changed); the mesh stays valid.
+template <class Step>
+bool refine_failing_allocation(pmz::Decoder& d, long n, Step step) {
+  d.clear_changes();
+  g_allocations_before_failure = n;
+  step();
+  const bool failed = g_allocations_before_failure == -2;
+  g_allocations_before_failure = -1;
+  if (!failed) return false;
+  if (d.status() != pmz::Status::ok)
+    EXPECT_EQ(d.status(), pmz::Status::out_of_memory) << n;
+  else
+    EXPECT_TRUE(d.changes().all) << n;
+  expect_valid(d);
+  return true;
+}
+
 TEST(Hostile, AllocationFailureWhileRefiningKeepsALevel) {
   const Bytes f = small_file(24, 8);
   pmz::Decoder ref;
@@ -928,19 +947,8 @@ TEST(Hostile, AllocationFailureWhileRefiningKeepsALevel) {
   for (long n = 0; n < 400; ++n) {
     pmz::Decoder d;
     ASSERT_EQ(d.feed(f.data(), f.size()), pmz::Status::ok);
-    d.clear_changes();
-    g_allocations_before_failure = n;
-    d.set_face_target(8 + 2 * 24);
-    const bool failed = g_allocations_before_failure == -2;
-    g_allocations_before_failure = -1;
-    if (!failed) break;
+    if (!refine_failing_allocation(d, n, [&] { d.set_face_target(8 + 2 * 24); })) break;
     ++failures;
-    // Either reported, or absorbed (the change list then says everything changed).
-    if (d.status() != pmz::Status::ok)
-      EXPECT_EQ(d.status(), pmz::Status::out_of_memory) << n;
-    else
-      EXPECT_TRUE(d.changes().all) << n;
-    expect_valid(d);
     ASSERT_EQ(size_t(d.face_count()), 8 + 2 * d.splits_applied()) << n;
     // Memory is back: the same full mesh as without the failure.
     d.coarsen();
@@ -1119,6 +1127,59 @@ TEST(Hostile, EveryByteOfAnAttributeStream) {
   ASSERT_FALSE(b.empty());
   corrupt_every_byte(b, false);
   corrupt_every_byte(b, true);
+}
+
+// AllocationFailureWhileRefiningKeepsALevel with attribute wedges (spec/format.md section
+// 14.5): the decoder reserves what a split's a-wedges need before the mesh changes, so an
+// allocation failure never leaves a split with its faces but without its wedges; the same full
+// mesh and wedges follow once memory is back.
+TEST(Hostile, AllocationFailureWithAttributesKeepsALevel) {
+  const Bytes f = read_vector("seamed-q.pmz");
+  ASSERT_FALSE(f.empty());
+  // The level as bits: faces, positions, the wedges' vertices, corners and values.
+  auto level = [](const pmz::Decoder& d) {
+    std::vector<uint32_t> out(d.indices(), d.indices() + size_t(d.face_count()) * 3);
+    auto floats = [&](const float* p, size_t n) {
+      for (size_t i = 0; i < n && p; ++i) {
+        uint32_t bits;
+        std::memcpy(&bits, p + i, 4);
+        out.push_back(bits);
+      }
+    };
+    const size_t w = d.wedge_count();
+    floats(d.positions(), size_t(d.vertex_count()) * 3);
+    out.insert(out.end(), d.wedge_vertices(), d.wedge_vertices() + w);
+    out.insert(out.end(), d.wedge_indices(), d.wedge_indices() + size_t(d.face_count()) * 3);
+    for (uint32_t t = 0; t < d.texcoord_set_count(); ++t) floats(d.texcoords(t), w * 2);
+    floats(d.normals(), w * 3);
+    floats(d.colors(), w * d.color_components());
+    return out;
+  };
+  pmz::Decoder ref;
+  ASSERT_EQ(ref.feed(f.data(), f.size()), pmz::Status::ok) << ref.error_message();
+  ASSERT_EQ(ref.finish(), pmz::Status::ok);
+  const uint64_t splits = ref.refine();
+  ASSERT_GT(splits, 20u);
+  ASSERT_GT(ref.wedge_count(), ref.vertex_count());  // seams: some vertices have several
+  const std::vector<uint32_t> full = level(ref);
+  uint32_t failures = 0;
+  for (long n = 0; n < 2000; ++n) {
+    pmz::Decoder d;
+    ASSERT_EQ(d.feed(f.data(), f.size()), pmz::Status::ok);
+    ASSERT_EQ(d.finish(), pmz::Status::ok);
+    if (!refine_failing_allocation(d, n, [&] { d.set_split_target(splits); })) break;
+    ++failures;
+    // A whole level, wedges included: the one a fresh decoder gives at the same split.
+    pmz::Decoder same;
+    ASSERT_EQ(same.feed(f.data(), f.size()), pmz::Status::ok);
+    same.set_split_target(d.splits_applied());
+    ASSERT_EQ(level(d), level(same)) << n;
+    d.coarsen();
+    d.refine();
+    ASSERT_EQ(d.splits_applied(), splits) << n;
+    ASSERT_EQ(level(d), full) << n;
+  }
+  EXPECT_GT(failures, 3u);
 }
 
 // Out-of-range attribute fields in HEAD are corrupt (spec/format.md section 14.1).

@@ -1,4 +1,4 @@
-// Attribute wedges in the .pmz format (spec/format.md section 14; format 8.0): the HEAD
+// Attribute wedges in the .pmz format (spec/format.md section 14; format 9.0): the HEAD
 // fields, the per-corner wedge state writer and decoder keep in step, and the coding of a
 // corner's wedge reference and a new wedge's values (ATTR chunks). Writer and decoder share it.
 //
@@ -80,6 +80,8 @@ struct AttributeModels {
   UIntModel normal[3], color[4];
   SmallModel material[4];  // [candidates]
   UIntModel material_escape;
+  Prob simple[2] = {kProbInit, kProbInit};  // a split's "simple" bit [the previous split's]
+  uint32_t last_simple = 0;
 };
 
 // The attribute state writer and decoder keep: per corner its wedge, per wedge its vertex and
@@ -92,7 +94,6 @@ struct AttributeState {
   std::vector<int32_t> values;
   std::vector<uint32_t> face_material;
   uint32_t wedge_count = 0;  // wedges in use (the arrays may hold more: undone splits' wedges)
-  std::vector<uint32_t> scratch_corners, scratch_wedges;  // undo_split_wedges()
   void init(const AttributeHeader& a) {
     head = a;
     stride = a.stride();
@@ -105,25 +106,29 @@ struct AttributeState {
 // then u's corners in L, in the sector faces in order, in R.
 void split_corners(const ProgressiveMesh& pm, bool has_l, bool has_r, std::vector<uint32_t>& out);
 
-// One corner's wedge (the corner is pending in s.corner_wedge): the writer codes `wedge` (an
+// A base corner's wedge (the corner is pending in s.corner_wedge): the writer codes `wedge` (an
 // existing wedge id, or s.wedge_count for a new wedge with values `fresh`), the decoder reads
 // it. coords: the mesh's integer positions (3 per vertex).
 void encode_corner_wedge(RangeEncoder& rc, AttributeModels& m, const ProgressiveMesh& pm,
-                         const int32_t* coords, AttributeState& s, uint32_t c, bool u_corner,
-                         uint32_t wedge, const int32_t* fresh);
+                         const int32_t* coords, AttributeState& s, uint32_t c, uint32_t wedge,
+                         const int32_t* fresh);
 bool decode_corner_wedge(RangeState& rc, AttributeModels& m, const ProgressiveMesh& pm,
-                         const int32_t* coords, AttributeState& s, uint32_t c, bool u_corner);
+                         const int32_t* coords, AttributeState& s, uint32_t c);
+// A split's wedges (spec/format.md section 14.5): `corners` from split_corners(), all pending; u
+// the new vertex. The writer gives per corner the wedge id it gets (existing, or s.wedge_count + k
+// for the k-th new one, numbered in order) and, at a new wedge's first corner, its values.
+void encode_split_wedges(RangeEncoder& rc, AttributeModels& m, const ProgressiveMesh& pm,
+                         const int32_t* coords, AttributeState& s,
+                         std::span<const uint32_t> corners, uint32_t u, const uint32_t* wedges,
+                         const int32_t* const* fresh);
+// False on a malformed stream or reference (s then holds part of the split's assignments).
+bool decode_split_wedges(RangeState& rc, AttributeModels& m, const ProgressiveMesh& pm,
+                         const int32_t* coords, AttributeState& s,
+                         std::span<const uint32_t> corners, uint32_t u);
 // A face's material (its entry pending in s.face_material), when there are two or more.
 void encode_face_material(RangeEncoder& rc, AttributeModels& m, const ProgressiveMesh& pm,
                           AttributeState& s, uint32_t f, uint32_t material);
 bool decode_face_material(RangeState& rc, AttributeModels& m, const ProgressiveMesh& pm,
                           AttributeState& s, uint32_t f);
-
-// Undoing a split (decoder; right after ProgressiveMesh::undo_split/undo_resplit, whose
-// sector_faces() are the faces rewritten back to v): the sector corners take v's wedges by the
-// collapse rule, the new faces' entries are dropped (pm.face_count() is the count before the
-// split); wedges_before: the wedge count before the split.
-void undo_split_wedges(const ProgressiveMesh& pm, uint32_t v, bool has_l, bool has_r,
-                       AttributeState& s, uint32_t wedges_before);
 
 }  // namespace pmz
