@@ -51,6 +51,22 @@ bool read_string(ByteReader& r, std::string& s) {
   return n;
 }
 
+// Candidate 0 of corner c alone (kNoCorner when nc = 0): the simple rule's wedge.
+[[gnu::always_inline]] inline uint32_t first_candidate(const ProgressiveMesh& pm,
+                                                       const AttributeState& s, uint32_t c) {
+  const uint32_t o1 = pm.opposite[prev_corner(c)];
+  if (o1 != kNoCorner) {
+    const uint32_t a = prev_corner(o1);
+    if (a < s.corner_wedge.size() && s.corner_wedge[a] < s.wedge_count) return s.corner_wedge[a];
+  }
+  const uint32_t o2 = pm.opposite[next_corner(c)];
+  if (o2 != kNoCorner) {
+    const uint32_t a = next_corner(o2);
+    if (a < s.corner_wedge.size() && s.corner_wedge[a] < s.wedge_count) return s.corner_wedge[a];
+  }
+  return kNoCorner;
+}
+
 // The assigned wedge at corner a (kNoCorner / pending: none).
 uint32_t wedge_at(const AttributeState& s, uint32_t a) {
   return a < s.corner_wedge.size() && s.corner_wedge[a] < s.wedge_count ? s.corner_wedge[a]
@@ -276,18 +292,22 @@ float AttributeQuantizer::dequantize_color(int32_t q) const {
 }
 
 void split_corners(const ProgressiveMesh& pm, bool has_l, bool has_r, std::vector<uint32_t>& out) {
-  out.clear();
+  const std::span<const uint32_t> sector = pm.sector_faces();
+  out.resize(sector.size() + 6);  // at most: the decoder reserved it before the split
+  uint32_t* o = out.data();
   const uint32_t new_faces = (has_l ? 1u : 0u) + (has_r ? 1u : 0u);
   const uint32_t f0 = pm.face_count() - new_faces;
   const uint32_t fl = f0, fr = f0 + (has_l ? 1u : 0u);
   const uint32_t u = pm.vertex_count() - 1;
-  if (has_l) out.insert(out.end(), {fl * 3 + 1, fl * 3 + 2});  // L = (u, v, vl)
-  if (has_r) out.insert(out.end(), {fr * 3 + 0, fr * 3 + 2});  // R = (v, u, vr)
-  if (has_l) out.push_back(fl * 3);
-  for (uint32_t f : pm.sector_faces())
-    for (uint32_t k = 0; k < 3; ++k)
-      if (pm.corner_vertex[f * 3 + k] == u) out.push_back(f * 3 + k);
-  if (has_r) out.push_back(fr * 3 + 1);
+  if (has_l) *o++ = fl * 3 + 1, *o++ = fl * 3 + 2;  // L = (u, v, vl)
+  if (has_r) *o++ = fr * 3 + 0, *o++ = fr * 3 + 2;  // R = (v, u, vr)
+  if (has_l) *o++ = fl * 3;
+  for (uint32_t f : sector) {  // u's corner in each sector face
+    const uint32_t* cv = &pm.corner_vertex[f * 3];
+    *o++ = f * 3 + (cv[0] == u ? 0 : cv[1] == u ? 1 : 2);
+  }
+  if (has_r) *o++ = fr * 3 + 1;
+  out.resize(size_t(o - out.data()));
 }
 
 namespace {
@@ -428,11 +448,10 @@ bool decode_split_wedges(RangeState& rc, AttributeModels& m, const ProgressiveMe
       if (!decode_reference(rc, m, pm, coords, s, c, pm.corner_vertex[c] == u)) return false;
       continue;
     }
-    uint32_t cand[2];
-    const uint32_t n = candidates(pm, s, c, cand);
-    if (n)
-      s.corner_wedge[c] = cand[0];
-    else if (!decode_new_wedge(rc, m, pm, coords, s, c, cand, n))
+    const uint32_t w = first_candidate(pm, s, c);
+    if (w != kNoCorner)
+      s.corner_wedge[c] = w;
+    else if (!decode_new_wedge(rc, m, pm, coords, s, c, nullptr, 0))
       return false;
   }
   return rc.ok;
