@@ -7,7 +7,8 @@
 #                                web/dist/viewer/index.html (static files, ?src=URL)
 #   bash scripts/web.sh test     build, then the node API tests and the headless Chromium tests
 #
-# PMZ_WASM_OPT overrides the optimization flags (default -O3: see tests/bench/RESULTS.md).
+# PMZ_WASM_OPT overrides the optimization flags of the refinement loop's files and the link
+# (default -O3), PMZ_WASM_COLD_OPT those of the other files (default -Os): tests/bench/RESULTS.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
@@ -25,19 +26,35 @@ if [ ! -d web/node_modules/three ] || [ ! -d web/node_modules/puppeteer-core ]; 
   (cd web && PUPPETEER_SKIP_DOWNLOAD=1 npm ci --no-audit --no-fund --loglevel=error)
 fi
 
-# The decoder library's sources: standard C++ only. Everything is one translation unit list
-# linked with LTO, so the writer-side code in format/ is dropped.
-sources=(decoder/src/*.cpp format/src/*.cpp)
+# The decoder library's sources: standard C++ only, linked with LTO (the writer-side code in
+# format/ is dropped). Size budget (issue 16: .wasm + pmz_wasm.js at most 120,000 bytes, 50 KB
+# gzip): the refinement loop's files are compiled -O3 ($opt), the rest -Os: the chunk set-up,
+# the base mesh, attributes, the C API (decoder.cpp's own once-per-chunk functions are
+# minsize in wasm: PMZ_SMALL_IN_WASM). Every other decoder source (a new file) is -Os too.
+hot=(decoder/src/decoder.cpp format/src/split_chunk.cpp format/src/vertex_choice.cpp format/src/progressive_mesh.cpp
+  format/src/geometry.cpp format/src/fan_wedge.cpp format/src/coding.cpp)
+cold=()
+for f in decoder/src/*.cpp format/src/*.cpp; do
+  [[ " ${hot[*]} " == *" $f "* ]] || cold+=("$f")
+done
 exports=$(sed -n 's/^[a-zA-Z][^(]* \**\(pmz_[a-z_]*\)(.*/"_\1"/p' decoder/include/pmz/pmz.h | paste -sd,)
 opt=${PMZ_WASM_OPT:--O3}
+cold_opt=${PMZ_WASM_COLD_OPT:--Os}
 out=web/build
 pkg=web/dist/pkg
-mkdir -p "$out" "$pkg"
+obj=$out/obj
+rm -rf "$obj" && mkdir -p "$out" "$pkg" "$obj/hot" "$obj/cold"
+cxxflags=(-std=c++20 -flto -Wall -Wextra -I"$root/decoder/include" -I"$root/format/include")
+# Each set in one em++ call (objects land in the current directory), the two sets in parallel.
+(cd "$obj/hot" && em++ "${cxxflags[@]}" $opt -c "${hot[@]/#/$root/}") &
+hot_job=$!
+(cd "$obj/cold" && em++ "${cxxflags[@]}" $cold_opt -c "${cold[@]/#/$root/}")
+wait "$hot_job"
 # A standalone module (no emscripten JS runtime: web/src/pmz_wasm.js instantiates it, 2 KB
 # instead of emscripten's 14 KB of glue). -sFILESYSTEM=0: no file I/O; exceptions stay disabled
 # (the default: a throw aborts, which the JS wrapper reports as out_of_memory, the only
 # exception the decoder can meet).
-em++ -std=c++20 $opt -flto -Wall -Wextra -Idecoder/include -Iformat/include "${sources[@]}" \
+em++ $opt -flto "$obj"/hot/*.o "$obj"/cold/*.o \
   -o "$out/pmz_wasm.wasm" --no-entry -sSTANDALONE_WASM=1 -sFILESYSTEM=0 -sALLOW_MEMORY_GROWTH=1 \
   -sWASM_BIGINT=1 -sEXPORTED_FUNCTIONS="[$exports,\"_malloc\",\"_free\"]"
 

@@ -27,6 +27,14 @@
 #define PMZ_OUT_OF_LINE [[gnu::noinline, gnu::noclone]]
 #endif
 
+// Chunk framing, the once-per-chunk and the error paths: PMZ_SMALL_IN_WASM (range_coder.hpp),
+// e.g. the base mesh decoder inlined into parse by the WebAssembly build's LTO.
+#if defined(__wasm__)
+#define PMZ_COLD [[gnu::cold, clang::minsize]]
+#else
+#define PMZ_COLD [[gnu::cold]]
+#endif
+
 #if defined(__linux__)
 #include <sys/mman.h>
 #endif
@@ -180,7 +188,7 @@ struct Decoder::Impl {
 
   // Error paths and the once-per-file HEAD are cold: kept small, out of the hot code's way
   // (the stripped library has a 200 KB budget).
-  [[gnu::cold]] Status fail(Status s, const std::string& what) {
+  PMZ_COLD Status fail(Status s, const std::string& what) {
     stage = Stage::failed;
     status = s;
     message = std::string("pmz: ") + status_name(s) + ": " + what + " (chunk " +
@@ -188,15 +196,15 @@ struct Decoder::Impl {
               ")";
     return s;
   }
-  size_t parse(const uint8_t* p, size_t n);
-  Status chunk(uint8_t type, const uint8_t* p, size_t n);
-  [[gnu::cold]] Status head(const uint8_t* p, size_t n);
-  [[gnu::cold]] Status base(const uint8_t* p, size_t n);  // once per file, like head
-  Status split_chunk(const uint8_t* p, size_t n);
-  [[gnu::cold]] Status attribute_chunk(const uint8_t* p, size_t n);
-  [[gnu::cold]] Status install_base(ProgressiveMesh&& m, std::vector<int32_t>&& coords);
+  PMZ_SMALL_IN_WASM size_t parse(const uint8_t* p, size_t n);
+  PMZ_SMALL_IN_WASM Status chunk(uint8_t type, const uint8_t* p, size_t n);
+  PMZ_COLD Status head(const uint8_t* p, size_t n);
+  PMZ_COLD Status base(const uint8_t* p, size_t n);  // once per file, like head
+  PMZ_SMALL_IN_WASM Status split_chunk(const uint8_t* p, size_t n);
+  PMZ_COLD Status attribute_chunk(const uint8_t* p, size_t n);
+  PMZ_COLD Status install_base(ProgressiveMesh&& m, std::vector<int32_t>&& coords);
   bool apply();
-  [[gnu::cold]] bool refuse(Status s, const std::string& what);
+  PMZ_COLD bool refuse(Status s, const std::string& what);
   void undo();
   // Up to max_splits splits, stopping once the mesh has face_target faces / before it would
   // have fewer than face_floor.

@@ -90,8 +90,8 @@ bool split_chunk_stream_sizes(const uint8_t* p, size_t size, uint64_t& count,
   return r.ok;
 }
 
-bool SplitChunkReader::open(const uint8_t* p, size_t size, uint64_t max_splits, SplitModels& models,
-                            std::string& error) {
+PMZ_SMALL_IN_WASM bool SplitChunkReader::open(const uint8_t* p, size_t size, uint64_t max_splits,
+                                              SplitModels& models, std::string& error) {
   ByteReader r(p, size);
   const uint64_t count = r.varint();
   if (!r.ok || count == 0 || count > max_splits) return error = "SPLT counts", false;
@@ -158,7 +158,7 @@ namespace {
 }
 }  // namespace
 
-SplitModels::SplitModels() {
+PMZ_SMALL_IN_WASM SplitModels::SplitModels() {
   for (uint32_t c = 0; c < kChoiceContexts; ++c) {
     const uint32_t d = c / (2 * kChoiceKeys);
     choice[c] = d == 0 ? kProbInit : primed_model(choice_prior(d));

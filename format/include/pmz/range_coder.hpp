@@ -7,6 +7,15 @@
 #include <cstdint>
 #include <vector>
 
+// The WebAssembly build has a size budget (scripts/web.sh): there, once-per-file set-up (model
+// initialization, chunk and base mesh decoding) is optimized for size with all it inlines (its
+// LTO inlines every single-caller function). No effect elsewhere.
+#if defined(__wasm__)
+#define PMZ_SMALL_IN_WASM [[clang::minsize]]
+#else
+#define PMZ_SMALL_IN_WASM
+#endif
+
 namespace pmz {
 
 inline constexpr uint32_t kProbBits = 15, kProbOne = 1u << kProbBits, kTop = 1u << 24;
@@ -233,7 +242,7 @@ struct UIntModel {
   Prob length[16];
   Prob escape[32];
   Prob high[33][4];
-  UIntModel() {
+  PMZ_SMALL_IN_WASM UIntModel() {
     for (auto& p : length) p = kProbInit;
     for (auto& p : escape) p = kProbInit;
     for (auto& h : high)
