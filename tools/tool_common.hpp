@@ -2,12 +2,13 @@
 // errors ("pmz-encode: out.pmz: cannot write: No space left on device"), CLI11 set-up, `-` for
 // stdin/stdout, safe output files (temporary + rename for regular files, removed on error and on
 // SIGINT/SIGTERM/SIGHUP/SIGPIPE; symlinks keep pointing at their updated target; devices and FIFOs
-// written directly) and a progress bar on stderr. Standard library + CLI11 only: the decoder's
-// tools use it too.
+// written directly: meshio's OutputFile) and a progress bar on stderr. Standard library, CLI11
+// and meshio only: the decoder's tools use it too.
 #pragma once
 #include <CLI/CLI.hpp>
 #include <cstdint>
 #include <cstdio>
+#include <pmz/output_file.hpp>
 #include <string>
 #include <vector>
 
@@ -53,57 +54,10 @@ bool same_file(const std::string& a, const std::string& b);
 // Lower-case extension without the dot ("" if none).
 std::string extension(const std::string& path);
 
-// An output being written. open() decides how:
-//   "-"                  stdout (refused when stdout is a terminal and the data is binary);
-//   a device, FIFO, socket  written directly (a temporary + rename would replace the node);
-//   a regular file or a new name  a hidden temporary beside the target (after following
-//                        symlinks, so the link keeps pointing at the updated file), with the
-//                        target's permissions, renamed over it by commit().
-// Errors name the output as the user gave it, never the temporary.
-class OutputFile {
- public:
-  OutputFile() = default;
-  ~OutputFile();  // discards what was not committed
-  OutputFile(const OutputFile&) = delete;
-  OutputFile& operator=(const OutputFile&) = delete;
-
-  bool open(const std::string& path, bool binary, std::string& error);
-  FILE* stream() const { return file_; }
-  // Buffered write; remembers the first failure's errno for commit().
-  bool write(const void* data, size_t size);
-  // Flushes and closes, renames the temporary into place. error: "path: cannot write: reason".
-  bool commit(std::string& error);
-  // Closes and removes the temporary (a direct output is left as it is).
-  void discard();
-  const std::string& path() const { return path_; }
-
- private:
-  std::string path_;    // as given
-  std::string target_;  // where the temporary is renamed to (symlinks resolved)
-  std::string temp_;    // the temporary, while open
-  FILE* file_ = nullptr;
-  int temp_slot_ = -1;  // registered temporary (removed on signals), or -1
-  int write_errno_ = 0;
-  bool is_stdout_ = false;
-};
-
-// A temporary file in $TMPDIR (else /tmp), for library calls that take a path (a mesh read
-// from stdin, a mesh written for an output that is not a plain file); removed by the destructor
-// and on SIGINT/SIGTERM/SIGHUP/SIGPIPE.
-class ScratchFile {
- public:
-  ScratchFile() = default;
-  ~ScratchFile();
-  ScratchFile(const ScratchFile&) = delete;
-  ScratchFile& operator=(const ScratchFile&) = delete;
-  // `suffix` e.g. ".obj" (readers and writers go by the extension); `data` its contents.
-  bool create(const std::vector<uint8_t>& data, const std::string& suffix, std::string& error);
-  const std::string& path() const { return path_; }
-
- private:
-  std::string path_;
-  int slot_ = -1;
-};
+// Safe output files and scratch files: meshio's one implementation (pmz/output_file.hpp), whose
+// registered temporaries init()'s signal handler removes.
+using pmz::OutputFile;
+using pmz::ScratchFile;
 
 // Writes `data` to `path` through an OutputFile.
 bool write_output(const std::string& path, const void* data, size_t size, std::string& error);

@@ -31,7 +31,8 @@ bool read_mesh_input(const std::string& path, const std::string& stdin_format, I
     shown = "stdin";
     std::vector<uint8_t> bytes;
     ScratchFile scratch;
-    ok = read_input("-", bytes, error) && scratch.create(bytes, "." + stdin_format, error) &&
+    ok = read_input("-", bytes, error) &&
+         scratch.create(bytes, name(), "." + stdin_format, error) &&
          read_mesh(scratch.path(), mesh, stats, error);
     if (!ok) replace_all(error, scratch.path(), shown);
   } else {

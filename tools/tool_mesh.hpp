@@ -1,15 +1,14 @@
 // The mesh side of the tools' shared behaviour (tool_common.hpp): a mesh read from a file or
-// stdin, a mesh written to any output tool_common::OutputFile handles. Needs the mesh module.
+// stdin, a mesh written to any output pmz::OutputFile handles. Needs the mesh module.
 #pragma once
 #include <CLI/CLI.hpp>
 #include <string>
 #include <vector>
 
 #include "pmz/mesh.hpp"
+#include "pmz/output_file.hpp"
 
 namespace pmz::tool {
-
-class OutputFile;
 
 // Reads `path` ("-": stdin, parsed as `stdin_format`: obj, off, ply or stl) and repairs it;
 // repairs are reported on stderr ("pmz: FILE: ...") as by pmz::read_mesh. Errors name the file

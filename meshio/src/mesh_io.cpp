@@ -18,6 +18,7 @@
 
 #include "mesh_gltf.hpp"
 #include "pmz/mesh.hpp"
+#include "pmz/output_file.hpp"
 
 namespace pmz {
 
@@ -1429,43 +1430,17 @@ bool read_mesh(const std::string& path, IndexedMesh& out, std::string& error) {
 
 namespace {
 
-// Hidden temporary beside the target (same filesystem, so the rename is atomic), renamed when
-// `body` has written everything; removed on any error.
+// Through OutputFile (pmz/output_file.hpp): a temporary renamed over the target when `body` has
+// written everything, removed on any error; symlinks, devices and FIFOs as every tool does.
 bool write_atomic(const std::string& path, const std::function<void(Writer&)>& body,
                   std::string& error) {
-  std::filesystem::path target(path);
-  std::string tmp = (target.parent_path() /
-                     ("." + target.filename().string() + ".tmp" + std::to_string(::getpid())))
-                        .string();
-  FILE* f = std::fopen(tmp.c_str(), "wb");
-  if (!f) {
-    error = path + ": cannot create file: " + std::strerror(errno);
-    return false;
-  }
-  int sink_errno = 0;  // the first failed fwrite's
-  const MeshSink sink = [&](const void* p, size_t n) {
-    if (std::fwrite(p, 1, n, f) == n) return true;
-    if (!sink_errno) sink_errno = errno ? errno : EIO;
-    return false;
-  };
+  OutputFile out;
+  if (!out.open(path, false, error)) return false;
+  const MeshSink sink = [&](const void* p, size_t n) { return out.write(p, n); };
   Writer w(sink);
   body(w);
-  int write_errno = w.finish() ? 0 : sink_errno;
-  if (std::fflush(f) != 0 && !write_errno) write_errno = errno ? errno : EIO;
-  if (std::fclose(f) != 0 && !write_errno) write_errno = errno ? errno : EIO;
-  if (write_errno) {
-    std::remove(tmp.c_str());
-    error = path + ": write failed: " + std::strerror(write_errno);
-    return false;
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::remove(tmp.c_str());
-    error = path + ": " + ec.message();
-    return false;
-  }
-  return true;
+  w.finish();  // a failed write is remembered by `out` and reported by commit()
+  return out.commit(error);
 }
 
 // A mesh's attribute arrays must agree with its geometry before anything is written.

@@ -132,9 +132,11 @@ bool read_mesh(const std::string& path, IndexedMesh& out, std::string& error);
 // any IndexedMesh round-trips through OBJ/OFF/PLY; STL has no shared vertices, so it cannot keep
 // isolated vertices or split copies apart). Attributes: OBJ writes vt/vn per wedge, usemtl and
 // an MTL beside it (colours per vertex: the first wedge's); PLY and .glb write one vertex per
-// wedge (glTF: one primitive per material); OFF and STL have none. Atomic: a temporary file
-// beside the target, renamed when complete; on any error (missing directory, disk full) the
-// temporary is removed.
+// wedge (glTF: one primitive per material); OFF and STL have none. Atomic, as every pmz tool
+// writes: a temporary file beside the target, renamed when complete (through a symlink: the
+// link keeps pointing at the updated file; a device or FIFO is written directly; "-" is
+// stdout); on any error (missing directory, disk full) the temporary is removed and the error
+// reads "path: cannot write: reason".
 bool write_mesh(const std::string& path, const IndexedMesh& mesh, std::string& error);
 
 // Receives a writer's bytes in order, a buffer's worth at a time; false stops the writing.
