@@ -111,7 +111,11 @@ bool OutputFile::open(const std::string& path, bool binary, std::string& error) 
   }
   // The temporary: hidden, beside the target (same filesystem: the rename is atomic).
   const std::filesystem::path dir = target.parent_path();
-  std::string temp = (dir / ("." + target.filename().string() + ".tmp.XXXXXX")).string();
+  // Appended rather than "." + name: GCC 12 warns falsely (-Wrestrict) on literal + string&&.
+  std::string temp_name = ".";
+  temp_name += target.filename().string();
+  temp_name += ".tmp.XXXXXX";
+  std::string temp = (dir / temp_name).string();
   temp_slot_ = claim_temp_slot(temp);
   char* name_buf = temp_slot_ >= 0 ? g_temps[temp_slot_].path : temp.data();
   const int fd = ::mkstemp(name_buf);
