@@ -13,6 +13,7 @@
 #include "halfedge.hpp"
 #include "metric.hpp"
 #include "parallel.hpp"
+#include "survivors.hpp"
 
 namespace pmz {
 
@@ -1074,21 +1075,10 @@ void attributes_after(const MeshAttributes& in, const CollapseReplay& replay,
 IndexedMesh mesh_after(const CollapseSequence& seq, size_t k) {
   const uint32_t n = seq.mesh.vertex_count();
   k = std::min(k, seq.collapses.size());
-  // Collapse i maps u to v; following the chain gives each input vertex's survivor. A face
-  // whose corners meet is one a collapse deleted.
-  std::vector<uint32_t> parent(n);
-  for (uint32_t i = 0; i < n; ++i) parent[i] = i;
-  for (size_t i = 0; i < k; ++i) parent[seq.collapses[i].u] = seq.collapses[i].v;
-  auto find = [&](uint32_t x) {
-    uint32_t root = x;
-    while (parent[root] != root) root = parent[root];
-    while (parent[x] != root) {
-      const uint32_t next = parent[x];
-      parent[x] = root;
-      x = next;
-    }
-    return root;
-  };
+  // Each input vertex's survivor (survivors.hpp); a face whose corners meet is one a collapse
+  // deleted.
+  const std::vector<uint32_t> survivor = collapse_survivors(seq, k);
+  auto find = [&](uint32_t x) { return survivor[x]; };
   std::vector<uint32_t> remap(n, kNoVertex);
   IndexedMesh result;
   for (uint32_t i = 0; i < n; ++i) {

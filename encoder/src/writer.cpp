@@ -18,6 +18,7 @@
 #include "pmz/progressive_mesh.hpp"
 #include "pmz/split_chunk.hpp"
 #include "pmz/vertex_choice.hpp"
+#include "survivors.hpp"
 
 namespace pmz {
 
@@ -47,14 +48,6 @@ struct Plan {
   std::vector<uint32_t> decoded_id;   // input id -> decoded id
   std::vector<uint8_t> base_stream;   // BASE's range-coded traversal
 };
-
-uint32_t find_root(std::vector<uint32_t>& parent, uint32_t x) {
-  while (parent[x] != x) {
-    parent[x] = parent[parent[x]];
-    x = parent[x];
-  }
-  return x;
-}
 
 // Ranks of vl/vr (kNoVertex -> kNoRank) in the ring gathered last; false if absent.
 bool find_ranks(const ProgressiveMesh& pm, uint32_t vl, uint32_t vr, uint32_t& rl, uint32_t& rr) {
@@ -98,15 +91,13 @@ bool make_plan(const CollapseSequence& seq, const WriteOptions& opt, Plan& plan,
     removed[c.u] = 1;
     faces -= (c.vl != kNoVertex) + (c.vr != kNoVertex);
   }
-  std::vector<uint32_t> parent(n);
-  for (uint32_t i = 0; i < n; ++i) parent[i] = i;
-  for (size_t i = 0; i < used; ++i) parent[seq.collapses[i].u] = seq.collapses[i].v;
+  const std::vector<uint32_t> survivor = collapse_survivors(seq, used);
 
   // Base faces, in input ids of the surviving vertices.
   std::vector<uint32_t> base_faces;
   for (uint32_t f = 0; f < mesh.face_count(); ++f) {
     uint32_t t[3];
-    for (int k = 0; k < 3; ++k) t[k] = find_root(parent, mesh.indices[f * 3 + k]);
+    for (int k = 0; k < 3; ++k) t[k] = survivor[mesh.indices[f * 3 + k]];
     if (t[0] == t[1] || t[0] == t[2] || t[1] == t[2]) continue;
     base_faces.insert(base_faces.end(), t, t + 3);
   }
