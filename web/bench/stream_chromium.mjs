@@ -43,7 +43,7 @@ for (let r = 0; r < runs; ++r) {
   // The same full mesh drawn while nothing changes: what rendering alone costs per frame.
   await new Promise((r) => setTimeout(r, STATIC_MS + 500));
   const s = await page.evaluate(() => ({ status: window.pmzStatus, timing: window.pmzTiming,
-    frames: window.pmzFrames, longTasks: window.pmzLongTasks }));
+    frames: window.pmzFrames, longTasks: window.pmzLongTasks, calibration: window.pmzDrawCalibration || null }));
   await browser.close();
   rmSync(profile, { recursive: true, force: true });
   const { firstBytes, firstObjectFrame } = s.timing;
@@ -60,8 +60,16 @@ for (let r = 0; r < runs; ++r) {
     .sort((a, b) => b.gap - a.gap).slice(0, 3);
   const still = done ? s.frames.filter((f) => f.t > done.t + 500) : [];
   const stillGaps = still.slice(1).map((f, i) => f.t - still[i].t).sort((a, b) => a - b);
+  // The frame after the one that showed the finest level: what drawing the full mesh cost
+  // once decoding ended (not a gap while decoding).
+  const doneAt = done ? s.frames.indexOf(done) : -1;
+  const finalGap = doneAt >= 0 && doneAt + 1 < s.frames.length ? s.frames[doneAt + 1].t - done.t : null;
+  const before = done ? during.filter((f) => f !== done) : during;
   results.push({ faces: s.status.faces, error: s.status.error,
-    first_object_ms: +(firstObjectFrame - firstBytes).toFixed(1),
+    first_object_ms: +(firstObjectFrame - firstBytes).toFixed(1), first_object_faces: s.timing.firstObjectFaces,
+    shown_max_while_decoding: Math.max(0, ...before.map((f) => f.faces)),
+    final_frame_gap_ms: finalGap === null ? null : +finalGap.toFixed(1),
+    calibration: s.calibration && { faces: s.calibration.faces, ms: +s.calibration.ms.toFixed(1) },
     complete_ms: done ? +(done.t - firstBytes).toFixed(1) : null, frames: during.length,
     gap_median_ms: q(0.5), gap_p95_ms: q(0.95), gap_max_ms: gaps.length ? +gaps[gaps.length - 1].toFixed(1) : null,
     gaps_over_50ms: gaps.filter((g) => g > 50).length,

@@ -77,8 +77,9 @@ export declare class Decoder {
   refine(maxSplits?: number): number;
   /** Undoes up to maxSplits applied splits (all when absent); returns how many. */
   coarsen(maxSplits?: number): number;
-  /** Refines for at most budgetMs milliseconds (default 8); returns the splits applied. */
-  refineFor(budgetMs?: number): number;
+  /** Refines for at most budgetMs milliseconds (default 8) and at most maxSplits splits
+   * (default: no limit); returns the splits applied. */
+  refineFor(budgetMs?: number, maxSplits?: number): number;
   /** The smallest level with at least `faces` faces, clamped to what is available. */
   setFaceTarget(faces: number): void;
   setSplitTarget(splits: number): void;

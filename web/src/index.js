@@ -277,17 +277,18 @@ export class Decoder {
   }
   clearChanges() { this._call((m) => m._pmz_decoder_clear_changes(this._ptr)); }
 
-  // Applies available splits for at most budgetMs (in batches that adapt to the rate seen).
-  // Returns the splits applied.
-  refineFor(budgetMs = 8) {
+  // Applies available splits for at most budgetMs (in batches that adapt to the rate seen),
+  // and at most maxSplits of them. Returns the splits applied.
+  refineFor(budgetMs = 8, maxSplits = Infinity) {
     const start = performance.now();
     let total = 0, batch = this._batch || 256;
     for (;;) {
       const t0 = performance.now();
-      const n = this.refine(batch);
+      const want = Math.min(batch, maxSplits - total);
+      const n = this.refine(want);
       total += n;
       const now = performance.now();
-      if (n < batch || this.status !== 'ok') break;
+      if (n < want || total >= maxSplits || this.status !== 'ok') break;
       const per = (now - t0) / n;
       // Aim each batch at a quarter of the budget left.
       batch = Math.max(16, Math.min(1 << 20, Math.floor((budgetMs - (now - start)) / 4 / (per || 1e-4))));

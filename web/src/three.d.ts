@@ -11,6 +11,11 @@ export interface PMZOptions extends DecoderOptions {
   autoUpdate?: boolean;
   /** Decode in a Web Worker (worker.js): stream() gives a PMZWorkerStream. */
   worker?: boolean;
+  /** The initial faceLimit (default null: none). */
+  faceLimit?: number | null;
+  /** PMZWorkerStream: bytes of the worker's ranges one update() applies (default 8 MiB; at
+   * least one update). */
+  maxUpdateBytes?: number;
 }
 
 /** A copy of the decoder's current mesh. */
@@ -32,6 +37,14 @@ export interface PMZStreamState {
   readonly geometry: BufferGeometry;
   /** null: follow the stream to the finest level; a number: hold that face count. */
   faceTarget: number | null;
+  /** Following the stream, at most this many faces shown until decoding ends (null: no
+   * limit): refinement goes up to the limit and waits there while bytes arrive; once every
+   * byte is in, decoding goes on but the geometry keeps the level at the limit until every
+   * split is applied, then shows the finest level at once. For renderers whose drawing is the
+   * limit (the viewer sets it from a frame-time budget). */
+  faceLimit: number | null;
+  /** The decoder's face count (above faceCount while held back by faceLimit). */
+  readonly decodedFaces: number;
   bytes: number;
   totalBytes: number;
   status: PmzStatus;
@@ -70,6 +83,8 @@ export interface PMZWorkerStream extends PMZStreamState {}
 export declare class PMZWorkerStream {
   constructor(options?: PMZOptions);
   readonly worker: Worker;
+  /** Bytes of the worker's ranges one update() applies (the rest waits; at least one update). */
+  maxUpdateBytes: number;
   /** When the first body bytes reached the worker (performance.now() of this page), or null. */
   readonly firstBytesTime: number | null;
   /** Resolves to the final status once every byte is decoded and, following the stream, applied. */

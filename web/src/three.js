@@ -11,6 +11,14 @@ import { renderArrays, renderUpdate } from './render_update.js';
 const RUNS_MAX = 64;  // more rewritten-face runs than this upload as one span
 const MODIFIED_LIST_MAX = 1 << 16;  // rewritten faces listed per frame; more: one span
 
+// The bytes of ranges a renderUpdate() carries (what applying it copies and uploads).
+function renderBytes(u) {
+  let n = u.positions.byteLength + u.indices.byteLength;
+  for (const name in u.attributes) n += u.attributes[name].byteLength;
+  for (const a of [u.faceMaterials, u.modified, u.morph]) if (a) n += a.byteLength;
+  return n;
+}
+
 // Update ranges for rewritten faces: sorted runs, or one span when there are many.
 function addFaceRuns(attributes, modifiedFaces, perFace) {
   const faces = Uint32Array.from(modifiedFaces).sort();
@@ -174,17 +182,26 @@ export class PMZStream {
     this.geomorph = options.geomorph ?? false;
     this.frameBudgetMs = options.frameBudgetMs ?? 8;
     this.faceTarget = null;  // null: follow the stream to its finest level
+    // Following the stream, at most this many faces shown until decoding ends (null: no limit;
+    // see update()).
+    this.faceLimit = options.faceLimit ?? null;
     this.bytes = 0;
     this.totalBytes = 0;
     this.status = 'ok';
     this.complete = false;  // see update()
     this._finished = false;
+    this._held = false;  // the geometry shows an older level than the decoder's (faceLimit)
+    this._baseShown = false;
+    this._shownVertices = 0;
     this._renderState = { shownVertices: 0 };
   }
 
   get error() { return this.status === 'ok' ? '' : this.decoder.error; }
-  get faceCount() { return this.decoder.faceCount; }
-  get vertexCount() { return this.decoder.vertexCount; }
+  // The geometry's level (older than the decoder's while held back by faceLimit).
+  get faceCount() { return this._held ? this._mirror.faces : this.decoder.faceCount; }
+  get vertexCount() { return this._held ? this._shownVertices : this.decoder.vertexCount; }
+  // The decoder's level (faceCount unless held back by faceLimit).
+  get decodedFaces() { return this.decoder.faceCount; }
   get splitsApplied() { return this.decoder.splitsApplied; }
   info() { return this.decoder.info(); }
   // The material table ([] without materials): see Decoder.materials().
@@ -208,20 +225,34 @@ export class PMZStream {
   }
 
   // Moves the level toward the target within frameBudgetMs and copies what changed into the
-  // geometry. Returns true when the geometry changed.
+  // geometry. Returns true when the geometry changed. The base mesh is shown before any
+  // refinement. With faceLimit, following the stream: refinement goes up to the limit and,
+  // while bytes arrive, waits there; once every byte is in it goes on, but the geometry keeps
+  // the level at the limit until every split is applied, then shows the finest level at once.
   update(budgetMs = this.frameBudgetMs) {
     const d = this.decoder;
-    if (!d.info().baseDone) return false;
+    const info = d.info();
+    if (!info.baseDone) return false;
+    if (!this._baseShown) {  // the base mesh first, not refined yet
+      this._baseShown = true;
+      return this._sync();
+    }
     if (this.faceTarget === null) {
-      d.refineFor(budgetMs);
+      // Within the limit (a split adds at most two faces); past it once every byte is in.
+      const within = this.faceLimit === null ? Infinity : Math.floor((this.faceLimit - d.faceCount) / 2);
+      const room = within > 0 ? within : this._finished ? Infinity : 0;
+      if (room > 0) d.refineFor(budgetMs, room);
     } else if (this.faceTarget !== d.faceCount) {
       d.setFaceTarget(this.faceTarget);
     }
     if (this.status === 'ok' && d.status !== 'ok') this.status = d.status;
+    const allApplied = d.splitsApplied === info.totalSplits;
     // Complete: every byte decoded and, when following the stream, the finest level shown.
-    this.complete = this._finished && this.status === 'ok' &&
-      (this.faceTarget !== null || d.splitsApplied === d.info().totalSplits);
-    return this._sync();
+    this.complete = this._finished && this.status === 'ok' && (this.faceTarget !== null || allApplied);
+    const decodingEnded = this._finished && (this.status !== 'ok' || allApplied);
+    this._held = this.faceTarget === null && this.faceLimit !== null && d.faceCount > this.faceLimit &&
+      !decodingEnded;
+    return this._held ? false : this._sync();
   }
 
   _sync() {
@@ -232,6 +263,7 @@ export class PMZStream {
       u.faces === this._mirror.faces;
     const changed = !nothing && this._mirror.apply([u], d.info());
     d.clearChanges();
+    this._shownVertices = d.vertexCount;
     return changed;
   }
 
@@ -250,18 +282,26 @@ export class PMZWorkerStream {
     this.geometry = this._mirror.geometry;
     this.geomorph = options.geomorph ?? false;
     this.faceTarget = null;
+    // Following the stream, at most this many faces shown until decoding ends (null: none;
+    // see PMZStream.update()).
+    this.faceLimit = options.faceLimit ?? null;
+    // update() applies the worker's updates in order until about this many bytes of ranges
+    // (at least one update): what one frame copies and uploads.
+    this.maxUpdateBytes = options.maxUpdateBytes ?? 8 << 20;
     this.bytes = 0;
     this.totalBytes = 0;
     this.status = 'ok';
     this.complete = false;
     this.faceCount = 0;
     this.vertexCount = 0;
+    this.decodedFaces = 0;
     this.splitsApplied = 0;
     this._error = '';
     this._info = { headerDone: false, baseDone: false, complete: false };
     this._materials = [];
     this._pending = [];
     this._sentTarget = null;
+    this._sentLimit = this.faceLimit;  // in the init message
     this._snapshots = new Map();
     this.firstBytesTime = null;
     const { worker: _, ...cloneable } = options;
@@ -322,24 +362,37 @@ export class PMZWorkerStream {
     return this.status;
   }
 
-  // Applies the worker's updates that arrived since the last call. True when the geometry
+  // Applies the worker's updates that arrived since the last call, in order, up to
+  // maxUpdateBytes of ranges (the rest waits for the next call). True when the geometry
   // changed.
   update() {
     if (this.faceTarget !== this._sentTarget) {
       this._sentTarget = this.faceTarget;
       this.worker.postMessage({ type: 'target', faces: this.faceTarget });
     }
+    if (this.faceLimit !== this._sentLimit) {
+      this._sentLimit = this.faceLimit;
+      this.worker.postMessage({ type: 'limit', faces: this.faceLimit });
+    }
     const updates = [];
+    let taken = 0, size = 0;
     for (const m of this._pending) {
-      Object.assign(this, { faceCount: m.faces, vertexCount: m.vertices,
+      if (m.render) {
+        const bytes = renderBytes(m.render);
+        if (updates.length && size + bytes > this.maxUpdateBytes) break;
+        size += bytes;
+        updates.push(m.render);
+      }
+      ++taken;
+      Object.assign(this, { faceCount: m.faces, vertexCount: m.vertices, decodedFaces: m.decodedFaces,
         splitsApplied: m.splitsApplied, status: m.status });
       this._error = m.error;
       this._info = m.info;
-      if (m.render) updates.push(m.render);
     }
-    this._pending.length = 0;
+    this._pending.splice(0, taken);
     const changed = updates.length > 0 && this._mirror.apply(updates, this._info);
     this.complete = !!this._done && this._done.status === 'ok' && this.status === 'ok' &&
+      this._pending.length === 0 &&
       (this.faceTarget !== null || this.splitsApplied === this._info.totalSplits);
     return changed;
   }

@@ -4,6 +4,7 @@
 //
 // Messages in:  {type: 'open', url, init?} | {type: 'open', blob} | {type: 'feed', bytes} |
 //               {type: 'finish'} | {type: 'target', faces} (null: follow the stream) |
+//               {type: 'limit', faces} (null: none; see PMZWorkerStream.faceLimit) |
 //               {type: 'snapshot', id} | {type: 'close'}
 // Messages out: {type: 'update', ...} (see post()), {type: 'done', status, error},
 //               {type: 'snapshot', id, positions, indices, render}, {type: 'failed', error}
@@ -15,6 +16,11 @@ const SLICE_MS = 8;  // refinement between two updates (and between two reads of
 let decoder = null;
 let options = {};
 let faceTarget = null;
+// Following the stream, the page shows at most this many faces until decoding ends:
+// refinement goes up to it; while bytes arrive it waits there, once every byte is in it goes
+// on, with the ranges held back (the change report accumulates) until every split is applied.
+let faceLimit = null;
+let shown = { faces: 0, vertices: 0 };  // the level the page was last sent
 let bytes = 0, totalBytes = 0;
 let firstBytesAt = null;  // ms since the epoch (timeOrigin + now: comparable across threads)
 let finished = false, doneSent = false;
@@ -64,23 +70,37 @@ async function open(msg) {
   }
 }
 
-// Moves the level toward the target for one slice and posts the changes.
+// The splits to apply now, following the stream: within the face limit (a split adds at most
+// two faces), past it only once every byte is in (then held back: see faceLimit).
+function splitRoom(faces) {
+  if (faceLimit === null) return Infinity;
+  const within = Math.floor((faceLimit - faces) / 2);
+  return within > 0 ? within : finished ? Infinity : 0;
+}
+
+// Moves the level toward the target for one slice and posts the changes (or, held back by
+// the face limit, only the progress).
 function work() {
   if (!decoder) return;
   const d = decoder;
   const info = d.info();
   if (info.baseDone && !basePosted) {  // the base mesh goes out before any refinement
     basePosted = true;
-    post(info);
+    post(info, true);
     schedule();
     return;
   }
+  const room = () => splitRoom(d.faceCount);
   if (info.baseDone) {
-    if (faceTarget === null) d.refineFor(SLICE_MS);
-    else if (faceTarget !== d.faceCount) d.setFaceTarget(faceTarget);
+    if (faceTarget === null) {
+      if (room() > 0) d.refineFor(SLICE_MS, room());
+    } else if (faceTarget !== d.faceCount) {
+      d.setFaceTarget(faceTarget);
+    }
   }
-  post(info);
-  if (d.status === 'ok' && faceTarget === null && d.splitsApplied < d.splitsAvailable) schedule();
+  const decoded = finished && (d.status !== 'ok' || d.splitsApplied === info.totalSplits);
+  post(info, faceTarget !== null || faceLimit === null || d.faceCount <= faceLimit || decoded);
+  if (d.status === 'ok' && faceTarget === null && d.splitsApplied < d.splitsAvailable && room() > 0) schedule();
   if (finished && !doneSent && (d.status !== 'ok' || faceTarget !== null ||
                                 d.splitsApplied === info.totalSplits)) {
     doneSent = true;
@@ -88,17 +108,20 @@ function work() {
   }
 }
 
-// The state and, once the base mesh is in, the changed ranges since the last post
-// (render_update.js: copies, transferred), with the material table in the first.
-function post(info) {
+// The state and, once the base mesh is in and `show`, the changed ranges since the last post
+// (render_update.js: copies, transferred), with the material table in the first. Without
+// `show` the counts are those of the level the page has.
+function post(info, show) {
   const d = decoder;
+  const send = show && info.baseDone;
+  if (send) shown = { faces: d.faceCount, vertices: d.vertexCount };
   const msg = {
-    type: 'update', vertices: d.vertexCount, faces: d.faceCount, bytes, totalBytes,
-    status: d.status, error: d.status === 'ok' ? '' : d.error, splitsApplied: d.splitsApplied,
-    info, firstBytesAt, render: null, materials: null,
+    type: 'update', vertices: shown.vertices, faces: shown.faces, decodedFaces: d.faceCount, bytes,
+    totalBytes, status: d.status, error: d.status === 'ok' ? '' : d.error,
+    splitsApplied: d.splitsApplied, info, firstBytesAt, render: null, materials: null,
   };
   let transfer = [];
-  if (info.baseDone) {
+  if (send) {
     if (!materialsPosted) {
       materialsPosted = true;
       msg.materials = d.materials();
@@ -121,6 +144,7 @@ async function handle(msg) {
       break;
     case 'finish': finish(); break;
     case 'target': faceTarget = msg.faces; schedule(); break;
+    case 'limit': faceLimit = msg.faces; schedule(); break;
     case 'snapshot':
       self.postMessage({ type: 'snapshot', id: msg.id, positions: decoder.positions().slice(),
         indices: decoder.indices().slice(), render: renderArrays(decoder) });
@@ -138,6 +162,7 @@ self.onmessage = (e) => {
   if (msg.type === 'init') {
     options = msg.options || {};
     totalBytes = msg.totalBytes || 0;
+    faceLimit = options.faceLimit ?? null;
     createDecoder(options).then((d) => {
       decoder = d;
       for (const m of queue) handle(m).catch(fail);

@@ -45,6 +45,19 @@ function differingShare(a, b) {
 }
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 
+// window.pmzStatus every 25 ms until the stream is complete or failed (at most 60 s).
+async function statusUntilDone(page, messages) {
+  const samples = [];
+  const deadline = Date.now() + 60000;
+  for (;;) {
+    const s = await page.evaluate(() => window.pmzStatus && { ...window.pmzStatus });
+    if (s) samples.push(s);
+    if (s && (s.complete || s.error)) return samples;
+    assert.ok(Date.now() < deadline, `not complete after 60 s: ${JSON.stringify(s)} ${messages}`);
+    await sleep(25);
+  }
+}
+
 test('the viewer refines while the stream arrives and shows the object', async () => {
   const page = await browser.newPage();
   const messages = [];
@@ -55,15 +68,7 @@ test('the viewer refines while the stream arrives and shows the object', async (
   await page.goto(`http://127.0.0.1:${port}/index.html?src=/stream/sample.pmz`);
   const fullFaces = nativeDecode(demoPmz()).indices.length / 3;
 
-  const samples = [];
-  const deadline = Date.now() + 60000;
-  for (;;) {
-    const s = await page.evaluate(() => window.pmzStatus && { ...window.pmzStatus });
-    if (s) samples.push(s);
-    if (s && (s.complete || s.error)) break;
-    assert.ok(Date.now() < deadline, `not complete after 60 s: ${JSON.stringify(s)} ${messages}`);
-    await sleep(25);
-  }
+  const samples = await statusUntilDone(page, messages);
   const last = samples[samples.length - 1];
   assert.equal(last.error, '', messages.join('\n'));
   assert.equal(last.complete, true);
@@ -140,6 +145,30 @@ test('the viewer decodes on its own thread with ?worker=0 too', async () => {
   const s = await page.evaluate(() => ({ ...window.pmzStatus }));
   assert.equal(s.error, '', messages.join('\n'));
   assert.equal(s.faces, nativeDecode(demoPmz()).indices.length / 3);
+  const shot = await page.evaluate(() => window.pmzSnapshot());
+  const reference = await page.evaluate(() => window.pmzReferenceSnapshot());
+  assert.ok(shot.coverage > 0.05, `coverage ${shot.coverage}`);
+  assert.ok(differingShare(shot, reference) < 0.002, 'in-place geometry differs from a fresh one');
+  await page.close();
+});
+
+test('the viewer holds at ?maxfaces=N while decoding, then shows the finest level', async () => {
+  const page = await browser.newPage();
+  const messages = [];
+  page.on('pageerror', (e) => messages.push(String(e)));
+  await page.setViewport({ width: 320, height: 240 });
+  const { port } = server.address();
+  const limit = 3000;
+  await page.goto(`http://127.0.0.1:${port}/index.html?src=/stream/sample.pmz&maxfaces=${limit}`);
+  const samples = await statusUntilDone(page, messages);
+  const last = samples[samples.length - 1];
+  assert.equal(last.error, '', messages.join('\n'));
+  assert.equal(last.faces, nativeDecode(demoPmz()).indices.length / 3);
+  const arriving = samples.filter((s) => s.bytes < s.totalBytes && s.faces > 0);
+  assert.ok(arriving.length > 3);
+  for (const s of arriving) assert.ok(s.faces <= limit, `${s.faces} faces shown at ${s.bytes} bytes`);
+  assert.ok(arriving.some((s) => s.faces > limit - 2), 'the limit was never reached');
+  // The held level was a level of the stream, drawn as a fresh geometry of the decoder's draws.
   const shot = await page.evaluate(() => window.pmzSnapshot());
   const reference = await page.evaluate(() => window.pmzReferenceSnapshot());
   assert.ok(shot.coverage > 0.05, `coverage ${shot.coverage}`);

@@ -24,9 +24,11 @@ function softwareRenderer() {
     return false;
   }
 }
-const antialias = params.has('aa') ? params.get('aa') !== '0' : !softwareRenderer();
+const software = softwareRenderer();
+const antialias = params.has('aa') ? params.get('aa') !== '0' : !software;
 const renderer = new THREE.WebGLRenderer({ antialias, preserveDrawingBuffer: true });
-renderer.setPixelRatio(window.devicePixelRatio);
+// A software renderer shades every device pixel on the CPU: CSS pixels there.
+renderer.setPixelRatio(software ? 1 : window.devicePixelRatio);
 renderer.setSize(window.innerWidth, window.innerHeight);
 renderer.setClearColor(BACKGROUND);
 document.body.prepend(renderer.domElement);
@@ -54,6 +56,43 @@ let morphTime = null;  // tests: a fixed geomorph time instead of the clock
 const plainMaterial = new THREE.MeshStandardMaterial({ color: 0xd8c8a8, flatShading: true,
   side: THREE.DoubleSide, roughness: 0.7 });
 
+// Frame-time budget for drawing while a stream decodes (?drawms=N, 0: off): where drawing is
+// the limit (a software renderer draws 75k faces in about 50 ms on a loaded 2-core machine),
+// the stream shows at most as many faces as the measured cost per face lets it draw in
+// DRAW_BUDGET_MS (of the 50 ms a frame may take: the rest is the page's own work and the
+// frame's alignment); the finest level is shown once decoding ends (PMZStream.faceLimit). The cost per face starts from a
+// calibration draw before the stream opens and follows the frames' timestamps: a frame that
+// took longer than SLOW_FRAME_MS after drawing F >= MIN_SAMPLE_FACES faces is a sample gap / F
+// (the median of the last five is the estimate), a faster one bounds the cost by gap / F.
+// ?maxfaces=N caps the faces shown while decoding outright.
+const DRAW_BUDGET_MS = params.has('drawms') ? Number(params.get('drawms')) : 30;
+const MAX_FACES = params.has('maxfaces') ? Number(params.get('maxfaces')) : Infinity;
+const SLOW_FRAME_MS = 25;
+const MIN_SAMPLE_FACES = 1000;
+const drawCost = { perFace: 0, samples: [], last: null };  // ms per face; the last drawn frame
+function noteFrame(t) {
+  const last = drawCost.last;
+  drawCost.last = null;
+  if (!last || last.faces === 0) return;
+  const gap = t - last.t, sample = gap / last.faces;
+  if (gap > SLOW_FRAME_MS) {
+    if (last.faces < MIN_SAMPLE_FACES) return;  // then mostly the frame's fixed costs
+    drawCost.samples.push(sample);
+    if (drawCost.samples.length > 5) drawCost.samples.shift();
+    const sorted = [...drawCost.samples].sort((a, b) => a - b);
+    drawCost.perFace = sorted.length >= 3 ? sorted[sorted.length >> 1] : Math.max(drawCost.perFace, sample);
+  } else {
+    drawCost.perFace = Math.min(drawCost.perFace || sample, sample);
+  }
+}
+// The face limit for the stream now (null: none).
+function faceLimit(shownFaces, fullFaces) {
+  let limit = MAX_FACES;
+  if (DRAW_BUDGET_MS > 0 && drawCost.perFace > 0)
+    limit = Math.min(limit, Math.max(shownFaces, Math.floor(DRAW_BUDGET_MS / drawCost.perFace)));
+  return limit >= fullFaces ? null : limit;
+}
+
 // Both materials' shader programs are compiled before a stream is opened (in parallel where
 // the browser has KHR_parallel_shader_compile): compiling on the first frame with the object
 // blocked the page for seconds in SwiftShader. Then one tiny triangle is drawn with each, as
@@ -72,12 +111,49 @@ const shadersReady = (async () => {
   try {
     await renderer.compileAsync(scene, camera);
     renderer.render(scene, camera);
+    if (DRAW_BUDGET_MS > 0) calibrate(meshes[0]);
   } finally {
     for (const m of meshes) scene.remove(m);
     dummy.dispose();
     redraw = true;
   }
 })();
+
+// The first estimate of the cost per face: CALIBRATION_FACES small triangles (a grid over part
+// of the view, as a streamed mesh covers it) drawn with the geomorph material, timed to a
+// one-pixel readPixels (the draw has then happened); the second of two draws (the first
+// uploads).
+const CALIBRATION_FACES = 20000;
+function calibrate(mesh) {
+  const n = Math.ceil(Math.sqrt(CALIBRATION_FACES / 2)), positions = new Float32Array(3 * (n + 1) * (n + 1));
+  for (let i = 0, k = 0; i <= n; ++i)
+    for (let j = 0; j <= n; ++j, k += 3) positions.set([(j / n - 0.5) * 1.2, (i / n - 0.5) * 1.2, 0], k);
+  const index = new Uint32Array(6 * n * n);
+  for (let i = 0, k = 0; i < n; ++i)
+    for (let j = 0; j < n; ++j, k += 6) {
+      const a = i * (n + 1) + j, b = a + n + 1;
+      index.set([a, a + 1, b, a + 1, b + 1, b], k);
+    }
+  const grid = new THREE.BufferGeometry();
+  grid.setAttribute('position', new THREE.BufferAttribute(positions, 3));
+  const glide = new Float32Array(4 * (n + 1) * (n + 1));  // born long ago: at their positions
+  for (let v = 0; v <= (n + 1) * (n + 1) - 1; ++v) glide.set([...positions.subarray(3 * v, 3 * v + 3), -1e6], 4 * v);
+  grid.setAttribute('pmzMorph', new THREE.BufferAttribute(glide, 4));
+  grid.setIndex(new THREE.BufferAttribute(index, 1));
+  const saved = mesh.geometry, gl = renderer.getContext(), pixel = new Uint8Array(4);
+  mesh.geometry = grid;
+  let ms = 0;
+  for (let i = 0; i < 2; ++i) {
+    const t0 = performance.now();
+    renderer.render(scene, camera);
+    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
+    ms = performance.now() - t0;
+  }
+  mesh.geometry = saved;
+  grid.dispose();
+  drawCost.perFace = ms / (2 * n * n);
+  window.pmzDrawCalibration = { faces: 2 * n * n, ms };
+}
 
 const overlay = document.getElementById('overlay');
 const lod = document.getElementById('lod');
@@ -146,9 +222,10 @@ async function open(source) {
   window.pmzTiming = { firstBytes: null, firstObjectFrame: null };
   window.pmzFrames = [];
   window.pmzLongTasks = [];
-  const loader = new PMZLoader(undefined, { geomorph: true, autoUpdate: false, worker: useWorker });
   try {
-    await shadersReady;
+    await shadersReady;  // and the draw calibration: the first face limit
+    const loader = new PMZLoader(undefined, { geomorph: true, autoUpdate: false, worker: useWorker,
+      faceLimit: faceLimit(0, Infinity) });
     const stream = await loader.stream(source, (s) => {
       if (window.pmzTiming.firstBytes === null && s.bytes > 0) window.pmzTiming.firstBytes = performance.now();
       status.bytes = s.bytes;
@@ -181,7 +258,9 @@ function fit(info) {
 
 function frame(t) {
   requestAnimationFrame(frame);
+  noteFrame(t);
   let work = 0;  // ms spent in update(): refinement on this thread, or applying the worker's
+  let limit = null;
   if (current) {
     const s = current.stream;
     const info = s.info();
@@ -191,6 +270,7 @@ function frame(t) {
     }
     const before = s.splitsApplied;
     s.faceTarget = faceTarget;
+    s.faceLimit = limit = faceLimit(s.faceCount, info.headerDone ? info.fullFaces : Infinity);
     const t0 = performance.now();
     if (s.update(REFINE_BUDGET_MS)) {
       redraw = true;
@@ -227,15 +307,23 @@ function frame(t) {
   if (drawn) renderer.render(scene, camera);
   redraw = false;
   const now = performance.now();
-  if (drawn && status.faces > 0 && window.pmzTiming.firstObjectFrame === null) window.pmzTiming.firstObjectFrame = now;
-  if (window.pmzFrames.length < 100000)
-    window.pmzFrames.push({ t, faces: status.faces, bytes: status.bytes, work, render: now - t0r, drawn });
+  if (drawn && status.faces > 0 && window.pmzTiming.firstObjectFrame === null) {
+    window.pmzTiming.firstObjectFrame = now;
+    window.pmzTiming.firstObjectFaces = status.faces;
+  }
+  if (drawn) drawCost.last = { t, faces: status.faces };
+  if (window.pmzFrames.length < 100000) {
+    window.pmzFrames.push({ t, faces: status.faces, bytes: status.bytes, work, render: now - t0r, drawn,
+      limit, decoded: current ? current.stream.decodedFaces : 0 });
+  }
   if (now - rate.t >= 500) {
     rate = { t: now, splits: 0, perSecond: rate.splits / ((now - rate.t) / 1000) };
   }
   const kb = (n) => (n / 1024).toFixed(1) + ' KiB';
   const text = current
-    ? `faces     ${status.faces.toLocaleString()}\nvertices  ${status.vertices.toLocaleString()}\n` +
+    ? `faces     ${status.faces.toLocaleString()}` +
+      (limit !== null && !status.complete ? ` shown (draw budget), ${current.stream.decodedFaces.toLocaleString()} ` +
+        'decoded' : '') + `\nvertices  ${status.vertices.toLocaleString()}\n` +
       `bytes     ${kb(status.bytes)} / ${status.totalBytes ? kb(status.totalBytes) : '?'}\n` +
       `refine    ${Math.round(rate.perSecond).toLocaleString()} splits/s\n` +
       (status.error ? `error     ${status.error}` : status.complete ? 'complete' : 'streaming')
@@ -332,6 +420,34 @@ window.pmzBirthTimes = () => {
   const out = [];
   for (let v = 0; v < current.stream.vertexCount; ++v) if (glide[4 * v + 3] > -1e5) out.push(glide[4 * v + 3]);
   return out.sort((a, b) => a - b);
+};
+// Benchmarks: what drawing the current geometry's first F faces costs, for each F in
+// faceCounts: render() then a one-pixel readPixels (waits until the GPU process, SwiftShader in
+// headless Chromium, has drawn; Chromium's gl.finish() does not wait), median of `reps` after
+// one unmeasured draw; with the geomorph material (morphing) or the plain one.
+window.pmzDrawCost = (faceCounts, reps = 5, morphing = true) => {
+  const gl = renderer.getContext(), mesh = current.mesh, g = mesh.geometry;
+  const pixel = new Uint8Array(4);
+  const saved = { count: g.drawRange.count, material: mesh.material };
+  mesh.material = morphing ? material : plainMaterial;
+  const out = [];
+  for (const faces of faceCounts) {
+    g.setDrawRange(0, 3 * Math.min(faces, current.stream.faceCount));
+    const times = [];
+    for (let i = 0; i <= reps; ++i) {
+      const t0 = performance.now();
+      renderer.render(scene, camera);
+      gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
+      if (i > 0) times.push(performance.now() - t0);
+    }
+    times.sort((a, b) => a - b);
+    out.push({ faces: g.drawRange.count / 3, ms: +times[times.length >> 1].toFixed(2),
+      min: +times[0].toFixed(2), max: +times[times.length - 1].toFixed(2) });
+  }
+  g.setDrawRange(0, saved.count);
+  mesh.material = saved.material;
+  redraw = true;
+  return out;
 };
 
 if (params.get('src')) {
