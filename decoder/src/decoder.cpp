@@ -222,11 +222,10 @@ struct Decoder::Impl {
     if (near < frontier.decoded) {
       if (level.applied + kFar < frontier.decoded) {
         const Split& f = record.splits[level.applied + kFar];
-        if (f.v < level.mesh.vertex_corner.size())
-          __builtin_prefetch(&level.mesh.vertex_corner[f.v]);
+        if (f.v < level.mesh.vertex_corner.size()) PMZ_PREFETCH(&level.mesh.vertex_corner[f.v]);
         if (f.a < level.mesh.opposite.size()) {
-          __builtin_prefetch(&level.mesh.opposite[f.a]);
-          __builtin_prefetch(&level.mesh.corner_vertex[f.a]);
+          PMZ_PREFETCH(&level.mesh.opposite[f.a]);
+          PMZ_PREFETCH(&level.mesh.corner_vertex[f.a]);
         }
       }
       const Split& s = record.splits[near];
@@ -236,13 +235,13 @@ struct Decoder::Impl {
       const size_t pl = s.a % 3 == 2 ? size_t(s.a) - 2 : size_t(s.a) + 1;
       if (pl < level.mesh.opposite.size()) {
         const uint32_t ql = level.mesh.opposite[pl];
-        if (ql < level.mesh.opposite.size()) __builtin_prefetch(&level.mesh.opposite[ql]);
+        if (ql < level.mesh.opposite.size()) PMZ_PREFETCH(&level.mesh.opposite[ql]);
       }
       return;
     }
     if (level.applied + kFar < record.available) {
       const uint32_t v = record.splits[level.applied + kFar].v;
-      if (v < level.mesh.vertex_corner.size()) __builtin_prefetch(&level.mesh.vertex_corner[v]);
+      if (v < level.mesh.vertex_corner.size()) PMZ_PREFETCH(&level.mesh.vertex_corner[v]);
     }
     // Ring coordinates matter only where positions are still to be predicted (not when
     // re-refining after coarsening: there they cost about 10% on bunny00-loop2).
@@ -281,12 +280,12 @@ struct Decoder::Impl {
     const uint32_t* cv = level.mesh.corner_vertex.data();
     auto near = [&](uint32_t c) {  // a corner across a new face: its link and its face
       if (c < corners) {
-        __builtin_prefetch(opp + c);
-        __builtin_prefetch(cv + c);
+        PMZ_PREFETCH(opp + c);
+        PMZ_PREFETCH(cv + c);
       }
     };
     auto vertex = [&](uint32_t x) {
-      if (x < level.mesh.vertex_corner.size()) __builtin_prefetch(&level.mesh.vertex_corner[x]);
+      if (x < level.mesh.vertex_corner.size()) PMZ_PREFETCH(&level.mesh.vertex_corner[x]);
     };
     vertex(record.splits[j].v);
     if (f0 + 3 * new_faces(side) > corners) return;

@@ -11,6 +11,18 @@
 
 namespace pmz {
 
+// A cache-line prefetch of an address inside a live buffer. WebAssembly has no prefetch
+// instruction (clang drops __builtin_prefetch there), so the wasm build loads the byte instead:
+// the out-of-order core issues the miss early just the same, only its retirement waits for it
+// (bunny00-loop2 in node: tests/bench/RESULTS.md, web section). Only for an address inside a
+// buffer (a wasm load beyond memory traps). A macro: native code stays the same as
+// __builtin_prefetch written out (GCC inlines differently around a wrapper function).
+#if defined(__wasm__)
+#define PMZ_PREFETCH(p) ((void)*reinterpret_cast<const volatile uint8_t*>(p))
+#else
+#define PMZ_PREFETCH(p) __builtin_prefetch(p)
+#endif
+
 inline constexpr uint32_t kNoCorner = 0xFFFFFFFFu;
 inline constexpr uint32_t kNoRank = 0xFFFFFFFFu;  // wedge side on the boundary
 // Corner c = 3 * face + k: the face's next and previous corners, counter-clockwise
@@ -165,8 +177,8 @@ class FanPrefetcher {
     // v's own coordinates: the wedge scores and the prediction read them (about 3% on the
     // first refinement of bunny00-loop2, median of 7 alternating runs).
     if (size_t(v_ahead) * 3 < coord_count) {
-      __builtin_prefetch(coords + size_t(v_ahead) * 3);
-      if (sums) __builtin_prefetch(sums + size_t(v_ahead) * kSumBytes);
+      PMZ_PREFETCH(coords + size_t(v_ahead) * 3);
+      if (sums) PMZ_PREFETCH(sums + size_t(v_ahead) * kSumBytes);
     }
     const uint32_t c0 = m.vertex_corner[v_ahead];
     if (c0 < m.opposite.size()) start(m, slot, c0 % 3 == 2 ? c0 - 2 : c0 + 1, kNoCorner);
@@ -193,16 +205,16 @@ class FanPrefetcher {
       if (n >= corners) continue;
       const uint32_t w = cv[n], o = opp[n];
       if (size_t(w) * 3 < coord_count) {
-        __builtin_prefetch(coords + size_t(w) * 3);
-        if (degree) __builtin_prefetch(degree + w);
-        if (sums) __builtin_prefetch(sums + size_t(w) * kSumBytes);
+        PMZ_PREFETCH(coords + size_t(w) * 3);
+        if (degree) PMZ_PREFETCH(degree + w);
+        if (sums) PMZ_PREFETCH(sums + size_t(w) * kSumBytes);
       }
       uint32_t next = o == kNoCorner ? kNoCorner : (o % 3 == 0 ? o + 2 : o - 1);
       if (next == n0_[k] || left_[k]-- == 0) next = kNoCorner;
       n_[k] = next;
       if (next < corners) {
-        __builtin_prefetch(opp + next);
-        __builtin_prefetch(cv + next);
+        PMZ_PREFETCH(opp + next);
+        PMZ_PREFETCH(cv + next);
       }
     }
     return slot;
@@ -211,8 +223,8 @@ class FanPrefetcher {
   void start(const ProgressiveMesh& m, uint32_t slot, uint32_t n0, uint32_t faces) {
     n_[slot] = n0_[slot] = n0;
     left_[slot] = faces;
-    __builtin_prefetch(m.opposite.data() + n0);
-    __builtin_prefetch(m.corner_vertex.data() + n0);
+    PMZ_PREFETCH(m.opposite.data() + n0);
+    PMZ_PREFETCH(m.corner_vertex.data() + n0);
   }
 
   uint32_t n_[kWalkers] = {};
