@@ -7,12 +7,18 @@
 // median gap over 3 s of the finished mesh while nothing changes. The viewer draws only when
 // something changed: gap_* are the page's frames (requestAnimationFrame, drawn or not: how
 // responsive the page stays), redraw_gap_* the intervals between frames that drew the object,
-// worst_gaps the three longest gaps with what the frame before each did.
+// worst_gaps the three longest gaps with what the frame before each did. The viewer's draw
+// budget (?drawms=0 turns it off) shows at most shown_max_while_decoding faces until decoding
+// ends; final_frame_gap_ms is the frame after the finest level was shown (drawing the full
+// mesh, after decoding: not among the gaps while decoding). first_object_faces: the faces of
+// the first object frame (the base mesh; bunny00's has 4), first_1000_faces_ms the first
+// frame with at least 1,000.
 //
 //   node web/bench/stream_chromium.mjs MESH.pmz [RATE=2000000] [RUNS=3] [WIDTHxHEIGHT=640x480]
 //                                     [WORKER=1]   (0: decode on the page's thread)
-//                                     [QUERY]      (more viewer parameters, e.g. aa=1)
-import { mkdtempSync, rmSync } from 'node:fs';
+//                                     [QUERY]      (more viewer parameters, e.g. drawms=0)
+// PMZ_VIEWER_DIR: another built viewer; PMZ_BENCH_FRAMES=PREFIX: raw frames per run.
+import { mkdtempSync, rmSync, writeFileSync } from 'node:fs';
 import { loadavg, tmpdir } from 'node:os';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -25,7 +31,6 @@ const [file, rateArg, runsArg, sizeArg, workerArg, extraQuery] = process.argv.sl
 const worker = workerArg !== '0';
 const rate = Number(rateArg || 2e6), runs = Number(runsArg || 3);
 const [width, height] = (sizeArg || '640x480').split('x').map(Number);
-// PMZ_VIEWER_DIR: another built viewer (e.g. an older commit's web/dist/viewer) to compare.
 const viewerDir = process.env.PMZ_VIEWER_DIR || path.join(here, '..', 'dist', 'viewer');
 const server = await serveViewer(path.resolve(viewerDir), { 'mesh.pmz': path.resolve(file) }, rate);
 const STATIC_MS = 3000;  // frames of the finished mesh, for static_gap_median_ms
@@ -46,6 +51,9 @@ for (let r = 0; r < runs; ++r) {
     frames: window.pmzFrames, longTasks: window.pmzLongTasks, calibration: window.pmzDrawCalibration || null }));
   await browser.close();
   rmSync(profile, { recursive: true, force: true });
+  // PMZ_BENCH_FRAMES=PREFIX: each run's frames and timings as PREFIX-RUN.json.
+  if (process.env.PMZ_BENCH_FRAMES)
+    writeFileSync(`${process.env.PMZ_BENCH_FRAMES}-${r}.json`, JSON.stringify(s));
   const { firstBytes, firstObjectFrame } = s.timing;
   const done = s.frames.find((f) => f.faces === s.status.faces && f.bytes === s.status.totalBytes);
   const during = s.frames.filter((f) => f.t >= firstBytes && (!done || f.t <= done.t));
@@ -67,6 +75,11 @@ for (let r = 0; r < runs; ++r) {
   const before = done ? during.filter((f) => f !== done) : during;
   results.push({ faces: s.status.faces, error: s.status.error,
     first_object_ms: +(firstObjectFrame - firstBytes).toFixed(1), first_object_faces: s.timing.firstObjectFaces,
+    // The base mesh can be a handful of faces: when a frame first drew 1,000 or more.
+    first_1000_faces_ms: (() => {
+      const f = s.frames.find((x) => x.drawn && x.faces >= 1000 && x.t >= firstBytes);
+      return f ? +(f.t + f.work + f.render - firstBytes).toFixed(1) : null;
+    })(),
     shown_max_while_decoding: Math.max(0, ...before.map((f) => f.faces)),
     final_frame_gap_ms: finalGap === null ? null : +finalGap.toFixed(1),
     calibration: s.calibration && { faces: s.calibration.faces, ms: +s.calibration.ms.toFixed(1) },

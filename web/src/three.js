@@ -32,19 +32,19 @@ function addFaceRuns(attributes, modifiedFaces, perFace) {
   for (const [a, b] of runs) attributes.addUpdateRange(perFace * a, perFace * (b - a));
 }
 
-// Room for what is needed, contents kept: first a small size for the base mesh, at the next
-// growth the header's full counts (render vertices with attributes: wedges, which the header
-// does not count: 1.5x its vertices, then doubling). Not the full mesh at once: a new
-// attribute is uploaded whole, and the first frame of a 1.2M-face stream then moved 31 MB
-// (3.9 s to the first frame in SwiftShader); nor 4x steps: each step re-uploads everything
-// (65k, 262k, 1M, 1.2M faces: 2.1x the full mesh's bytes in uploads).
+// Room for what is needed, contents kept: twice what is needed (at least a little, at most
+// the header's full counts; render vertices with attributes: wedges, which the header does not
+// count: 1.5x its vertices). Each growth uploads the new attribute whole, so small first: the
+// first frame with the object uploads the base mesh's room only (bunny00's first object frame
+// 107-196 ms with room for 32k vertices and 64k faces, 38-88 ms with this, load 16-20); and
+// doubling rather than jumping to the full counts: a stream shown within a face limit until
+// its end never uploads the full mesh's room before it has the full mesh (31 MB for 1.2M
+// faces). Doubling uploads at most twice the final bytes in all.
 function allocateGeometry(g, info, vertices, faces, caps, spec) {
-  const room = (need, cap, full, least) =>
-    cap === 0 ? Math.max(need, Math.min(full, Math.max(2 * need, least))) : Math.max(full, 2 * need);
+  const room = (need, full, least) => Math.max(need, Math.min(full, Math.max(2 * need, least)));
   const fullVertices = spec.layout.length ? Math.ceil(1.5 * info.fullVertices) : info.fullVertices;
-  // (Twice these for the base mesh of bunny00-loop2: its first frame 120-190 ms -> 350-470.)
-  const vcap = room(vertices, caps.vertices, fullVertices, 1 << 15);
-  const fcap = room(faces, caps.faces, info.fullFaces, 1 << 16);
+  const vcap = room(vertices, fullVertices, 256);
+  const fcap = room(faces, info.fullFaces, 512);
   const grow = (name, old, size, itemSize, Type) => {
     const a = new BufferAttribute(new Type(size * itemSize), itemSize);
     if (old) a.array.set(old.array.subarray(0, Math.min(old.array.length, a.array.length)));
