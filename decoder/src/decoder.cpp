@@ -520,8 +520,10 @@ Status Decoder::Impl::split_chunk(const uint8_t* p, size_t n) {
   const size_t size = record.splits.size() + r.split_count();
   // As refine() grows the mesh buffers: room for every split of the header once the decoded ones
   // are at least 1 / kHeaderTrust of them, instead of doubling (a copy and page faults each).
-  if (size > record.splits.capacity() && info.total_splits <= kHeaderTrust * size)
+  if (size > record.splits.capacity() && info.total_splits <= kHeaderTrust * size) {
     record.splits.reserve(info.total_splits);
+    advise_huge_pages(record.splits);  // (without: about 1,750 page faults on 1.2M faces)
+  }
   record.splits.resize(size, {kNoCorner, kNoRank, kNoRank});
   frontier.lazy.push_back(std::move(r));
   if (attrs)
@@ -751,6 +753,7 @@ uint64_t Decoder::Impl::refine(uint64_t max_splits, uint64_t face_target) {
         advise_huge_pages(level.mesh.vertex_corner);
         advise_huge_pages(record.coords);
         advise_huge_pages(record.positions);
+        advise_huge_pages(record.parents);
       }
     }
     level.fans.reset();
