@@ -60,22 +60,37 @@ const plainMaterial = new THREE.MeshStandardMaterial({ color: 0xd8c8a8, flatShad
 // the limit (a software renderer draws 75k faces in about 50 ms on a loaded 2-core machine),
 // the stream shows at most as many faces as the measured cost per face lets it draw in
 // DRAW_BUDGET_MS (of the 50 ms a frame may take: the rest is the page's own work and the
-// frame's alignment); the finest level is shown once decoding ends (PMZStream.faceLimit). The cost per face starts from a
-// calibration draw before the stream opens and follows the frames' timestamps: a frame that
+// frame's alignment); the finest level is shown once decoding ends (PMZStream.faceLimit).
+// The cost per face starts from a calibration draw before the stream opens and follows the
+// frames' timestamps: a frame that
 // took longer than SLOW_FRAME_MS after drawing F >= MIN_SAMPLE_FACES faces is a sample gap / F
-// (the median of the last five is the estimate), a faster one bounds the cost by gap / F.
-// ?maxfaces=N caps the faces shown while decoding outright.
+// (the median of the last five is the estimate), a faster one bounds the cost by gap / F. A
+// machine too busy to keep even the frames that draw nothing at the display's rate is not
+// drawing's doing: what their gaps (median of the last nine) exceed a vsync by is taken off
+// the drawn frames' gaps first. ?maxfaces=N caps the faces shown while decoding outright.
 const DRAW_BUDGET_MS = params.has('drawms') ? Number(params.get('drawms')) : 30;
 const MAX_FACES = params.has('maxfaces') ? Number(params.get('maxfaces')) : Infinity;
 const SLOW_FRAME_MS = 25;
 const MIN_SAMPLE_FACES = 1000;
-const drawCost = { perFace: 0, samples: [], last: null };  // ms per face; the last drawn frame
+const VSYNC_MS = 1000 / 60;
+// ms per face; the last drawn frame; the previous frame's time; gaps after frames that drew nothing
+const drawCost = { perFace: 0, samples: [], last: null, prev: null, idle: [] };
 function noteFrame(t) {
-  const last = drawCost.last;
+  const last = drawCost.last, gap = drawCost.prev === null ? 0 : t - drawCost.prev;
   drawCost.last = null;
-  if (!last || last.faces === 0) return;
-  const gap = t - last.t, sample = gap / last.faces;
-  if (gap > SLOW_FRAME_MS) {
+  drawCost.prev = t;
+  if (!last) {
+    if (gap > 0) {
+      drawCost.idle.push(gap);
+      if (drawCost.idle.length > 9) drawCost.idle.shift();
+    }
+    return;
+  }
+  if (last.faces === 0) return;
+  const idle = [...drawCost.idle].sort((a, b) => a - b);
+  const busy = idle.length ? Math.max(0, idle[idle.length >> 1] - VSYNC_MS) : 0;
+  const drawing = Math.max(VSYNC_MS, gap - busy), sample = drawing / last.faces;
+  if (drawing > SLOW_FRAME_MS) {
     if (last.faces < MIN_SAMPLE_FACES) return;  // then mostly the frame's fixed costs
     drawCost.samples.push(sample);
     if (drawCost.samples.length > 5) drawCost.samples.shift();
