@@ -16,7 +16,8 @@
 //
 //   node web/bench/stream_chromium.mjs MESH.pmz [RATE=2000000] [RUNS=3] [WIDTHxHEIGHT=640x480]
 //                                     [WORKER=1]   (0: decode on the page's thread)
-//                                     [QUERY]      (more viewer parameters, e.g. drawms=0)
+//                                     [QUERY]      (more viewer parameters, e.g. drawms=0;
+//                                                   'A|B': runs alternate A, B, A, B, ...)
 // PMZ_VIEWER_DIR: another built viewer; PMZ_BENCH_FRAMES=PREFIX: raw frames per run.
 import { mkdtempSync, rmSync, writeFileSync } from 'node:fs';
 import { loadavg, tmpdir } from 'node:os';
@@ -35,14 +36,16 @@ const viewerDir = process.env.PMZ_VIEWER_DIR || path.join(here, '..', 'dist', 'v
 const server = await serveViewer(path.resolve(viewerDir), { 'mesh.pmz': path.resolve(file) }, rate);
 const STATIC_MS = 3000;  // frames of the finished mesh, for static_gap_median_ms
 const results = [];
-for (let r = 0; r < runs; ++r) {
+const variants = (extraQuery || '').split('|');
+for (let r = 0; r < runs * variants.length; ++r) {
+  const query = variants[r % variants.length];
   const profile = mkdtempSync(path.join(tmpdir(), 'pmz-bench-chromium-'));
   const browser = await puppeteer.launch({ executablePath: '/usr/bin/chromium', headless: true, protocolTimeout: 900000,
     args: [...CHROMIUM_ARGS, `--user-data-dir=${profile}`] });
   const page = await browser.newPage();
   await page.setViewport({ width, height });
   await page.goto(`http://127.0.0.1:${server.address().port}/index.html?src=/stream/mesh.pmz${worker ? '' : '&worker=0'}` +
-    (extraQuery ? `&${extraQuery}` : ''));
+    (query ? `&${query}` : ''));
   await page.waitForFunction(() => window.pmzStatus.complete || window.pmzStatus.error,
     { timeout: 600000, polling: 200 });
   // The same full mesh drawn while nothing changes: what rendering alone costs per frame.
@@ -73,7 +76,7 @@ for (let r = 0; r < runs; ++r) {
   const doneAt = done ? s.frames.indexOf(done) : -1;
   const finalGap = doneAt >= 0 && doneAt + 1 < s.frames.length ? s.frames[doneAt + 1].t - done.t : null;
   const before = done ? during.filter((f) => f !== done) : during;
-  results.push({ faces: s.status.faces, error: s.status.error,
+  results.push({ query, loadavg: +loadavg()[0].toFixed(1), faces: s.status.faces, error: s.status.error,
     first_object_ms: +(firstObjectFrame - firstBytes).toFixed(1), first_object_faces: s.timing.firstObjectFaces,
     // The base mesh can be a handful of faces: when a frame first drew 1,000 or more.
     first_1000_faces_ms: (() => {
@@ -98,5 +101,17 @@ for (let r = 0; r < runs; ++r) {
       (!done || x.start <= done.t)).map((x) => x.duration)).toFixed(1) });
 }
 server.close();
-console.log(JSON.stringify({ file: path.basename(file), viewer: path.resolve(viewerDir), rate, width, height, worker, query: extraQuery || '',
-  loadavg: loadavg().map((x) => +x.toFixed(1)), runs: results }, null, 1));
+// Per query: the median of each figure over its runs (the lower one of an even count).
+const median = (xs) => {
+  const v = xs.filter((x) => typeof x === 'number').sort((a, b) => a - b);
+  return v.length ? v[(v.length - 1) >> 1] : null;
+};
+const medians = variants.map((query) => {
+  const rs = results.filter((x) => x.query === query), out = { query, runs: rs.length };
+  for (const k of ['loadavg', 'first_object_ms', 'first_1000_faces_ms', 'complete_ms', 'gap_median_ms', 'gap_p95_ms',
+    'gap_max_ms', 'gaps_over_50ms', 'frames', 'redraw_gap_median_ms', 'shown_max_while_decoding', 'final_frame_gap_ms',
+    'update_max_ms', 'long_task_max_ms']) out[k] = median(rs.map((x) => x[k]));
+  return out;
+});
+console.log(JSON.stringify({ file: path.basename(file), viewer: path.resolve(viewerDir), rate, width, height, worker,
+  loadavg: loadavg().map((x) => +x.toFixed(1)), medians, runs: results }, null, 1));
