@@ -28,7 +28,8 @@ struct AttributeField {
   // of the input, times its weight, so one typical edge's change counts 1 whatever the unit.
   std::vector<float> values;
   uint32_t dims = 0;
-  double scale = 0;  // attribute_weight / L^2 (L: the metric's unit of length)
+  double scale = 0;       // attribute_weight / L^2 (L: the metric's unit of length)
+  double seam_scale = 0;  // the seam planes' weight / L^4 (spec/algorithm.md section 7)
 
   // corner_wedges / face_materials in the engine's face order; values from `attributes`.
   void init(const HalfEdgeMesh& m, const std::vector<uint32_t>& corner_wedges,
@@ -53,8 +54,11 @@ struct AttributeField {
   }
   // The attribute term of u -> x (ha: u->x in L, hb: x->u in R, either kNone): infinity when
   // the seam rule forbids it, else scale times the sum over u's surviving faces of
-  // area * |A_f(p_x) - a'|^2, A_f the face's linear attribute field (extrapolated in its
-  // plane) and a' the value the collapse rule gives the corner moved to p_x.
+  // area * min(|A_f(p_x) - a'|^2, kJumpCap * extent_f^2), A_f the face's linear attribute
+  // field (extrapolated in its plane), a' the value the collapse rule gives the corner moved
+  // to p_x and extent_f the face's largest attribute change along an edge; plus seam_scale
+  // times the squared distances of p_x from the planes of u's seam edges (the plane through
+  // the edge perpendicular to its face), each weighted by the edge's squared length.
   float cost(const HalfEdgeMesh& m, uint32_t u, uint32_t x, uint32_t ha, uint32_t hb) const;
   // Applies the collapse rule to u's corners outside L and R; before the topology changes.
   void collapse(const HalfEdgeMesh& m, uint32_t u, uint32_t ha, uint32_t hb);

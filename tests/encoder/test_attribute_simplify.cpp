@@ -277,15 +277,75 @@ TEST(AttributeSimplify, NormalCreaseIsPricedByTheNormalJump) {
     options.attributes = mode;
     return pmz::detail::initial_collapse_cost(m, options, a, b);
   };
-  const float angle = 0.5f;
+  // Moving off the crease also costs its seam planes, the same at every angle: measured at a
+  // negligible angle and taken off.
+  const float angle = 0.5f, tiny = 1e-3f;
   const pmz::IndexedMesh once = creased(angle), twice = creased(2 * angle);
+  const float c0 = cost(creased(tiny), pmz::AttributeMode::full, s, s + 1);
   const float c1 = cost(once, pmz::AttributeMode::full, s, s + 1);
   const float c2 = cost(twice, pmz::AttributeMode::full, s, s + 1);
-  ASSERT_GT(c1, 0.f);
-  const double chord1 = 2 * std::sin(angle / 2), chord2 = 2 * std::sin(angle);
-  EXPECT_NEAR(c2 / c1, chord2 * chord2 / (chord1 * chord1), 0.01);
+  ASSERT_GT(c1, c0);
+  auto chord2 = [](double t) { return 4 * std::sin(t / 2) * std::sin(t / 2); };
+  EXPECT_NEAR((c2 - c0) / (c1 - c0),
+              (chord2(2 * angle) - chord2(tiny)) / (chord2(angle) - chord2(tiny)), 0.01);
   EXPECT_LT(cost(once, pmz::AttributeMode::full, s, s + (n + 1)), 1e-9f);  // along: free
   EXPECT_TRUE(std::isinf(cost(once, pmz::AttributeMode::seams, s, s + 1)));
+}
+
+// A corner that takes the far side of a seam is wrong however far the jump: its deviation
+// counts at most kJumpCap times its face's own largest squared change along an edge. Crossing
+// a texture seam costs the same whether the charts lie one or two uv units apart, while a
+// jump below the cap still costs less the smaller it is.
+TEST(AttributeSimplify, SeamJumpIsCappedByTheFacesExtent) {
+  const int n = 8;
+  const uint32_t s = 3 * (n + 1) + n / 2;  // on the seam column
+  auto apart = [&](float offset) {         // the right chart moved to u = x + offset
+    pmz::IndexedMesh m = crossing_seams_grid(n, 0.f);
+    m.attributes.face_materials.clear();
+    m.attributes.materials.clear();
+    for (size_t w = 0; w < m.attributes.wedge_count(); ++w) {
+      float& tu = m.attributes.texcoords[0][w * 2];
+      if (tu > 1) tu += offset - 1;
+    }
+    return m;
+  };
+  auto crossing = [&](const pmz::IndexedMesh& m) {
+    return pmz::detail::initial_collapse_cost(m, pmz::SimplifyOptions{}, s, s + 1);
+  };
+  const float one = crossing(apart(1)), two = crossing(apart(2));
+  ASSERT_TRUE(std::isfinite(one));
+  EXPECT_EQ(one, two);
+  const float small = crossing(apart(0.5f / n)), smaller = crossing(apart(0.25f / n));
+  EXPECT_LT(smaller, small);
+  EXPECT_LT(small, one);
+}
+
+// Seam planes: sliding a seam vertex along its seam leaves both sides' fields as they were
+// (free when the seam is straight) but moves where the seam runs; where the seam bends, the
+// slide costs the square of the bend's distance, and only in the modes with seams.
+TEST(AttributeSimplify, SeamPlanesKeepTheSeamsCourse) {
+  const int n = 8;
+  const uint32_t s = 3 * (n + 1) + n / 2;  // on the seam column, below the material boundary
+  auto bent = [&](float shift) {  // s and its wedges moved by shift in x: the seam bends at s
+    pmz::IndexedMesh m = crossing_seams_grid(n, 0.f);  // flat, fields linear in each chart
+    m.positions[size_t(s) * 3] += shift;
+    for (size_t w = 0; w < m.attributes.wedge_count(); ++w)
+      if (m.attributes.wedge_vertices[w] == s) m.attributes.texcoords[0][w * 2] += shift;
+    return m;
+  };
+  auto slide = [&](const pmz::IndexedMesh& m, pmz::AttributeMode mode) {
+    pmz::SimplifyOptions options;
+    options.attributes = mode;
+    return pmz::detail::initial_collapse_cost(m, options, s, s + (n + 1));
+  };
+  EXPECT_LT(slide(bent(0), pmz::AttributeMode::full), 1e-9f);
+  const float d = 0.05f / n;
+  const float once = slide(bent(d), pmz::AttributeMode::full);
+  const float twice = slide(bent(2 * d), pmz::AttributeMode::full);
+  EXPECT_GT(once, 1e-6f);
+  EXPECT_NEAR(twice / once, 4.f, 0.2f);
+  EXPECT_EQ(slide(bent(d), pmz::AttributeMode::seams), once);
+  EXPECT_EQ(slide(bent(d), pmz::AttributeMode::geometry_only), 0.f);
 }
 
 }  // namespace
