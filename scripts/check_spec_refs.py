@@ -90,7 +90,7 @@ def self_test():
             "// the counts of spec/format.md\n// section 12.", "# docs/algorithm-notes.md section 4",
             "// (spec/format.md section 9.6, 21 models per slot)"]
     bad = ["// spec section 9.2", "// (section 4)", "// spec/format.md section 15",
-           "// spec/format.md section 9.10", "// spec/format.md sections 9.1 and 99",
+           "// spec/format.md section 9.17", "// spec/format.md sections 9.1 and 99",
            "// docs/none.md section 1", "// Section 2 of the spec", "// see §4"]
     failed = 0
     with tempfile.TemporaryDirectory() as tmp:

@@ -50,8 +50,8 @@ def read_head(data):
     head = {"version": f"{data[p]}.{data[p + 1]}"}
     p += 2
     head["flags"], p = varint(data, p)
-    head["position_bits"], head["curvature"], head["fine_curvature"] = data[p : p + 3]
-    p += 3
+    head["position_bits"], head["curvature"], head["fine_curvature"], head["level"] = data[p : p + 4]
+    p += 4
     for name in ("base_vertices", "base_faces", "total_splits", "full_faces"):
         head[name], p = varint(data, p)
     head["bbox_min"] = list(struct.unpack_from("<3f", data, p))

@@ -32,7 +32,8 @@ fi
 # the base mesh, attributes, the C API (decoder.cpp's own once-per-chunk functions are
 # minsize in wasm: PMZ_SMALL_IN_WASM). Every other decoder source (a new file) is -Os too.
 hot=(decoder/src/decoder.cpp format/src/split_chunk.cpp format/src/vertex_choice.cpp format/src/progressive_mesh.cpp
-  format/src/geometry.cpp format/src/fan_wedge.cpp format/src/coding.cpp)
+  format/src/geometry.cpp format/src/fan_wedge.cpp format/src/coding.cpp
+  format/src/speed_level.cpp)
 cold=()
 for f in decoder/src/*.cpp format/src/*.cpp; do
   [[ " ${hot[*]} " == *" $f "* ]] || cold+=("$f")

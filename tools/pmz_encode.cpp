@@ -120,6 +120,11 @@ int main(int argc, char** argv) {
                  "quantization bits (0 = lossless float32)")
       ->check(CLI::Range(0, 30))
       ->capture_default_str();
+  app.add_option("--level", settings.write.level,
+                 "compression level: 0 smallest (default), 1 speed (faster decoding, about 20% "
+                 "larger; spec/format.md section 9.10)")
+      ->check(CLI::Range(0, 1))
+      ->capture_default_str();
   app.add_option("--texcoord-bits", settings.write.texcoord_bits,
                  "texture coordinate bits over each set's bounding box (0 = lossless float32)")
       ->check(CLI::Range(0, 24))

@@ -120,14 +120,15 @@ int main(int argc, char** argv) {
   if (json) {
     std::printf(
         "{\"file\":\"%s\",\"bytes\":%zu,\"state\":\"%s\",\"complete\":%s,"
-        "\"version\":\"%u.%u\",\"position_bits\":%u,\"curvature\":%u,\"fine_curvature\":%u,"
+        "\"version\":\"%u.%u\",\"level\":%u,\"position_bits\":%u,\"curvature\":%u,"
+        "\"fine_curvature\":%u,"
         "\"base_vertices\":%llu,\"base_faces\":%llu,\"full_vertices\":%llu,\"full_faces\":%llu,"
         "\"splits\":%llu,\"splits_available\":%llu,\"base_complete\":%s,\"split_chunks\":%llu,"
         "\"header_bytes\":%llu,\"base_bytes\":%llu,\"split_bytes\":%llu,\"other_bytes\":%llu,"
         "\"unfinished_chunk_bytes\":%llu,\"bits_per_vertex\":%.4f,"
         "\"connectivity_bits_per_split\":%.4f,\"geometry_bits_per_split\":%.4f,",
         shown.c_str(), data.size(), state, truncated || damaged ? "false" : "true", i.version_major,
-        i.version_minor, i.position_bits, i.curvature, i.fine_curvature,
+        i.version_minor, i.level, i.position_bits, i.curvature, i.fine_curvature,
         (unsigned long long)i.base_vertices, (unsigned long long)i.base_faces,
         (unsigned long long)i.full_vertices, (unsigned long long)i.full_faces,
         (unsigned long long)i.total_splits, (unsigned long long)available,
@@ -145,8 +146,9 @@ int main(int argc, char** argv) {
       std::printf("%s\"%s\":%llu", k ? "," : "", names[k], (unsigned long long)stream_bytes[k]);
     std::printf("}}\n");
   } else {
-    std::printf("%s: %zu bytes, format %u.%u, %s, curvature %u/8 + %u/8\n", shown.c_str(),
-                data.size(), i.version_major, i.version_minor,
+    std::printf("%s: %zu bytes, format %u.%u, level %u (%s), %s, curvature %u/8 + %u/8\n",
+                shown.c_str(), data.size(), i.version_major, i.version_minor, i.level,
+                i.level == 1 ? "speed" : "default",
                 i.position_bits ? (std::to_string(i.position_bits) + "-bit positions").c_str()
                                 : "lossless float32 positions",
                 i.curvature, i.fine_curvature);

@@ -78,6 +78,7 @@ PMZ_API void pmz_decoder_info(const pmz_decoder* d, pmz_stream_info* out) {
   out->position_bits = i.position_bits;
   out->curvature = i.curvature;
   out->fine_curvature = i.fine_curvature;
+  out->level = i.level;
   for (int k = 0; k < 3; ++k) {
     out->bbox_min[k] = i.bbox_min[k];
     out->bbox_max[k] = i.bbox_max[k];

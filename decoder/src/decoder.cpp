@@ -17,6 +17,7 @@
 #include "pmz/fan_wedge.hpp"
 #include "pmz/format.hpp"
 #include "pmz/progressive_mesh.hpp"
+#include "pmz/speed_level.hpp"
 #include "pmz/split_chunk.hpp"
 #include "pmz/vertex_choice.hpp"
 
@@ -408,6 +409,7 @@ Status Decoder::Impl::head(const uint8_t* p, size_t n) {
   if (h.position_bits > 30) return fail(Status::corrupt, "position bits above 30");
   if (h.curvature > kMaxCurvature || h.fine_curvature > kMaxCurvature)
     return fail(Status::corrupt, "curvature above 8");
+  if (h.level > kMaxLevel) return fail(Status::corrupt, "level above 1");
   if (h.flags & ~kKnownFlags) return fail(Status::corrupt, "unknown HEAD flags");
   for (int a = 0; a < 3; ++a)
     if (!std::isfinite(h.bbox_min[a]) || !std::isfinite(h.bbox_max[a]) ||
@@ -443,6 +445,7 @@ Status Decoder::Impl::head(const uint8_t* p, size_t n) {
   info.position_bits = h.position_bits;
   info.curvature = h.curvature;
   info.fine_curvature = h.fine_curvature;
+  info.level = h.level;
   info.base_vertices = h.base_vertices;
   info.base_faces = h.base_faces;
   info.full_vertices = h.full_vertices();
@@ -475,7 +478,8 @@ Status Decoder::Impl::install_base(ProgressiveMesh&& m, std::vector<int32_t>&& c
   const uint32_t vn = uint32_t(info.base_vertices);
   level.mesh = std::move(m);
   record.coords = std::move(coords);
-  frontier.choice.reset(level.mesh, record.coords.data(), info.position_bits);
+  frontier.choice.reset(level.mesh, record.coords.data(), info.position_bits,
+                        info.level != kLevelSpeed);
   frontier.group_vs.reserve(kChoiceLag +
                             2);  // find_vertices() adds at most kChoiceLag + 1 at a time
   for (size_t i = 0; i < vn; ++i) frontier.grow_box(&record.coords[i * 3]);
@@ -514,7 +518,10 @@ Status Decoder::Impl::attribute_chunk(const uint8_t* p, size_t n) {
 Status Decoder::Impl::split_chunk(const uint8_t* p, size_t n) {
   std::string err;
   SplitChunkReader r;
-  if (!frontier.models) frontier.models = std::make_unique<SplitModels>();
+  if (!frontier.models) {
+    frontier.models = std::make_unique<SplitModels>();
+    frontier.models->speed = info.level == kLevelSpeed;
+  }
   if (!r.open(p, n, info.total_splits - record.splits.size(), *frontier.models, err))
     return fail(Status::corrupt, err);
   const size_t size = record.splits.size() + r.split_count();
@@ -595,13 +602,19 @@ bool Decoder::Impl::apply() {
     };
     if (!frontier.lazy.front().wedge_count(wedge_context(k, level.mesh.ring_closed()), count))
       return malformed();
-    if (!wedge_scores(record.coords.data(), frontier.choice.degrees(), s.v, level.mesh, count,
-                      frontier.wedge_scratch))
-      return invalid();
-    if (!frontier.lazy.front().wedge_rank(
-            rank_context(level.mesh.ring_closed(), frontier.wedge_scratch.confident), rank))
-      return malformed();
-    if (!wedge_pick(level.mesh, count, rank, s.a, s.b, frontier.wedge_scratch)) return invalid();
+    if (info.level == kLevelSpeed) {  // the candidate's index (spec/format.md section 9.10)
+      if (!frontier.lazy.front().wedge_rank(rank_context(level.mesh.ring_closed(), false), rank))
+        return malformed();
+      if (!speed_wedge_pick(level.mesh, count, rank, s.a, s.b)) return invalid();
+    } else {
+      if (!wedge_scores(record.coords.data(), frontier.choice.degrees(), s.v, level.mesh, count,
+                        frontier.wedge_scratch))
+        return invalid();
+      if (!frontier.lazy.front().wedge_rank(
+              rank_context(level.mesh.ring_closed(), frontier.wedge_scratch.confident), rank))
+        return malformed();
+      if (!wedge_pick(level.mesh, count, rank, s.a, s.b, frontier.wedge_scratch)) return invalid();
+    }
   }
   if (!level.mesh.split_gathered(s.v, s.a, s.b)) return invalid();
   const bool has_l = s.a != kNoRank, has_r = s.b != kNoRank;
@@ -610,10 +623,17 @@ bool Decoder::Impl::apply() {
     int32_t residual[3], c[3];
     // (v's ring offsets: summed by the wedge scores over the same ring and coordinates.)
     const WedgeScratch& ws = frontier.wedge_scratch;
-    predict_position(record.coords.data(), level.mesh.u_ring(), level.mesh.ring(), info.curvature,
-                     info.fine_curvature, pred, ws.extent,
-                     ws.ring_offsets_ok ? ws.ring_offsets : nullptr);
-    if (!frontier.lazy.front().residuals(pred.context, pred.mix, residual)) {
+    bool decoded;
+    if (info.level == kLevelSpeed) {
+      speed_predict_position(record.coords.data(), level.mesh.u_ring(), pred);
+      decoded = frontier.lazy.front().speed_residuals(pred.context, residual);
+    } else {
+      predict_position(record.coords.data(), level.mesh.u_ring(), level.mesh.ring(), info.curvature,
+                       info.fine_curvature, pred, ws.extent,
+                       ws.ring_offsets_ok ? ws.ring_offsets : nullptr);
+      decoded = frontier.lazy.front().residuals(pred.context, pred.mix, residual);
+    }
+    if (!decoded) {
       level.mesh.undo_split(s.v, has_l, has_r);
       return refuse(Status::corrupt,
                     "split " + std::to_string(level.applied) + ": residual streams malformed");

@@ -16,6 +16,7 @@
 #include "pmz/fan_wedge.hpp"
 #include "pmz/format.hpp"
 #include "pmz/progressive_mesh.hpp"
+#include "pmz/speed_level.hpp"
 #include "pmz/split_chunk.hpp"
 #include "pmz/vertex_choice.hpp"
 #include "survivors.hpp"
@@ -221,6 +222,8 @@ Face canonical_face(uint32_t a, uint32_t b, uint32_t c) {
 bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector<uint8_t>& out,
                std::string& error, WriteStats* stats) {
   if (opt.position_bits > 30) return error = "position bits must be 0..30", false;
+  if (opt.level > kMaxLevel) return error = "level must be 0..1", false;
+  const bool speed = opt.level == kLevelSpeed;
   for (float x : seq.mesh.positions)
     if (!std::isfinite(x)) return error = "non-finite vertex coordinate", false;
   Plan plan;
@@ -242,6 +245,7 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
   h.base_faces = uint32_t(plan.base_faces.size() / 3);
   h.full_faces = mesh.face_count();
   h.total_splits = splits;
+  h.level = opt.level;
   // Attributes (spec/format.md section 14.1): the ATTR chunks follow BASE and each SPLT chunk.
   std::unique_ptr<AttributeWriter> attrs;
   if (!mesh.attributes.empty()) {
@@ -253,22 +257,26 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
   // Splits: replay in final order with the decoder's core to get ranks and predictions. The
   // curvature weight (HEAD) is the file's: one replay codes the splits once per candidate
   // (only the residuals differ) and the smallest is kept (spec/format.md section 13).
-  constexpr size_t kCandidates = std::size(kCurvatureCandidates);
+  // The speed level has no curvature offsets: one candidate, (0, 0).
+  const size_t kCandidates = speed ? 1 : std::size(kCurvatureCandidates);
   ProgressiveMesh pm;
-  std::vector<uint8_t> trial[kCandidates];
-  WriteStats trial_st[kCandidates];
+  std::vector<uint8_t> trial[std::size(kCurvatureCandidates)];
+  WriteStats trial_st[std::size(kCurvatureCandidates)];
   {
     if (!pm.build(base_n, plan.base_faces.data(), h.base_faces, error)) return false;
     if (attrs) attrs->encode_base(pm, coords.data(), base_attributes);
-    std::vector<SplitSymbols> chunk[kCandidates];
+    std::vector<SplitSymbols> chunk[std::size(kCurvatureCandidates)];
     std::vector<GroupCode> chunk_groups;
     std::vector<uint32_t> chunk_choice, vs;  // connectivity: the same for every candidate
     std::vector<uint8_t> payload;
     WedgeScratch scratch;
     VertexChoice choice;
-    choice.reset(pm, coords.data(), h.position_bits);
-    std::unique_ptr<SplitModels> models[kCandidates];
-    for (auto& m : models) m = std::make_unique<SplitModels>();
+    choice.reset(pm, coords.data(), h.position_bits, !speed);
+    std::unique_ptr<SplitModels> models[std::size(kCurvatureCandidates)];
+    for (auto& m : models) {
+      m = std::make_unique<SplitModels>();
+      m->speed = speed;
+    }
     uint32_t chunk_limit = kFirstChunkSplits;
     auto flush = [&]() {
       if (chunk_groups.empty()) return;
@@ -323,14 +331,24 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
           SplitSymbols code;
           code.v = v;
           code.wedge_context = wedge_context(uint32_t(pm.ring().size()), pm.ring_closed());
-          if (!wedge_symbols(coords.data(), choice.degrees(), v, pm, rl, rr, code.wedge_count,
-                             code.wedge_rank, scratch) ||
+          if (!(speed ? wedge_index(pm, rl, rr, code.wedge_count, code.wedge_rank)
+                      : wedge_symbols(coords.data(), choice.degrees(), v, pm, rl, rr,
+                                      code.wedge_count, code.wedge_rank, scratch)) ||
               !pm.split_gathered(v, rl, rr))
             return error = "internal: split rejected", false;
-          code.rank_context = rank_context(pm.ring_closed(), scratch.confident);
+          code.rank_context = rank_context(pm.ring_closed(), !speed && scratch.confident);
           choice.applied(pm, coords.data(), rl != kNoRank, rr != kNoRank);
           const uint32_t u = pm.vertex_count() - 1;
           if (attrs) attrs->encode_split(pm, coords.data(), collapse, rl != kNoRank, rr != kNoRank);
+          if (speed) {
+            PositionPrediction pred;
+            speed_predict_position(coords.data(), pm.u_ring(), pred);
+            position_residuals(pred, &coords[size_t(u) * 3], code.residual);
+            for (int s = 0; s < 3; ++s)
+              code.residual_context[s] = pred.context[s], code.mix_context[s] = 0;
+            chunk[0].push_back(code);
+            continue;
+          }
           RingBasis basis;  // the ring part once; per candidate only the offset and contexts
           ring_basis(coords.data(), pm.u_ring(), pm.ring(), true, true, basis);
           for (size_t k = 0; k < kCandidates; ++k) {

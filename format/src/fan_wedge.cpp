@@ -227,23 +227,29 @@ inline uint32_t max_count(const ProgressiveMesh& pm) {
 
 }  // namespace
 
-bool wedge_symbols(const int32_t* coords, const uint32_t* degree, uint32_t v,
-                   const ProgressiveMesh& pm, uint32_t rank_l, uint32_t rank_r, uint32_t& count,
-                   uint32_t& rank, WedgeScratch& s) {
+bool wedge_index(const ProgressiveMesh& pm, uint32_t rank_l, uint32_t rank_r, uint32_t& count,
+                 uint32_t& j) {
   const uint32_t k = uint32_t(pm.ring().size());
-  uint32_t j;
   if (pm.ring_closed()) {
     if (rank_l >= k || rank_r >= k || rank_l == rank_r) return false;
     count = (rank_r + k - rank_l) % k - 1;
     j = rank_l;
-  } else {
-    if ((rank_l == kNoRank && rank_r == kNoRank) || (rank_l != kNoRank && rank_l >= k) ||
-        (rank_r != kNoRank && rank_r >= k) ||
-        (rank_l != kNoRank && rank_r != kNoRank && rank_l >= rank_r))
-      return false;
-    j = rank_l == kNoRank ? 0 : rank_l + 1;
-    count = (rank_r == kNoRank ? k : rank_r) - j;
+    return true;
   }
+  if ((rank_l == kNoRank && rank_r == kNoRank) || (rank_l != kNoRank && rank_l >= k) ||
+      (rank_r != kNoRank && rank_r >= k) ||
+      (rank_l != kNoRank && rank_r != kNoRank && rank_l >= rank_r))
+    return false;
+  j = rank_l == kNoRank ? 0 : rank_l + 1;
+  count = (rank_r == kNoRank ? k : rank_r) - j;
+  return true;
+}
+
+bool wedge_symbols(const int32_t* coords, const uint32_t* degree, uint32_t v,
+                   const ProgressiveMesh& pm, uint32_t rank_l, uint32_t rank_r, uint32_t& count,
+                   uint32_t& rank, WedgeScratch& s) {
+  uint32_t j;
+  if (!wedge_index(pm, rank_l, rank_r, count, j)) return false;
   const uint32_t n = wedge_candidates(coords, degree, v, pm, count, s);
   rank = s.narrow ? rank_of(s.score64.data(), n, j) : rank_of(s.score.data(), n, j);
   return true;

@@ -23,6 +23,7 @@ void write_head_payload(std::vector<uint8_t>& out, const FileHeader& h) {
   out.push_back(uint8_t(h.position_bits));
   out.push_back(uint8_t(h.curvature));
   out.push_back(uint8_t(h.fine_curvature));
+  out.push_back(uint8_t(h.level));
   put_varint(out, h.base_vertices);
   put_varint(out, h.base_faces);
   put_varint(out, h.total_splits);
@@ -45,6 +46,7 @@ bool read_head_payload(const uint8_t* p, size_t size, FileHeader& h, size_t* con
   h.position_bits = r.u8();
   h.curvature = r.u8();
   h.fine_curvature = r.u8();
+  h.level = r.u8();
   h.base_vertices = u32();
   h.base_faces = u32();
   h.total_splits = u32();

@@ -60,8 +60,11 @@ void encode_split_chunk(const std::vector<GroupCode>& groups, const std::vector<
         choose(scan_after_split(j));
         for (int a = 0; a < 3; ++a) {
           ga.to(kSymbolResidualT0 + a);
-          encode_uint_mixed(ge, m->residual[a][s.residual_context[a]], m->mix(a, s.mix_context[a]),
-                            zigzag_encode(s.residual[a]));
+          if (m->speed)
+            encode_uint(ge, m->residual[a][s.residual_context[a]], zigzag_encode(s.residual[a]));
+          else
+            encode_uint_mixed(ge, m->residual[a][s.residual_context[a]],
+                              m->mix(a, s.mix_context[a]), zigzag_encode(s.residual[a]));
         }
       }
     }
@@ -218,6 +221,20 @@ bool SplitChunkReader::residuals(const uint32_t context[3], const uint32_t mix[3
     residual[a] = zigzag_decode(z);
   }
   return true;
+}
+
+// The three symbols with the coder's state in registers throughout (one copy in and out).
+bool SplitChunkReader::speed_residuals(const uint32_t context[3], int32_t residual[3]) {
+  RangeState st = geo_dec_->state();
+  bool ok = true;
+#pragma GCC unroll 1
+  for (int a = 0; a < 3 && ok; ++a) {
+    uint32_t z = 0;
+    ok = decode_uint(st, models_->residual[a][context[a]], z);
+    residual[a] = zigzag_decode(z);
+  }
+  geo_dec_->set_state(st);
+  return ok && geo_dec_->ok;
 }
 
 }  // namespace pmz

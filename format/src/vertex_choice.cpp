@@ -13,8 +13,9 @@ inline uint64_t l1(int64_t x, int64_t y, int64_t z) {
 }  // namespace
 
 [[gnu::cold]] void VertexChoice::reset(ProgressiveMesh& base, const int32_t* coords,
-                                       uint32_t position_bits) {
+                                       uint32_t position_bits, bool umbrella) {
   shift_ = umbrella_shift(position_bits);
+  umbrella_ = umbrella;
   degree_.assign(base.vertex_count(), 0);
   sums_.assign(base.vertex_count(), RingSums{{0, 0, 0}, 0});
   key_.assign(base.vertex_count(), 0);
@@ -22,7 +23,7 @@ inline uint64_t l1(int64_t x, int64_t y, int64_t z) {
     if (base.gather_ring(w)) {
       degree_[w] = uint32_t(base.ring().size());
       RingSums& s = sums_[w];
-      for (uint32_t x : base.ring()) {
+      for (uint32_t x : umbrella ? base.ring() : std::span<const uint32_t>()) {
         int64_t e[3];
         for (int a = 0; a < 3; ++a) {
           e[a] = coord(coords, x, a) - coord(coords, w, a);
@@ -215,6 +216,18 @@ void VertexChoice::umbrella_sums(const ProgressiveMesh& pm, const int32_t* coord
   key[u] = key_of(su, r);
 }
 
+// The speed level's keys (class 0): those of the vertices whose degree changed. Out of line:
+// the default level's applied() stays as it was.
+[[gnu::noinline]] void VertexChoice::degree_keys(const ProgressiveMesh& pm, bool has_left,
+                                                 bool has_right) {
+  const std::span<const uint32_t> ur = pm.u_ring();
+  const uint32_t r = uint32_t(ur.size());
+  update_key(ur[0]);
+  update_key(pm.vertex_count() - 1);
+  if (has_left) update_key(ur[1]);
+  if (has_right) update_key(ur[r - 1]);
+}
+
 void VertexChoice::applied(const ProgressiveMesh& pm, const int32_t* coords, bool has_left,
                            bool has_right) {
   const std::span<const uint32_t> ring = pm.ring(), ur = pm.u_ring();
@@ -224,7 +237,10 @@ void VertexChoice::applied(const ProgressiveMesh& pm, const int32_t* coords, boo
   push_vertex(r);
   if (has_left) ++degree_[ur[1]];
   if (has_right) ++degree_[ur[r - 1]];
-  umbrella(pm, coords, has_left, has_right);
+  if (umbrella_)
+    umbrella(pm, coords, has_left, has_right);
+  else
+    degree_keys(pm, has_left, has_right);
   // Exclusion (the scan's caller applies the split when its closed one-ring starts to count).
   const uint32_t excluded = excluded_;
   mark_[v] = excluded;

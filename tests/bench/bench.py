@@ -73,6 +73,12 @@ CODECS = {
         tool="bin/pmz-encode", needs=["bin/pmz-decode"], ext=".pmz",
         encode=lambda b, off, ply, o: [b / "bin/pmz-encode", off, "-o", o, "--position-bits", "14"],
         decode=lambda b, i, o: [b / "bin/pmz-decode", i, "-o", o]),
+    # The speed level (issue 17): simpler models, faster to decode, larger.
+    "pmz level 1 (14 bits)": dict(
+        tool="bin/pmz-encode", needs=["bin/pmz-decode"], ext=".pmz",
+        encode=lambda b, off, ply, o: [b / "bin/pmz-encode", off, "-o", o, "--position-bits", "14",
+                                       "--level", "1"],
+        decode=lambda b, i, o: [b / "bin/pmz-decode", i, "-o", o]),
     "draco -qp 14 -cl 10": dict(
         tool="/usr/bin/draco_encoder", needs=["/usr/bin/draco_decoder"], ext=".drc",
         encode=lambda b, off, ply, o: ["/usr/bin/draco_encoder", "-i", ply, "-o", o, "-qp", "14", "-cl", "10"],
@@ -393,7 +399,8 @@ def report(args, rows, out, command):
         by_mesh = {}
         for r in codecs:
             by_mesh.setdefault(r["mesh"], {})[r["method"]] = r["bytes"]
-        for a, b in [("pmz (14 bits)", "draco -qp 14 -cl 10"), ("pmz (14 bits)", "OpenMesh .pm (mkbalancedpm)")]:
+        for a, b in [("pmz (14 bits)", "draco -qp 14 -cl 10"), ("pmz level 1 (14 bits)", "draco -qp 14 -cl 10"),
+                     ("pmz (14 bits)", "OpenMesh .pm (mkbalancedpm)")]:
             q = [m[a] / m[b] for m in by_mesh.values() if a in m and b in m]
             if q:
                 L.append(f"Median size {a} / {b}: {statistics.median(q):.3f} over {len(q)} meshes  ")

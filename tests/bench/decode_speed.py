@@ -8,9 +8,12 @@ shared machine's load hits them alike. bench-stream's figure is its decoder's CP
 first feed to the last split (the file already read). Prints each round with the load average,
 then the medians as one JSON line. --baseline DIR: another tree's build directory, whose
 pmz-decode, bench-stream and pmz-info run in the same rounds (before/after comparisons).
+--speed-pmz FILE: the same mesh encoded at the speed level (pmz-encode --level 1), run by the
+--build tools in the same rounds as "speed" (issue 17: pmz-decode at most 1.0x draco_decoder).
 
   python3 tests/bench/decode_speed.py --build build --pmz bunny00-loop2.pmz \\
-      --drc bunny00-loop2.drc [--baseline ../main/build] [--rounds 7]
+      --drc bunny00-loop2.drc [--speed-pmz bunny00-loop2-l1.pmz] [--baseline ../main/build]
+      [--rounds 7]
 """
 import argparse
 import json
@@ -65,16 +68,19 @@ def main():
     ap.add_argument("--baseline", help="another build directory, run in the same rounds")
     ap.add_argument("--pmz", required=True)
     ap.add_argument("--drc", required=True, help="the same mesh, draco_encoder -qp 14 -cl 10")
+    ap.add_argument("--speed-pmz", help="the same mesh at pmz-encode --level 1")
     ap.add_argument("--rounds", type=int, default=7)
     a = ap.parse_args()
-    sides = [("new", tools(a.build))] + ([("base", tools(a.baseline))] if a.baseline else [])
+    sides = ([("new", tools(a.build), a.pmz)] +
+             ([("base", tools(a.baseline), a.pmz)] if a.baseline else []) +
+             ([("speed", tools(a.build), a.speed_pmz)] if a.speed_pmz else []))
     rounds = []
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "out.ply")
         for i in range(a.rounds):
             r = {"load": load()}
-            for name, t in (sides if i % 2 == 0 else sides[::-1]):  # who goes first alternates
-                r.update(round_of(name, t, a.pmz, out))
+            for name, t, pmz in (sides if i % 2 == 0 else sides[::-1]):  # who goes first alternates
+                r.update(round_of(name, t, pmz, out))
             r["draco decode"] = child_cpu(["/usr/bin/draco_decoder", "-i", a.drc, "-o", out])
             rounds.append(r)
             print(f"round {i + 1}: load {r['load']:.2f}  " + "  ".join(
@@ -85,7 +91,8 @@ def main():
     summary = {"loads": [r["load"] for r in rounds], "rounds": a.rounds, "splits": splits,
                "draco_decode_elapsed_s": med("draco decode", 0),
                "draco_decode_cpu_s": med("draco decode", 1)}
-    for name, _ in sides:
+    for name, _, _ in sides:
+        splits = rounds[0][name + " stream"][2]
         summary[name] = {
             "decode_elapsed_s": med(name + " decode", 0),
             "decode_cpu_s": med(name + " decode", 1),

@@ -4,7 +4,8 @@
 For each mesh and link rate, the time (transfer and decoding overlapped, as a streaming client
 overlaps them) until the mean error first drops below 1e-3 and 1e-4 of the bounding-box
 diagonal, and until full resolution, for
-  - pmz (default level): bench-stream feeds the decoder library 4096-byte slices as they arrive
+  - pmz at each level (the default, and "pmz speed": pmz-encode --level 1, the same meshes at
+    every face count, so the same errors): bench-stream feeds the decoder library 4096-byte slices as they arrive
     at the link rate and refines everything that has arrived after each, on a virtual clock
     (max(arrival, clock) + measured decode time);
   - Draco single-rate (-qp 14 -cl 10): the whole file arrives, then draco_decoder decodes it;
@@ -95,6 +96,9 @@ def measure_mesh(args, build, name, off, work):
     pmz = work / f"{name}.pmz"
     if not pmz.exists():
         run([build / "bin/pmz-encode", off, "-o", pmz])
+    pmz_speed = work / f"{name}-l1.pmz"
+    if not pmz_speed.exists():
+        run([build / "bin/pmz-encode", off, "-o", pmz_speed, "--level", "1"])
     ply = work / f"{name}.ply"
     if not ply.exists():  # Draco reads PLY, not OFF
         run([build / "bench/bench-subdivide", off, ply, "0"])
@@ -128,32 +132,39 @@ def measure_mesh(args, build, name, off, work):
         log(f"{name}: pmz {g:g}: {grid[-1]}")
     links = {}
     for mbit in args.links:
-        runs = []
-        for _ in range(args.reps):
-            out = run([build / "bench/bench-stream", pmz, "--slice", SLICE, "--refine", "all", "--mbit", mbit,
-                       "--faces", ",".join(str(x["faces"]) for x in grid)])
-            runs.append(json.loads(out))
-        reached = {}
-        for f in [x["faces"] for x in grid]:
-            reached[f] = statistics.median(dict((a, b) for a, b in r["reached"])[f] for r in runs)
-        links[str(mbit)] = dict(reached=reached, complete_s=statistics.median(r["complete_s"] for r in runs),
-                                decode_cpu_s=statistics.median(r["cpu_s"] for r in runs))
-        log(f"{name}: pmz at {mbit} Mbit/s: complete {links[str(mbit)]['complete_s']:.3f} s")
-    return dict(mesh=name, faces=full_faces, pmz_bytes=pmz.stat().st_size, draco=levels, pmz_grid=grid,
-                pmz_links=links)
+        for key, stream in (("", pmz), ("speed ", pmz_speed)):  # the levels alternate
+            runs = []
+            for _ in range(args.reps):
+                out = run([build / "bench/bench-stream", stream, "--slice", SLICE, "--refine", "all",
+                           "--mbit", mbit, "--faces", ",".join(str(x["faces"]) for x in grid)])
+                runs.append(json.loads(out))
+            reached = {}
+            for f in [x["faces"] for x in grid]:
+                reached[f] = statistics.median(dict((a, b) for a, b in r["reached"])[f] for r in runs)
+            links[key + str(mbit)] = dict(
+                reached=reached, complete_s=statistics.median(r["complete_s"] for r in runs),
+                decode_cpu_s=statistics.median(r["cpu_s"] for r in runs))
+            log(f"{name}: pmz {key}at {mbit} Mbit/s: complete {links[key + str(mbit)]['complete_s']:.3f} s")
+    return dict(mesh=name, faces=full_faces, pmz_bytes=pmz.stat().st_size,
+                pmz_speed_bytes=pmz_speed.stat().st_size, draco=levels, pmz_grid=grid,
+                pmz_links={k: v for k, v in links.items() if not k.startswith("speed ")},
+                pmz_speed_links={k[6:]: v for k, v in links.items() if k.startswith("speed ")})
 
 
 def times(m, mbit):
     """Per method: {thr: seconds or None, 'full': seconds}."""
     rate = mbit * 1e6 / 8
     res = {}
-    # pmz: the first grid level below each threshold.
-    link = m["pmz_links"][str(mbit)]
-    row = {"full": link["complete_s"]}
-    for thr in THRESHOLDS:
-        hit = next((g for g in m["pmz_grid"] if g["mean"] < thr), None)
-        row[thr] = link["reached"][hit["faces"]] if hit else None
-    res["pmz"] = row
+    # pmz, each level: the first grid level below each threshold.
+    for meth, key in (("pmz", "pmz_links"), ("pmz speed", "pmz_speed_links")):
+        if key not in m:  # (a stream.json from before the speed level)
+            continue
+        link = m[key][str(mbit)]
+        row = {"full": link["complete_s"]}
+        for thr in THRESHOLDS:
+            hit = next((g for g in m["pmz_grid"] if g["mean"] < thr), None)
+            row[thr] = link["reached"][hit["faces"]] if hit else None
+        res[meth] = row
     # Draco single-rate: the full file, then its decode.
     full = m["draco"][-1]
     t = full["bytes"] / rate + full["decode_s"]
@@ -177,10 +188,11 @@ def report(results, links, out):
     lines = ["| mesh (faces, pmz / Draco bytes) | link | method | < 1e-3 | < 1e-4 | full |", "|---|---|---|---|---|---|"]
     verdicts = []
     for m in results:
-        label = f"{m['mesh']} ({m['faces']:,}, {m['pmz_bytes']:,} / {m['draco'][-1]['bytes']:,})"
+        speed = f" ({m['pmz_speed_bytes']:,} speed)" if "pmz_speed_bytes" in m else ""
+        label = f"{m['mesh']} ({m['faces']:,}, {m['pmz_bytes']:,}{speed} / {m['draco'][-1]['bytes']:,})"
         for mbit in links:
             t = times(m, mbit)
-            for meth in ["pmz", "draco", "draco LOD"]:
+            for meth in [x for x in ["pmz", "pmz speed", "draco", "draco LOD"] if x in t]:
                 r = t[meth]
                 cells = []
                 for key in THRESHOLDS + ["full"]:
@@ -189,18 +201,19 @@ def report(results, links, out):
                     cells.append(f"**{s}**" if r[key] is not None and r[key] == best else s)
                 lines.append(f"| {label} | {mbit:g} Mbit/s | {meth} | " + " | ".join(cells) + " |")
             for key, what in [(1e-3, "mean error < 1e-3"), (1e-4, "< 1e-4"), ("full", "full resolution")]:
-                p = t["pmz"][key]
                 others = [t[x][key] for x in ["draco", "draco LOD"]]
-                if p is None:
-                    v = "pmz never gets there"
-                elif all(o is None or p < o for o in others):
-                    v = "pmz ahead of both"
-                elif all(o is not None and p > o for o in others):
-                    v = "pmz behind both"
-                else:
-                    v = "pmz between the two"
-                verdicts.append(f"- {m['mesh']}, {mbit:g} Mbit/s, {what}: {v} "
-                                f"(pmz {fmt(p)} s, Draco {fmt(others[0])} s, LOD chain {fmt(others[1])} s)")
+                for meth in [x for x in ["pmz", "pmz speed"] if x in t]:
+                    p = t[meth][key]
+                    if p is None:
+                        v = f"{meth} never gets there"
+                    elif all(o is None or p < o for o in others):
+                        v = f"{meth} ahead of both"
+                    elif all(o is not None and p > o for o in others):
+                        v = f"{meth} behind both"
+                    else:
+                        v = f"{meth} between the two"
+                    verdicts.append(f"- {m['mesh']}, {mbit:g} Mbit/s, {what}: {v} "
+                                    f"({meth} {fmt(p)} s, Draco {fmt(others[0])} s, LOD chain {fmt(others[1])} s)")
     return "\n".join(lines) + "\n\n" + "\n".join(verdicts) + "\n"
 
 
@@ -217,7 +230,9 @@ def plot(results, links, path):
     for i, m in enumerate(results):
         for j, (key, title) in enumerate(keys):
             ax = axes[i][j]
-            for meth, style in [("pmz", "o-"), ("draco", "s--"), ("draco LOD", "^:")]:
+            for meth, style in [("pmz", "o-"), ("pmz speed", "D-"), ("draco", "s--"), ("draco LOD", "^:")]:
+                if meth not in times(m, links[0]):
+                    continue
                 xs, ys = [], []
                 for mbit in links:
                     v = times(m, mbit)[meth][key]
@@ -265,7 +280,7 @@ def main():
             (out / "stream.json").write_text(json.dumps(results, indent=1))
     # JSON turns the face-count keys into strings.
     for m in results:
-        for link in m["pmz_links"].values():
+        for link in list(m["pmz_links"].values()) + list(m.get("pmz_speed_links", {}).values()):
             link["reached"] = {int(k): v for k, v in link["reached"].items()}
     (out / "STREAM.md").write_text(report(results, args.links, out))
     plotted = plot(results, args.links, out / "stream.png")

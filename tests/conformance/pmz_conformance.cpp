@@ -197,10 +197,10 @@ std::string describe(const Bytes& file, const std::string& name, size_t slice,
   o << "stream " << status_token(d.status()) << "\n";
   const pmz::StreamInfo& i = d.info();
   if (i.header_done)
-    o << "head version " << i.version_major << "." << i.version_minor << " position_bits "
-      << i.position_bits << " curvature " << i.curvature << " fine_curvature " << i.fine_curvature
-      << " base_vertices " << i.base_vertices << " base_faces " << i.base_faces << " total_splits "
-      << i.total_splits << " full_faces " << i.full_faces << "\n";
+    o << "head version " << i.version_major << "." << i.version_minor << " level " << i.level
+      << " position_bits " << i.position_bits << " curvature " << i.curvature << " fine_curvature "
+      << i.fine_curvature << " base_vertices " << i.base_vertices << " base_faces " << i.base_faces
+      << " total_splits " << i.total_splits << " full_faces " << i.full_faces << "\n";
   o << "available " << d.splits_available() << "\n";
   if (!i.base_done) return o.str();
   d.refine();
@@ -578,7 +578,8 @@ bool derive(const fs::path& src, const fs::path& dir) {
       p.push_back(uint8_t(v));
     };
     padded(h.flags);
-    p.insert(p.end(), {uint8_t(h.position_bits), uint8_t(h.curvature), uint8_t(h.fine_curvature)});
+    p.insert(p.end(), {uint8_t(h.position_bits), uint8_t(h.curvature), uint8_t(h.fine_curvature),
+                       uint8_t(h.level)});
     for (uint64_t v : {h.base_vertices, h.base_faces, h.total_splits, h.full_faces}) padded(v);
     for (float f : h.bbox_min) pmz::put_f32le(p, f);
     for (float f : h.bbox_max) pmz::put_f32le(p, f);
@@ -640,6 +641,7 @@ bool derive(const fs::path& src, const fs::path& dir) {
     b[head_end + 8] ^= 0x01;  // a byte of BASE's payload (its header is at most 7 bytes here)
     emit("bad-checksum", b, "invalid: a BASE payload byte changed, CRC not");
   }
+  emit("bad-level", with_head([](pmz::FileHeader& e) { e.level = 2; }), "invalid: level 2");
   emit("bad-flags", with_head([](pmz::FileHeader& e) { e.flags = 1; }), "invalid: flags 1");
   emit("bad-position-bits", with_head([](pmz::FileHeader& e) { e.position_bits = 31; }),
        "invalid: position_bits 31");

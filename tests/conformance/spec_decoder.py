@@ -192,10 +192,11 @@ def read_head(p):  # spec/format.md section 4
     h = {"major": p[0], "minor": p[1]}
     at = 2
     h["flags"], at = varint(p, at)
-    if at + 3 > len(p):
+    if at + 4 > len(p):
         raise Refused("corrupt")
     h["position_bits"], h["curvature"], h["fine_curvature"] = p[at], p[at + 1], p[at + 2]
-    at += 3
+    h["level"] = p[at + 3]
+    at += 4
     for name in ("base_vertices", "base_faces", "total_splits", "full_faces"):
         h[name], at = varint(p, at)
     if at + 24 > len(p):
@@ -205,9 +206,10 @@ def read_head(p):  # spec/format.md section 4
     if any(h[n] >= 1 << 32 for n in ("flags", "base_vertices", "base_faces", "total_splits",
                                      "full_faces")):
         raise Refused("corrupt")
-    if h["major"] != 9:
+    if h["major"] != 10:
         raise Refused("bad_version")
-    if h["flags"] & ~1 or h["position_bits"] > 30 or h["curvature"] > 8 or h["fine_curvature"] > 8:
+    if (h["flags"] & ~1 or h["position_bits"] > 30 or h["curvature"] > 8
+            or h["fine_curvature"] > 8 or h["level"] > 1):
         raise Refused("corrupt")
     for a in range(3):
         lo, hi = h["bbox_min"][a], h["bbox_max"][a]
@@ -766,6 +768,8 @@ class Splits:
         return tuple(b[i] - a[i] for i in range(3))
 
     def klass(self, x):
+        if self.head["level"] == 1:  # 9.10: no umbrella class
+            return 0
         d = [v - (1 << 32) if v >= 1 << 31 else v for v in self.SD[x]]
         d2, l2 = sum(v * v for v in d), self.SL[x] ** 2
         return 0 if 64 * d2 < l2 else 1 if 16 * d2 < l2 else 2
@@ -837,6 +841,7 @@ class Splits:
             d = self.degree[ring[e]]
             return 4 if d <= 4 else 3 if d == 5 else 2
 
+        speed = self.head["level"] == 1
         cands = []
         for j in range(W):
             if closed:
@@ -845,7 +850,7 @@ class Splits:
                 rl = j - 1 if j > 0 else None
                 rr = j + count if j + count != k else None
                 interior = list(range(j, j + count))
-            if k > 1 << 24:
+            if k > 1 << 24 or speed:  # (9.10: no scores, the candidates in index order)
                 cands.append((0, j, rl, rr))
                 continue
             ol = o[rl] if rl is not None else zero
@@ -869,6 +874,8 @@ class Splits:
         s1 = order[0][0]
         s2 = order[1][0] if len(order) > 1 else None
         confident = 1 if W < 2 or s2 <= 0 or s1 > 2 * s2 else 0
+        if speed:
+            confident = 0
         rc = 2 * closed + confident
         if conn.bit(self.rank_nonzero[rc]) == 0:
             rank = 0
@@ -903,6 +910,35 @@ class Splits:
         nr = len(R)
         sumc = [cv[a] + sum(self.c[x][a] for x in R) for a in range(3)]
         pred0 = [(sumc[a] + (nr + 1) // 2) // (nr + 1) for a in range(3)]
+        if speed:  # 9.10
+            r = []
+            for a in range(3):
+                E = max(self.c[x][a] for x in R) - min(self.c[x][a] for x in R)
+                r.append(s32(unzigzag(geom.uint(self.residual[a][ctx(E // 4)]))))
+            if geom.past:
+                raise Refused("corrupt")
+            self.c.append(tuple(s32(pred0[a] + r[a]) for a in range(3)))
+        else:
+            self.position(v, cv, ring, R, k, pred0, geom)
+        if self.attrs:  # 14.5
+            nf = len(self.F) // 3
+            new_faces = list(range(nf - (vl is not None) - (vr is not None), nf))
+            self.attrs.split(self, attr_rc, u, new_faces, sector)
+        # 9.8
+        self.degree[v] = k - nr + 2 + (vl is not None) + (vr is not None)
+        self.degree.append(nr)
+        if vl is not None:
+            self.degree[vl] += 1
+        if vr is not None:
+            self.degree[vr] += 1
+        self.noted += [v] + ring + [u]
+        if not speed:
+            self.umbrella(u, v, vl, vr, R)
+        return ring
+
+    def position(self, v, cv, ring, R, k, pred0, geom):
+        """9.6 at the default level: appends c[u]."""
+        nr = len(R)
         d = [tuple(self.c[x][a] - cv[a] for a in range(3)) for x in R]
         nw = [0, 0, 0]
         for i in range(1, nr - 1):
@@ -950,17 +986,10 @@ class Splits:
         pn = pred[tn] - rnd(n[t0] * r[0] + n[t1] * r[1], n[tn]) if n[tn] != 0 else pred[tn]
         cu[tn] = s32(pn + r[2])
         self.c.append(tuple(cu))
-        if self.attrs:  # 14.5
-            nf = len(self.F) // 3
-            new_faces = list(range(nf - (vl is not None) - (vr is not None), nf))
-            self.attrs.split(self, attr_rc, u, new_faces, sector)
-        # 9.8
-        self.degree[v] = k - nr + 2 + (vl is not None) + (vr is not None)
-        self.degree.append(nr)
-        if vl is not None:
-            self.degree[vl] += 1
-        if vr is not None:
-            self.degree[vr] += 1
+
+    def umbrella(self, u, v, vl, vr, R):
+        """9.8 step 2: the umbrella sums (default level)."""
+        nr = len(R)
         M32 = 1 << 32
         add = lambda t, e, sign=1: tuple((t[i] + sign * e[i]) % M32 for i in range(3))
         l1 = lambda e: sum(abs(t) for t in e)
@@ -983,8 +1012,6 @@ class Splits:
         for x in interior:
             self.SD[x] = add(add(self.SD[x], self.spoke(x, v), -1), self.spoke(x, u))
             self.SL[x] = (self.SL[x] - l1(self.spoke(x, v)) + l1(self.spoke(x, u))) % M32
-        self.noted += [v] + ring + [u]
-        return ring
 
     def run(self, levels, hashes):
         """Applies every split (9.2, 9.3); hashes[L] for each L in levels; returns (status,

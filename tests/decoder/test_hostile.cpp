@@ -320,6 +320,29 @@ TEST(Hostile, CurvatureAboveEightIsRefused) {
   }
 }
 
+// HEAD level (spec/format.md section 4): 0 and 1 decode (and are reported), 2 and above are
+// refused as corrupt.
+TEST(Hostile, LevelAboveOneIsRefused) {
+  for (uint32_t level : {0u, 1u, 2u, 255u}) {
+    Bytes f = signature();
+    pmz::FileHeader h = header(6, 8, 0, 8);
+    h.level = level;
+    head(f, h);
+    pmz::append_chunk(f, pmz::kChunkBase, octa_base_payload());
+    pmz::append_chunk(f, pmz::kChunkEnd, {});
+    pmz::Decoder d;
+    const pmz::Status s = d.feed(f.data(), f.size());
+    if (level <= 1) {
+      EXPECT_EQ(s, pmz::Status::ok) << d.error_message();
+      EXPECT_EQ(d.info().level, level);
+      EXPECT_EQ(d.face_count(), 8u);
+    } else {
+      EXPECT_EQ(s, pmz::Status::corrupt) << level;
+      EXPECT_NE(d.error_message().find("level"), std::string::npos) << d.error_message();
+    }
+  }
+}
+
 // HEAD's varint fields (spec/format.md section 4): a payload cut anywhere before bbox_max ends, or
 // a flags / count varint of 2^32 or more (or of 11 bytes), is corrupt; bytes after bbox_max are
 // ignored, and a varint written longer than needed reads as its value.
@@ -336,7 +359,7 @@ TEST(Hostile, HeadVarintsCutShortOrBeyondUint32AreCorrupt) {
     if (message) *message = d.error_message();
     return s == pmz::Status::ok && d.face_count() == 8 ? pmz::Status::ok : s;
   };
-  ASSERT_EQ(payload.size(), 34u);  // 2 + 1 + 3 + 4 one-byte varints + 24
+  ASSERT_EQ(payload.size(), 35u);  // 2 + 1 + 4 + 4 one-byte varints + 24
   EXPECT_EQ(decode(payload), pmz::Status::ok);
   for (size_t n = 0; n < payload.size(); ++n) {
     std::string message;
@@ -349,9 +372,9 @@ TEST(Hostile, HeadVarintsCutShortOrBeyondUint32AreCorrupt) {
   longer.insert(longer.end(), {1, 2, 3});  // fields of a later minor
   EXPECT_EQ(decode(longer), pmz::Status::ok);
   // Field k (0 flags, 1 base_vertices, 2 base_faces, 3 total_splits, 4 full_faces) replaced by
-  // the varint bytes v. The fields' offsets in payload: flags at 2, the counts at 6 .. 9.
+  // the varint bytes v. The fields' offsets in payload: flags at 2, the counts at 7 .. 10.
   auto with_field = [&](int k, const Bytes& v) {
-    const size_t at = k == 0 ? 2 : size_t(5 + k);
+    const size_t at = k == 0 ? 2 : size_t(6 + k);
     Bytes p(payload.begin(), payload.begin() + ptrdiff_t(at));
     p.insert(p.end(), v.begin(), v.end());
     p.insert(p.end(), payload.begin() + ptrdiff_t(at + 1), payload.end());

@@ -41,7 +41,7 @@ inline Snapshot snapshot(const pmz::Decoder& d) {
 inline bool same_info(const pmz::StreamInfo& a, const pmz::StreamInfo& b) {
   return a.header_done == b.header_done && a.base_done == b.base_done && a.complete == b.complete &&
          a.version_major == b.version_major && a.version_minor == b.version_minor &&
-         a.flags == b.flags && a.position_bits == b.position_bits &&
+         a.flags == b.flags && a.position_bits == b.position_bits && a.level == b.level &&
          a.base_vertices == b.base_vertices && a.base_faces == b.base_faces &&
          a.full_vertices == b.full_vertices && a.full_faces == b.full_faces &&
          a.total_splits == b.total_splits &&

@@ -108,7 +108,8 @@ def main():
             'two': merge(sphere(3, 5), shifted),
         }
         settings = {'q14': ['--position-bits', '14'], 'lossless': ['--position-bits', '0'],
-                    'q4': ['--position-bits', '4']}
+                    'q4': ['--position-bits', '4'],
+                    'speed': ['--level', '1'], 'speed-lossless': ['--level', '1', '--position-bits', '0']}
         with tempfile.TemporaryDirectory() as tmp:
             for name, mesh in meshes.items():
                 off = os.path.join(tmp, name + '.off')

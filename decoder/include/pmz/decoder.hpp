@@ -37,6 +37,7 @@ struct StreamInfo {
   uint32_t position_bits = 0;  // 0 = lossless float32
   uint32_t curvature = 0;      // prediction offset weights, eighths (spec/format.md section 9.6)
   uint32_t fine_curvature = 0;
+  uint32_t level = 0;  // compression level: 0 default, 1 speed (spec/format.md section 4)
   uint64_t base_vertices = 0, base_faces = 0;
   uint64_t full_vertices = 0, full_faces = 0;
   uint64_t total_splits = 0;

@@ -68,6 +68,7 @@ typedef struct pmz_stream_info {
   uint32_t position_bits; /* 0 = lossless float32 */
   uint32_t curvature, fine_curvature;
   float bbox_min[3], bbox_max[3];
+  uint32_t level; /* compression level: 0 default, 1 speed */
 } pmz_stream_info;
 PMZ_API void pmz_decoder_info(const pmz_decoder* d, pmz_stream_info* out);
 

@@ -16,6 +16,9 @@ struct WriteOptions {
   // lossless: texture coordinates over each set's bounding box, normals octahedral, colours over
   // [0, 1].
   uint32_t texcoord_bits = 12, normal_bits = 10, color_bits = 8;
+  // Compression level (spec/format.md section 4): 0 the default (smallest), 1 the speed level
+  // (simpler models: faster to decode, larger).
+  uint32_t level = 0;
 };
 
 // The kinds of SPLT symbols (pmz::SymbolKind, format.hpp: groups, choice, wedge count, wedge

@@ -60,6 +60,11 @@ inline uint32_t rank_context(bool closed, bool confident) {
   return (closed ? 2u : 0u) + (confident ? 1u : 0u);
 }
 
+// Writer: the wedge (canonical ranks, kNoRank for a boundary side) of the ring gathered last in
+// pm as its interior count and candidate index j (spec/format.md section 9.4 step 2); false if
+// the ranks are not a valid wedge.
+bool wedge_index(const ProgressiveMesh& pm, uint32_t rank_l, uint32_t rank_r, uint32_t& count,
+                 uint32_t& j);
 // degree: VertexChoice::degrees() (the end weights of the score).
 // Writer: the wedge (canonical ranks, kNoRank for a boundary side) of the ring gathered last in
 // pm as symbols (interior count, rank among the candidates of that count); s.confident then

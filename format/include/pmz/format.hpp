@@ -11,7 +11,7 @@
 namespace pmz {
 
 inline constexpr uint8_t kSignature[8] = {0x89, 'P', 'M', 'Z', 0x0D, 0x0A, 0x1A, 0x0A};
-inline constexpr uint32_t kVersionMajor = 9;
+inline constexpr uint32_t kVersionMajor = 10;
 inline constexpr uint32_t kVersionMinor = 0;
 
 // Chunk = u8 type | varint payload_size | u32le crc32(type, size varint, payload) | payload
@@ -67,6 +67,7 @@ struct FileHeader {
   uint32_t curvature =
       0;  // prediction offset weights, 0..kMaxCurvature (eighths; spec/format.md section 9.6)
   uint32_t fine_curvature = 0;
+  uint32_t level = 0;  // compression level: 0 default, 1 speed (speed_level.hpp)
   uint32_t base_vertices = 0, base_faces = 0, full_faces = 0;
   uint32_t total_splits = 0;
   float bbox_min[3] = {0, 0, 0}, bbox_max[3] = {0, 0, 0};

@@ -55,6 +55,8 @@ struct SplitModels {
   // PositionPrediction::mix (kMixTangentContexts), the normal slot likewise (kMixNormalContexts).
   UIntModel mix_tangent[2][kMixTangentContexts];
   UIntModel mix_normal[kMixNormalContexts];
+  // The speed level (spec/format.md section 9.10): each residual with its residual model alone.
+  bool speed = false;
   UIntModel& mix(int slot, uint32_t context) {
     return slot < 2 ? mix_tangent[slot][context] : mix_normal[context];
   }
@@ -123,6 +125,8 @@ class SplitChunkReader {
   bool wedge_rank(uint32_t context, uint32_t& rank);
   // context, mix: PositionPrediction's per slot.
   bool residuals(const uint32_t context[3], const uint32_t mix[3], int32_t residual[3]);
+  // The speed level's: one model per residual (SplitModels::speed).
+  bool speed_residuals(const uint32_t context[3], int32_t residual[3]);
   uint64_t split_count() const { return count_; }
   size_t largest_group() const { return largest_; }
 
@@ -155,7 +159,9 @@ bool SplitChunkReader::group_symbols(VertexChoice& choice, const ProgressiveMesh
     if (!wedge_count(s.wedge_context, s.wedge_count) || !wedge_rank(s.rank_context, s.wedge_rank))
       return false;
     if (more) more = find(choice, &mesh, scan_after_split(j), vs);
-    if (!residuals(s.residual_context, s.mix_context, s.residual)) return false;
+    if (!(models_->speed ? speed_residuals(s.residual_context, s.residual)
+                         : residuals(s.residual_context, s.mix_context, s.residual)))
+      return false;
     out.push_back(s);
   }
   return more;

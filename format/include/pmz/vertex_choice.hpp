@@ -85,7 +85,9 @@ inline constexpr uint32_t kChoiceLag = 8;
 class VertexChoice {
  public:
   // Degrees and umbrella sums from the base rings (0 without a face); coords: 3 per vertex.
-  void reset(ProgressiveMesh& base, const int32_t* coords, uint32_t position_bits);
+  // umbrella false (the speed level, spec/format.md section 9.10): no sums, every class 0.
+  void reset(ProgressiveMesh& base, const int32_t* coords, uint32_t position_bits,
+             bool umbrella = true);
   // Starts a group: the neighbourhood noted since the last call becomes the near list (if
   // `near`: a decoder knows the group's flag and skips building a list it does not use).
   void start_group(bool near = true);
@@ -216,7 +218,12 @@ class VertexChoice {
   template <bool kShift>
   void umbrella_sums(const ProgressiveMesh& pm, const int32_t* coords, bool has_left,
                      bool has_right);
-  void update_key(uint32_t w) { key_[w] = key_of(sums_[w], degree_[w]); }
+  void degree_keys(const ProgressiveMesh& pm, bool has_left, bool has_right);
+  void update_key(uint32_t w) {
+    key_[w] = umbrella_ ? key_of(sums_[w], degree_[w])
+                        : uint8_t((degree_[w] < kChoiceDegrees ? degree_[w] : kChoiceDegrees - 1) *
+                                  kChoiceShapes);
+  }
   // A fresh mark value (all of mark_ differs from it).
   uint32_t next_epoch() {
     if (++epoch_ == 0) {
@@ -231,6 +238,7 @@ class VertexChoice {
   std::vector<RingSums> sums_;  // per vertex
   std::vector<uint8_t> key_;    // per vertex: min(degree, 8) * 3 + umbrella class
   uint32_t shift_ = 0;          // umbrella_shift
+  bool umbrella_ = true;        // umbrella sums kept (else every class is 0)
   std::vector<uint64_t> bits_;  // start_group's bitmap of the noted vertices (all 0 between calls)
   // Per vertex: epoch_ when in the near list being built (start_group), excluded_ when
   // excluded from the group being scanned, another value of epoch_ in independent().
