@@ -153,6 +153,10 @@ namespace {
 [[gnu::noinline]] bool decode_symbol(RangeDecoder& rc, UIntModel& m, UIntModel& m2, uint32_t& x) {
   return decode_uint_mixed(rc, m, m2, x);
 }
+// The speed level's residual (one model).
+[[gnu::noinline]] bool decode_symbol(RangeDecoder& rc, UIntModel& m, uint32_t& x) {
+  return decode_uint(rc, m, x);
+}
 [[gnu::noinline]] bool decode_small(RangeDecoder& rc, SmallModel& m, uint32_t& x) {
   RangeState st = rc.state();
   const bool ok = decode_small(st, m, x);
@@ -223,18 +227,14 @@ bool SplitChunkReader::residuals(const uint32_t context[3], const uint32_t mix[3
   return true;
 }
 
-// The three symbols with the coder's state in registers throughout (one copy in and out).
 bool SplitChunkReader::speed_residuals(const uint32_t context[3], int32_t residual[3]) {
-  RangeState st = geo_dec_->state();
-  bool ok = true;
-#pragma GCC unroll 1
-  for (int a = 0; a < 3 && ok; ++a) {
-    uint32_t z = 0;
-    ok = decode_uint(st, models_->residual[a][context[a]], z);
+  for (int a = 0; a < 3; ++a) {
+    uint32_t z;
+    if (!decode_symbol(*geo_dec_, models_->residual[a][context[a]], z) || !geo_dec_->ok)
+      return false;
     residual[a] = zigzag_decode(z);
   }
-  geo_dec_->set_state(st);
-  return ok && geo_dec_->ok;
+  return true;
 }
 
 }  // namespace pmz
