@@ -7,8 +7,11 @@
 #                                web/dist/viewer/index.html (static files, ?src=URL)
 #   bash scripts/web.sh test     build, then the node API tests and the headless Chromium tests
 #
-# PMZ_WASM_OPT overrides the optimization flags of the refinement loop's files and the link
-# (default -O3), PMZ_WASM_COLD_OPT those of the other files (default -Os): tests/bench/RESULTS.md.
+# Build knobs (defaults; tests/bench/RESULTS.md has what each measured): PMZ_WASM_OPT, the
+# refinement loop's files (-O3); PMZ_WASM_COLD_OPT, the other files (-Os); PMZ_WASM_LINK_OPT, the
+# LTO link (-Os); PMZ_WASM_POST_OPT, binaryen's wasm-opt after the link ("-Oz --converge"; empty:
+# none); PMZ_WASM_FEATURES, the wasm features (bulk memory, non-trapping float-to-int,
+# sign extension: every browser since 2021 and node 16+); PMZ_WASM_MALLOC (emmalloc).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
@@ -41,11 +44,14 @@ done
 exports=$(sed -n 's/^[a-zA-Z][^(]* \**\(pmz_[a-z_]*\)(.*/"_\1"/p' decoder/include/pmz/pmz.h | paste -sd,)
 opt=${PMZ_WASM_OPT:--O3}
 cold_opt=${PMZ_WASM_COLD_OPT:--Os}
+link_opt=${PMZ_WASM_LINK_OPT:--Os}
+post_opt=${PMZ_WASM_POST_OPT--Oz --converge}
 out=web/build
 pkg=web/dist/pkg
 obj=$out/obj
 rm -rf "$obj" && mkdir -p "$out" "$pkg" "$obj/hot" "$obj/cold"
-cxxflags=(-std=c++20 -flto -Wall -Wextra -I"$root/decoder/include" -I"$root/format/include")
+features=(${PMZ_WASM_FEATURES--mbulk-memory -mnontrapping-fptoint -msign-ext})
+cxxflags=(-std=c++20 -flto "${features[@]}" -Wall -Wextra -I"$root/decoder/include" -I"$root/format/include")
 # Each set in one em++ call (objects land in the current directory), the two sets in parallel.
 (cd "$obj/hot" && em++ "${cxxflags[@]}" $opt -c "${hot[@]/#/$root/}") &
 hot_job=$!
@@ -54,10 +60,14 @@ wait "$hot_job"
 # A standalone module (no emscripten JS runtime: web/src/pmz_wasm.js instantiates it, 2 KB
 # instead of emscripten's 14 KB of glue). -sFILESYSTEM=0: no file I/O; exceptions stay disabled
 # (the default: a throw aborts, which the JS wrapper reports as out_of_memory, the only
-# exception the decoder can meet).
-em++ $opt -flto "$obj"/hot/*.o "$obj"/cold/*.o \
+# exception the decoder can meet). emmalloc: 7.7 KB smaller than dlmalloc, as fast here (the
+# decoder makes few, large allocations). Linking -Os and wasm-opt -Oz after it: -3.4 KB, no
+# slower (the hot files' -O3 inlining and unrolling happen before the link).
+em++ $link_opt -flto "${features[@]}" "$obj"/hot/*.o "$obj"/cold/*.o \
   -o "$out/pmz_wasm.wasm" --no-entry -sSTANDALONE_WASM=1 -sFILESYSTEM=0 -sALLOW_MEMORY_GROWTH=1 \
-  -sWASM_BIGINT=1 -sEXPORTED_FUNCTIONS="[$exports,\"_malloc\",\"_free\"]"
+  -sWASM_BIGINT=1 -sMALLOC=${PMZ_WASM_MALLOC:-emmalloc} -sEXPORTED_FUNCTIONS="[$exports,\"_malloc\",\"_free\"]"
+# (wasm-opt takes the features from the module's target_features section.)
+[ -z "$post_opt" ] || wasm-opt $post_opt "$out/pmz_wasm.wasm" -o "$out/pmz_wasm.wasm"
 
 rm -rf "$pkg" && mkdir -p "$pkg"
 cp web/pkg/package.json web/pkg/README.md "$pkg/"

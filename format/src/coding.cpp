@@ -27,7 +27,7 @@ inline uint32_t load_u32le(const uint8_t* p) {
 }
 }  // namespace
 
-uint32_t crc32(const void* data, size_t size, uint32_t crc) {
+PMZ_SMALL_IN_WASM uint32_t crc32(const void* data, size_t size, uint32_t crc) {
   static const CrcTables tables;
   const auto& t = tables.t;
   const auto* p = static_cast<const uint8_t*>(data);
@@ -76,7 +76,7 @@ float ByteReader::f32le() {
   return f;
 }
 
-uint64_t ByteReader::varint() {
+PMZ_SMALL_IN_WASM uint64_t ByteReader::varint() {
   uint64_t v = 0;
   for (int shift = 0; shift < 70; shift += 7) {
     if (p >= end) break;

@@ -48,7 +48,7 @@ bool ProgressiveMesh::build(uint32_t n, const uint32_t* indices, size_t faces, s
   return true;
 }
 
-void ProgressiveMesh::grow_scratch(size_t need) {
+PMZ_SMALL_IN_WASM void ProgressiveMesh::grow_scratch(size_t need) {
   size_t cap = std::max<size_t>(64, scratch_cap_);
   while (cap < need) cap *= 2;
   for (auto* b : {&fan_, &ring_, &u_ring_, &sector_}) b->resize(cap);

@@ -120,7 +120,7 @@ void VertexChoice::push_vertex(uint32_t degree) {
   sums_.push_back(RingSums{{0, 0, 0}, 0});
 }
 
-void VertexChoice::grow(size_t k) {
+PMZ_SMALL_IN_WASM void VertexChoice::grow(size_t k) {
   make_room(noted_, k + 2);
   make_room(degree_, 1);
   make_room(mark_, 1);

@@ -1,19 +1,13 @@
-// Instantiates pmz_wasm.wasm: the decoder built by emscripten as a standalone module
-// (scripts/web.sh: -sSTANDALONE_WASM, no emscripten JS runtime). It owns its memory and
-// imports two functions; this file is the whole JS side of it (emscripten's generated glue was
-// 14 KB of the 120 KB size budget).
-//
-// Returns { HEAPU8, _name for each exported function } like an emscripten module, so the
-// wrapper in index.js calls `_pmz_decoder_feed`, `_malloc`, ... directly.
+// Instantiates pmz_wasm.wasm, the decoder as a standalone module (scripts/web.sh): the whole JS
+// side of it. Returns { HEAPU8, _name per export } like an emscripten module (index.js calls
+// _pmz_decoder_feed, _malloc, ...). Kept short: its bytes count in the size budget.
 export default async function createModule(options = {}) {
   const imports = {
-    // A failed allocation or a throw (exceptions are not compiled in) ends in abort(): the
-    // instance is unusable from then on and the caller's try/catch reports it.
+    // abort() (a failed allocation or a throw): the caller's try/catch reports it.
     wasi_snapshot_preview1: {
       proc_exit(code) { throw new Error(`pmz: the WebAssembly instance aborted (exit ${code})`); },
     },
-    // memory.grow detaches the old buffer; HEAPU8 below notices by itself.
-    env: { emscripten_notify_memory_growth() {} },
+    env: { emscripten_notify_memory_growth() {} },  // HEAPU8 notices by itself
   };
   let source;
   if (options.wasmBinary) {
@@ -33,7 +27,7 @@ export default async function createModule(options = {}) {
   const memory = exports.memory;
   let heap = new Uint8Array(memory.buffer);
   const module = {
-    get HEAPU8() {
+    get HEAPU8() {  // memory.grow detaches the old buffer
       if (heap.buffer !== memory.buffer) heap = new Uint8Array(memory.buffer);
       return heap;
     },

@@ -9,19 +9,9 @@
 #include <string>
 #include <vector>
 
-namespace pmz {
+#include "pmz/wasm_hints.hpp"
 
-// A cache-line prefetch of an address inside a live buffer. WebAssembly has no prefetch
-// instruction (clang drops __builtin_prefetch there), so the wasm build loads the byte instead:
-// the out-of-order core issues the miss early just the same, only its retirement waits for it
-// (bunny00-loop2 in node: tests/bench/RESULTS.md, web section). Only for an address inside a
-// buffer (a wasm load beyond memory traps). A macro: native code stays the same as
-// __builtin_prefetch written out (GCC inlines differently around a wrapper function).
-#if defined(__wasm__)
-#define PMZ_PREFETCH(p) ((void)*reinterpret_cast<const volatile uint8_t*>(p))
-#else
-#define PMZ_PREFETCH(p) __builtin_prefetch(p)
-#endif
+namespace pmz {
 
 inline constexpr uint32_t kNoCorner = 0xFFFFFFFFu;
 inline constexpr uint32_t kNoRank = 0xFFFFFFFFu;  // wedge side on the boundary
@@ -49,7 +39,8 @@ class ProgressiveMesh {
   // Resets to the given mesh. Fails (false + message) on out-of-range indices, degenerate
   // faces, an edge used twice in the same direction or by more than two faces, a vertex whose
   // faces form several fans.
-  bool build(uint32_t vertex_count, const uint32_t* indices, size_t face_count, std::string& error);
+  PMZ_SMALL_IN_WASM bool build(uint32_t vertex_count, const uint32_t* indices, size_t face_count,
+                               std::string& error);
 
   // Canonical ordered one-ring of v (history-independent): counter-clockwise;
   // closed fan: starting at the smallest neighbour index; open fan: from the boundary, so it

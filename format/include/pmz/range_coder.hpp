@@ -7,14 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-// The WebAssembly build has a size budget (scripts/web.sh): there, once-per-file set-up (model
-// initialization, chunk and base mesh decoding) is optimized for size with all it inlines (its
-// LTO inlines every single-caller function). No effect elsewhere.
-#if defined(__wasm__)
-#define PMZ_SMALL_IN_WASM [[clang::minsize]]
-#else
-#define PMZ_SMALL_IN_WASM
-#endif
+#include "pmz/wasm_hints.hpp"
 
 namespace pmz {
 
@@ -215,7 +208,7 @@ class RangeDecoder {
   // Decodes its own copy of the size bytes at p followed by kStreamPad zero bytes (the bytes past
   // a stream's end read as 0, up to kStreamPad); reading further yields zeros and clears ok (a
   // valid stream never does).
-  RangeDecoder(const uint8_t* p, size_t size);  // coding.cpp
+  PMZ_SMALL_IN_WASM RangeDecoder(const uint8_t* p, size_t size);  // coding.cpp
   RangeState state() const { return s_; }
   void set_state(const RangeState& s) {
     s_.range = s.range;

@@ -1,0 +1,24 @@
+// Build hints for the WebAssembly decoder (scripts/web.sh); natively they expand to what the
+// code would say without them, so native code is the same with or without this header.
+#pragma once
+
+// The WebAssembly build has a size budget (scripts/web.sh): there, once-per-file set-up (model
+// initialization, chunk and base mesh decoding, buffer growth) is optimized for size with all it
+// inlines (its LTO inlines every single-caller function). No effect elsewhere.
+#if defined(__wasm__)
+#define PMZ_SMALL_IN_WASM [[clang::minsize]]
+#else
+#define PMZ_SMALL_IN_WASM
+#endif
+
+// A cache-line prefetch of an address inside a live buffer. WebAssembly has no prefetch
+// instruction (clang drops __builtin_prefetch there), so the wasm build loads the byte instead:
+// the out-of-order core issues the miss early just the same, only its retirement waits for it
+// (bunny00-loop2 in node: tests/bench/RESULTS.md, web section). Only for an address inside a
+// buffer (a wasm load beyond memory traps). A macro: native code stays the same as
+// __builtin_prefetch written out (GCC inlines differently around a wrapper function).
+#if defined(__wasm__)
+#define PMZ_PREFETCH(p) ((void)*reinterpret_cast<const volatile uint8_t*>(p))
+#else
+#define PMZ_PREFETCH(p) __builtin_prefetch(p)
+#endif
