@@ -483,6 +483,37 @@ std::string uri_encode(const std::string& s) {
   return r;
 }
 
+// glTF's JSON must be UTF-8, but OBJ/MTL and .pmz names are bytes (regr01.mtl has a Latin-1
+// "Terraind\xebk"). Valid UTF-8 passes unchanged; any other byte is read as Latin-1, which keeps
+// the name readable and distinct instead of refusing the whole mesh over it.
+std::string utf8_name(const std::string& s) {
+  std::string r;
+  const auto* p = reinterpret_cast<const unsigned char*>(s.data());
+  const size_t n = s.size();
+  for (size_t i = 0; i < n;) {
+    const unsigned char c = p[i];
+    size_t len = c < 0x80 ? 1 : (c >> 5) == 6 ? 2 : (c >> 4) == 14 ? 3 : (c >> 3) == 30 ? 4 : 0;
+    bool valid = len > 0 && i + len <= n;
+    uint32_t cp = len == 1 ? c : len == 2 ? c & 0x1f : len == 3 ? c & 0x0f : c & 0x07;
+    for (size_t k = 1; valid && k < len; ++k) {
+      valid = (p[i + k] & 0xc0) == 0x80;
+      cp = (cp << 6) | (p[i + k] & 0x3f);
+    }
+    // RFC 3629: shortest form only, no surrogates, nothing above U+10FFFF.
+    static constexpr uint32_t kShortest[5] = {0, 0, 0x80, 0x800, 0x10000};
+    valid = valid && cp >= kShortest[len] && cp <= 0x10ffff && (cp < 0xd800 || cp > 0xdfff);
+    if (valid) {
+      r.append(s, i, len);
+      i += len;
+    } else {
+      r += char(0xc0 | (c >> 6));
+      r += char(0x80 | (c & 0x3f));
+      i += 1;
+    }
+  }
+  return r;
+}
+
 }  // namespace
 
 bool read_gltf(const std::string& path, std::string_view data, PolygonSoup& out,
@@ -586,7 +617,7 @@ bool write_glb(const IndexedMesh& mesh, std::string& bytes, std::string& error) 
   // Materials, their textures and images (URIs only: pmz carries no pixels).
   for (const Material& m : a.materials) {
     tinygltf::Material gm;
-    gm.name = m.name;
+    gm.name = utf8_name(m.name);
     gm.pbrMetallicRoughness.baseColorFactor.assign(m.base_color, m.base_color + 4);
     for (double& c : gm.pbrMetallicRoughness.baseColorFactor) c = std::clamp(c, 0.0, 1.0);
     gm.pbrMetallicRoughness.metallicFactor = 0;  // OBJ / PLY materials are not metallic
@@ -633,7 +664,14 @@ bool write_glb(const IndexedMesh& mesh, std::string& bytes, std::string& error) 
   model.defaultScene = 0;
   std::ostringstream stream;
   tinygltf::TinyGLTF writer;
-  if (!writer.WriteGltfSceneToStream(&model, stream, false, true)) {
+  bool written = false;
+  try {  // tinygltf's JSON library reports what it cannot serialise by throwing
+    written = writer.WriteGltfSceneToStream(&model, stream, false, true);
+  } catch (const std::exception& e) {
+    error = std::string("glTF serialisation failed: ") + e.what();
+    return false;
+  }
+  if (!written) {
     error = "glTF serialisation failed";
     return false;
   }

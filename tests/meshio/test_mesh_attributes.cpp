@@ -317,6 +317,29 @@ TEST(MeshAttributes, RoundTripsExactlyThroughObjPlyAndGlb) {
   EXPECT_TRUE(fs::exists(dir.path("out.mtl")));
 }
 
+// glTF's JSON is UTF-8; an MTL's names are bytes. A Latin-1 name (assimp's regr01.mtl has one)
+// once made the .glb writer throw out of the tool; now such a byte is read as Latin-1.
+TEST(MeshAttributes, GlbWritesANonUtf8MaterialNameAsLatin1) {
+  TempDir dir;
+  std::string mtl = kCubeMtl;
+  const std::string from = "newmtl blue", to = "newmtl blu\xeb";  // Latin-1 e-diaeresis
+  ASSERT_NE(mtl.find(from), std::string::npos);
+  mtl.replace(mtl.find(from), from.size(), to);
+  std::string obj = cube_obj("cube.mtl");
+  ASSERT_NE(obj.find("usemtl blue"), std::string::npos);
+  obj.replace(obj.find("usemtl blue"), 11, "usemtl blu\xeb");
+  dir.write("cube.mtl", mtl);
+  auto cube = read_ok(dir.write("cube.obj", obj));
+  ASSERT_EQ(cube.attributes.materials.size(), 2u);
+  ASSERT_EQ(cube.attributes.materials[1].name, "blu\xeb");
+  std::string out = dir.path("out.glb"), err;
+  ASSERT_TRUE(pmz::write_mesh(out, cube, err)) << err;
+  auto back = read_ok(out);
+  ASSERT_EQ(back.attributes.materials.size(), 2u);
+  EXPECT_EQ(back.attributes.materials[1].name, "blu\xc3\xab");  // U+00EB in UTF-8
+  EXPECT_EQ(back.attributes.materials[0].name, cube.attributes.materials[0].name);
+}
+
 TEST(MeshAttributes, PlyAttributesAsciiAndBinary) {
   TempDir dir;
   const std::string header =
