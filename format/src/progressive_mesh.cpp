@@ -5,7 +5,8 @@
 
 namespace pmz {
 
-bool ProgressiveMesh::build(uint32_t n, const uint32_t* indices, size_t faces, std::string& error) {
+[[gnu::cold]] bool ProgressiveMesh::build(uint32_t n, const uint32_t* indices, size_t faces,
+                                          std::string& error) {
   corner_vertex.assign(indices, indices + faces * 3);
   opposite.assign(faces * 3, kNoCorner);
   vertex_corner.assign(n, kNoCorner);
