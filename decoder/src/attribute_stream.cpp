@@ -9,9 +9,13 @@ namespace {
 // Room for `extra` more elements, growing geometrically (a split's reservation must not make
 // every later split reallocate).
 template <class T>
+[[gnu::noinline, gnu::cold]] void grow(std::vector<T>& v, size_t extra) {
+  v.reserve(std::max(v.capacity() * 2, v.size() + extra));
+}
+template <class T>
 inline void reserve_more(std::vector<T>& v, size_t extra) {
   if (v.size() + extra > v.capacity()) [[unlikely]]
-    v.reserve(std::max(v.capacity() * 2, v.size() + extra));
+    grow(v, extra);  // out of line: the decoder library has a size budget
 }
 
 }  // namespace

@@ -91,10 +91,39 @@ void octahedral(double x, double y, double z, uint32_t bits, int32_t* q) {
   q[1] = int32_t(std::clamp(std::floor((y * 0.5 + 0.5) * max_q + 0.5), 0.0, max_q));
 }
 
-// Which predictions a new wedge's values had (they select the residual models).
+// Which predictions a new wedge's values had, and how much its neighbourhood varies (they
+// select the residual models).
 struct PredictionKind {
   uint8_t face_map = 0;
+  uint8_t texcoord_ctx = 0, normal_ctx = 0;
 };
+
+inline constexpr uint32_t kMaxChartFan = 16;
+
+// x's corners in the faces around x (x = c's vertex) that c's chart reaches (spec/format.md
+// section 14.3, "Chart fan"): c, then across x's edges toward next(c)'s side, then from c
+// toward prev(c)'s side, crossing an edge only where its other vertex has the same assigned
+// a-wedge in both faces (no seam or crease there); at most kMaxChartFan corners.
+uint32_t chart_fan(const ProgressiveMesh& pm, const AttributeState& s, uint32_t c, uint32_t* out) {
+  uint32_t n = 0;
+  out[n++] = c;
+  for (uint32_t at = c; n < kMaxChartFan;) {
+    const uint32_t w = wedge_at(s, next_corner(at)), o = pm.opposite[prev_corner(at)];
+    if (w == kNoCorner || o == kNoCorner || wedge_at(s, next_corner(o)) != w) break;
+    at = prev_corner(o);
+    if (at == c) return n;  // the fan closed
+    out[n++] = at;
+  }
+  for (uint32_t at = c; n < kMaxChartFan;) {
+    const uint32_t w = wedge_at(s, prev_corner(at)), o = pm.opposite[next_corner(at)];
+    if (w == kNoCorner || o == kNoCorner || wedge_at(s, prev_corner(o)) != w) break;
+    at = next_corner(o);
+    out[n++] = at;
+  }
+  return n;
+}
+
+uint8_t spread_context(uint32_t spread) { return uint8_t(1 + std::min(bit_length(spread), 6u)); }
 
 // The prediction of a new wedge's values at corner c (spec/format.md section 14.3).
 PredictionKind predict(const ProgressiveMesh& pm, const int32_t* coords, const AttributeState& s,
@@ -105,46 +134,91 @@ PredictionKind predict(const ProgressiveMesh& pm, const int32_t* coords, const A
   for (uint32_t i = 0; i < s.stride; ++i)
     pred[i] = ref == kNoCorner ? 0 : s.values[size_t(ref) * s.stride + i];
   PredictionKind kind;
-  if (!h.texcoord_sets || !h.texcoord_bits || wa == kNoCorner || wb == kNoCorner) return kind;
-  // The face's map from positions to texture coordinates, applied to c's vertex: x = a +
-  // s (b - a) + t perp(b - a) in both spaces, perp a quarter turn counter-clockwise. Binary64,
-  // each operation rounded in this order (no fused multiply-add).
+  uint32_t fan[kMaxChartFan];
+  const uint32_t fan_n = chart_fan(pm, s, c, fan);
+  if (h.normals && h.normal_bits) {
+    // How far the fan's neighbours' normals lie from the prediction (octahedral steps).
+    const uint32_t at = 2 * h.texcoord_sets;
+    uint32_t spread = 0;
+    bool any = false;
+    for (uint32_t i = 0; i < fan_n; ++i)
+      for (uint32_t nb : {next_corner(fan[i]), prev_corner(fan[i])}) {
+        const uint32_t w = wedge_at(s, nb);
+        if (w == kNoCorner) continue;
+        any = true;
+        for (uint32_t k = 0; k < 2; ++k) {
+          const int64_t d = int64_t(s.values[size_t(w) * s.stride + at + k]) - pred[at + k];
+          spread = std::max(spread, uint32_t(std::min<int64_t>(d < 0 ? -d : d, 0xFFFFFFFF)));
+        }
+      }
+    kind.normal_ctx = any ? spread_context(spread) : 0;
+  }
+  if (!h.texcoord_sets || !h.texcoord_bits) return kind;
+  // The mean over the fan's faces of each face's map from positions to texture coordinates,
+  // applied to x: x = a + s (b - a) + t perp(b - a) in both spaces, perp a quarter turn
+  // counter-clockwise. Binary64, each operation rounded in this order (no fused multiply-add).
+  double sum[kMaxTexcoordSets * 2] = {}, own[kMaxTexcoordSets * 2] = {}, lo[2] = {0, 0},
+                                hi[2] = {0, 0};
+  uint32_t maps = 0;
+  bool own_map = false;  // c's own face gave a map
   const int32_t* px = coords + size_t(pm.corner_vertex[c]) * 3;
-  const int32_t* pa = coords + size_t(pm.corner_vertex[next_corner(c)]) * 3;
-  const int32_t* pb = coords + size_t(pm.corner_vertex[prev_corner(c)]) * 3;
-  double e[3], d[3];
-  for (int k = 0; k < 3; ++k) {
-    e[k] = double(pb[k]) - double(pa[k]);
-    d[k] = double(px[k]) - double(pa[k]);
+  for (uint32_t i = 0; i < fan_n; ++i) {
+    const uint32_t k = fan[i];
+    const uint32_t ka = wedge_at(s, next_corner(k)), kb = wedge_at(s, prev_corner(k));
+    if (ka == kNoCorner || kb == kNoCorner) continue;
+    const int32_t* pa = coords + size_t(pm.corner_vertex[next_corner(k)]) * 3;
+    const int32_t* pb = coords + size_t(pm.corner_vertex[prev_corner(k)]) * 3;
+    double e[3], d[3];
+    for (int j = 0; j < 3; ++j) {
+      e[j] = double(pb[j]) - double(pa[j]);
+      d[j] = double(px[j]) - double(pa[j]);
+    }
+    const double ee = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+    if (!(ee > 0)) continue;
+    const double along = (d[0] * e[0] + d[1] * e[1] + d[2] * e[2]) / ee;
+    double hh = 0;
+    for (int j = 0; j < 3; ++j) {
+      const double r = d[j] - along * e[j];
+      hh = hh + r * r;
+    }
+    const double across = std::sqrt(hh / ee);
+    for (uint32_t t = 0; t < h.texcoord_sets; ++t) {
+      const int32_t* A = &s.values[size_t(ka) * s.stride + 2 * t];
+      const int32_t* B = &s.values[size_t(kb) * s.stride + 2 * t];
+      const double du = double(B[0]) - double(A[0]), dv = double(B[1]) - double(A[1]);
+      const double p[2] = {A[0] + along * du - across * dv, A[1] + along * dv + across * du};
+      for (int j = 0; j < 2; ++j) {
+        sum[2 * t + j] = sum[2 * t + j] + p[j];
+        if (i == 0) own[2 * t + j] = p[j];
+        if (t == 0 && (maps == 0 || p[j] < lo[j])) lo[j] = p[j];
+        if (t == 0 && (maps == 0 || p[j] > hi[j])) hi[j] = p[j];
+      }
+    }
+    own_map = own_map || i == 0;
+    ++maps;
   }
-  const double ee = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
-  if (!(ee > 0)) return kind;
-  const double along = (d[0] * e[0] + d[1] * e[1] + d[2] * e[2]) / ee;
-  double hh = 0;
-  for (int k = 0; k < 3; ++k) {
-    const double r = d[k] - along * e[k];
-    hh = hh + r * r;
-  }
-  const double across = std::sqrt(hh / ee);
+  if (!maps) return kind;
   kind.face_map = 1;
-  for (uint32_t t = 0; t < h.texcoord_sets; ++t) {
-    const double max_q = double((1u << h.texcoord_bits) - 1);
-    const double ua = s.values[size_t(wa) * s.stride + 2 * t],
-                 va = s.values[size_t(wa) * s.stride + 2 * t + 1];
-    const double du = s.values[size_t(wb) * s.stride + 2 * t] - ua,
-                 dv = s.values[size_t(wb) * s.stride + 2 * t + 1] - va;
-    const double u = ua + along * du - across * dv, v = va + along * dv + across * du;
-    pred[2 * t] = int32_t(std::clamp(std::floor(u + 0.5), 0.0, max_q));
-    pred[2 * t + 1] = int32_t(std::clamp(std::floor(v + 0.5), 0.0, max_q));
+  // How much the faces' maps disagree (set 0, texture steps).
+  const double spread = std::min(std::max(hi[0] - lo[0], hi[1] - lo[1]), 1048576.0);
+  kind.texcoord_ctx = maps == 1 ? 0 : spread_context(uint32_t(spread));
+  // Maps that disagree by 128 steps or more: c's own face alone (a far face's map is off).
+  const bool own_only = own_map && maps > 1 && spread >= 128;
+  const double max_q = double((1u << h.texcoord_bits) - 1);
+  for (uint32_t t = 0; t < 2 * h.texcoord_sets; ++t) {
+    const double p = own_only ? own[t] : sum[t] / double(maps);
+    pred[t] = int32_t(std::clamp(std::floor(p + 0.5), 0.0, max_q));
   }
   return kind;
 }
 
 UIntModel& residual_model(AttributeModels& m, const AttributeHeader& h, uint32_t i,
                           PredictionKind kind) {
-  if (i < 2 * h.texcoord_sets) return m.texcoord[kind.face_map][i & 1];
+  if (i < 2 * h.texcoord_sets)
+    return kind.face_map ? m.texcoord_fan[kind.texcoord_ctx][i & 1] : m.texcoord[i & 1];
   i -= 2 * h.texcoord_sets;
-  if (i < h.normal_components()) return m.normal[i];
+  if (i < h.normal_components())
+    return h.normal_bits ? m.normal_fan[kind.normal_ctx][i] : m.normal[i];
   return m.color[std::min(i - h.normal_components(), 3u)];
 }
 
@@ -199,7 +273,8 @@ void write_attribute_header(std::vector<uint8_t>& out, const AttributeHeader& a)
   }
 }
 
-bool read_attribute_header(ByteReader& r, AttributeHeader& a, std::string& error) {
+[[gnu::optimize("Os")]] bool read_attribute_header(ByteReader& r, AttributeHeader& a,
+                                                   std::string& error) {
   a.texcoord_sets = r.u8();
   a.texcoord_bits = r.u8();
   if (a.texcoord_sets > kMaxTexcoordSets || a.texcoord_bits > kMaxAttributeBits)

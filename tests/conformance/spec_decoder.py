@@ -431,8 +431,10 @@ class Attributes:
         self.a, self.aw, self.wv, self.val, self.mat, self.W = a, [], [], [], [], 0
         self.reference = [[SmallModel() for _ in range(3)] for _ in range(2)]  # Appendix A
         self.escape = UIntModel()
-        self.tex = [[UIntModel(), UIntModel()], [UIntModel(), UIntModel()]]
+        self.tex = [UIntModel(), UIntModel()]
+        self.tex_fan = [[UIntModel(), UIntModel()] for _ in range(8)]
         self.normal = [UIntModel() for _ in range(3)]
+        self.normal_fan = [[UIntModel(), UIntModel()] for _ in range(8)]
         self.color = [UIntModel() for _ in range(4)]
         self.material = [SmallModel() for _ in range(4)]
         self.material_escape = UIntModel()
@@ -442,6 +444,27 @@ class Attributes:
     def opposite(m, h):  # the corner across the edge opposite h, or None
         g = m.E.get((m.F[prv(h)], m.F[nxt(h)]))
         return None if g is None else prv(g)
+
+    def chart_fan(self, m, c):  # 14.3, chart fan
+        fan, k = [c], c
+        while len(fan) < 16:
+            o = self.opposite(m, prv(k))
+            if not (self.assigned(nxt(k)) and o is not None and self.assigned(nxt(o))
+                    and self.aw[nxt(o)] == self.aw[nxt(k)]):
+                break
+            k = prv(o)
+            if k == c:
+                return fan
+            fan.append(k)
+        k = c
+        while len(fan) < 16:
+            o = self.opposite(m, nxt(k))
+            if not (self.assigned(prv(k)) and o is not None and self.assigned(prv(o))
+                    and self.aw[prv(o)] == self.aw[prv(k)]):
+                break
+            k = nxt(o)
+            fan.append(k)
+        return fan
 
     def assigned(self, h):
         return h is not None and h < len(self.aw) and self.aw[h] is not None
@@ -473,33 +496,66 @@ class Attributes:
         wb = self.aw[prv(c)] if self.assigned(prv(c)) else None
         ref = cand[0] if nc else wa if wa is not None else wb
         P = list(self.val[ref]) if ref is not None else [0] * a["stride"]
-        fm = 0
-        if a["sets"] and a["tbits"] and wa is not None and wb is not None:
-            px, pa, pb = m.c[x], m.c[m.F[nxt(c)]], m.c[m.F[prv(c)]]
-            e = [float(pb[k]) - float(pa[k]) for k in range(3)]
-            d = [float(px[k]) - float(pa[k]) for k in range(3)]
-            ee = e[0] * e[0] + e[1] * e[1] + e[2] * e[2]
-            if ee > 0:
+        fan = self.chart_fan(m, c)
+        nctx = 0
+        if a["nn"] == 2:  # octahedral normals: the neighbours' spread around P
+            at, spread, found = 2 * a["sets"], 0, False
+            for k in fan:
+                for h in (nxt(k), prv(k)):
+                    if self.assigned(h):
+                        found = True
+                        for j in range(2):
+                            spread = max(spread, abs(self.val[self.aw[h]][at + j] - P[at + j]))
+            nctx = 1 + min(spread.bit_length(), 6) if found else 0
+        fm, tctx = 0, 0
+        if a["sets"] and a["tbits"]:
+            maps, own = [], False  # per face map: [U0, V0, U1, V1, ...]
+            px = m.c[x]
+            for i_fan, k in enumerate(fan):
+                if not (self.assigned(nxt(k)) and self.assigned(prv(k))):
+                    continue
+                pa, pb = m.c[m.F[nxt(k)]], m.c[m.F[prv(k)]]
+                e = [float(pb[i]) - float(pa[i]) for i in range(3)]
+                d = [float(px[i]) - float(pa[i]) for i in range(3)]
+                ee = e[0] * e[0] + e[1] * e[1] + e[2] * e[2]
+                if not ee > 0:
+                    continue
                 along = (d[0] * e[0] + d[1] * e[1] + d[2] * e[2]) / ee
                 hh = 0.0
-                for k in range(3):
-                    rr = d[k] - along * e[k]
+                for i in range(3):
+                    rr = d[i] - along * e[i]
                     hh = hh + rr * rr
                 across = math.sqrt(hh / ee)
-                fm, top = 1, float((1 << a["tbits"]) - 1)
-                A, B = self.val[wa], self.val[wb]
+                A, B, uv = self.val[self.aw[nxt(k)]], self.val[self.aw[prv(k)]], []
                 for t in range(a["sets"]):
                     ua, va = float(A[2 * t]), float(A[2 * t + 1])
                     du, dv = float(B[2 * t]) - ua, float(B[2 * t + 1]) - va
-                    pu = ua + along * du - across * dv
-                    pv = va + along * dv + across * du
-                    P[2 * t] = int(min(max(math.floor(pu + 0.5), 0.0), top))
-                    P[2 * t + 1] = int(min(max(math.floor(pv + 0.5), 0.0), top))
+                    uv += [ua + along * du - across * dv, va + along * dv + across * du]
+                own = own or i_fan == 0
+                maps.append(uv)
+            if maps:
+                fm, top = 1, float((1 << a["tbits"]) - 1)
+                g = max(max(uv[j] for uv in maps) - min(uv[j] for uv in maps) for j in range(2))
+                tctx = 0 if len(maps) == 1 else \
+                    1 + min(int(math.floor(min(g, 2.0 ** 20))).bit_length(), 6)
+                for i in range(2 * a["sets"]):
+                    if own and len(maps) >= 2 and g >= 128:
+                        Q = maps[0][i]
+                    else:
+                        S = 0.0
+                        for uv in maps:
+                            S = S + uv[i]
+                        Q = S / len(maps)
+                    P[i] = int(min(max(math.floor(Q + 0.5), 0.0), top))
         value = []
         for i in range(a["stride"]):
             j = i - 2 * a["sets"]
-            M = self.tex[fm][i % 2] if j < 0 else self.normal[j] if j < a["nn"] else \
-                self.color[min(j - a["nn"], 3)]
+            if j < 0:
+                M = self.tex_fan[tctx][i % 2] if fm else self.tex[i % 2]
+            elif j < a["nn"]:
+                M = self.normal_fan[nctx][j] if a["nn"] == 2 else self.normal[j]
+            else:
+                M = self.color[min(j - a["nn"], 3)]
             value.append(s32(P[i] + unzigzag(rc.uint(M))))
         self.wv.append(x)
         self.val.append(value)

@@ -1,4 +1,4 @@
-// Attribute wedges in the .pmz format (spec/format.md section 14; format 9.0): the HEAD
+// Attribute wedges in the .pmz format (spec/format.md section 14; format 10.0): the HEAD
 // fields, the per-corner wedge state writer and decoder keep in step, and the coding of a
 // corner's wedge reference and a new wedge's values (ATTR chunks). Writer and decoder share it.
 //
@@ -74,10 +74,13 @@ struct AttributeQuantizer {
 
 // Context models of the ATTR streams, created once per file (carried across chunks).
 struct AttributeModels {
-  SmallModel reference[2][3];  // [u corner][candidates]
-  UIntModel escape;            // an existing wedge that is no candidate: wedges - 1 - id
-  UIntModel texcoord[2][2];    // [face-map prediction][component]
-  UIntModel normal[3], color[4];
+  SmallModel reference[2][3];    // [u corner][candidates]
+  UIntModel escape;              // an existing wedge that is no candidate: wedges - 1 - id
+  UIntModel texcoord[2];         // [component], without a face-map prediction
+  UIntModel texcoord_fan[8][2];  // [face maps' spread context][component]
+  UIntModel normal[3];           // lossless normals [component]
+  UIntModel normal_fan[8][2];    // octahedral [neighbours' spread context][component]
+  UIntModel color[4];
   SmallModel material[4];  // [candidates]
   UIntModel material_escape;
   Prob simple[2] = {kProbInit, kProbInit};  // a split's "simple" bit [the previous split's]
