@@ -28,8 +28,13 @@ export interface StreamInfo {
   flags: number;
   /** 0 = lossless float32. */
   positionBits: number;
+  /** The predictor's curvature weights (spec/format.md section 4). */
+  curvature: number;
+  fineCurvature: number;
   bboxMin: [number, number, number];
   bboxMax: [number, number, number];
+  /** Compression level (format 10.0): 0 the default, 1 the speed level. */
+  level: number;
 }
 
 export interface MeshChanges {

@@ -169,8 +169,9 @@ export class Decoder {
         baseVertices: u64(0), baseFaces: u64(8), fullVertices: u64(16), fullFaces: u64(24),
         totalSplits: u64(32), headerDone: u32(40) !== 0, baseDone: u32(44) !== 0,
         complete: u32(48) !== 0, versionMajor: u32(52), versionMinor: u32(56), flags: u32(60),
-        positionBits: u32(64), bboxMin: [f32(76), f32(80), f32(84)],
-        bboxMax: [f32(88), f32(92), f32(96)],
+        positionBits: u32(64), curvature: u32(68), fineCurvature: u32(72),
+        bboxMin: [f32(76), f32(80), f32(84)], bboxMax: [f32(88), f32(92), f32(96)],
+        level: u32(100),
       };
     }, { headerDone: false, baseDone: false, complete: false });
   }

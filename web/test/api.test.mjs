@@ -9,7 +9,10 @@ import { test } from 'node:test';
 import { demoPmz, importPackage, nativeDecode, rootDir, sameBits } from './common.mjs';
 
 const samplePmz = path.join(rootDir, 'tests', 'data', 'sample.pmz');
-const files = [samplePmz, demoPmz()];
+// A speed-level stream (format 10.0's level 1) beside two default-level ones.
+const speedPmz = path.join(rootDir, 'tests', 'conformance', 'vectors', 'torus-speed.pmz');
+const files = [samplePmz, demoPmz(), speedPmz];
+const levelOf = (file) => (file === speedPmz ? 1 : 0);
 
 function copyMesh(d) {
   return { positions: d.positions().slice(), indices: d.indices().slice() };
@@ -54,6 +57,7 @@ for (const file of files) {
     const { mesh, info } = await decodeAll(bytes, [bytes.length]);
     const native = nativeDecode(file);
     assert.equal(mesh.indices.length / 3, info.fullFaces);
+    assert.equal(info.level, levelOf(file));
     assert.equal(mesh.positions.length, native.positions.length);
     assert.ok(sameBits(mesh.positions, native.positions), 'positions differ');
     assert.ok(sameBits(mesh.indices, native.indices), 'indices differ');
