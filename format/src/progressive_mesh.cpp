@@ -5,50 +5,6 @@
 
 namespace pmz {
 
-[[gnu::cold]] bool ProgressiveMesh::build(uint32_t n, const uint32_t* indices, size_t faces,
-                                          std::string& error) {
-  corner_vertex.assign(indices, indices + faces * 3);
-  opposite.assign(faces * 3, kNoCorner);
-  vertex_corner.assign(n, kNoCorner);
-  // Directed edge (from, to) of corner c is the edge opposite c: next(c) -> prev(c).
-  std::vector<uint64_t> edges(faces * 3);
-  for (uint32_t c = 0; c < faces * 3; ++c) {
-    uint32_t a = corner_vertex[c];
-    if (a >= n) return error = "face index out of range", false;
-    uint32_t f = c - c % 3;
-    if (corner_vertex[f] == corner_vertex[f + 1] || corner_vertex[f] == corner_vertex[f + 2] ||
-        corner_vertex[f + 1] == corner_vertex[f + 2])
-      return error = "degenerate face", false;
-    vertex_corner[a] = c;
-  }
-  std::vector<uint32_t> order(faces * 3);
-  for (uint32_t c = 0; c < faces * 3; ++c) {
-    edges[c] = uint64_t(corner_vertex[next_corner(c)]) << 32 | corner_vertex[prev_corner(c)];
-    order[c] = c;
-  }
-  std::sort(order.begin(), order.end(),
-            [&](uint32_t a, uint32_t b) { return edges[a] < edges[b]; });
-  for (size_t i = 1; i < order.size(); ++i)
-    if (edges[order[i]] == edges[order[i - 1]]) return error = "non-manifold edge", false;
-  for (uint32_t c = 0; c < faces * 3; ++c) {
-    uint64_t twin = edges[c] << 32 | edges[c] >> 32;
-    auto it = std::lower_bound(order.begin(), order.end(), twin,
-                               [&](uint32_t x, uint64_t key) { return edges[x] < key; });
-    if (it != order.end() && edges[*it] == twin) opposite[c] = *it;
-  }
-  // Each vertex's faces must form one fan (spec/format.md sections 6 and 7: a vertex in several
-  // fans is refused): the fan walked from its stored corner holds all of its corners.
-  std::vector<uint32_t> corners_at(n, 0);
-  for (uint32_t c = 0; c < faces * 3; ++c) ++corners_at[corner_vertex[c]];
-  for (uint32_t v = 0; v < n; ++v) {
-    uint32_t fan_faces = 0;
-    for_each_fan_face(v, [&](uint32_t, uint32_t) { ++fan_faces; });
-    if (fan_faces != corners_at[v])
-      return error = "vertex " + std::to_string(v) + " in several fans", false;
-  }
-  return true;
-}
-
 PMZ_SMALL_IN_WASM void ProgressiveMesh::grow_scratch(size_t need) {
   size_t cap = std::max<size_t>(64, scratch_cap_);
   while (cap < need) cap *= 2;
