@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "pmz/coding.hpp"
+#include "pmz/wasm_hints.hpp"
 
 namespace pmz {
 
@@ -273,8 +274,7 @@ void write_attribute_header(std::vector<uint8_t>& out, const AttributeHeader& a)
   }
 }
 
-[[gnu::optimize("Os")]] bool read_attribute_header(ByteReader& r, AttributeHeader& a,
-                                                   std::string& error) {
+PMZ_SMALL bool read_attribute_header(ByteReader& r, AttributeHeader& a, std::string& error) {
   a.texcoord_sets = r.u8();
   a.texcoord_bits = r.u8();
   if (a.texcoord_sets > kMaxTexcoordSets || a.texcoord_bits > kMaxAttributeBits)

@@ -11,6 +11,15 @@
 #define PMZ_SMALL_IN_WASM
 #endif
 
+// Once-per-file code built for size everywhere (the native decoder library's size budget).
+// GCC spells it optimize("Os"); clang (the fuzz and WebAssembly builds) ignores that attribute
+// with a warning, and says minsize.
+#if defined(__clang__)
+#define PMZ_SMALL [[clang::minsize]]
+#else
+#define PMZ_SMALL [[gnu::optimize("Os")]]
+#endif
+
 // A cache-line prefetch of an address inside a live buffer. WebAssembly has no prefetch
 // instruction (clang drops __builtin_prefetch there), so the wasm build loads the byte instead:
 // the out-of-order core issues the miss early just the same, only its retirement waits for it
