@@ -276,13 +276,7 @@ bool wedge_pick(const ProgressiveMesh& pm, uint32_t count, uint32_t rank, uint32
   const uint32_t j = rank == 0  ? s.best
                      : s.narrow ? select(s.score64.data(), n, rank, s.order)
                                 : select(s.score.data(), n, rank, s.order);
-  if (pm.ring_closed()) {
-    rank_l = j;
-    rank_r = (j + count + 1) % k;
-  } else {
-    rank_l = j == 0 ? kNoRank : j - 1;
-    rank_r = j + count == k ? kNoRank : j + count;
-  }
+  wedge_ends(pm.ring_closed(), k, count, j, rank_l, rank_r);
   return true;
 }
 

@@ -1,5 +1,6 @@
 #include "pmz/speed_level.hpp"
 
+#include "pmz/fan_wedge.hpp"
 #include "pmz/progressive_mesh.hpp"
 #include "pmz/range_coder.hpp"
 
@@ -9,15 +10,10 @@ bool speed_wedge_pick(const ProgressiveMesh& pm, uint32_t count, uint32_t rank, 
                       uint32_t& rank_r) {
   const uint32_t k = uint32_t(pm.ring().size());
   if (k < 2) return false;
-  if (pm.ring_closed()) {  // k candidates, count <= k - 2
-    if (count > k - 2 || rank >= k) return false;
-    rank_l = rank;
-    rank_r = (rank + count + 1) % k;
-  } else {  // k - count + 1 candidates, count <= k - 1
-    if (count > k - 1 || rank > k - count) return false;
-    rank_l = rank == 0 ? kNoRank : rank - 1;
-    rank_r = rank + count == k ? kNoRank : rank + count;
-  }
+  if (pm.ring_closed() ? count > k - 2 || rank >= k          // k candidates
+                       : count > k - 1 || rank > k - count)  // k - count + 1 candidates
+    return false;
+  wedge_ends(pm.ring_closed(), k, count, rank, rank_l, rank_r);
   return true;
 }
 

@@ -7,9 +7,9 @@
 #include <cstdint>
 #include <vector>
 
-namespace pmz {
+#include "pmz/progressive_mesh.hpp"
 
-class ProgressiveMesh;
+namespace pmz {
 
 // Context counts of the wedge_count and wedge_rank models (wedge_context, rank_context).
 inline constexpr uint32_t kWedgeContexts = 18, kRankContexts = 4;
@@ -58,6 +58,19 @@ inline uint32_t wedge_context(uint32_t k, bool closed) {
 // twice the second's (WedgeScratch::confident).
 inline uint32_t rank_context(bool closed, bool confident) {
   return (closed ? 2u : 0u) + (confident ? 1u : 0u);
+}
+
+// The ends (canonical ranks, kNoRank for a missing one) of candidate j with `count` interior
+// vertices in a ring of k (spec/format.md section 9.4 step 2); the inverse of wedge_index().
+inline void wedge_ends(bool closed, uint32_t k, uint32_t count, uint32_t j, uint32_t& rank_l,
+                       uint32_t& rank_r) {
+  if (closed) {
+    rank_l = j;
+    rank_r = (j + count + 1) % k;
+  } else {
+    rank_l = j == 0 ? kNoRank : j - 1;
+    rank_r = j + count == k ? kNoRank : j + count;
+  }
 }
 
 // Writer: the wedge (canonical ranks, kNoRank for a boundary side) of the ring gathered last in
