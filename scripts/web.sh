@@ -51,18 +51,21 @@ pkg=web/dist/pkg
 obj=$out/obj
 rm -rf "$obj" && mkdir -p "$out" "$pkg" "$obj/hot" "$obj/cold"
 features=(${PMZ_WASM_FEATURES--mbulk-memory -mnontrapping-fptoint -msign-ext})
-cxxflags=(-std=c++20 -flto "${features[@]}" -Wall -Wextra -I"$root/decoder/include" -I"$root/format/include")
+cxxflags=(-std=c++20 -flto -fno-exceptions "${features[@]}" -Wall -Wextra
+  -I"$root/decoder/include" -I"$root/format/include")
 # Each set in one em++ call (objects land in the current directory), the two sets in parallel.
 (cd "$obj/hot" && em++ "${cxxflags[@]}" $opt -c "${hot[@]/#/$root/}") &
 hot_job=$!
 (cd "$obj/cold" && em++ "${cxxflags[@]}" $cold_opt -c "${cold[@]/#/$root/}")
 wait "$hot_job"
 # A standalone module (no emscripten JS runtime: web/src/pmz_wasm.js instantiates it, 2 KB
-# instead of emscripten's 14 KB of glue). -sFILESYSTEM=0: no file I/O; exceptions stay disabled
-# (the default: a throw aborts, which the JS wrapper reports as out_of_memory, the only
-# exception the decoder can meet). emmalloc: 7.7 KB smaller than dlmalloc, as fast here (the
-# decoder makes few, large allocations). Linking -Os and wasm-opt -Oz after it: -3.4 KB, no
-# slower (the hot files' -O3 inlining and unrolling happen before the link).
+# instead of emscripten's 14 KB of glue). -sFILESYSTEM=0: no file I/O. -fno-exceptions (above): a
+# failed allocation aborts, which the JS wrapper reports as out_of_memory, the only exception the
+# decoder can meet; the decoder's handlers are PMZ_TRY / PMZ_CATCH_BAD_ALLOC (wasm_hints.hpp), and
+# without the throw/catch runtime and its RTTI the module is 944 B smaller. emmalloc: 7.7 KB
+# smaller than dlmalloc, as fast here (the decoder makes few, large allocations). Linking -Os and
+# wasm-opt -Oz after it: -3.4 KB, no slower (the hot files' -O3 inlining and unrolling happen
+# before the link).
 em++ $link_opt -flto "${features[@]}" "$obj"/hot/*.o "$obj"/cold/*.o \
   -o "$out/pmz_wasm.wasm" --no-entry -sSTANDALONE_WASM=1 -sFILESYSTEM=0 -sALLOW_MEMORY_GROWTH=1 \
   -sWASM_BIGINT=1 -sMALLOC=${PMZ_WASM_MALLOC:-emmalloc} -sEXPORTED_FUNCTIONS="[$exports,\"_malloc\",\"_free\"]"

@@ -4,6 +4,7 @@
 #include "pmz/decoder.hpp"
 #include "pmz/export.h"
 #include "pmz/pmz.h"
+#include "pmz/wasm_hints.hpp"
 
 struct pmz_decoder {
   pmz::Decoder dec;
@@ -20,11 +21,8 @@ PMZ_API pmz_decoder* pmz_decoder_create(uint64_t max_vertices, uint64_t max_face
 }
 PMZ_API void pmz_decoder_destroy(pmz_decoder* d) { delete d; }
 PMZ_API int pmz_decoder_feed(pmz_decoder* d, const void* data, size_t size) {
-  try {
-    return int(d->dec.feed(data, size));
-  } catch (const std::bad_alloc&) {
-    return PMZ_ERR_MEMORY;
-  }
+  PMZ_TRY { return int(d->dec.feed(data, size)); }
+  PMZ_CATCH_BAD_ALLOC { return PMZ_ERR_MEMORY; }
 }
 PMZ_API int pmz_decoder_finish(pmz_decoder* d) { return int(d->dec.finish()); }
 PMZ_API int pmz_decoder_status(const pmz_decoder* d) { return int(d->dec.status()); }

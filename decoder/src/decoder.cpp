@@ -20,6 +20,7 @@
 #include "pmz/speed_level.hpp"
 #include "pmz/split_chunk.hpp"
 #include "pmz/vertex_choice.hpp"
+#include "pmz/wasm_hints.hpp"
 
 // noclone is GCC's: clang has no such attribute and warns (-Wunknown-attributes).
 #if defined(__clang__)
@@ -300,12 +301,11 @@ struct Decoder::Impl {
   // memory for the list, it reports everything as changed.
   void note_rewritten(std::span<const uint32_t> faces) noexcept {
     if (level.changes.all) return;
-    try {
+    PMZ_TRY {
       for (uint32_t f : faces)
         if (f < level.changes.face_begin) level.changes.modified_faces.push_back(f);
-    } catch (const std::bad_alloc&) {
-      level.changes.all = true;
     }
+    PMZ_CATCH_BAD_ALLOC { level.changes.all = true; }
     if (level.changes.all || level.changes.modified_faces.size() > level.mesh.face_count() + 64u) {
       level.changes.all = true;
       level.changes.modified_faces.clear();
@@ -694,7 +694,7 @@ Status Decoder::feed(const void* data, size_t size) {
   const auto* p = static_cast<const uint8_t*>(data);
   d.input.parse_base = d.input.consumed - d.input.pending.size();
   d.input.consumed += size;
-  try {
+  PMZ_TRY {
     if (d.input.pending.empty()) {
       size_t used = d.parse(p, size);
       if (d.stage != Stage::failed) d.input.pending.assign(p + used, p + size);
@@ -704,9 +704,8 @@ Status Decoder::feed(const void* data, size_t size) {
       if (d.stage != Stage::failed)
         d.input.pending.erase(d.input.pending.begin(), d.input.pending.begin() + ptrdiff_t(used));
     }
-  } catch (const std::bad_alloc&) {
-    d.fail(Status::out_of_memory, "allocation failed");
   }
+  PMZ_CATCH_BAD_ALLOC { d.fail(Status::out_of_memory, "allocation failed"); }
   if (d.stage == Stage::failed) d.input.pending.clear();
   return d.status;
 }
@@ -725,7 +724,7 @@ uint64_t Decoder::bytes_consumed() const { return impl_->input.consumed; }
 
 uint64_t Decoder::Impl::refine(uint64_t max_splits, uint64_t face_target) {
   uint64_t n = 0;
-  try {
+  PMZ_TRY {
     // Room for every split this call may apply (bounded by decoded input, not the header):
     // apply() must not grow a buffer once it changed the mesh (an allocation failure there would
     // leave a split half applied). With a face target, at most the missing faces (a split adds
@@ -783,9 +782,8 @@ uint64_t Decoder::Impl::refine(uint64_t max_splits, uint64_t face_target) {
       if (!apply()) break;
       ++n;
     }
-  } catch (const std::bad_alloc&) {
-    fail(Status::out_of_memory, "allocation failed while refining");
   }
+  PMZ_CATCH_BAD_ALLOC { fail(Status::out_of_memory, "allocation failed while refining"); }
   return n;
 }
 
@@ -793,7 +791,7 @@ uint64_t Decoder::Impl::coarsen(uint64_t max_splits, uint64_t face_floor) {
   uint64_t n = 0;
   level.fans.reset();
   UnlinkWindow window;
-  try {
+  PMZ_TRY {
     for (; n < max_splits && level.applied > 0; ++n) {
       const uint8_t side = record.sides[level.applied - 1];
       if (level.mesh.face_count() - (side & kHasLeft ? 1u : 0u) - (side & kHasRight ? 1u : 0u) <
@@ -810,8 +808,9 @@ uint64_t Decoder::Impl::coarsen(uint64_t max_splits, uint64_t face_floor) {
       prefetch_unlink(window);
       undo();
     }
-  } catch (const std::bad_alloc&) {  // undo_resplit grows no scratch in practice (see its test);
-                                     // kept as a guard
+  }
+  PMZ_CATCH_BAD_ALLOC {  // undo_resplit grows no scratch in practice (see its test);
+                         // kept as a guard
     fail(Status::out_of_memory, "allocation failed while coarsening");
   }
   return n;

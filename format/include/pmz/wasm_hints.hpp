@@ -2,6 +2,8 @@
 // code would say without them, so native code is the same with or without this header.
 #pragma once
 
+#include <new>  // std::bad_alloc in PMZ_CATCH_BAD_ALLOC
+
 // The WebAssembly build has a size budget (scripts/web.sh): there, once-per-file set-up (model
 // initialization, chunk and base mesh decoding, buffer growth) is optimized for size with all it
 // inlines (its LTO inlines every single-caller function). No effect elsewhere.
@@ -30,4 +32,17 @@
 #define PMZ_PREFETCH(p) ((void)*reinterpret_cast<const volatile uint8_t*>(p))
 #else
 #define PMZ_PREFETCH(p) __builtin_prefetch(p)
+#endif
+
+// Out of memory: a std::bad_alloc caught where the decoder reports Status::out_of_memory. The
+// WebAssembly build compiles without exceptions (scripts/web.sh: -fno-exceptions drops the
+// throw/catch runtime and its RTTI, ~1.3 KB), where a failed allocation aborts the instance and
+// web/src/index.js reports out_of_memory from then on. There the try block runs as a plain block
+// and the handler is never reached. Natively (exceptions on) these are try / catch written out.
+#if defined(__cpp_exceptions)
+#define PMZ_TRY try
+#define PMZ_CATCH_BAD_ALLOC catch (const std::bad_alloc&)
+#else
+#define PMZ_TRY if (true)
+#define PMZ_CATCH_BAD_ALLOC else
 #endif
