@@ -54,12 +54,10 @@ void AttributeStream::reserve_split(uint32_t faces, uint32_t ring) {
     reserve_more(state.face_material, faces_after - state.face_material.size());
   if (!h.has_wedges()) return;
   reserve_more(state.corner_wedge, faces_after * 3 - state.corner_wedge.size());
-  reserve_more(state.wedge_vertex, n);
-  reserve_more(state.values, n * state.stride);
-  reserve_more(wedge_positions, n * 3);
-  for (uint32_t t = 0; t < h.texcoord_sets; ++t) reserve_more(texcoords[t], n * 2);
-  if (h.normals) reserve_more(normals, n * 3);
-  reserve_more(colors, n * h.color_components);
+  // No more wedges than HEAD announced (decode_new_wedge refuses them): near the end, room
+  // for a whole ring of new ones would double every buffer for nothing.
+  const size_t w = std::min<size_t>(n, h.full_wedges - state.wedge_count);
+  each_wedge_buffer([w](auto& v, size_t per_wedge) { reserve_more(v, w * per_wedge); });
 }
 
 bool AttributeStream::first_apply(const ProgressiveMesh& pm, const int32_t* coords,

@@ -13,6 +13,7 @@
 #include <span>
 
 #include "attribute_stream.hpp"
+#include "huge_pages.hpp"
 #include "pmz/base_codec.hpp"
 #include "pmz/fan_wedge.hpp"
 #include "pmz/format.hpp"
@@ -35,10 +36,6 @@
 #define PMZ_COLD [[gnu::cold, clang::minsize]]
 #else
 #define PMZ_COLD [[gnu::cold]]
-#endif
-
-#if defined(__linux__)
-#include <sys/mman.h>
 #endif
 
 namespace pmz {
@@ -68,19 +65,6 @@ const char* status_name(Status s) {
 namespace {
 constexpr uint8_t kHasLeft = 1, kHasRight = 2;
 
-// Refinement reads the mesh buffers at random: ask the OS to back their untouched capacity
-// with transparent huge pages (fewer page faults and TLB misses). Only a hint: where
-// unsupported or disabled it does nothing, and results never depend on it.
-template <typename T>
-void advise_huge_pages([[maybe_unused]] const std::vector<T>& v) {
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-  constexpr uintptr_t kHuge = uintptr_t(2) << 20;
-  const uintptr_t p = reinterpret_cast<uintptr_t>(v.data());
-  const uintptr_t b = (p + kHuge - 1) & ~(kHuge - 1),
-                  e = (p + v.capacity() * sizeof(T)) & ~(kHuge - 1);
-  if (e > b) madvise(reinterpret_cast<void*>(b), e - b, MADV_HUGEPAGE);
-#endif
-}
 }  // namespace
 
 // Where the stream is: waiting for HEAD, then BASE, then taking SPLT chunks until END
@@ -757,11 +741,9 @@ uint64_t Decoder::Impl::refine(uint64_t max_splits, uint64_t face_target) {
       record.positions.reserve(nv * 3);
       record.parents.reserve(nv);
       record.sides.reserve(room);
-      if (attrs) {  // the per-face arrays (a-wedge values grow with what the splits decode)
-        const size_t faces = level.mesh.face_count() + 2 * (room - level.applied);
-        attrs->state.corner_wedge.reserve(faces * 3);
-        if (!attrs->state.face_material.empty()) attrs->state.face_material.reserve(faces);
-      }
+      if (attrs)
+        attrs->reserve(level.mesh.face_count() + 2 * (room - level.applied), room,
+                       info.total_splits);
       const uint32_t* degrees_before = frontier.choice.degrees();
       frontier.choice.reserve_vertices(nv, [&](const auto& v) {
         if (frontier.choice.degrees() != degrees_before) advise_huge_pages(v);
