@@ -104,22 +104,30 @@ inline constexpr uint32_t kMaxChartFan = 16;
 // x's corners in the faces around x (x = c's vertex) that c's chart reaches (spec/format.md
 // section 14.3, "Chart fan"): c, then across x's edges toward next(c)'s side, then from c
 // toward prev(c)'s side, crossing an edge only where its other vertex has the same assigned
-// a-wedge in both faces (no seam or crease there); at most kMaxChartFan corners.
-uint32_t chart_fan(const ProgressiveMesh& pm, const AttributeState& s, uint32_t c, uint32_t* out) {
+// a-wedge in both faces (no seam or crease there); at most kMaxChartFan corners. With each
+// corner, the assigned a-wedges at its next and previous corners (kNoCorner: none), gathered
+// once for both predictions: the walk's check is the shared edge's wedge.
+struct FanCorner {
+  uint32_t corner, next_wedge, prev_wedge;
+};
+
+uint32_t chart_fan(const ProgressiveMesh& pm, const AttributeState& s, uint32_t c, FanCorner* out) {
   uint32_t n = 0;
-  out[n++] = c;
-  for (uint32_t at = c; n < kMaxChartFan;) {
-    const uint32_t w = wedge_at(s, next_corner(at)), o = pm.opposite[prev_corner(at)];
+  out[n++] = {c, wedge_at(s, next_corner(c)), wedge_at(s, prev_corner(c))};
+  for (uint32_t i = 0; n < kMaxChartFan;) {  // out[i] is the last corner reached this way
+    const uint32_t w = out[i].next_wedge, o = pm.opposite[prev_corner(out[i].corner)];
     if (w == kNoCorner || o == kNoCorner || wedge_at(s, next_corner(o)) != w) break;
-    at = prev_corner(o);
+    const uint32_t at = prev_corner(o);
     if (at == c) return n;  // the fan closed
-    out[n++] = at;
+    out[n] = {at, wedge_at(s, next_corner(at)), w};
+    i = n++;
   }
-  for (uint32_t at = c; n < kMaxChartFan;) {
-    const uint32_t w = wedge_at(s, prev_corner(at)), o = pm.opposite[next_corner(at)];
+  for (uint32_t i = 0; n < kMaxChartFan;) {
+    const uint32_t w = out[i].prev_wedge, o = pm.opposite[next_corner(out[i].corner)];
     if (w == kNoCorner || o == kNoCorner || wedge_at(s, prev_corner(o)) != w) break;
-    at = next_corner(o);
-    out[n++] = at;
+    const uint32_t at = next_corner(o);
+    out[n] = {at, w, wedge_at(s, prev_corner(at))};
+    i = n++;
   }
   return n;
 }
@@ -135,7 +143,7 @@ PredictionKind predict(const ProgressiveMesh& pm, const int32_t* coords, const A
   for (uint32_t i = 0; i < s.stride; ++i)
     pred[i] = ref == kNoCorner ? 0 : s.values[size_t(ref) * s.stride + i];
   PredictionKind kind;
-  uint32_t fan[kMaxChartFan];
+  FanCorner fan[kMaxChartFan];
   const uint32_t fan_n = chart_fan(pm, s, c, fan);
   if (h.normals && h.normal_bits) {
     // How far the fan's neighbours' normals lie from the prediction (octahedral steps).
@@ -143,8 +151,7 @@ PredictionKind predict(const ProgressiveMesh& pm, const int32_t* coords, const A
     uint32_t spread = 0;
     bool any = false;
     for (uint32_t i = 0; i < fan_n; ++i)
-      for (uint32_t nb : {next_corner(fan[i]), prev_corner(fan[i])}) {
-        const uint32_t w = wedge_at(s, nb);
+      for (uint32_t w : {fan[i].next_wedge, fan[i].prev_wedge}) {
         if (w == kNoCorner) continue;
         any = true;
         for (uint32_t k = 0; k < 2; ++k) {
@@ -164,8 +171,7 @@ PredictionKind predict(const ProgressiveMesh& pm, const int32_t* coords, const A
   bool own_map = false;  // c's own face gave a map
   const int32_t* px = coords + size_t(pm.corner_vertex[c]) * 3;
   for (uint32_t i = 0; i < fan_n; ++i) {
-    const uint32_t k = fan[i];
-    const uint32_t ka = wedge_at(s, next_corner(k)), kb = wedge_at(s, prev_corner(k));
+    const uint32_t k = fan[i].corner, ka = fan[i].next_wedge, kb = fan[i].prev_wedge;
     if (ka == kNoCorner || kb == kNoCorner) continue;
     const int32_t* pa = coords + size_t(pm.corner_vertex[next_corner(k)]) * 3;
     const int32_t* pb = coords + size_t(pm.corner_vertex[prev_corner(k)]) * 3;
