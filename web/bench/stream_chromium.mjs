@@ -7,7 +7,9 @@
 // median gap over 3 s of the finished mesh while nothing changes. The viewer draws only when
 // something changed: gap_* are the page's frames (requestAnimationFrame, drawn or not: how
 // responsive the page stays), redraw_gap_* the intervals between frames that drew the object,
-// worst_gaps the three longest gaps with what the frame before each did. The viewer's draw
+// worst_gaps the three longest gaps with what the frame before each did (js: its whole
+// requestAnimationFrame callback; a gap far longer than that is the frame's commit waiting for
+// SwiftShader, see trace_chromium.mjs's long_tasks, or no core for the page). The viewer's draw
 // budget (?drawms=0 turns it off) shows at most shown_max_while_decoding faces until decoding
 // ends; final_frame_gap_ms is the frame after the finest level was shown (drawing the full
 // mesh, after decoding: not among the gaps while decoding). first_object_faces: the faces of
@@ -67,7 +69,8 @@ for (let r = 0; r < runs * variants.length; ++r) {
   const redraws = drawn.slice(1).map((f, i) => f.t - drawn[i].t).sort((a, b) => a - b);
   // The three longest gaps, with the frame that ended each (what it did).
   const worst = during.slice(1).map((f, i) => ({ gap: +(f.t - during[i].t).toFixed(1), at: +(f.t - firstBytes).toFixed(1),
-    faces: during[i].faces, work: +during[i].work.toFixed(1), render: +during[i].render.toFixed(1), drawn: during[i].drawn }))
+    faces: during[i].faces, work: +during[i].work.toFixed(1), render: +during[i].render.toFixed(1),
+    js: +(during[i].js || 0).toFixed(1), drawn: during[i].drawn }))
     .sort((a, b) => b.gap - a.gap).slice(0, 3);
   const still = done ? s.frames.filter((f) => f.t > done.t + 500) : [];
   const stillGaps = still.slice(1).map((f, i) => f.t - still[i].t).sort((a, b) => a - b);
@@ -96,6 +99,9 @@ for (let r = 0; r < runs * variants.length; ++r) {
     // and the render() call (queuing GL commands; SwiftShader draws in the GPU process).
     update_max_ms: +Math.max(0, ...during.map((f) => f.work)).toFixed(1),
     render_call_max_ms: +Math.max(0, ...during.map((f) => f.render)).toFixed(1),
+    // The whole requestAnimationFrame callback (update, render() call, overlay), before the
+    // frame that showed the finest level (its copy of the held-back mesh is after decoding).
+    frame_js_max_ms: +Math.max(0, ...before.map((f) => f.js || 0)).toFixed(1),
     long_tasks: s.longTasks.filter((x) => x.start >= firstBytes && (!done || x.start <= done.t)).length,
     long_task_max_ms: +Math.max(0, ...s.longTasks.filter((x) => x.start >= firstBytes &&
       (!done || x.start <= done.t)).map((x) => x.duration)).toFixed(1) });
@@ -110,7 +116,7 @@ const medians = variants.map((query) => {
   const rs = results.filter((x) => x.query === query), out = { query, runs: rs.length };
   for (const k of ['loadavg', 'first_object_ms', 'first_1000_faces_ms', 'complete_ms', 'gap_median_ms', 'gap_p95_ms',
     'gap_max_ms', 'gaps_over_50ms', 'frames', 'redraw_gap_median_ms', 'shown_max_while_decoding', 'final_frame_gap_ms',
-    'update_max_ms', 'long_task_max_ms']) out[k] = median(rs.map((x) => x[k]));
+    'update_max_ms', 'frame_js_max_ms', 'long_task_max_ms']) out[k] = median(rs.map((x) => x[k]));
   return out;
 });
 console.log(JSON.stringify({ file: path.basename(file), viewer: path.resolve(viewerDir), rate, width, height, worker,

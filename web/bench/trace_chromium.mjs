@@ -3,6 +3,15 @@
 // trace, summed per process and thread (the page's main thread, its decoding worker, the GPU
 // process's threads: SwiftShader draws there) and, per thread, the busiest top-level event
 // names by self time. Times from the first body byte to the stream's completion.
+// long_tasks: the page's main-thread tasks of at least 50 ms in that window (what the Long
+// Tasks API reports), each split by what its time went to (wall, the nearest enclosing event
+// of a kind): the animation frame's JS (the viewer's frame(): update() and the render()
+// call), the canvas read-back in the frame's commit (GLES2::ReadPixels: with software
+// compositing, as headless Chromium with SwiftShader has it, the page's thread reads each
+// drawn WebGL frame back and waits until SwiftShader has drawn it), other waits for the GPU
+// process (gpu_wait: e.g. in the frame's GL calls when the command or transfer buffer is full),
+// the rest of the commit, style/layout/paint, the worker's messages (deserializing its
+// updates), GC, and the rest. cpu_ms: the task's own CPU time (under load far below its wall).
 //
 //   node web/bench/trace_chromium.mjs MESH.pmz [RATE=2000000] [WIDTHxHEIGHT=640x480] [QUERY]
 //                                    [TRACE_OUT.json]   (keeps the raw trace: chrome://tracing)
@@ -104,7 +113,50 @@ const threads = [...perThread.entries()].map(([key, t]) => {
       .map(([n, d]) => `${n}: ${ms(d)} ms wall, ${ms(t.cpu.get(n) || 0)} cpu`) };
 }).filter((t) => t.busy_ms >= 5).sort((a, b) => b.busy_ms - a.busy_ms);
 rmSync(profile, { recursive: true, force: true });
+
+// The page's main thread: the one that ran the animation frames.
+const frameCounts = new Map();
+for (const e of events)
+  if (e.name === 'FireAnimationFrame') frameCounts.set(`${e.pid}:${e.tid}`, (frameCounts.get(`${e.pid}:${e.tid}`) || 0) + 1);
+const pageKey = [...frameCounts.entries()].sort((a, b) => b[1] - a[1])[0]?.[0];
+const KINDS = [['frame_js', /^FireAnimationFrame$/], ['canvas_readback', /^GLES2::ReadPixels$/], ['commit_other', /^Commit$/],
+  ['style_layout_paint', /^WebFrameWidgetImpl::UpdateLifecycle$/], ['worker_messages', /^HandlePostMessage$/],
+  ['gc', /^(MinorGC|MajorGC|V8\.GC_SCAVENGER|V8\.GCFinalizeMC|BlinkGC\.|CppGC\.)/]];
+const GPU_WAIT = /^(CommandBufferProxyImpl::WaitForGetOffset|ImplementationBase::WaitForCmd|CommandBufferHelper::Finish)$/;
+const longTasks = [];
+if (pageKey) {
+  const list = byThread.get(pageKey) || [];  // sorted above
+  const stack = [];
+  let task = null;
+  const close = () => {
+    if (task && task.dur >= 50000 && task.ts >= tStart && task.ts <= tStop) longTasks.push(task);
+  };
+  for (const e of list) {
+    while (stack.length && stack[stack.length - 1].ts + stack[stack.length - 1].dur <= e.ts) stack.pop();
+    if (!stack.length) {
+      close();
+      task = { ts: e.ts, dur: e.dur, cpu: e.tdur || 0, self: new Map(), events: [] };
+    }
+    // This event's time leaves its parent's kind for its own (or the parent's, if none).
+    const parent = stack[stack.length - 1];
+    let kind = KINDS.find(([, re]) => re.test(e.name))?.[0] || (parent ? parent.kind : 'other');
+    // Waiting for the GPU process elsewhere than in the read-back (in the frame's GL calls: a
+    // full command buffer or transfer buffer waits for SwiftShader to catch up).
+    if (GPU_WAIT.test(e.name) && kind !== 'canvas_readback') kind = 'gpu_wait';
+    e.kind = kind;
+    const bump = (k, v) => task.self.set(k, (task.self.get(k) || 0) + v);
+    if (parent) bump(parent.kind, -Math.min(e.dur, parent.ts + parent.dur - e.ts));
+    bump(kind, e.dur);
+    stack.push(e);
+  }
+  close();
+}
+const long_tasks = longTasks.map((t) => ({ at_ms: +((t.ts - tStart) / 1000).toFixed(1), ms: ms(t.dur), cpu_ms: ms(t.cpu),
+  parts: Object.fromEntries([...t.self.entries()].filter(([, v]) => v >= 500).sort((a, b) => b[1] - a[1])
+    .map(([k, v]) => [k, ms(v)])) }));
+const long_task_totals = {};
+for (const t of long_tasks) for (const [k, v] of Object.entries(t.parts)) long_task_totals[k] = +((long_task_totals[k] || 0) + v).toFixed(1);
 console.log(JSON.stringify({ file: path.basename(file), rate, width, height, query: extraQuery || '',
   loadavg: loadavg().map((x) => +x.toFixed(1)), faces: state.status.faces,
   first_object_ms: +(state.timing.firstObjectFrame - state.timing.firstBytes).toFixed(1),
-  window_ms: +windowMs.toFixed(1), threads }, null, 1));
+  window_ms: +windowMs.toFixed(1), long_task_totals, long_tasks, threads }, null, 1));

@@ -272,6 +272,7 @@ function fit(info) {
 }
 
 function frame(t) {
+  const tStart = performance.now();
   requestAnimationFrame(frame);
   noteFrame(t);
   let work = 0;  // ms spent in update(): refinement on this thread, or applying the worker's
@@ -329,7 +330,7 @@ function frame(t) {
   if (drawn) drawCost.last = { t, faces: status.faces };
   if (window.pmzFrames.length < 100000) {
     window.pmzFrames.push({ t, faces: status.faces, bytes: status.bytes, work, render: now - t0r, drawn,
-      limit, decoded: current ? current.stream.decodedFaces : 0 });
+      limit, decoded: current ? current.stream.decodedFaces : 0, js: 0 });
   }
   if (now - rate.t >= 500) {
     rate = { t: now, splits: 0, perSecond: rate.splits / ((now - rate.t) / 1000) };
@@ -344,6 +345,8 @@ function frame(t) {
       (status.error ? `error     ${status.error}` : status.complete ? 'complete' : 'streaming')
     : overlay.textContent;
   if (text !== overlay.textContent) overlay.textContent = text;  // no layout for an unchanged text
+  // The whole callback's time (update, render() call, overlay): the page's own JS per frame.
+  if (window.pmzFrames.length) window.pmzFrames[window.pmzFrames.length - 1].js = performance.now() - tStart;
 }
 requestAnimationFrame(frame);
 
