@@ -89,6 +89,7 @@ class GeometryMirror {
     let vmin = Infinity, vmax = 0, fmin = Infinity, fmax = 0, mmin = Infinity;
     const modified = [];  // rewritten faces, or with manyModified only their span
     let modMin = Infinity, modMax = -1, manyModified = false, changed = false;
+    let regroupFrom = Infinity;  // the first face whose material may have changed
     for (const u of updates) {
       if (!spec.layout) {
         spec.layout = u.layout;
@@ -121,8 +122,16 @@ class GeometryMirror {
           if (modified.length < MODIFIED_LIST_MAX) modified.push(f);
           else manyModified = true;
         }
-        if (spec.groups && u.modifiedMaterials)
-          for (let i = 0; i < u.modifiedMaterials.length; ++i) spec.faceMaterials[mm[4 * i]] = u.modifiedMaterials[i];
+        if (spec.groups && u.modifiedMaterials) {
+          const fm = spec.faceMaterials;
+          for (let i = 0; i < u.modifiedMaterials.length; ++i) {
+            const f = mm[4 * i];
+            if (fm[f] !== u.modifiedMaterials[i]) {
+              fm[f] = u.modifiedMaterials[i];
+              if (f < regroupFrom) regroupFrom = f;
+            }
+          }
+        }
       }
       if (u.morph && spec.geomorph) {
         const morph = g.getAttribute('pmzMorph').array;
@@ -157,18 +166,26 @@ class GeometryMirror {
     else if (modified.length) addFaceRuns(index, modified, 3);
     index.needsUpdate = true;
     g.setDrawRange(0, 3 * this.faces);
-    if (spec.groups) this._groups();
+    if (spec.groups) this._groups(Math.min(fmin, regroupFrom));
     return true;
   }
 
-  // One group per run of faces of one material (materialIndex: the material table's index).
-  _groups() {
-    const g = this.geometry, m = this.spec.faceMaterials, nf = this.faces;
-    g.clearGroups();
-    for (let f = 0; f < nf;) {
+  // One group per run of faces of one material (materialIndex: the material table's index),
+  // redone from face `from` on (the groups before it stand): new faces and the faces whose
+  // material changed (a split rewrites a face's corners, rarely its material) only, not every
+  // face on each update.
+  _groups(from) {
+    const g = this.geometry, m = this.spec.faceMaterials, nf = this.faces, groups = g.groups;
+    let f = Math.min(from, nf);
+    while (groups.length && groups[groups.length - 1].start >= 3 * f) groups.pop();
+    const last = groups[groups.length - 1];
+    if (last && last.start + last.count > 3 * f) last.count = 3 * f - last.start;
+    while (f < nf) {
       const start = f, id = m[f];
       while (f < nf && m[f] === id) ++f;
-      g.addGroup(3 * start, 3 * (f - start), id);
+      const prev = groups[groups.length - 1];
+      if (prev && prev.materialIndex === id && prev.start + prev.count === 3 * start) prev.count += 3 * (f - start);
+      else g.addGroup(3 * start, 3 * (f - start), id);
     }
   }
 }

@@ -206,6 +206,14 @@ function dress(stream) {
 }
 let morphTicks = [];  // geomorph clocks of the dressed materials
 
+// Compiles the programs of materials ({plain, morph}, each one or an array) for a geometry,
+// in parallel where the browser can (KHR_parallel_shader_compile), lit as the scene is.
+function compileFirst(materials, geometry) {
+  const probe = new THREE.Group();
+  for (const m of [materials.plain, materials.morph].flat()) probe.add(new THREE.Mesh(geometry, m));
+  return renderer.compileAsync(probe, camera, scene).catch((e) => console.warn(`pmz viewer: ${e}`));
+}
+
 let current = null;  // { stream, mesh, fitted, materials }
 let faceTarget = null;  // null: follow the stream; else the LOD slider's face count
 lod.addEventListener('input', () => {
@@ -294,9 +302,20 @@ function frame(t) {
     }
     work = performance.now() - t0;
     const g = s.geometry;
-    if (!current.materials && g.getAttribute('position')) {
+    if (!current.materials && !current.dressing && g.getAttribute('position')) {
       const attributes = ['uv', 'normal', 'color'].some((n) => g.getAttribute(n)) || s.materials().length > 1;
-      current.materials = attributes ? dress(s) : { plain: plainMaterial, morph: material };
+      if (attributes) {
+        // The dressed materials' programs are compiled before they draw (the plain ones draw
+        // meanwhile): compiling at their first draw blocked the page.
+        const dressed = dress(s), c = current;
+        c.dressing = true;
+        compileFirst(dressed, g).then(() => {
+          c.materials = dressed;
+          redraw = true;
+        });
+      } else {
+        current.materials = { plain: plainMaterial, morph: material };
+      }
       // Tests: the attributes the geometry draws with, and how many materials.
       window.pmzAttributes = { names: ['uv', 'uv1', 'normal', 'color'].filter((n) => g.getAttribute(n)),
         materials: s.materials().length };
