@@ -62,8 +62,11 @@ const plainMaterial = new THREE.MeshStandardMaterial({ color: 0xd8c8a8, flatShad
 // DRAW_BUDGET_MS (of the 50 ms a frame may take: the rest is the page's own work and the
 // frame's alignment); the finest level is shown once decoding ends (PMZStream.faceLimit).
 // The cost per face starts from a calibration draw before the stream opens and follows the
-// frames' timestamps: a frame that
-// took longer than SLOW_FRAME_MS after drawing F >= MIN_SAMPLE_FACES faces is a sample gap / F
+// frames' timestamps. The calibration draws while nothing decodes: during the stream the
+// decoding worker takes a core SwiftShader would otherwise use, and faces once shown cannot be
+// taken back while decoding. So the shown faces grow in steps frames have proven: at most
+// GROWTH x the most faces a frame drew within DRAW_BUDGET_MS (at least GROWTH_START_FACES).
+// A frame that took longer than SLOW_FRAME_MS after drawing F >= MIN_SAMPLE_FACES faces is a sample gap / F
 // (the median of the last five is the estimate), a faster one bounds the cost by gap / F. A
 // machine too busy to keep even the frames that draw nothing at the display's rate is not
 // drawing's doing: what their gaps (median of the last nine) exceed a vsync by is taken off
@@ -73,8 +76,10 @@ const MAX_FACES = params.has('maxfaces') ? Number(params.get('maxfaces')) : Infi
 const SLOW_FRAME_MS = 25;
 const MIN_SAMPLE_FACES = 1000;
 const VSYNC_MS = 1000 / 60;
-// ms per face; the last drawn frame; the previous frame's time; gaps after frames that drew nothing
-const drawCost = { perFace: 0, samples: [], last: null, prev: null, idle: [] };
+const GROWTH = 2, GROWTH_START_FACES = 2000;
+// ms per face; the last drawn frame; the previous frame's time; gaps after frames that drew
+// nothing; the most faces a frame drew within the budget
+const drawCost = { perFace: 0, samples: [], last: null, prev: null, idle: [], proven: 0 };
 function noteFrame(t) {
   const last = drawCost.last, gap = drawCost.prev === null ? 0 : t - drawCost.prev;
   drawCost.last = null;
@@ -90,6 +95,7 @@ function noteFrame(t) {
   const idle = [...drawCost.idle].sort((a, b) => a - b);
   const busy = idle.length ? Math.max(0, idle[idle.length >> 1] - VSYNC_MS) : 0;
   const drawing = Math.max(VSYNC_MS, gap - busy), sample = drawing / last.faces;
+  if (drawing <= DRAW_BUDGET_MS) drawCost.proven = Math.max(drawCost.proven, last.faces);
   if (drawing > SLOW_FRAME_MS) {
     if (last.faces < MIN_SAMPLE_FACES) return;  // then mostly the frame's fixed costs
     drawCost.samples.push(sample);
@@ -103,8 +109,10 @@ function noteFrame(t) {
 // The face limit for the stream now (null: none).
 function faceLimit(shownFaces, fullFaces) {
   let limit = MAX_FACES;
-  if (DRAW_BUDGET_MS > 0 && drawCost.perFace > 0)
-    limit = Math.min(limit, Math.max(shownFaces, Math.floor(DRAW_BUDGET_MS / drawCost.perFace)));
+  if (DRAW_BUDGET_MS > 0 && drawCost.perFace > 0) {
+    const proven = GROWTH * Math.max(drawCost.proven, GROWTH_START_FACES / GROWTH);
+    limit = Math.min(limit, Math.max(shownFaces, Math.floor(Math.min(proven, DRAW_BUDGET_MS / drawCost.perFace))));
+  }
   return limit >= fullFaces ? null : limit;
 }
 
@@ -245,6 +253,7 @@ async function open(source) {
   window.pmzTiming = { firstBytes: null, firstObjectFrame: null };
   window.pmzFrames = [];
   window.pmzLongTasks = [];
+  drawCost.proven = 0;
   try {
     await shadersReady;  // and the draw calibration: the first face limit
     const loader = new PMZLoader(undefined, { geomorph: true, autoUpdate: false, worker: useWorker,
