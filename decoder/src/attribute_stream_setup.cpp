@@ -2,6 +2,7 @@
 // the per-split ones in attribute_stream.cpp so that they can be built for size.
 #include "attribute_stream.hpp"
 #include "huge_pages.hpp"
+#include "pmz/wasm_hints.hpp"
 
 namespace pmz {
 
@@ -65,12 +66,12 @@ bool AttributeStream::base(const uint8_t* p, size_t n, const ProgressiveMesh& pm
   state.values.reserve(size_t(h.base_wedges) * state.stride);
   for (uint32_t f = 0; f < fn; ++f) {
     if (h.materials.size() > 1 && !decode_face_material(rc, *models, pm, state, f))
-      return error = "ATTR: base face " + std::to_string(f) + " material malformed", false;
+      return error = "ATTR: base face " + PMZ_DECIMAL(f) + " material malformed", false;
     if (!h.has_wedges()) continue;
     for (uint32_t k = 0; k < 3; ++k)
       if (state.wedge_count > h.base_wedges ||
           !decode_corner_wedge(rc, *models, pm, coords, state, f * 3 + k))
-        return error = "ATTR: base corner " + std::to_string(f * 3 + k) + " wedge malformed", false;
+        return error = "ATTR: base corner " + PMZ_DECIMAL(f * 3 + k) + " wedge malformed", false;
   }
   if (!rc.ok || state.wedge_count != h.base_wedges)
     return error = "ATTR: base wedges do not match HEAD", false;

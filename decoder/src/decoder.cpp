@@ -178,8 +178,7 @@ struct Decoder::Impl {
     stage = Stage::failed;
     status = s;
     message = std::string("pmz: ") + status_name(s) + ": " + what + " (chunk " +
-              std::to_string(input.chunk_index) + " at byte " + std::to_string(input.chunk_offset) +
-              ")";
+              PMZ_DECIMAL(input.chunk_index) + " at byte " + PMZ_DECIMAL(input.chunk_offset) + ")";
     return s;
   }
   PMZ_SMALL_IN_WASM size_t parse(const uint8_t* p, size_t n);
@@ -326,9 +325,9 @@ size_t Decoder::Impl::parse(const uint8_t* p, size_t n) {
       if (p[at] == kOldHeadType[0] &&
           std::memcmp(p + at, kOldHeadType, std::min<size_t>(k, 4)) == 0) {
         if (k < 14) break;  // its version bytes (old HEAD payload bytes 0 and 1) are still to come
-        fail(Status::bad_version, "format " + std::to_string(p[at + 12]) + "." +
-                                      std::to_string(p[at + 13]) + " (this decoder reads format " +
-                                      std::to_string(kVersionMajor) + ")");
+        fail(Status::bad_version, "format " + PMZ_DECIMAL(p[at + 12]) + "." +
+                                      PMZ_DECIMAL(p[at + 13]) + " (this decoder reads format " +
+                                      PMZ_DECIMAL(kVersionMajor) + ")");
         return n;
       }
     }
@@ -339,7 +338,7 @@ size_t Decoder::Impl::parse(const uint8_t* p, size_t n) {
     }
     // Checked before buffering the payload.
     if (f.payload_size > limits.max_chunk_bytes) {
-      fail(Status::limit_exceeded, "chunk of " + std::to_string(f.payload_size) + " bytes");
+      fail(Status::limit_exceeded, "chunk of " + PMZ_DECIMAL(f.payload_size) + " bytes");
       return n;
     }
     const size_t size = size_t(f.payload_size);
@@ -388,8 +387,8 @@ Status Decoder::Impl::head(const uint8_t* p, size_t n) {
   size_t fixed = 0;
   if (!read_head_payload(p, n, h, &fixed)) return fail(Status::corrupt, "HEAD malformed");
   if (h.version_major != kVersionMajor)
-    return fail(Status::bad_version, "format version " + std::to_string(h.version_major) + "." +
-                                         std::to_string(h.version_minor));
+    return fail(Status::bad_version, "format version " + PMZ_DECIMAL(h.version_major) + "." +
+                                         PMZ_DECIMAL(h.version_minor));
   if (h.position_bits > 30) return fail(Status::corrupt, "position bits above 30");
   if (h.curvature > kMaxCurvature || h.fine_curvature > kMaxCurvature)
     return fail(Status::corrupt, "curvature above 8");
@@ -404,10 +403,10 @@ Status Decoder::Impl::head(const uint8_t* p, size_t n) {
   // Vertex ids are uint32 with 0xFFFFFFFF for none, whatever the limits (spec/format.md section 4).
   if (h.full_vertices() > 0xFFFFFFFFu)
     return fail(Status::corrupt,
-                std::to_string(h.full_vertices()) + " vertices in HEAD (2^32 or more)");
+                PMZ_DECIMAL(h.full_vertices()) + " vertices in HEAD (2^32 or more)");
   if (h.full_vertices() > limits.max_vertices || h.full_faces > limits.max_faces)
-    return fail(Status::limit_exceeded, std::to_string(h.full_vertices()) + " vertices, " +
-                                            std::to_string(h.full_faces) + " faces");
+    return fail(Status::limit_exceeded, PMZ_DECIMAL(h.full_vertices()) + " vertices, " +
+                                            PMZ_DECIMAL(h.full_faces) + " faces");
   if (h.flags & kFlagAttributes) {
     std::string err;
     attrs = std::make_unique<AttributeStream>();
@@ -550,8 +549,7 @@ bool Decoder::Impl::apply() {
     return true;
   }
   auto invalid = [&] {
-    return refuse(Status::corrupt,
-                  "split " + std::to_string(level.applied) + " has an invalid wedge");
+    return refuse(Status::corrupt, "split " + PMZ_DECIMAL(level.applied) + " has an invalid wedge");
   };
   SplitChunkReader& reader = frontier.lazy.front();
   if (level.applied - frontier.lazy_first ==
@@ -562,7 +560,7 @@ bool Decoder::Impl::apply() {
   }
   if (s.v == kNoCorner)
     return refuse(Status::corrupt,
-                  "split " + std::to_string(level.applied) + ": vertex choice malformed");
+                  "split " + PMZ_DECIMAL(level.applied) + ": vertex choice malformed");
   if (!level.mesh.gather_ring(s.v)) return invalid();
   {  // first application: the wedge symbols, with contexts from v's ring
     const uint32_t k = uint32_t(level.mesh.ring().size());
@@ -582,7 +580,7 @@ bool Decoder::Impl::apply() {
     uint32_t count, rank;
     auto malformed = [&] {
       return refuse(Status::corrupt,
-                    "split " + std::to_string(level.applied) + ": wedge streams malformed");
+                    "split " + PMZ_DECIMAL(level.applied) + ": wedge streams malformed");
     };
     if (!frontier.lazy.front().wedge_count(wedge_context(k, level.mesh.ring_closed()), count))
       return malformed();
@@ -620,7 +618,7 @@ bool Decoder::Impl::apply() {
     if (!decoded) {
       level.mesh.undo_split(s.v, has_l, has_r);
       return refuse(Status::corrupt,
-                    "split " + std::to_string(level.applied) + ": residual streams malformed");
+                    "split " + PMZ_DECIMAL(level.applied) + ": residual streams malformed");
     }
     position_from_residuals(pred, residual, c);
     frontier.grow_box(c);
@@ -634,7 +632,7 @@ bool Decoder::Impl::apply() {
       record.positions.resize(record.positions.size() - 3);
       level.mesh.undo_split(s.v, has_l, has_r);
       return refuse(Status::corrupt,
-                    "split " + std::to_string(level.applied) + ": attributes malformed");
+                    "split " + PMZ_DECIMAL(level.applied) + ": attributes malformed");
     }
     record.parents.push_back(s.v);
     record.sides.push_back(uint8_t((has_l ? kHasLeft : 0) | (has_r ? kHasRight : 0)));

@@ -7,6 +7,7 @@
 #include "pmz/coding.hpp"
 #include "pmz/progressive_mesh.hpp"
 #include "pmz/range_coder.hpp"
+#include "pmz/wasm_hints.hpp"
 
 namespace pmz {
 
@@ -309,10 +310,9 @@ bool encode_base(const int32_t* coords, uint32_t n, const uint32_t* faces, uint3
   for (uint32_t h = 0; h < fn * 3; ++h) {
     const uint32_t a = faces[h], b = faces[next_corner(h)];
     if (a >= n || a == b)
-      return error = "face " + std::to_string(h / 3) + " is out of range or degenerate", false;
+      return error = "face " + PMZ_DECIMAL(h / 3) + " is out of range or degenerate", false;
     if (!oracle.edge.emplace(edge_key(a, b), h).second)
-      return error =
-                 "directed edge " + std::to_string(a) + " -> " + std::to_string(b) + " used twice",
+      return error = "directed edge " + PMZ_DECIMAL(a) + " -> " + PMZ_DECIMAL(b) + " used twice",
              false;
   }
   // Both predictors (the parallelogram, the gate's midpoint); the smaller stream is kept.
@@ -336,7 +336,7 @@ bool encode_base(const int32_t* coords, uint32_t n, const uint32_t* faces, uint3
 Status decode_base(const uint8_t* p, size_t size, uint32_t n, uint32_t fn, BaseMesh& out,
                    std::string& error) {
   if (fn > kFacesPerByte * (size + 1) || n > kVerticesPerByte * (size + 1)) {
-    error = "BASE counts beyond what its " + std::to_string(size) + " bytes can hold";
+    error = "BASE counts beyond what its " + PMZ_DECIMAL(size) + " bytes can hold";
     return Status::corrupt;
   }
   RangeDecoder dec(p, size);

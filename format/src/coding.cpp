@@ -3,6 +3,7 @@
 #include <cstring>
 
 #include "pmz/range_coder.hpp"
+#include "pmz/wasm_hints.hpp"
 
 namespace pmz {
 
@@ -106,5 +107,14 @@ RangeDecoder::RangeDecoder(const uint8_t* p, size_t size) : buf_(p, p + size) {
   for (int i = 0; i < 4; ++i) s_.code = (s_.code << 8) | s_.next();
   ok = s_.ok;
 }
+
+#if defined(__wasm__)
+std::string decimal_in_wasm(uint64_t v) {
+  char text[20], *p = text + sizeof text;
+  do *--p = char('0' + v % 10);
+  while (v /= 10);
+  return std::string(p, text + sizeof text);
+}
+#endif
 
 }  // namespace pmz

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "pmz/progressive_mesh.hpp"
+#include "pmz/wasm_hints.hpp"
 
 namespace pmz {
 
@@ -47,7 +48,7 @@ namespace pmz {
     uint32_t fan_faces = 0;
     for_each_fan_face(v, [&](uint32_t, uint32_t) { ++fan_faces; });
     if (fan_faces != corners_at[v])
-      return error = "vertex " + std::to_string(v) + " in several fans", false;
+      return error = "vertex " + PMZ_DECIMAL(v) + " in several fans", false;
   }
   return true;
 }

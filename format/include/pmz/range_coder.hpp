@@ -343,7 +343,7 @@ inline void encode_uint_mixed(RangeEncoder& rc, UIntModel& m, UIntModel& m2, uin
 struct SmallModel {
   Prob tree[8];
   UIntModel escape;
-  SmallModel() {
+  PMZ_SMALL_IN_WASM SmallModel() {
     for (auto& p : tree) p = kProbInit;
   }
 };

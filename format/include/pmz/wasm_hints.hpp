@@ -2,7 +2,10 @@
 // code would say without them, so native code is the same with or without this header.
 #pragma once
 
+#include <cstdint>
 #include <new>  // std::bad_alloc in PMZ_CATCH_BAD_ALLOC
+#include <string>
+#include <type_traits>
 
 // The WebAssembly build has a size budget (scripts/web.sh): there, once-per-file set-up (model
 // initialization, chunk and base mesh decoding, buffer growth) is optimized for size with all it
@@ -45,4 +48,21 @@
 #else
 #define PMZ_TRY if (true)
 #define PMZ_CATCH_BAD_ALLOC else
+#endif
+
+// The decimal text of an unsigned number in an error message. Natively std::to_string; the
+// WebAssembly build spells it with a short loop (coding.cpp): libc++'s to_string overloads and
+// their digit and power-of-ten tables are ~0.9 KB there.
+#if defined(__wasm__)
+namespace pmz {
+std::string decimal_in_wasm(uint64_t v);
+template <class T>
+std::string decimal_of_unsigned(T v) {
+  static_assert(std::is_unsigned_v<T>, "error message numbers are unsigned");
+  return decimal_in_wasm(v);
+}
+}  // namespace pmz
+#define PMZ_DECIMAL(x) ::pmz::decimal_of_unsigned(x)
+#else
+#define PMZ_DECIMAL(x) std::to_string(x)
 #endif
