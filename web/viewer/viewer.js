@@ -76,7 +76,8 @@ const MAX_FACES = params.has('maxfaces') ? Number(params.get('maxfaces')) : Infi
 const SLOW_FRAME_MS = 25;
 const MIN_SAMPLE_FACES = 1000;
 const VSYNC_MS = 1000 / 60;
-const GROWTH = 2, GROWTH_START_FACES = 2000;
+// ?drawgrowth=N: the factor (0: no such bound, the calibrated limit at once).
+const GROWTH = params.has('drawgrowth') ? Number(params.get('drawgrowth')) : 2, GROWTH_START_FACES = 2000;
 // ms per face; the last drawn frame; the previous frame's time; gaps after frames that drew
 // nothing; the most faces a frame drew within the budget
 const drawCost = { perFace: 0, samples: [], last: null, prev: null, idle: [], proven: 0 };
@@ -110,7 +111,7 @@ function noteFrame(t) {
 function faceLimit(shownFaces, fullFaces) {
   let limit = MAX_FACES;
   if (DRAW_BUDGET_MS > 0 && drawCost.perFace > 0) {
-    const proven = GROWTH * Math.max(drawCost.proven, GROWTH_START_FACES / GROWTH);
+    const proven = GROWTH > 0 ? GROWTH * Math.max(drawCost.proven, GROWTH_START_FACES / GROWTH) : Infinity;
     limit = Math.min(limit, Math.max(shownFaces, Math.floor(Math.min(proven, DRAW_BUDGET_MS / drawCost.perFace))));
   }
   return limit >= fullFaces ? null : limit;
