@@ -240,7 +240,7 @@ void ProgressiveMesh::link_new_faces(uint32_t v, uint32_t vl, uint32_t vr, uint3
   vertex_corner[v] = has_l ? f0 + 1 : g0;
 }
 
-void ProgressiveMesh::undo_split(uint32_t v, bool has_l, bool has_r) {
+PMZ_SMALL_IN_WASM void ProgressiveMesh::undo_split(uint32_t v, bool has_l, bool has_r) {
   const uint32_t u = vertex_count() - 1;
   const uint32_t limit = 3 * (face_count() - (has_l ? 1 : 0) - (has_r ? 1 : 0));
   gather_fan(u);
@@ -254,7 +254,8 @@ void ProgressiveMesh::undo_split(uint32_t v, bool has_l, bool has_r) {
   unlink_new_faces(v, has_l, has_r);
 }
 
-void ProgressiveMesh::undo_resplit(uint32_t v, uint32_t h, uint32_t count, bool has_l, bool has_r) {
+PMZ_SMALL_IN_WASM void ProgressiveMesh::undo_resplit(uint32_t v, uint32_t h, uint32_t count,
+                                                     bool has_l, bool has_r) {
   if (count > scratch_cap_) grow_scratch(count);
   // u's fan is [left face], the sector from h in order, [right face]: the order undo_split()
   // finds the sector in. The links inside the sector are those of before the split.
@@ -269,7 +270,7 @@ void ProgressiveMesh::undo_resplit(uint32_t v, uint32_t h, uint32_t count, bool 
   unlink_new_faces(v, has_l, has_r);
 }
 
-void ProgressiveMesh::unlink_new_faces(uint32_t v, bool has_l, bool has_r) {
+PMZ_SMALL_IN_WASM void ProgressiveMesh::unlink_new_faces(uint32_t v, bool has_l, bool has_r) {
   const uint32_t nf = (has_l ? 1 : 0) + (has_r ? 1 : 0);
   const uint32_t limit = 3 * (face_count() - nf);
   const uint32_t f0 = limit, g0 = limit + (has_l ? 3 : 0);
