@@ -2,23 +2,59 @@
 
 #include <algorithm>
 
+#include "huge_pages.hpp"
+
 namespace pmz {
 
 namespace {
 
-// Room for `extra` more elements, growing geometrically (a split's reservation must not make
-// every later split reallocate).
+// Room for n elements, growing geometrically (a split's reservation must not make every later
+// split reallocate), the new capacity hinted for huge pages.
 template <class T>
-[[gnu::noinline, gnu::cold]] void grow(std::vector<T>& v, size_t extra) {
-  v.reserve(std::max(v.capacity() * 2, v.size() + extra));
+[[gnu::noinline, gnu::cold]] void grow(std::vector<T>& v, size_t n) {
+  v.reserve(std::max(v.capacity() * 2, n));
+  advise_huge_pages(v);
+}
+template <class T>
+inline void reserve_total(std::vector<T>& v, size_t n) {
+  if (n > v.capacity()) [[unlikely]]
+    grow(v, n);  // out of line: the decoder library has a size budget
 }
 template <class T>
 inline void reserve_more(std::vector<T>& v, size_t extra) {
-  if (v.size() + extra > v.capacity()) [[unlikely]]
-    grow(v, extra);  // out of line: the decoder library has a size budget
+  reserve_total(v, v.size() + extra);
 }
 
+// `assigned` entries per split, a little above the usual: its new faces' materials and two per
+// corner of split_corners() (2 per new face, u's two in L and R, u's in the sector faces); 18.3
+// on a UV sphere.
+constexpr size_t kAssignedPerSplit = 24;
+
 }  // namespace
+
+void AttributeStream::reserve_wedges(size_t wedges) {
+  reserve_total(state.wedge_vertex, wedges);
+  reserve_total(state.values, wedges * state.stride);
+  reserve_total(wedge_positions, wedges * 3);
+  for (uint32_t t = 0; t < state.head.texcoord_sets; ++t) reserve_total(texcoords[t], wedges * 2);
+  if (state.head.normals) reserve_total(normals, wedges * 3);
+  reserve_total(colors, wedges * state.head.color_components);
+}
+
+void AttributeStream::reserve(size_t faces, uint64_t splits, uint64_t total) {
+  const AttributeHeader& h = state.head;
+  reserve_total(wedge_end, splits);
+  reserve_total(assign_begin, splits + 1);
+  reserve_total(assigned, splits * kAssignedPerSplit);
+  if (!h.materials.empty()) reserve_total(state.face_material, faces);
+  if (!h.has_wedges()) return;
+  reserve_total(state.corner_wedge, faces * 3);
+  // The new wedges in proportion to the splits (all of them for the whole stream).
+  const uint64_t fresh = h.full_wedges - h.base_wedges;
+  reserve_wedges(
+      h.base_wedges +
+      (splits >= total ? fresh : size_t(double(fresh) * double(splits) / double(total)) + 1));
+}
 
 void AttributeStream::new_wedges(const float* positions) {
   const AttributeHeader& h = state.head;
@@ -56,8 +92,9 @@ void AttributeStream::reserve_split(uint32_t faces, uint32_t ring) {
   reserve_more(state.corner_wedge, faces_after * 3 - state.corner_wedge.size());
   // No more wedges than HEAD announced (decode_new_wedge refuses them): near the end, room
   // for a whole ring of new ones would double every buffer for nothing.
-  const size_t w = std::min<size_t>(n, h.full_wedges - state.wedge_count);
-  each_wedge_buffer([w](auto& v, size_t per_wedge) { reserve_more(v, w * per_wedge); });
+  // Every per-wedge buffer holds the wedges ever decoded (wedge_vertex.size()).
+  reserve_wedges(state.wedge_vertex.size() +
+                 std::min<size_t>(n, h.full_wedges - state.wedge_count));
 }
 
 bool AttributeStream::first_apply(const ProgressiveMesh& pm, const int32_t* coords,

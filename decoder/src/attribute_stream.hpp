@@ -40,6 +40,8 @@ struct AttributeStream {
   // them), from HEAD's counts, before refining: every buffer grows once rather than doubling
   // (copies and page faults) split by split. reserve_split() stays the guarantee.
   void reserve(size_t faces, uint64_t splits, uint64_t total);
+  // Room for `wedges` wedges in every per-wedge buffer (they grow together).
+  void reserve_wedges(size_t wedges);
   // Before a split's first application (faces: the mesh's now, ring: v's ring size): allocates
   // what first_apply() may need, so that it cannot fail to allocate after the mesh changed.
   void reserve_split(uint32_t faces, uint32_t ring);
@@ -58,18 +60,6 @@ struct AttributeStream {
 
   // Float arrays for the wedges decoded since the last call.
   void new_wedges(const float* positions);
-
- private:
-  // f(buffer, elements per wedge) for each per-wedge buffer the stream has.
-  template <class F>
-  void each_wedge_buffer(F f) {
-    f(state.wedge_vertex, 1);
-    f(state.values, state.stride);
-    f(wedge_positions, 3);
-    for (uint32_t t = 0; t < state.head.texcoord_sets; ++t) f(texcoords[t], 2);
-    if (state.head.normals) f(normals, 3);
-    f(colors, state.head.color_components);
-  }
 };
 
 }  // namespace pmz
