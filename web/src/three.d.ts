@@ -91,6 +91,9 @@ export declare class PMZWorkerStream {
   done: Promise<PmzStatus>;
   /** The worker fetches a URL or reads a Blob itself; feed() passes bytes read on the page. */
   open(source: string | URL | Blob, init?: RequestInit): void;
+  /** The worker stops refining for about ms (after its current time slice), e.g. while the
+   * page draws with a CPU renderer that shares the cores. */
+  pauseDecoding(ms: number): void;
 }
 
 /** Lets new vertices glide from their parent's position; call the result every frame. */

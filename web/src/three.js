@@ -378,6 +378,10 @@ export class PMZWorkerStream {
     this.worker.postMessage({ type: 'finish' });
     return this.status;
   }
+  // The worker stops refining for about ms, from the end of its current slice.
+  pauseDecoding(ms) {
+    this.worker.postMessage({ type: 'pause', ms });
+  }
 
   // Applies the worker's updates that arrived since the last call, in order, up to
   // maxUpdateBytes of ranges (the rest waits for the next call). True when the geometry

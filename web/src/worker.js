@@ -5,6 +5,7 @@
 // Messages in:  {type: 'open', url, init?} | {type: 'open', blob} | {type: 'feed', bytes} |
 //               {type: 'finish'} | {type: 'target', faces} (null: follow the stream) |
 //               {type: 'limit', faces} (null: none; see PMZWorkerStream.faceLimit) |
+//               {type: 'pause', ms} (no refinement for ms) |
 //               {type: 'snapshot', id} | {type: 'close'}
 // Messages out: {type: 'update', ...} (see post()), {type: 'done', status, error},
 //               {type: 'snapshot', id, positions, indices, render}, {type: 'failed', error}
@@ -28,6 +29,7 @@ let renderState = { shownVertices: 0 };
 let materialsPosted = false;
 let basePosted = false;
 let scheduled = false;
+let pausedUntil = 0, pauseTimer = null;  // performance.now() ms; see 'pause'
 let queue = [];  // messages that arrived before the decoder was created
 
 // An immediate macrotask (no timer clamping), so network reads interleave with refinement.
@@ -82,6 +84,11 @@ function splitRoom(faces) {
 // the face limit, only the progress).
 function work() {
   if (!decoder) return;
+  const wait = pausedUntil - performance.now();
+  if (wait > 0) {  // paused: the bytes still arrive (pump), refinement waits
+    if (pauseTimer === null) pauseTimer = setTimeout(() => { pauseTimer = null; schedule(); }, wait);
+    return;
+  }
   const d = decoder;
   const info = d.info();
   if (info.baseDone && !basePosted) {  // the base mesh goes out before any refinement
@@ -145,6 +152,7 @@ async function handle(msg) {
     case 'finish': finish(); break;
     case 'target': faceTarget = msg.faces; schedule(); break;
     case 'limit': faceLimit = msg.faces; schedule(); break;
+    case 'pause': pausedUntil = performance.now() + msg.ms; break;
     case 'snapshot':
       self.postMessage({ type: 'snapshot', id: msg.id, positions: decoder.positions().slice(),
         indices: decoder.indices().slice(), render: renderArrays(decoder) });

@@ -80,7 +80,7 @@ const VSYNC_MS = 1000 / 60;
 const GROWTH = params.has('drawgrowth') ? Number(params.get('drawgrowth')) : 2, GROWTH_START_FACES = 2000;
 // ms per face; the last drawn frame; the previous frame's time; gaps after frames that drew
 // nothing; the most faces a frame drew within the budget
-const drawCost = { perFace: 0, samples: [], last: null, prev: null, idle: [], proven: 0 };
+const drawCost = { perFace: 0, samples: [], last: null, prev: null, idle: [], proven: 0, lastDrawing: 0 };
 function noteFrame(t) {
   const last = drawCost.last, gap = drawCost.prev === null ? 0 : t - drawCost.prev;
   drawCost.last = null;
@@ -96,6 +96,7 @@ function noteFrame(t) {
   const idle = [...drawCost.idle].sort((a, b) => a - b);
   const busy = idle.length ? Math.max(0, idle[idle.length >> 1] - VSYNC_MS) : 0;
   const drawing = Math.max(VSYNC_MS, gap - busy), sample = drawing / last.faces;
+  drawCost.lastDrawing = drawing;
   if (drawing <= DRAW_BUDGET_MS) drawCost.proven = Math.max(drawCost.proven, last.faces);
   if (drawing > SLOW_FRAME_MS) {
     if (last.faces < MIN_SAMPLE_FACES) return;  // then mostly the frame's fixed costs
@@ -107,6 +108,12 @@ function noteFrame(t) {
     drawCost.perFace = Math.min(drawCost.perFace || sample, sample);
   }
 }
+// ?yielddraw=1 (an experiment, off by default): each drawn frame while decoding asks the
+// decoding worker to pause for about the last drawn frame's time (at most 40 ms, at most half
+// the time), so that a CPU renderer (SwiftShader) has the cores the worker would take.
+const YIELD_DRAW = params.get('yielddraw') === '1';
+let yieldAgain = 0;  // performance.now() before which no new pause is asked for
+
 // The face limit for the stream now (null: none).
 function faceLimit(shownFaces, fullFaces) {
   let limit = MAX_FACES;
@@ -349,6 +356,12 @@ function frame(t) {
   controls.update();
   const t0r = performance.now();
   const drawn = redraw || (morph.checked && t0r < glideUntil);
+  if (drawn && YIELD_DRAW && current && current.stream.pauseDecoding && status.faces > 0 && !status.complete &&
+      t0r >= yieldAgain) {
+    const ms = Math.min(40, Math.max(VSYNC_MS, drawCost.lastDrawing || VSYNC_MS));
+    current.stream.pauseDecoding(ms);
+    yieldAgain = t0r + 2 * ms;
+  }
   if (drawn) renderer.render(scene, camera);
   redraw = false;
   const now = performance.now();
