@@ -28,7 +28,9 @@ struct AttributeField {
   // of the input, times its weight, so one typical edge's change counts 1 whatever the unit.
   std::vector<float> values;
   uint32_t dims = 0;
-  double scale = 0;       // attribute_weight / L^2 (L: the metric's unit of length)
+  // attribute_weight / L^2 (L: the metric's unit of length) times (faces / input faces)^3,
+  // so the field term does not outgrow the geometric one late (spec/algorithm.md section 7).
+  double scale = 0;
   double seam_scale = 0;  // the seam planes' weight / L^4 (spec/algorithm.md section 7)
 
   // corner_wedges / face_materials in the engine's face order; values from `attributes`.
@@ -61,6 +63,7 @@ struct AttributeField {
   // the edge perpendicular to its face), each weighted by the edge's squared length.
   float cost(const HalfEdgeMesh& m, uint32_t u, uint32_t x, uint32_t ha, uint32_t hb) const;
   // Applies the collapse rule to u's corners outside L and R; before the topology changes.
+  // Also counts the faces the collapse removes and rescales the field term.
   void collapse(const HalfEdgeMesh& m, uint32_t u, uint32_t ha, uint32_t hb);
 
  private:
@@ -71,6 +74,8 @@ struct AttributeField {
   void for_each_moved_corner(const HalfEdgeMesh& m, uint32_t u, uint32_t ha, uint32_t hb,
                              F&& f) const;
   std::vector<std::pair<uint32_t, uint32_t>> moved_;  // collapse(): corner, new wedge
+  double input_scale_ = 0;                            // scale at the input
+  uint32_t input_faces_ = 0, faces_ = 0;              // faces at the input, and now
 };
 
 }  // namespace pmz::detail

@@ -9,6 +9,7 @@
 #include <map>
 #include <vector>
 
+#include "../../encoder/src/attr_simplify.hpp"
 #include "../../encoder/src/metric.hpp"
 #include "pmz/simplify.hpp"
 
@@ -346,6 +347,53 @@ TEST(AttributeSimplify, SeamPlanesKeepTheSeamsCourse) {
   EXPECT_NEAR(twice / once, 4.f, 0.2f);
   EXPECT_EQ(slide(bent(d), pmz::AttributeMode::seams), once);
   EXPECT_EQ(slide(bent(d), pmz::AttributeMode::geometry_only), 0.f);
+}
+
+// The field term follows the current mesh (kFieldDecay = 3): with half the input's faces left,
+// a distortion of the field costs an eighth of what it cost at the input, so seams do not
+// outgrow geometry late; the seam planes (where a seam runs) stay as they were.
+TEST(AttributeSimplify, FieldTermDecaysWithTheFaceCount) {
+  using pmz::detail::kNone;
+  const int n = 8;
+  pmz::IndexedMesh mesh = crossing_seams_grid(n, 0.f);  // flat: the fields alone cost
+  mesh.attributes.face_materials.clear();
+  mesh.attributes.materials.clear();
+  const uint32_t u = 2 * (n + 1) + 2;  // interior, left chart, off the seam
+  mesh.attributes.texcoords[0][size_t(u) * 2 + 1] += 0.25f / n;  // off the linear field
+  const uint32_t s = 5 * (n + 1) + n / 2;                        // on the seam column
+  mesh.positions[size_t(s) * 3] += 0.05f / n;                    // the seam bends at s
+  for (size_t w = 0; w < mesh.attributes.wedge_count(); ++w)
+    if (mesh.attributes.wedge_vertices[w] == s) mesh.attributes.texcoords[0][w * 2] += 0.05f / n;
+  pmz::detail::HalfEdgeMesh m;
+  std::string error;
+  ASSERT_TRUE(pmz::detail::build_halfedge(mesh, m, error)) << error;
+  pmz::detail::AttributeField field;
+  field.init(m, mesh.attributes.corner_wedges, {}, mesh.attributes, pmz::AttributeMode::full, 0.5f,
+             1.0 / n);
+  auto cost = [&](uint32_t a, uint32_t b) {  // a -> b, an interior edge
+    uint32_t ha = kNone;
+    pmz::detail::for_each_outgoing(m, a, [&](uint32_t h) {
+      if (m.dest(h) == b) ha = h;
+    });
+    EXPECT_NE(ha, kNone);
+    return field.cost(m, a, b, ha, m.twin[ha]);
+  };
+  const float distortion = cost(u, u + 1), slide = cost(s, s + (n + 1));
+  ASSERT_GT(distortion, 0.f);
+  ASSERT_GT(slide, 0.f);
+  // Collapses far from u and s (their corners' wedges are rewritten, the topology is left as
+  // it is: only the count of faces matters here) until half the faces are gone.
+  const uint32_t far = 1, far_to = 2;  // on the bottom boundary, left chart
+  uint32_t ha = kNone;
+  pmz::detail::for_each_outgoing(m, far, [&](uint32_t h) {
+    if (m.dest(h) == far_to) ha = h;
+  });
+  ASSERT_NE(ha, kNone);
+  ASSERT_EQ(m.twin[ha], kNone);
+  for (uint32_t faces = m.face_count(); faces > m.face_count() / 2; --faces)
+    field.collapse(m, far, ha, kNone);  // a boundary collapse: one face
+  EXPECT_NEAR(cost(u, u + 1) / distortion, 0.125f, 1e-4f);
+  EXPECT_NEAR(cost(s, s + (n + 1)) / slide, 1.f, 1e-4f);
 }
 
 }  // namespace
