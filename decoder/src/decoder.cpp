@@ -11,6 +11,7 @@
 #include <deque>
 #include <new>
 #include <span>
+#include <type_traits>
 
 #include "attribute_stream.hpp"
 #include "huge_pages.hpp"
@@ -101,12 +102,12 @@ struct Decoder::Impl {
   // decoder reserve more than a bounded multiple of its input).
   static constexpr uint64_t kHeaderTrust = 16;
   struct Record {
-    std::vector<Split> splits;
-    std::vector<uint8_t> sides;   // per split below frontier.decoded: kHasLeft | kHasRight
-    uint64_t available = 0;       // splits of the chunks arrived (splits.size())
-    std::vector<int32_t> coords;  // 3 per computed vertex (computed >= vertex_count)
-    std::vector<float> positions;
-    std::vector<uint32_t> parents;
+    BigVector<Split> splits;
+    BigVector<uint8_t> sides;   // per split below frontier.decoded: kHasLeft | kHasRight
+    uint64_t available = 0;     // splits of the chunks arrived (splits.size())
+    BigVector<int32_t> coords;  // 3 per computed vertex (computed >= vertex_count)
+    BigVector<float> positions;
+    BigVector<uint32_t> parents;
   } record;
 
   // The first-application frontier: splits below `decoded` have their symbols decoded; the
@@ -144,7 +145,7 @@ struct Decoder::Impl {
     // Continues the scan of the group being found (lazy.front()'s) until `upto` of its vertices
     // are known (within what the lag allows: the caller applied enough of its splits), into
     // splits[].v; a failure leaves the splits without a vertex, refused when reached.
-    void find_vertices(uint32_t upto, std::vector<Split>& splits) {
+    void find_vertices(uint32_t upto, BigVector<Split>& splits) {
       if (!choice_ok) return;
       const uint32_t before = choice.found();
       group_vs.clear();
@@ -460,7 +461,12 @@ Status Decoder::Impl::base(const uint8_t* p, size_t n) {
 Status Decoder::Impl::install_base(ProgressiveMesh&& m, std::vector<int32_t>&& coords) {
   const uint32_t vn = uint32_t(info.base_vertices);
   level.mesh = std::move(m);
-  record.coords = std::move(coords);
+  [](auto& to, std::vector<int32_t>& from) {  // (a template: the other branch is discarded)
+    if constexpr (std::is_same_v<std::remove_reference_t<decltype(to)>, std::vector<int32_t>>)
+      to = std::move(from);  // BigVector is std::vector (WebAssembly)
+    else
+      to.assign(from.begin(), from.end());
+  }(record.coords, coords);
   frontier.choice.reset(level.mesh, record.coords.data(), info.position_bits,
                         info.level != kLevelSpeed);
   frontier.group_vs.reserve(kChoiceLag +
@@ -512,7 +518,6 @@ Status Decoder::Impl::split_chunk(const uint8_t* p, size_t n) {
   // are at least 1 / kHeaderTrust of them, instead of doubling (a copy and page faults each).
   if (size > record.splits.capacity() && info.total_splits <= kHeaderTrust * size) {
     record.splits.reserve(info.total_splits);
-    advise_huge_pages(record.splits);  // (without: about 1,750 page faults on 1.2M faces)
   }
   record.splits.resize(size, {kNoCorner, kNoRank, kNoRank});
   frontier.lazy.push_back(std::move(r));
@@ -733,7 +738,6 @@ uint64_t Decoder::Impl::refine(uint64_t max_splits, uint64_t face_target) {
               : std::max(target, std::min<uint64_t>(info.total_splits,
                                                     std::max(std::bit_ceil(target), 2 * capacity)));
       uint64_t nv = info.base_vertices + room;
-      const uint32_t* before = level.mesh.opposite.data();
       level.mesh.reserve(nv, level.mesh.face_count() + 2 * (room - level.applied));
       record.coords.reserve(nv * 3);
       record.positions.reserve(nv * 3);
@@ -742,18 +746,7 @@ uint64_t Decoder::Impl::refine(uint64_t max_splits, uint64_t face_target) {
       if (attrs)
         attrs->reserve(level.mesh.face_count() + 2 * (room - level.applied), room,
                        info.total_splits);
-      const uint32_t* degrees_before = frontier.choice.degrees();
-      frontier.choice.reserve_vertices(nv, [&](const auto& v) {
-        if (frontier.choice.degrees() != degrees_before) advise_huge_pages(v);
-      });
-      if (level.mesh.opposite.data() != before) {  // reallocated: the new capacity is untouched
-        advise_huge_pages(level.mesh.corner_vertex);
-        advise_huge_pages(level.mesh.opposite);
-        advise_huge_pages(level.mesh.vertex_corner);
-        advise_huge_pages(record.coords);
-        advise_huge_pages(record.positions);
-        advise_huge_pages(record.parents);
-      }
+      frontier.choice.reserve_vertices(nv);
     }
     level.fans.reset();
     while (n < max_splits && level.applied < record.available &&

@@ -209,6 +209,30 @@ void ProgressiveMesh::resplit(uint32_t v, uint32_t h, uint32_t count, bool has_l
   link_new_faces(v, vl, vr, pl, ql, pr, qr, has_l, has_r);
 }
 
+namespace {
+// A new face: its corners' vertices (x, y, z) and opposite corners (ox, oy, oz). push_back's
+// reallocation path (rare: the decoder reserves) is out of line, once: natively one call per face
+// (the native decoder library's size budget), in the WebAssembly build one per array (smaller
+// there).
+#if defined(__wasm__)
+#define PMZ_APPEND_FACE inline
+#define PMZ_APPEND3 [[gnu::noinline]]
+#else
+#define PMZ_APPEND_FACE [[gnu::noinline]]
+#define PMZ_APPEND3 inline
+#endif
+PMZ_APPEND3 void append3(BigVector<uint32_t>& b, uint32_t x, uint32_t y, uint32_t z) {
+  b.push_back(x);
+  b.push_back(y);
+  b.push_back(z);
+}
+PMZ_APPEND_FACE void append_face(BigVector<uint32_t>& cv, uint32_t x, uint32_t y, uint32_t z,
+                                 BigVector<uint32_t>& opp, uint32_t ox, uint32_t oy, uint32_t oz) {
+  append3(cv, x, y, z);
+  append3(opp, ox, oy, oz);
+}
+}  // namespace
+
 void ProgressiveMesh::link_new_faces(uint32_t v, uint32_t vl, uint32_t vr, uint32_t pl, uint32_t ql,
                                      uint32_t pr, uint32_t qr, bool has_l, bool has_r) {
   const uint32_t u = vertex_count(), F = face_count();
@@ -223,18 +247,11 @@ void ProgressiveMesh::link_new_faces(uint32_t v, uint32_t vl, uint32_t vr, uint3
     if (pr != kNoCorner) opp[pr] = g0;
     if (qr != kNoCorner) opp[qr] = g0 + 1;
   }
-  auto append = [](std::vector<uint32_t>& b, uint32_t x, uint32_t y, uint32_t z) {
-    b.push_back(x);
-    b.push_back(y);
-    b.push_back(z);
-  };
   if (has_l) {
-    append(corner_vertex, u, v, vl);
-    append(opposite, ql, pl, across ? g0 + 2 : kNoCorner);
+    append_face(corner_vertex, u, v, vl, opposite, ql, pl, across ? g0 + 2 : kNoCorner);
   }
   if (has_r) {
-    append(corner_vertex, v, u, vr);
-    append(opposite, pr, qr, across ? f0 + 2 : kNoCorner);
+    append_face(corner_vertex, v, u, vr, opposite, pr, qr, across ? f0 + 2 : kNoCorner);
   }
   vertex_corner.push_back(has_l ? f0 : g0 + 1);
   vertex_corner[v] = has_l ? f0 + 1 : g0;

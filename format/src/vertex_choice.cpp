@@ -102,8 +102,8 @@ bool VertexChoice::covers(std::span<const uint32_t> vs) const {
 }
 
 namespace {
-template <class T>
-void make_room(std::vector<T>& b, size_t extra) {
+template <class V>
+void make_room(V& b, size_t extra) {
   if (b.capacity() - b.size() < extra) b.reserve(std::max(b.size() + extra, 2 * b.capacity()));
 }
 }  // namespace

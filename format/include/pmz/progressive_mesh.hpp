@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "pmz/huge_pages.hpp"
 #include "pmz/wasm_hints.hpp"
 
 namespace pmz {
@@ -23,9 +24,10 @@ inline uint32_t prev_corner(uint32_t c) { return c % 3 == 0 ? c + 2 : c - 1; }
 class ProgressiveMesh {
  public:
   // Corner c = 3 * face + k. corner_vertex is the triangle index buffer.
-  std::vector<uint32_t> corner_vertex;
-  std::vector<uint32_t> opposite;       // corner across the edge opposite c, or kNoCorner
-  std::vector<uint32_t> vertex_corner;  // any corner of the vertex, or kNoCorner (isolated)
+  // (BigVector: refinement reads them at random, huge pages where available)
+  BigVector<uint32_t> corner_vertex;
+  BigVector<uint32_t> opposite;       // corner across the edge opposite c, or kNoCorner
+  BigVector<uint32_t> vertex_corner;  // any corner of the vertex, or kNoCorner (isolated)
 
   // Capacity for this many vertices and faces, so refinement does not reallocate.
   void reserve(size_t vertices, size_t faces) {

@@ -177,15 +177,13 @@ class VertexChoice {
   }
   // Decoder: room for n vertices in the per-vertex arrays at once (refine() knows how many it
   // may add): growing them by doubling one vertex at a time copied them and faulted their
-  // pages in twice. f(vector) is called on each, for memory hints.
-  template <class F>
-  void reserve_vertices(size_t n, F&& f) {
+  // pages in twice.
+  void reserve_vertices(size_t n) {
     degree_.reserve(n);
     mark_.reserve(n);
     key_.reserve(n);
     sums_.reserve(n);
     bits_.reserve(n / 64 + 2);
-    f(degree_), f(mark_), f(key_), f(sums_);
   }
   // After pm.split_gathered() (its ring and u_ring still those of the split), once u's
   // coordinates are known: coords holds 3 per vertex, u's included.
@@ -234,15 +232,16 @@ class VertexChoice {
   }
   void exclude(const ProgressiveMesh& mesh, uint32_t w);
   void grow(size_t k);  // reserve()'s work  // w's closed one-ring in mesh
-  std::vector<uint32_t> degree_, near_, noted_;
-  std::vector<RingSums> sums_;  // per vertex
-  std::vector<uint8_t> key_;    // per vertex: min(degree, 8) * 3 + umbrella class
+  BigVector<uint32_t> degree_;
+  std::vector<uint32_t> near_, noted_;
+  BigVector<RingSums> sums_;    // per vertex
+  BigVector<uint8_t> key_;      // per vertex: min(degree, 8) * 3 + umbrella class
   uint32_t shift_ = 0;          // umbrella_shift
   bool umbrella_ = true;        // umbrella sums kept (else every class is 0)
   std::vector<uint64_t> bits_;  // start_group's bitmap of the noted vertices (all 0 between calls)
   // Per vertex: epoch_ when in the near list being built (start_group), excluded_ when
   // excluded from the group being scanned, another value of epoch_ in independent().
-  std::vector<uint32_t> mark_;
+  BigVector<uint32_t> mark_;
   uint32_t epoch_ = 0, excluded_ = 0;
   // The scan: near or all vertices, candidates n_, next candidate i_, the group's size and
   // splits found; with a mesh, the vertices found.
