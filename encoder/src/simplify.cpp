@@ -346,12 +346,13 @@ class Engine {
     std::copy(next_witness, next_witness + 3 * kWitnesses, &witness[size_t(v) * 3 * kWitnesses]);
   }
   // The guard's cost of a collapse of cost c and bound b: c while b stays within guard_slack
-  // times the worst bound so far, c * (b / (guard_slack * worst))^2 beyond.
+  // times the worst bound so far, c * (b / (guard_slack * worst))^2 beyond, the factor at most
+  // guard_penalty_cap.
   float guarded(float c, float bound) const {
     const double scale = double(params.guard_slack) * worst_bound;
     if (!(scale > 0) || !(bound > scale)) return c;
     const double excess = double(bound) / scale;
-    return float(double(c) * excess * excess);
+    return float(double(c) * std::min(double(params.guard_penalty_cap), excess * excess));
   }
   void perform(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb, float c);
   void fix_out(uint32_t w, uint32_t candidate);

@@ -48,8 +48,12 @@ struct MetricParams {
   float boundary_weight = 1.0f;  // boundary-plane quadrics (both metrics)
   float quadric_memory = 0.1f;   // weight of the accumulated (QSlim) quadric in Q
   // guarded: a collapse whose bound b exceeds guard_slack times the largest bound of the
-  // collapses performed so far has its cost multiplied by (b / (guard_slack * that))^2.
+  // collapses performed so far has its cost multiplied by (b / (guard_slack * that))^2, at
+  // most by guard_penalty_cap: while that largest bound is still tiny (only near-zero-cost
+  // collapses so far) the ratio says nothing, and uncapped keys would stay stale
+  // (spec/algorithm.md section 6).
   float guard_slack = 0.8f;
+  float guard_penalty_cap = 1000.0f;
   // seams, full: weight of the attribute deviation (in units where one edge's typical
   // change of an attribute, moved by one mean edge length, weighs like that much distance).
   float attribute_weight = 0.5f;
