@@ -122,7 +122,7 @@ void fuzz_quantizer(const uint8_t* data, size_t size) {
 struct Applied {
   uint32_t v;
   bool l, r;
-  std::vector<uint32_t> cv, op, vc;
+  pmz::BigVector<uint32_t> cv, op, vc;  // the mesh's own buffer type (huge-page allocator)
   uint32_t hint = 0, count = 0;
 };
 
@@ -177,7 +177,7 @@ void fuzz_mesh(const uint8_t* data, size_t size) {
       if (m.opposite[c] != pmz::kNoCorner) PMZ_FUZZ_CHECK(m.opposite[m.opposite[c]] == c);
     a.hint = m.sector_hint();
     a.count = uint32_t(m.sector_faces().size());
-    const std::vector<uint32_t> cv = m.corner_vertex, op = m.opposite;
+    const pmz::BigVector<uint32_t> cv = m.corner_vertex, op = m.opposite;
     const std::vector<uint32_t> sector(m.sector_faces().begin(), m.sector_faces().end());
     const uint32_t u = m.vertex_count() - 1, cu = m.vertex_corner[u], cvv = m.vertex_corner[v];
     auto redone = [&] {
