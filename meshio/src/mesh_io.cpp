@@ -912,7 +912,16 @@ bool read_ply(const std::string& path, std::string_view data, PolygonSoup& out,
           }
           if (int(i) != list) continue;
           if (v < 0 || v >= double(kMaxVertices) || v != std::floor(v)) {
-            error = range_error(path, n, 0, int64_t(v), out.vertex_count());
+            // A float index may be fractional, NaN or beyond int64_t: only a whole number in
+            // range converts (anything else is undefined behaviour) and is named as a vertex.
+            if (v == std::floor(v) && std::fabs(v) < 0x1p62) {
+              error = range_error(path, n, 0, int64_t(v), out.vertex_count());
+            } else {
+              char text[32];
+              std::snprintf(text, sizeof text, "%g", v);
+              error = path + ": PLY face " + std::to_string(n) + " has vertex index " + text +
+                      ", not a whole vertex number";
+            }
             return false;
           }
           out.corners.push_back(uint32_t(v));

@@ -639,6 +639,19 @@ TEST(MeshAttributes, FuzzPlyHugeCountWithNormalsIsRefused) {
   EXPECT_EQ(error.find('\n'), std::string::npos) << error;
 }
 
+// fuzz_mesh_ply (the CI fuzz stage of session 25) found a binary PLY whose float32 vertex index
+// is 2.8e20: the range error converted it to int64_t, which is undefined beyond int64's range
+// (UBSan). Such an index is now named as it is, and the file refused with one line.
+TEST(MeshAttributes, FuzzPlyFloatIndexBeyondInt64IsRefused) {
+  const std::string bytes = fuzz_regression_bytes("ply-float-index-out-of-int64.ply");
+  ASSERT_FALSE(bytes.empty()) << "ply-float-index-out-of-int64.ply";
+  pmz::PolygonSoup soup;
+  std::string error;
+  EXPECT_FALSE(pmz::parse_polygon_soup("x.ply", bytes, soup, error));
+  EXPECT_FALSE(error.empty());
+  EXPECT_EQ(error.find('\n'), std::string::npos) << error;
+}
+
 // fuzz_mesh_ply (the 30-minute reader run) found a PLY whose header declares a texture
 // coordinate set that no corner names: repair indexed that set's empty corner list (null + 12).
 // Whatever the reader makes of it, parsing and repairing it must not touch memory it does not own
