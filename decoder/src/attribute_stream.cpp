@@ -2,26 +2,23 @@
 
 #include <algorithm>
 
-#include "huge_pages.hpp"
-
 namespace pmz {
 
 namespace {
 
 // Room for n elements, growing geometrically (a split's reservation must not make every later
-// split reallocate), the new capacity hinted for huge pages.
-template <class T>
-[[gnu::noinline, gnu::cold]] void grow(std::vector<T>& v, size_t n) {
+// split reallocate).
+template <class Vector>
+[[gnu::noinline, gnu::cold]] void grow(Vector& v, size_t n) {
   v.reserve(std::max(v.capacity() * 2, n));
-  advise_huge_pages(v);
 }
-template <class T>
-inline void reserve_total(std::vector<T>& v, size_t n) {
+template <class Vector>
+inline void reserve_total(Vector& v, size_t n) {
   if (n > v.capacity()) [[unlikely]]
     grow(v, n);  // out of line: the decoder library has a size budget
 }
-template <class T>
-inline void reserve_more(std::vector<T>& v, size_t extra) {
+template <class Vector>
+inline void reserve_more(Vector& v, size_t extra) {
   reserve_total(v, v.size() + extra);
 }
 

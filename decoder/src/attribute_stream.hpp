@@ -22,12 +22,12 @@ struct AttributeStream {
   // Per first-applied split: the wedge count after it, and where its assignments start in
   // `assigned` (the new faces' materials, then per corner of split_corners() the corner and its
   // wedge: re-applying and undoing the split need no walk).
-  std::vector<uint32_t> wedge_end;
-  std::vector<uint64_t> assign_begin{0};
-  std::vector<uint32_t> assigned;
+  BigVector<uint32_t> wedge_end;
+  BigVector<uint64_t> assign_begin{0};
+  BigVector<uint32_t> assigned;
   std::vector<uint32_t> corners, saved, sector_wedges;  // scratch
   // Float values per wedge (the public arrays), filled as wedges are first decoded.
-  std::vector<float> texcoords[kMaxTexcoordSets], normals, colors, wedge_positions;
+  BigVector<float> texcoords[kMaxTexcoordSets], normals, colors, wedge_positions;
 
   // HEAD's attribute fields (after the fixed ones). False with a message.
   bool head(const uint8_t* p, size_t n, uint64_t full_faces, std::string& error);

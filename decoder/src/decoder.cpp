@@ -14,7 +14,6 @@
 #include <type_traits>
 
 #include "attribute_stream.hpp"
-#include "huge_pages.hpp"
 #include "pmz/base_codec.hpp"
 #include "pmz/fan_wedge.hpp"
 #include "pmz/format.hpp"

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "pmz/format.hpp"
+#include "pmz/huge_pages.hpp"
 #include "pmz/progressive_mesh.hpp"
 #include "pmz/range_coder.hpp"
 
@@ -89,13 +90,14 @@ struct AttributeModels {
 
 // The attribute state writer and decoder keep: per corner its wedge, per wedge its vertex and
 // integer values (stride() per wedge), per face its material (empty without materials).
+// (BigVector: read at random like the mesh's buffers, huge pages where available)
 struct AttributeState {
   AttributeHeader head;
   uint32_t stride = 0;
-  std::vector<uint32_t> corner_wedge;
-  std::vector<uint32_t> wedge_vertex;
-  std::vector<int32_t> values;
-  std::vector<uint32_t> face_material;
+  BigVector<uint32_t> corner_wedge;
+  BigVector<uint32_t> wedge_vertex;
+  BigVector<int32_t> values;
+  BigVector<uint32_t> face_material;
   uint32_t wedge_count = 0;  // wedges in use (the arrays may hold more: undone splits' wedges)
   void init(const AttributeHeader& a) {
     head = a;
