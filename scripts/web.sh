@@ -84,6 +84,9 @@ viewer=web/dist/viewer
 rm -rf "$viewer" && mkdir -p "$viewer/vendor"
 cp web/viewer/* "$viewer/"
 cp -r "$pkg" "$viewer/pmz"
+# Module workers have no import map (the viewer draws in one): its copy of the loader imports
+# three by path, the same module the page's import map gives.
+sed -i "s#from 'three';#from '../vendor/three.module.js';#" "$viewer/pmz/three.js"
 cp web/node_modules/three/build/three.module.js "$viewer/vendor/"
 cp web/node_modules/three/examples/jsm/controls/OrbitControls.js "$viewer/vendor/"
 

@@ -31,11 +31,11 @@ try {
     await page.goto(`http://127.0.0.1:${server.address().port}/index.html?src=/stream/mesh.pmz`);
     await page.waitForFunction(() => window.pmzStatus.complete || window.pmzStatus.error,
       { timeout: 600000, polling: 200 });
-    const env = await page.evaluate(() => ({ dpr: window.devicePixelRatio,
-      canvas: [document.querySelector('canvas').width, document.querySelector('canvas').height] }));
+    const env = await page.evaluate(() => ({ dpr: window.devicePixelRatio, renderer: window.pmzRenderer }));
     for (const morphing of [true, false]) {
       const r = await page.evaluate((f, n, m) => window.pmzDrawCost(f, n, m), faces, reps, morphing);
-      for (const x of r) rows.push({ viewport: `${width}x${height}`, ...env, material: morphing ? 'geomorph' : 'plain', ...x });
+      for (const x of r.rows) rows.push({ viewport: `${width}x${height}`, ...env, canvas: r.canvas,
+        material: morphing ? 'geomorph' : 'plain', ...x });
     }
     await page.close();
   }

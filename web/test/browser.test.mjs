@@ -1,9 +1,11 @@
 // The viewer in headless Chromium (Debian's, via puppeteer-core) over a throttled local HTTP
-// stream, decoding in a Web Worker (the default) and on the page's thread: the face count rises
+// stream, drawing in a Web Worker (OffscreenCanvas, the default) and on the page's thread,
+// decoding in a worker of its own (the default) and on the drawing thread: the face count rises
 // while bytes arrive and reaches the full mesh; the geomorph shader matches its blend; a coarse
-// and the final level both show the object and differ.
+// and the final level both show the object, in the canvas and in screenshots of the page, and
+// differ.
 import assert from 'node:assert/strict';
-import { mkdtempSync, rmSync } from 'node:fs';
+import { mkdtempSync, rmSync, statSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import path from 'node:path';
 import { after, before, test } from 'node:test';
@@ -45,6 +47,31 @@ function differingShare(a, b) {
 }
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 
+// What the page shows (a screenshot: the composited page, the canvas drawn in a worker too) in
+// the band between the overlay and the controls, as a pmzSnapshot()-like {coverage, pixels}:
+// the share of pixels not the background, and a 200-pixel-wide copy.
+async function screenBand(page, file) {
+  const png = Buffer.from(await page.screenshot());
+  if (file) writeFileSync(file, png);
+  return page.evaluate(async (b64) => {
+    const img = new Image();
+    img.src = `data:image/png;base64,${b64}`;
+    await img.decode();
+    const top = Math.round(img.height * 0.25), bottom = Math.round(img.height * 0.85);
+    const w = 200, h = Math.round(200 * (bottom - top) / img.width);
+    const c = document.createElement('canvas');
+    c.width = w;
+    c.height = h;
+    const g = c.getContext('2d');
+    g.drawImage(img, 0, top, img.width, bottom - top, 0, 0, w, h);
+    const px = g.getImageData(0, 0, w, h).data;
+    let covered = 0;
+    for (let i = 0; i < px.length; i += 4)
+      if (Math.abs(px[i] - 0x20) + Math.abs(px[i + 1] - 0x24) + Math.abs(px[i + 2] - 0x2a) > 24) ++covered;
+    return { coverage: covered / (w * h), pixels: Array.from(px) };
+  }, png.toString('base64'));
+}
+
 // window.pmzStatus every 25 ms until the stream is complete or failed (at most 60 s).
 async function statusUntilDone(page, messages) {
   const samples = [];
@@ -65,8 +92,14 @@ test('the viewer refines while the stream arrives and shows the object', async (
   page.on('pageerror', (e) => messages.push(String(e)));
   await page.setViewport({ width: 640, height: 480 });
   const { port } = server.address();
-  await page.goto(`http://127.0.0.1:${port}/index.html?src=/stream/sample.pmz`);
+  // drawms=0: no draw budget. It holds the faces shown at what the machine draws within 30 ms a
+  // frame (on a loaded machine running the other test files in parallel: 1,414 faces, one level
+  // after the base mesh); here the levels shown while the bytes arrive are the point. The
+  // ?maxfaces test below holds a limit through the same code.
+  await page.goto(`http://127.0.0.1:${port}/index.html?src=/stream/sample.pmz&drawms=0`);
   const fullFaces = nativeDecode(demoPmz()).indices.length / 3;
+  // Chromium's workers have WebGL2 on an OffscreenCanvas: the viewer draws in one.
+  assert.equal(await page.evaluate(() => window.pmzReady.then(() => window.pmzRenderer)), 'worker', messages.join('\n'));
 
   const samples = await statusUntilDone(page, messages);
   const last = samples[samples.length - 1];
@@ -110,8 +143,9 @@ test('the viewer refines while the stream arrives and shows the object', async (
     await page.waitForFunction((f) => f === null ? window.pmzStatus.faces === window.pmzStatus.faces
       : window.pmzStatus.faces < f * 1.5 + 10, {}, faces);
     await sleep(800);  // geomorphs settle (0.4 s)
-    if (process.env.PMZ_WEB_SCREENSHOTS)
-      await page.screenshot({ path: path.join(process.env.PMZ_WEB_SCREENSHOTS, name) });
+    // What the page shows: the worker's canvas, composited.
+    const screen = await screenBand(page, process.env.PMZ_WEB_SCREENSHOTS &&
+      path.join(process.env.PMZ_WEB_SCREENSHOTS, name));
     // Geomorphs off: the reference below draws the same positions without them.
     await page.evaluate(() => { document.getElementById('morph').checked = false; });
     await sleep(300);
@@ -120,37 +154,48 @@ test('the viewer refines while the stream arrives and shows the object', async (
     const reference = await page.evaluate(() => window.pmzReferenceSnapshot());
     assert.ok(differingShare(shot, reference) < 0.002, `${name}: in-place geometry differs from a fresh one`);
     await page.evaluate(() => { document.getElementById('morph').checked = true; });
-    return shot;
+    return { shot, screen };
   };
   const coarse = await shot(Math.round(fullFaces / 100), 'web-coarse.png');
   const coarseFaces = await page.evaluate(() => window.pmzStatus.faces);
   const fine = await shot(null, 'web-final.png');
   assert.equal(await page.evaluate(() => window.pmzStatus.faces), fullFaces);
   assert.ok(coarseFaces < fullFaces / 50, `coarse level has ${coarseFaces} faces`);
-  assert.ok(coarse.coverage > 0.05, `coarse coverage ${coarse.coverage}`);
-  assert.ok(fine.coverage > 0.05, `final coverage ${fine.coverage}`);
-  assert.ok(differingShare(coarse, fine) > 0.01, 'coarse and final views do not differ');
+  for (const [name, view] of [['coarse canvas', coarse.shot], ['final canvas', fine.shot],
+    ['coarse screenshot', coarse.screen], ['final screenshot', fine.screen]])
+    assert.ok(view.coverage > 0.05, `${name}: coverage ${view.coverage}`);
+  assert.ok(differingShare(coarse.shot, fine.shot) > 0.01, 'coarse and final canvases do not differ');
+  assert.ok(differingShare(coarse.screen, fine.screen) > 0.01, 'coarse and final screenshots do not differ');
   await page.close();
 });
 
-test('the viewer decodes on its own thread with ?worker=0 too', async () => {
-  const page = await browser.newPage();
-  const messages = [];
-  page.on('pageerror', (e) => messages.push(String(e)));
-  await page.setViewport({ width: 320, height: 240 });
-  const { port } = server.address();
-  await page.goto(`http://127.0.0.1:${port}/index.html?src=/stream/sample.pmz&worker=0`);
-  await page.waitForFunction(() => window.pmzStatus && (window.pmzStatus.complete || window.pmzStatus.error),
-    { timeout: 60000, polling: 100 });
-  const s = await page.evaluate(() => ({ ...window.pmzStatus }));
-  assert.equal(s.error, '', messages.join('\n'));
-  assert.equal(s.faces, nativeDecode(demoPmz()).indices.length / 3);
-  const shot = await page.evaluate(() => window.pmzSnapshot());
-  const reference = await page.evaluate(() => window.pmzReferenceSnapshot());
-  assert.ok(shot.coverage > 0.05, `coverage ${shot.coverage}`);
-  assert.ok(differingShare(shot, reference) < 0.002, 'in-place geometry differs from a fresh one');
-  await page.close();
-});
+// ?worker=0: decoding on the drawing thread (the drawing worker); ?render=page: drawing on the
+// page's thread (the fallback where workers have no WebGL2), decoding in a worker; both.
+for (const [query, renderer] of [['worker=0', 'worker'], ['render=page', 'page'], ['render=page&worker=0', 'page']]) {
+  test(`the viewer streams with ?${query} too`, async () => {
+    const page = await browser.newPage();
+    const messages = [];
+    page.on('pageerror', (e) => messages.push(String(e)));
+    await page.setViewport({ width: 320, height: 240 });
+    const { port } = server.address();
+    await page.goto(`http://127.0.0.1:${port}/index.html?src=/stream/sample.pmz&${query}&drawms=0`);
+    const samples = await statusUntilDone(page, messages);
+    const s = samples[samples.length - 1];
+    assert.equal(s.error, '', messages.join('\n'));
+    assert.equal(await page.evaluate(() => window.pmzRenderer), renderer);
+    const fullFaces = nativeDecode(demoPmz()).indices.length / 3;
+    assert.equal(s.faces, fullFaces);
+    const levels = [...new Set(samples.filter((x) => x.bytes < x.totalBytes && x.faces > 0).map((x) => x.faces))];
+    assert.ok(levels.length >= 3 && levels[0] < fullFaces / 2, `faces while arriving: ${levels}`);
+    const shot = await page.evaluate(() => window.pmzSnapshot());
+    const reference = await page.evaluate(() => window.pmzReferenceSnapshot());
+    assert.ok(shot.coverage > 0.05, `coverage ${shot.coverage}`);
+    assert.ok(differingShare(shot, reference) < 0.002, 'in-place geometry differs from a fresh one');
+    const screen = await screenBand(page);
+    assert.ok(screen.coverage > 0.05, `screenshot coverage ${screen.coverage}`);
+    await page.close();
+  });
+}
 
 test('the viewer holds at ?maxfaces=N while decoding, then shows the finest level', async () => {
   const page = await browser.newPage();
@@ -173,6 +218,24 @@ test('the viewer holds at ?maxfaces=N while decoding, then shows the finest leve
   const reference = await page.evaluate(() => window.pmzReferenceSnapshot());
   assert.ok(shot.coverage > 0.05, `coverage ${shot.coverage}`);
   assert.ok(differingShare(shot, reference) < 0.002, 'in-place geometry differs from a fresh one');
+  await page.close();
+});
+
+test('the viewer opens a file from its file picker', async () => {
+  const page = await browser.newPage();
+  const messages = [];
+  page.on('pageerror', (e) => messages.push(String(e)));
+  await page.setViewport({ width: 320, height: 240 });
+  const { port } = server.address();
+  await page.goto(`http://127.0.0.1:${port}/index.html`);
+  await (await page.$('#file')).uploadFile(demoPmz());
+  await page.waitForFunction(() => window.pmzStatus.complete || window.pmzStatus.error, { timeout: 60000, polling: 100 });
+  const s = await page.evaluate(() => ({ ...window.pmzStatus }));
+  assert.equal(s.error, '', messages.join('\n'));
+  assert.equal(await page.evaluate(() => window.pmzRenderer), 'worker');
+  assert.equal(s.faces, nativeDecode(demoPmz()).indices.length / 3);
+  assert.equal(s.bytes, statSync(demoPmz()).size);
+  assert.ok((await page.evaluate(() => window.pmzSnapshot())).coverage > 0.05);
   await page.close();
 });
 
@@ -203,8 +266,10 @@ function checkerShares(shot) {
   return { covered: shown / (shot.pixels.length / 4), red: red / Math.max(1, shown), blue: blue / Math.max(1, shown) };
 }
 
-for (const worker of [true, false]) {
-  test(`a textured stream shows its texture's colours, coarse and final${worker ? '' : ' (?worker=0)'}`, async () => {
+// Drawn in a worker (textures decoded to ImageBitmaps there), decoding in the drawing worker,
+// and drawn on the page (TextureLoader).
+for (const query of ['', '&worker=0', '&render=page']) {
+  test(`a textured stream shows its texture's colours, coarse and final${query ? ` (?${query.slice(1)})` : ''}`, async () => {
     assert.ok(CHECKER_RED[0] > CHECKER_RED[2] + 60 && CHECKER_BLUE[2] > CHECKER_BLUE[0] + 60);
     const page = await browser.newPage();
     const messages = [];
@@ -212,7 +277,7 @@ for (const worker of [true, false]) {
     page.on('pageerror', (e) => messages.push(String(e)));
     await page.setViewport({ width: 480, height: 360 });
     const { port } = server.address();
-    await page.goto(`http://127.0.0.1:${port}/index.html?src=/stream/textured.pmz${worker ? '' : '&worker=0'}`);
+    await page.goto(`http://127.0.0.1:${port}/index.html?src=/stream/textured.pmz${query}`);
     await page.waitForFunction(() => window.pmzStatus && (window.pmzStatus.complete || window.pmzStatus.error),
       { timeout: 60000, polling: 100 });
     const s = await page.evaluate(() => ({ ...window.pmzStatus }));
@@ -230,9 +295,11 @@ for (const worker of [true, false]) {
         shares = checkerShares(shot);
         if (shares.red > 0.15 && shares.blue > 0.15) break;
       }
-      if (process.env.PMZ_WEB_SCREENSHOTS)
-        await page.screenshot({ path: path.join(process.env.PMZ_WEB_SCREENSHOTS, `web-${name}.png`) });
+      const screen = checkerShares(await screenBand(page, process.env.PMZ_WEB_SCREENSHOTS && !query &&
+        path.join(process.env.PMZ_WEB_SCREENSHOTS, `web-${name}.png`)));
       assert.ok(shares.covered > 0.05, `${name}: coverage ${shares.covered}`);
+      // The page shows it too (the canvas drawn in a worker, composited).
+      assert.ok(screen.red > 0.15 && screen.blue > 0.15, `${name}: screenshot ${JSON.stringify(screen)}`);
       assert.ok(shares.red > 0.15 && shares.blue > 0.15,
         `${name}: the checkerboard is not visible (red ${shares.red}, blue ${shares.blue}) ${messages}`);
       // The geometry updated in place draws what one built afresh from the decoder draws.
