@@ -107,6 +107,10 @@ struct Decoder::Impl {
     BigVector<int32_t> coords;  // 3 per computed vertex (computed >= vertex_count)
     BigVector<float> positions;
     BigVector<uint32_t> parents;
+    // Per split below frontier.decoded, in order: its sector's fan entries
+    // (ProgressiveMesh::sector_corners(), splits[i].b of them), so that re-applying a split
+    // reads them from here instead of walking the fan along opposite.
+    BigVector<uint32_t> sector_corners;
   } record;
 
   // The first-application frontier: splits below `decoded` have their symbols decoded; the
@@ -159,6 +163,8 @@ struct Decoder::Impl {
   struct Level {
     ProgressiveMesh mesh;
     uint64_t applied = 0;
+    uint64_t sector_end = 0;    // record.sector_corners of the splits below `applied`
+    uint64_t listed_ahead = 0;  // record.sector_corners prefetched up to here (re-applying)
     MeshChanges changes;
     FanPrefetcher fans;
   } level;
@@ -208,20 +214,12 @@ struct Decoder::Impl {
       if (level.applied + kFar < frontier.decoded) {
         const Split& f = record.splits[level.applied + kFar];
         if (f.v < level.mesh.vertex_corner.size()) PMZ_PREFETCH(&level.mesh.vertex_corner[f.v]);
-        if (f.a < level.mesh.opposite.size()) {
-          PMZ_PREFETCH(&level.mesh.opposite[f.a]);
+        if (f.a < level.mesh.opposite.size()) {     // (the hint: a sector's first face or, for an
+          PMZ_PREFETCH(&level.mesh.opposite[f.a]);  // empty sector, the face read instead)
           PMZ_PREFETCH(&level.mesh.corner_vertex[f.a]);
         }
       }
-      const Split& s = record.splits[near];
-      level.fans.step_sector(level.mesh, s.a, s.b);
-      // The face across the first sector face's v-side edge gets relinked too (its corner ql
-      // = opposite[next(hint)], a line prefetched kFar splits ahead).
-      const size_t pl = s.a % 3 == 2 ? size_t(s.a) - 2 : size_t(s.a) + 1;
-      if (pl < level.mesh.opposite.size()) {
-        const uint32_t ql = level.mesh.opposite[pl];
-        if (ql < level.mesh.opposite.size()) PMZ_PREFETCH(&level.mesh.opposite[ql]);
-      }
+      prefetch_listed();
       return;
     }
     if (level.applied + kFar < record.available) {
@@ -235,6 +233,36 @@ struct Decoder::Impl {
     level.fans.step(level.mesh, record.coords.data(), predicting ? record.coords.size() : 0,
                     near < record.available ? record.splits[near].v : kNoCorner,
                     frontier.choice.degrees(), frontier.choice.sums_bytes());
+  }
+  // Re-applying: the sector faces kListAhead list entries ahead (their corner_vertex and
+  // opposite lines), and half as far ahead the faces across a sector's ends, whose links the
+  // split rewrites (opposite[next(n)] and opposite[n], read from lines prefetched before).
+  static constexpr uint64_t kListAhead = 32;
+  void prefetch_listed() {
+    const uint32_t* list = record.sector_corners.data();
+    const uint64_t size = record.sector_corners.size();
+    const uint32_t* opp = level.mesh.opposite.data();
+    const uint32_t* cv = level.mesh.corner_vertex.data();
+    const size_t corners = level.mesh.opposite.size();
+    const uint64_t far = std::min(size, level.sector_end + kListAhead);
+    uint64_t at = std::max(level.listed_ahead, level.sector_end);
+    for (; at < far; ++at) {
+      const uint32_t n = list[at];
+      if (n >= corners) continue;
+      PMZ_PREFETCH(opp + n);
+      PMZ_PREFETCH(cv + n);
+      // The faces across: from lines prefetched kListAhead / 2 entries ago.
+      const uint64_t back = at - kListAhead / 2;
+      if (at >= kListAhead / 2 && back >= level.sector_end) {
+        const uint32_t m = list[back];
+        if (m < corners) {
+          const uint32_t a = opp[m], b = opp[m % 3 == 2 ? m - 2 : m + 1];
+          if (a < corners) PMZ_PREFETCH(opp + a);
+          if (b < corners) PMZ_PREFETCH(opp + b);
+        }
+      }
+    }
+    level.listed_ahead = at;
   }
   // Coarsening: undoing a split rewires the faces across its new faces and repoints
   // vertex_corner of v, vl and vr, all anywhere in the buffers. For the split kUnlinkAhead
@@ -546,7 +574,9 @@ bool Decoder::Impl::apply() {
   if (level.applied <
       frontier.decoded) {  // applied before, on this very mesh state: no ring, no symbols
     const uint8_t side = record.sides[level.applied];
-    level.mesh.resplit(s.v, s.a, s.b, side & kHasLeft, side & kHasRight);
+    level.mesh.resplit_listed(s.v, record.sector_corners.data() + level.sector_end, s.b, s.a,
+                              side & kHasLeft, side & kHasRight);
+    level.sector_end += s.b;
     if (attrs) attrs->reapply(level.mesh, level.applied, side & kHasLeft, side & kHasRight);
     note_rewritten(level.mesh.sector_faces());
     ++level.applied;
@@ -580,6 +610,12 @@ bool Decoder::Impl::apply() {
       frontier.wedge_scratch_ring = k;
     }
     frontier.choice.reserve(k);
+    // (About four sector corners per split on a regular mesh, valence 6: room for four per
+    // split refine() made room for.)
+    if (record.sector_corners.capacity() - record.sector_corners.size() < k)
+      record.sector_corners.reserve(
+          std::max({2 * record.sector_corners.capacity(), record.sector_corners.size() + k,
+                    4 * record.sides.capacity()}));
     if (attrs) attrs->reserve_split(level.mesh.face_count(), k);
     uint32_t count, rank;
     auto malformed = [&] {
@@ -647,6 +683,9 @@ bool Decoder::Impl::apply() {
                            record.splits);
     s.a = level.mesh.sector_hint();
     s.b = uint32_t(level.mesh.sector_faces().size());
+    for (uint32_t n : level.mesh.sector_corners())
+      record.sector_corners.push_back(n);  // (reserved above: no allocation)
+    level.sector_end += s.b;
     if (++frontier.decoded - frontier.lazy_first == frontier.lazy.front().split_count()) {
       frontier.lazy_first = frontier.decoded;
       frontier.lazy.pop_front();  // its bytes are no longer needed
@@ -664,6 +703,7 @@ void Decoder::Impl::undo() {
   const uint8_t side = record.sides[level.applied - 1];
   const Split& s = record.splits[level.applied - 1];
   level.mesh.undo_resplit(s.v, s.a, s.b, side & kHasLeft, side & kHasRight);
+  level.sector_end -= s.b;
   --level.applied;
   if (attrs) {
     attrs->undo(level.mesh, level.applied, side & kHasLeft, side & kHasRight);
@@ -748,6 +788,7 @@ uint64_t Decoder::Impl::refine(uint64_t max_splits, uint64_t face_target) {
       frontier.choice.reserve_vertices(nv);
     }
     level.fans.reset();
+    level.listed_ahead = 0;
     while (n < max_splits && level.applied < record.available &&
            level.mesh.face_count() < face_target) {
       prefetch();

@@ -8,7 +8,7 @@ namespace pmz {
 PMZ_SMALL_IN_WASM void ProgressiveMesh::grow_scratch(size_t need) {
   size_t cap = std::max<size_t>(64, scratch_cap_);
   while (cap < need) cap *= 2;
-  for (auto* b : {&fan_, &ring_, &u_ring_, &sector_}) b->resize(cap);
+  for (auto* b : {&fan_, &ring_, &u_ring_, &sector_, &sector_corner_}) b->resize(cap);
   scratch_cap_ = cap;
 }
 
@@ -152,6 +152,7 @@ bool ProgressiveMesh::split_gathered(uint32_t v, uint32_t a, uint32_t b) {
   // the sector's corners become u.
   uint32_t* ur = u_ring_.data();
   uint32_t* sec = sector_.data();
+  uint32_t* sc = sector_corner_.data();
   ur[0] = v;
   for (uint32_t i = 0, j = s; i <= count; ++i) {
     ur[i + 1] = ring[j];
@@ -161,6 +162,7 @@ bool ProgressiveMesh::split_gathered(uint32_t v, uint32_t a, uint32_t b) {
     const uint32_t n = fan[j];
     cv[prev_corner(n)] = u;
     sec[i] = n / 3;
+    sc[i] = n;
     j = j + 1 == m ? 0 : j + 1;
   }
   u_ring_n_ = count + 2;
@@ -172,29 +174,39 @@ bool ProgressiveMesh::split_gathered(uint32_t v, uint32_t a, uint32_t b) {
 
 void ProgressiveMesh::resplit(uint32_t v, uint32_t h, uint32_t count, bool has_l, bool has_r) {
   if (count > scratch_cap_) grow_scratch(count);
+  // h = fan[s]: the sector's fan entries along the fan from there (the walk reads only
+  // opposite, which the sector's rewrite does not change), then as from a list.
+  uint32_t* sc = sector_corner_.data();
+  for (uint32_t i = 0, n = h; i < count; ++i, n = prev_corner(opposite[n])) sc[i] = n;
+  resplit_listed(v, sc, count, h, has_l, has_r);
+}
+
+void ProgressiveMesh::resplit_listed(uint32_t v, const uint32_t* sector, uint32_t count, uint32_t h,
+                                     bool has_l, bool has_r) {
+  if (count > scratch_cap_) grow_scratch(count);
   const uint32_t u = vertex_count();
   uint32_t* cv = corner_vertex.data();
   const uint32_t* opp = opposite.data();
   uint32_t* sec = sector_.data();
   uint32_t vl = kNoCorner, vr = kNoCorner, pl = kNoCorner, ql = kNoCorner, pr = kNoCorner,
            qr = kNoCorner;
-  if (count) {  // h = fan[s]: the same reads as split_gathered(), along the fan from there
+  if (count) {  // the same reads as split_gathered(), from the sector's first and last faces
+    h = sector[0];
+    const uint32_t last = sector[count - 1];
     if (has_l) {
       pl = next_corner(h);
       ql = opp[pl];
       vl = cv[h];
     }
-    uint32_t n = h;
-    for (uint32_t i = 0;;) {
+    if (has_r) {
+      pr = last;
+      qr = opp[last];
+      vr = cv[next_corner(last)];
+    }
+    for (uint32_t i = 0; i < count; ++i) {
+      const uint32_t n = sector[i];
       cv[prev_corner(n)] = u;
       sec[i] = n / 3;
-      if (++i == count) break;
-      n = prev_corner(opp[n]);
-    }
-    if (has_r) {
-      pr = n;
-      qr = opp[n];
-      vr = cv[next_corner(n)];  // ring[s + count], the far side of the last sector face
     }
   } else if (has_r) {  // h = fan[0]
     qr = next_corner(h);

@@ -117,8 +117,9 @@ void fuzz_quantizer(const uint8_t* data, size_t size) {
 
 // Corner table: build from arbitrary faces, then splits and undos; every undo restores the
 // exact index and adjacency buffers (a vertex may keep a different, still valid, corner).
-// Each split is also redone from its sector hint (resplit) and undone that way (undo_resplit):
-// the same buffers and the same rewritten faces, in the same order, as split / undo_split.
+// Each split is also redone from its sector hint (resplit) or its listed sector corners
+// (resplit_listed) and undone that way (undo_resplit): the same buffers and the same rewritten
+// faces, in the same order, as split / undo_split.
 struct Applied {
   uint32_t v;
   bool l, r;
@@ -179,6 +180,8 @@ void fuzz_mesh(const uint8_t* data, size_t size) {
     a.count = uint32_t(m.sector_faces().size());
     const pmz::BigVector<uint32_t> cv = m.corner_vertex, op = m.opposite;
     const std::vector<uint32_t> sector(m.sector_faces().begin(), m.sector_faces().end());
+    const std::vector<uint32_t> listed(m.sector_corners().begin(), m.sector_corners().end());
+    PMZ_FUZZ_CHECK(listed.size() == a.count && (a.count == 0 || listed[0] == a.hint));
     const uint32_t u = m.vertex_count() - 1, cu = m.vertex_corner[u], cvv = m.vertex_corner[v];
     auto redone = [&] {
       PMZ_FUZZ_CHECK(m.corner_vertex == cv && m.opposite == op && m.vertex_count() == u + 1);
@@ -195,6 +198,10 @@ void fuzz_mesh(const uint8_t* data, size_t size) {
     restored(m, a);
     PMZ_FUZZ_CHECK(
         std::equal(undone.begin(), undone.end(), m.sector_faces().begin(), m.sector_faces().end()));
+    m.resplit_listed(v, listed.data(), a.count, a.hint, a.l, a.r);  // from the fan entries
+    redone();
+    m.undo_resplit(v, a.hint, a.count, a.l, a.r);
+    restored(m, a);
     m.resplit(v, a.hint, a.count, a.l, a.r);
     redone();
     stack.push_back(std::move(a));

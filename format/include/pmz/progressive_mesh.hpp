@@ -109,6 +109,14 @@ class ProgressiveMesh {
   // split_gathered() left them, sector_faces() too; u_ring() is left empty. The caller
   // guarantees the state (nothing is validated); may throw bad_alloc before changing anything.
   void resplit(uint32_t v, uint32_t hint, uint32_t count, bool has_l, bool has_r);
+  // The same from the sector's fan entries (sector_corners() after split_gathered(): `count`
+  // of them; hint is used only when count is 0): no walk along opposite, so the loads of a
+  // split are independent of each other and can be prefetched from the list.
+  void resplit_listed(uint32_t v, const uint32_t* sector, uint32_t count, uint32_t hint, bool has_l,
+                      bool has_r);
+  // After split_gathered() or resplit() (not after resplit_listed() or an undo): the fan entries
+  // (next of v's corner) of the rewritten faces, in order (the first is sector_hint() if any).
+  std::span<const uint32_t> sector_corners() const { return {sector_corner_.data(), sector_n_}; }
 
   // Undoes the last split (LIFO), which was at v and created the left/right faces that exist.
   // Buffers return exactly to their state before that split; sector_faces() holds the faces
@@ -129,7 +137,7 @@ class ProgressiveMesh {
   void grow_scratch(size_t need);
   // Scratch sized to scratch_cap_ (no push_back bookkeeping in the hot loops); the first
   // *_n_ entries are in use. fan_ holds at most scratch_cap_ - 2 faces.
-  std::vector<uint32_t> fan_, ring_, u_ring_, sector_;
+  std::vector<uint32_t> fan_, ring_, u_ring_, sector_, sector_corner_;
   size_t scratch_cap_ = 0;
   uint32_t fan_n_ = 0, ring_n_ = 0, u_ring_n_ = 0, sector_n_ = 0;
   uint32_t start_ = 0, hint_ = kNoCorner;
