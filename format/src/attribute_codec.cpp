@@ -220,12 +220,16 @@ PredictionKind predict(const ProgressiveMesh& pm, const int32_t* coords, const A
 }
 
 UIntModel& residual_model(AttributeModels& m, const AttributeHeader& h, uint32_t i,
-                          PredictionKind kind) {
+                          PredictionKind kind, uint32_t prev) {
+  // The second component of a pair (v, the octahedral second) by the class of the first's
+  // residual (prev): the two are far from the prediction together.
+  const uint32_t second = 1 + std::min(bit_length(prev), 7u);
   if (i < 2 * h.texcoord_sets)
-    return kind.face_map ? m.texcoord_fan[kind.texcoord_ctx][i & 1] : m.texcoord[i & 1];
+    return kind.face_map ? m.texcoord_fan[kind.texcoord_ctx][i & 1 ? second : 0]
+                         : m.texcoord[i & 1];
   i -= 2 * h.texcoord_sets;
   if (i < h.normal_components())
-    return h.normal_bits ? m.normal_fan[kind.normal_ctx][i] : m.normal[i];
+    return h.normal_bits ? m.normal_fan[kind.normal_ctx][i ? second : 0] : m.normal[i];
   return m.color[std::min(i - h.normal_components(), 3u)];
 }
 
@@ -400,9 +404,12 @@ void encode_new_wedge(RangeEncoder& rc, AttributeModels& m, const ProgressiveMes
                       uint32_t n, const int32_t* fresh) {
   int32_t pred[kMaxTexcoordSets * 2 + 7];
   const PredictionKind kind = predict(pm, coords, s, c, cand, n, pred);
-  for (uint32_t i = 0; i < s.stride; ++i)
-    encode_uint(rc, residual_model(m, s.head, i, kind),
-                zigzag_encode(int32_t(uint32_t(fresh[i]) - uint32_t(pred[i]))));
+  uint32_t prev = 0;
+  for (uint32_t i = 0; i < s.stride; ++i) {
+    const uint32_t z = zigzag_encode(int32_t(uint32_t(fresh[i]) - uint32_t(pred[i])));
+    encode_uint(rc, residual_model(m, s.head, i, kind, prev), z);
+    prev = z;
+  }
   s.corner_wedge[c] = s.wedge_count;
   push_wedge(s, pm.corner_vertex[c], fresh);
 }
@@ -413,9 +420,9 @@ bool decode_new_wedge(RangeState& rc, AttributeModels& m, const ProgressiveMesh&
   if (s.wedge_count >= s.head.full_wedges) return false;  // more wedges than HEAD announced
   int32_t pred[kMaxTexcoordSets * 2 + 7], value[kMaxTexcoordSets * 2 + 7];
   const PredictionKind kind = predict(pm, coords, s, c, cand, n, pred);
+  uint32_t z = 0;
   for (uint32_t i = 0; i < s.stride; ++i) {
-    uint32_t z;
-    if (!read_uint(rc, residual_model(m, s.head, i, kind), z)) return false;
+    if (!read_uint(rc, residual_model(m, s.head, i, kind, z), z)) return false;
     value[i] = int32_t(uint32_t(pred[i]) + uint32_t(zigzag_decode(z)));
   }
   s.corner_wedge[c] = s.wedge_count;

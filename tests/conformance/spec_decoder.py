@@ -206,7 +206,7 @@ def read_head(p):  # spec/format.md section 4
     if any(h[n] >= 1 << 32 for n in ("flags", "base_vertices", "base_faces", "total_splits",
                                      "full_faces")):
         raise Refused("corrupt")
-    if h["major"] != 10:
+    if h["major"] != 11:
         raise Refused("bad_version")
     if (h["flags"] & ~1 or h["position_bits"] > 30 or h["curvature"] > 8
             or h["fine_curvature"] > 8 or h["level"] > 1):
@@ -432,9 +432,9 @@ class Attributes:
         self.reference = [[SmallModel() for _ in range(3)] for _ in range(2)]  # Appendix A
         self.escape = UIntModel()
         self.tex = [UIntModel(), UIntModel()]
-        self.tex_fan = [[UIntModel(), UIntModel()] for _ in range(8)]
+        self.tex_fan = [[UIntModel() for _ in range(9)] for _ in range(8)]
         self.normal = [UIntModel() for _ in range(3)]
-        self.normal_fan = [[UIntModel(), UIntModel()] for _ in range(8)]
+        self.normal_fan = [[UIntModel() for _ in range(9)] for _ in range(8)]
         self.color = [UIntModel() for _ in range(4)]
         self.material = [SmallModel() for _ in range(4)]
         self.material_escape = UIntModel()
@@ -547,16 +547,19 @@ class Attributes:
                             S = S + uv[i]
                         Q = S / len(maps)
                     P[i] = int(min(max(math.floor(Q + 0.5), 0.0), top))
-        value = []
+        value, z = [], 0
         for i in range(a["stride"]):
             j = i - 2 * a["sets"]
+            second = (i % 2 == 1) if j < 0 else j == 1
+            k = 1 + min(z.bit_length(), 7) if second else 0  # the class of the first's z
             if j < 0:
-                M = self.tex_fan[tctx][i % 2] if fm else self.tex[i % 2]
+                M = self.tex_fan[tctx][k] if fm else self.tex[i % 2]
             elif j < a["nn"]:
-                M = self.normal_fan[nctx][j] if a["nn"] == 2 else self.normal[j]
+                M = self.normal_fan[nctx][k] if a["nn"] == 2 else self.normal[j]
             else:
                 M = self.color[min(j - a["nn"], 3)]
-            value.append(s32(P[i] + unzigzag(rc.uint(M))))
+            z = rc.uint(M)
+            value.append(s32(P[i] + unzigzag(z)))
         self.wv.append(x)
         self.val.append(value)
         self.aw[c] = self.W

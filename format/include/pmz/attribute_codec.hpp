@@ -1,4 +1,4 @@
-// Attribute wedges in the .pmz format (spec/format.md section 14; format 10.0): the HEAD
+// Attribute wedges in the .pmz format (spec/format.md section 14; format 11.0): the HEAD
 // fields, the per-corner wedge state writer and decoder keep in step, and the coding of a
 // corner's wedge reference and a new wedge's values (ATTR chunks). Writer and decoder share it.
 //
@@ -78,9 +78,9 @@ struct AttributeModels {
   SmallModel reference[2][3];    // [u corner][candidates]
   UIntModel escape;              // an existing wedge that is no candidate: wedges - 1 - id
   UIntModel texcoord[2];         // [component], without a face-map prediction
-  UIntModel texcoord_fan[8][2];  // [face maps' spread context][component]
+  UIntModel texcoord_fan[8][9];  // [face maps' spread context][u: 0; v: class of u's residual]
   UIntModel normal[3];           // lossless normals [component]
-  UIntModel normal_fan[8][2];    // octahedral [neighbours' spread context][component]
+  UIntModel normal_fan[8][9];    // octahedral [neighbours' spread][0, or class of the first's]
   UIntModel color[4];
   SmallModel material[4];  // [candidates]
   UIntModel material_escape;
