@@ -221,29 +221,17 @@ void ProgressiveMesh::resplit_listed(uint32_t v, const uint32_t* sector, uint32_
   link_new_faces(v, vl, vr, pl, ql, pr, qr, has_l, has_r);
 }
 
-namespace {
-// A new face: its corners' vertices (x, y, z) and opposite corners (ox, oy, oz). push_back's
-// reallocation path (rare: the decoder reserves) is out of line, once: natively one call per face
-// (the native decoder library's size budget), in the WebAssembly build one per array (smaller
-// there).
 #if defined(__wasm__)
-#define PMZ_APPEND_FACE inline
-#define PMZ_APPEND3 [[gnu::noinline]]
-#else
-#define PMZ_APPEND_FACE [[gnu::noinline]]
-#define PMZ_APPEND3 inline
-#endif
-PMZ_APPEND3 void append3(BigVector<uint32_t>& b, uint32_t x, uint32_t y, uint32_t z) {
+namespace {
+// A new face: its corners' vertices (x, y, z) and opposite corners (ox, oy, oz), in the
+// WebAssembly build with one out-of-line push_back call per array (smaller there).
+[[gnu::noinline]] void append3(BigVector<uint32_t>& b, uint32_t x, uint32_t y, uint32_t z) {
   b.push_back(x);
   b.push_back(y);
   b.push_back(z);
 }
-PMZ_APPEND_FACE void append_face(BigVector<uint32_t>& cv, uint32_t x, uint32_t y, uint32_t z,
-                                 BigVector<uint32_t>& opp, uint32_t ox, uint32_t oy, uint32_t oz) {
-  append3(cv, x, y, z);
-  append3(opp, ox, oy, oz);
-}
 }  // namespace
+#endif
 
 void ProgressiveMesh::link_new_faces(uint32_t v, uint32_t vl, uint32_t vr, uint32_t pl, uint32_t ql,
                                      uint32_t pr, uint32_t qr, bool has_l, bool has_r) {
@@ -259,12 +247,34 @@ void ProgressiveMesh::link_new_faces(uint32_t v, uint32_t vl, uint32_t vr, uint3
     if (pr != kNoCorner) opp[pr] = g0;
     if (qr != kNoCorner) opp[qr] = g0 + 1;
   }
+#if defined(__wasm__)
   if (has_l) {
-    append_face(corner_vertex, u, v, vl, opposite, ql, pl, across ? g0 + 2 : kNoCorner);
+    append3(corner_vertex, u, v, vl);
+    append3(opposite, ql, pl, across ? g0 + 2 : kNoCorner);
   }
   if (has_r) {
-    append_face(corner_vertex, v, u, vr, opposite, pr, qr, across ? f0 + 2 : kNoCorner);
+    append3(corner_vertex, v, u, vr);
+    append3(opposite, pr, qr, across ? f0 + 2 : kNoCorner);
   }
+#else
+  // Natively both faces at once: one resize per buffer (the decoder reserved the capacity),
+  // then plain stores. Six push_backs out of line cost about 112 instructions per split; inlined,
+  // about 2 KB of the decoder library's size budget.
+  const size_t at = corner_vertex.size(), n = 3 * ((has_l ? 1 : 0) + (has_r ? 1 : 0));
+  corner_vertex.resize(at + n);
+  opposite.resize(at + n);
+  uint32_t* c = corner_vertex.data() + at;
+  uint32_t* o = opposite.data() + at;
+  if (has_l) {
+    c[0] = u, c[1] = v, c[2] = vl;
+    o[0] = ql, o[1] = pl, o[2] = across ? g0 + 2 : kNoCorner;
+    c += 3, o += 3;
+  }
+  if (has_r) {
+    c[0] = v, c[1] = u, c[2] = vr;
+    o[0] = pr, o[1] = qr, o[2] = across ? f0 + 2 : kNoCorner;
+  }
+#endif
   vertex_corner.push_back(has_l ? f0 : g0 + 1);
   vertex_corner[v] = has_l ? f0 + 1 : g0;
 }
