@@ -382,7 +382,10 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
       for (const tick of morphTicks) tick();
     }
     const t0r = performance.now();
-    const drawn = redraw || (morphOn && t0r < glideUntil);
+    // Gliding vertices redraw every frame, up to the first frame past the glide's end (frames
+    // can be far apart: stopping at the last one before it left the mesh mid-glide on screen).
+    const drawn = redraw || (morphOn && glideUntil > 0);
+    if (t0r >= glideUntil) glideUntil = 0;
     if (drawn && YIELD_DRAW && current && current.stream.pauseDecoding && status.faces > 0 && !status.complete &&
         t0r >= yieldAgain) {
       const ms = Math.min(40, Math.max(VSYNC_MS, drawCost.lastDrawing || VSYNC_MS));
