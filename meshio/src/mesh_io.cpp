@@ -779,11 +779,10 @@ bool read_ply(const std::string& path, std::string_view data, PolygonSoup& out,
       Material m = named_material("texture" + std::to_string(out.attributes.materials.size()));
       m.base_color_texture = file;
       out.attributes.materials.push_back(std::move(m));
-    } else if (key != "comment" && key != "obj_info" && !key.empty()) {
-      error =
-          line_error(path, lines.number, "unexpected PLY header line '" + std::string(key) + "'");
-      return false;
     }
+    // Any other line ("comment", "obj_info", or free text such as Blender 2.4x's "Created by
+    // Blender3D ...") is skipped: only format, element and property lines shape the body, and
+    // Blender, MeshLab and assimp read such files.
   }
   if (!ended || format < 0) {
     error = path + ": PLY header has no " + std::string(ended ? "format line" : "end_header");

@@ -117,6 +117,18 @@ TEST(MeshIO, ReadsAsciiPly) {
                 "property int vertex2\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n0 1\n"));
 }
 
+TEST(MeshIO, ReadsPlyWithFreeTextHeaderLines) {
+  // Blender 2.47's exporter writes "Created by Blender3D ..." without "comment" (assimp's
+  // Wuson.ply).
+  TempDir dir;
+  expect_square(
+      dir.write("blender.ply",
+                "ply\nformat ascii 1.0\nCreated by Blender3D 247 - www.blender.org, source file: \n"
+                "element vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+                "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                "0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n"));
+}
+
 TEST(MeshIO, ReadsBinaryPlyBothEndians) {
   TempDir dir;
   for (bool big : {false, true}) {
