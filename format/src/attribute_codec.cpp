@@ -97,6 +97,8 @@ void octahedral(double x, double y, double z, uint32_t bits, int32_t* q) {
 struct PredictionKind {
   uint8_t face_map = 0;
   uint8_t texcoord_ctx = 0, normal_ctx = 0;
+  bool scored = false;                 // both normal predictions exist: the choice learns
+  int32_t neighbour[2], geometric[2];  // the two normal predictions (octahedral)
 };
 
 inline constexpr uint32_t kMaxChartFan = 16;
@@ -111,20 +113,39 @@ struct FanCorner {
   uint32_t corner, next_wedge, prev_wedge;
 };
 
-uint32_t chart_fan(const ProgressiveMesh& pm, const AttributeState& s, uint32_t c, FanCorner* out) {
+// Whether a walk around x crosses an edge whose other vertex has the a-wedges a and b in the
+// edge's two faces: the same a-wedge (the chart fan), or equal normals at normals_at (the normal
+// fan, spec/format.md section 14.3, "Normal prediction": it crosses texture seams).
+bool crosses(const AttributeState& s, uint32_t a, uint32_t b, uint32_t normals_at) {
+  if (a == kNoCorner || b == kNoCorner) return false;
+  if (a == b) return true;
+  if (normals_at == kNoCorner) return false;
+  const int32_t *na = &s.values[size_t(a) * s.stride + normals_at],
+                *nb = &s.values[size_t(b) * s.stride + normals_at];
+  return na[0] == nb[0] && na[1] == nb[1];
+}
+
+// The chart fan (normals_at = kNoCorner, at most kMaxChartFan corners) or the normal fan (at
+// most kMaxNormalFan).
+uint32_t walk_fan(const ProgressiveMesh& pm, const AttributeState& s, uint32_t c, FanCorner* out,
+                  uint32_t max, uint32_t normals_at) {
   uint32_t n = 0;
   out[n++] = {c, wedge_at(s, next_corner(c)), wedge_at(s, prev_corner(c))};
-  for (uint32_t i = 0; n < kMaxChartFan;) {  // out[i] is the last corner reached this way
-    const uint32_t w = out[i].next_wedge, o = pm.opposite[prev_corner(out[i].corner)];
-    if (w == kNoCorner || o == kNoCorner || wedge_at(s, next_corner(o)) != w) break;
+  for (uint32_t i = 0; n < max;) {  // out[i] is the last corner reached this way
+    const uint32_t o = pm.opposite[prev_corner(out[i].corner)];
+    if (o == kNoCorner) break;
+    const uint32_t w = wedge_at(s, next_corner(o));
+    if (!crosses(s, out[i].next_wedge, w, normals_at)) break;
     const uint32_t at = prev_corner(o);
     if (at == c) return n;  // the fan closed
     out[n] = {at, wedge_at(s, next_corner(at)), w};
     i = n++;
   }
-  for (uint32_t i = 0; n < kMaxChartFan;) {
-    const uint32_t w = out[i].prev_wedge, o = pm.opposite[next_corner(out[i].corner)];
-    if (w == kNoCorner || o == kNoCorner || wedge_at(s, prev_corner(o)) != w) break;
+  for (uint32_t i = 0; n < max;) {
+    const uint32_t o = pm.opposite[next_corner(out[i].corner)];
+    if (o == kNoCorner) break;
+    const uint32_t w = wedge_at(s, prev_corner(o));
+    if (!crosses(s, out[i].prev_wedge, w, normals_at)) break;
     const uint32_t at = next_corner(o);
     out[n] = {at, w, wedge_at(s, prev_corner(at))};
     i = n++;
@@ -132,11 +153,66 @@ uint32_t chart_fan(const ProgressiveMesh& pm, const AttributeState& s, uint32_t 
   return n;
 }
 
+uint32_t chart_fan(const ProgressiveMesh& pm, const AttributeState& s, uint32_t c, FanCorner* out) {
+  return walk_fan(pm, s, c, out, kMaxChartFan, kNoCorner);
+}
+
+inline constexpr uint32_t kMaxNormalFan = 32;
+
+// atan(t) for t >= 0 from +, -, *, / only, so that every decoder computes the same bits (a
+// library's atan may differ in the last bit between platforms): a degree-11 odd polynomial on
+// [0, 1] (error below 1e-5 rad), atan(t) = pi/2 - atan(1/t) above.
+PMZ_SMALL double atan_nonnegative(double t) {
+  const bool above = t > 1;
+  const double x = above ? 1 / t : t, x2 = x * x;
+  double p = -0.0117212;
+  p = p * x2 + 0.05265332;
+  p = p * x2 - 0.11643287;
+  p = p * x2 + 0.19354346;
+  p = p * x2 - 0.33262347;
+  p = p * x2 + 0.99997726;
+  p = p * x;
+  return above ? 1.5707963267948966 - p : p;
+}
+
+// The normal predicted from positions (spec/format.md section 14.3, "Normal prediction"): the
+// normal fan's face normals weighted by their angle at x (as most tools weight vertex normals),
+// octahedral into p; p is left as it is when the sum is zero. Binary64, each operation rounded in
+// the order written.
+PMZ_SMALL void predict_normal(const ProgressiveMesh& pm, const int32_t* coords,
+                              const AttributeState& s, uint32_t c, int32_t* p) {
+  const uint32_t at = 2 * s.head.texcoord_sets;
+  FanCorner fan[kMaxNormalFan];
+  const uint32_t fan_n = walk_fan(pm, s, c, fan, kMaxNormalFan, at);
+  const int32_t* px = coords + size_t(pm.corner_vertex[c]) * 3;
+  double n[3] = {0, 0, 0};
+  for (uint32_t i = 0; i < fan_n; ++i) {
+    const int32_t* pa = coords + size_t(pm.corner_vertex[next_corner(fan[i].corner)]) * 3;
+    const int32_t* pb = coords + size_t(pm.corner_vertex[prev_corner(fan[i].corner)]) * 3;
+    double e[3], f[3];
+    for (int j = 0; j < 3; ++j) {
+      e[j] = double(pa[j]) - double(px[j]);
+      f[j] = double(pb[j]) - double(px[j]);
+    }
+    const double m[3] = {e[1] * f[2] - e[2] * f[1], e[2] * f[0] - e[0] * f[2],
+                         e[0] * f[1] - e[1] * f[0]};
+    const double l = std::sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+    if (!(l > 0)) continue;
+    const double d = e[0] * f[0] + e[1] * f[1] + e[2] * f[2];
+    const double a = atan_nonnegative(d > 0 ? l / d : -d / l);  // the angle at x, below
+    const double w = (d > 0 ? a : 1.5707963267948966 + a) / l;
+    for (int j = 0; j < 3; ++j) n[j] = n[j] + m[j] * w;
+  }
+  if (n[0] == 0 && n[1] == 0 && n[2] == 0) return;
+  octahedral(n[0], n[1], n[2], s.head.normal_bits, p);
+}
+
 uint8_t spread_context(uint32_t spread) { return uint8_t(1 + std::min(bit_length(spread), 6u)); }
 
 // The prediction of a new wedge's values at corner c (spec/format.md section 14.3).
 PredictionKind predict(const ProgressiveMesh& pm, const int32_t* coords, const AttributeState& s,
-                       uint32_t c, const uint32_t* cand, uint32_t n, int32_t* pred) {
+                       uint32_t c, const uint32_t* cand, uint32_t n, int32_t normal_score,
+                       int32_t* pred) {
   const AttributeHeader& h = s.head;
   const uint32_t wa = wedge_at(s, next_corner(c)), wb = wedge_at(s, prev_corner(c));
   const uint32_t ref = n ? cand[0] : wa != kNoCorner ? wa : wb;
@@ -146,8 +222,16 @@ PredictionKind predict(const ProgressiveMesh& pm, const int32_t* coords, const A
   FanCorner fan[kMaxChartFan];
   const uint32_t fan_n = chart_fan(pm, s, c, fan);
   if (h.normals && h.normal_bits) {
-    // How far the fan's neighbours' normals lie from the prediction (octahedral steps).
     const uint32_t at = 2 * h.texcoord_sets;
+    int32_t geo[2] = {pred[at], pred[at + 1]};
+    predict_normal(pm, coords, s, c, geo);
+    if (ref != kNoCorner) {
+      kind.scored = true;
+      kind.neighbour[0] = pred[at], kind.neighbour[1] = pred[at + 1];
+      kind.geometric[0] = geo[0], kind.geometric[1] = geo[1];
+    }
+    if (normal_score <= 0) pred[at] = geo[0], pred[at + 1] = geo[1];
+    // How far the fan's neighbours' normals lie from the prediction (octahedral steps).
     uint32_t spread = 0;
     bool any = false;
     for (uint32_t i = 0; i < fan_n; ++i)
@@ -217,6 +301,22 @@ PredictionKind predict(const ProgressiveMesh& pm, const int32_t* coords, const A
     pred[t] = int32_t(std::clamp(std::floor(p + 0.5), 0.0, max_q));
   }
   return kind;
+}
+
+// Which normal prediction the stream's next new a-wedges take (spec/format.md section 14.3):
+// the score follows, with a decay of 1/16, how much closer the geometric prediction came than
+// the neighbour's (in octahedral steps, each new a-wedge's share at most 64); the geometric one
+// while the score is not positive.
+PMZ_SMALL void score_normal(AttributeModels& m, const AttributeHeader& h,
+                            const PredictionKind& kind, const int32_t* value) {
+  if (!kind.scored) return;
+  const uint32_t at = 2 * h.texcoord_sets;
+  int64_t d = 0;
+  for (int k = 0; k < 2; ++k) {
+    const int64_t v = value[at + k];
+    d += std::abs(v - kind.geometric[k]) - std::abs(v - kind.neighbour[k]);
+  }
+  m.normal_score = m.normal_score - m.normal_score / 16 + int32_t(std::clamp<int64_t>(d, -64, 64));
 }
 
 UIntModel& residual_model(AttributeModels& m, const AttributeHeader& h, uint32_t i,
@@ -403,28 +503,30 @@ void encode_new_wedge(RangeEncoder& rc, AttributeModels& m, const ProgressiveMes
                       const int32_t* coords, AttributeState& s, uint32_t c, const uint32_t* cand,
                       uint32_t n, const int32_t* fresh) {
   int32_t pred[kMaxTexcoordSets * 2 + 7];
-  const PredictionKind kind = predict(pm, coords, s, c, cand, n, pred);
+  const PredictionKind kind = predict(pm, coords, s, c, cand, n, m.normal_score, pred);
   uint32_t prev = 0;
   for (uint32_t i = 0; i < s.stride; ++i) {
     const uint32_t z = zigzag_encode(int32_t(uint32_t(fresh[i]) - uint32_t(pred[i])));
     encode_uint(rc, residual_model(m, s.head, i, kind, prev), z);
     prev = z;
   }
+  score_normal(m, s.head, kind, fresh);
   s.corner_wedge[c] = s.wedge_count;
   push_wedge(s, pm.corner_vertex[c], fresh);
 }
 
-bool decode_new_wedge(RangeState& rc, AttributeModels& m, const ProgressiveMesh& pm,
-                      const int32_t* coords, AttributeState& s, uint32_t c, const uint32_t* cand,
-                      uint32_t n) {
+PMZ_SMALL bool decode_new_wedge(RangeState& rc, AttributeModels& m, const ProgressiveMesh& pm,
+                                const int32_t* coords, AttributeState& s, uint32_t c,
+                                const uint32_t* cand, uint32_t n) {
   if (s.wedge_count >= s.head.full_wedges) return false;  // more wedges than HEAD announced
   int32_t pred[kMaxTexcoordSets * 2 + 7], value[kMaxTexcoordSets * 2 + 7];
-  const PredictionKind kind = predict(pm, coords, s, c, cand, n, pred);
+  const PredictionKind kind = predict(pm, coords, s, c, cand, n, m.normal_score, pred);
   uint32_t z = 0;
   for (uint32_t i = 0; i < s.stride; ++i) {
     if (!read_uint(rc, residual_model(m, s.head, i, kind, z), z)) return false;
     value[i] = int32_t(uint32_t(pred[i]) + uint32_t(zigzag_decode(z)));
   }
+  score_normal(m, s.head, kind, value);
   s.corner_wedge[c] = s.wedge_count;
   push_wedge(s, pm.corner_vertex[c], value);
   return rc.ok;

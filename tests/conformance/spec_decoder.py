@@ -206,7 +206,7 @@ def read_head(p):  # spec/format.md section 4
     if any(h[n] >= 1 << 32 for n in ("flags", "base_vertices", "base_faces", "total_splits",
                                      "full_faces")):
         raise Refused("corrupt")
-    if h["major"] != 11:
+    if h["major"] != 12:
         raise Refused("bad_version")
     if (h["flags"] & ~1 or h["position_bits"] > 30 or h["curvature"] > 8
             or h["fine_curvature"] > 8 or h["level"] > 1):
@@ -423,6 +423,32 @@ def positions(c, h):  # spec/format.md section 5
     return b"".join(out)
 
 
+HALF_PI = 1.5707963267948966
+
+
+def atan_nonnegative(t):  # 14.3, normal prediction
+    above = t > 1
+    x = 1 / t if above else t
+    x2, p = x * x, -0.0117212
+    for coef in (0.05265332, -0.11643287, 0.19354346, -0.33262347, 0.99997726):
+        p = p * x2 + coef
+    p = p * x
+    return HALF_PI - p if above else p
+
+
+def octahedral(n, bits):  # 14.2's quantization of a direction
+    x, y, z = n
+    l1 = abs(x) + abs(y) + abs(z)
+    if not l1 > 0:
+        x, y, z = 0.0, 0.0, 1.0
+    else:
+        x, y, z = x / l1, y / l1, z / l1
+    if z < 0:
+        x, y = (1 - abs(y)) * (-1 if x < 0 else 1), (1 - abs(x)) * (-1 if y < 0 else 1)
+    top = float((1 << bits) - 1)
+    return [int(min(max(math.floor((v * 0.5 + 0.5) * top + 0.5), 0.0), top)) for v in (x, y)]
+
+
 class Attributes:
     """spec/format.md section 14: a-wedges per corner (aw), their vertices (wv) and values (val),
     materials."""
@@ -439,32 +465,58 @@ class Attributes:
         self.material = [SmallModel() for _ in range(4)]
         self.material_escape = UIntModel()
         self.simple, self.last_simple = [Model(), Model()], 0
+        self.normal_score = 0  # 14.3, normal prediction: > 0 takes the neighbour's
 
     @staticmethod
     def opposite(m, h):  # the corner across the edge opposite h, or None
         g = m.E.get((m.F[prv(h)], m.F[nxt(h)]))
         return None if g is None else prv(g)
 
-    def chart_fan(self, m, c):  # 14.3, chart fan
+    def walk_fan(self, m, c, limit, same):  # 14.3: the chart fan and the normal fan
         fan, k = [c], c
-        while len(fan) < 16:
+        while len(fan) < limit:
             o = self.opposite(m, prv(k))
-            if not (self.assigned(nxt(k)) and o is not None and self.assigned(nxt(o))
-                    and self.aw[nxt(o)] == self.aw[nxt(k)]):
+            if o is None or not same(nxt(k), nxt(o)):
                 break
             k = prv(o)
             if k == c:
                 return fan
             fan.append(k)
         k = c
-        while len(fan) < 16:
+        while len(fan) < limit:
             o = self.opposite(m, nxt(k))
-            if not (self.assigned(prv(k)) and o is not None and self.assigned(prv(o))
-                    and self.aw[prv(o)] == self.aw[prv(k)]):
+            if o is None or not same(prv(k), prv(o)):
                 break
             k = nxt(o)
             fan.append(k)
         return fan
+
+    def chart_fan(self, m, c):  # 14.3, chart fan: the same a-wedge across each edge
+        return self.walk_fan(m, c, 16, lambda h, g: self.assigned(h) and self.assigned(g)
+                             and self.aw[h] == self.aw[g])
+
+    def walk_normal_fan(self, m, c):  # 14.3, normal prediction: equal normals across each edge
+        at = 2 * self.a["sets"]
+        return self.walk_fan(m, c, 32, lambda h, g: self.assigned(h) and self.assigned(g) and
+                             self.val[self.aw[h]][at:at + 2] == self.val[self.aw[g]][at:at + 2])
+
+    def geometric_normal(self, m, c, p):  # 14.3, normal prediction; p: [qx, qy]
+        px, n = m.c[m.F[c]], [0.0, 0.0, 0.0]
+        for k in self.walk_normal_fan(m, c):
+            pa, pb = m.c[m.F[nxt(k)]], m.c[m.F[prv(k)]]
+            e = [float(pa[i]) - float(px[i]) for i in range(3)]
+            f = [float(pb[i]) - float(px[i]) for i in range(3)]
+            mm = [e[1] * f[2] - e[2] * f[1], e[2] * f[0] - e[0] * f[2], e[0] * f[1] - e[1] * f[0]]
+            ln = math.sqrt(mm[0] * mm[0] + mm[1] * mm[1] + mm[2] * mm[2])
+            if not ln > 0:
+                continue
+            d = e[0] * f[0] + e[1] * f[1] + e[2] * f[2]
+            angle = atan_nonnegative(ln / d) if d > 0 else HALF_PI + atan_nonnegative(-d / ln)
+            w = angle / ln
+            n = [n[i] + mm[i] * w for i in range(3)]
+        if n == [0.0, 0.0, 0.0]:
+            return list(p)
+        return octahedral(n, self.a["nbits"])
 
     def assigned(self, h):
         return h is not None and h < len(self.aw) and self.aw[h] is not None
@@ -497,9 +549,15 @@ class Attributes:
         ref = cand[0] if nc else wa if wa is not None else wb
         P = list(self.val[ref]) if ref is not None else [0] * a["stride"]
         fan = self.chart_fan(m, c)
-        nctx = 0
-        if a["nn"] == 2:  # octahedral normals: the neighbours' spread around P
-            at, spread, found = 2 * a["sets"], 0, False
+        nctx, scored = 0, None
+        if a["nn"] == 2:  # octahedral normals: the normal prediction, then the neighbours' spread
+            at = 2 * a["sets"]
+            geo = self.geometric_normal(m, c, P[at:at + 2])
+            if ref is not None:
+                scored = (P[at:at + 2], geo)
+            if self.normal_score <= 0:
+                P[at:at + 2] = geo
+            spread, found = 0, False
             for k in fan:
                 for h in (nxt(k), prv(k)):
                     if self.assigned(h):
@@ -560,6 +618,11 @@ class Attributes:
                 M = self.color[min(j - a["nn"], 3)]
             z = rc.uint(M)
             value.append(s32(P[i] + unzigzag(z)))
+        if scored:  # 14.3, normal prediction: the score
+            at, (near, geo) = 2 * a["sets"], scored
+            d = sum(abs(value[at + j] - geo[j]) - abs(value[at + j] - near[j]) for j in range(2))
+            sc = self.normal_score
+            self.normal_score = sc - int(sc / 16) + min(max(d, -64), 64)
         self.wv.append(x)
         self.val.append(value)
         self.aw[c] = self.W

@@ -1,4 +1,4 @@
-// Attribute wedges in the .pmz format (spec/format.md section 14; format 11.0): the HEAD
+// Attribute wedges in the .pmz format (spec/format.md section 14; format 12.0): the HEAD
 // fields, the per-corner wedge state writer and decoder keep in step, and the coding of a
 // corner's wedge reference and a new wedge's values (ATTR chunks). Writer and decoder share it.
 //
@@ -86,6 +86,7 @@ struct AttributeModels {
   UIntModel material_escape;
   Prob simple[2] = {kProbInit, kProbInit};  // a split's "simple" bit [the previous split's]
   uint32_t last_simple = 0;
+  int32_t normal_score = 0;  // > 0: new normals take the neighbour's prediction (14.3)
 };
 
 // The attribute state writer and decoder keep: per corner its wedge, per wedge its vertex and
