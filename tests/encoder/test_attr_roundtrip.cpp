@@ -38,6 +38,15 @@ void encode(const pmz::IndexedMesh& mesh, const pmz::WriteOptions& opt, Encoded&
   e.order = pmz::decoded_vertex_order(e.seq, opt);
 }
 
+// Encoded lossless (every attribute's bits 0) or with the defaults, then fully decoded.
+void encode_and_decode(const pmz::IndexedMesh& mesh, bool lossless, Encoded& e, pmz::Decoder& d) {
+  pmz::WriteOptions opt;
+  if (lossless) opt.position_bits = opt.texcoord_bits = opt.normal_bits = opt.color_bits = 0;
+  encode(mesh, opt, e);
+  ASSERT_EQ(d.feed(e.bytes.data(), e.bytes.size()), pmz::Status::ok) << d.error_message();
+  d.refine();
+}
+
 // Every live corner names a wedge of its own vertex; wedge positions are their vertices'.
 void expect_consistent(const pmz::Decoder& d) {
   const uint32_t w = d.wedge_count();
@@ -181,6 +190,62 @@ float texcoord_extent(const pmz::MeshAttributes& a, uint32_t s) {
   return std::max(hi[0] - lo[0], hi[1] - lo[1]);
 }
 
+// A UV sphere (the geometric normal prediction's case, spec/format.md 14.3) with a texture seam
+// down one meridian and a normal crease at the equator: the northern faces have smooth radial
+// normals, the southern ones the flat (0, 0, -1), so equator vertices carry up to four wedges.
+TEST(AttrRoundTrip, CreasedUvSphere) {
+  const uint32_t rings = 24, segments = 32, equator = rings / 2;
+  pmz::IndexedMesh m;
+  pmz::MeshAttributes& a = m.attributes;
+  a.texcoords.resize(1);
+  for (uint32_t r = 1; r < rings; ++r)
+    for (uint32_t j = 0; j < segments; ++j) {
+      const double t = M_PI * r / rings, f = 2 * M_PI * j / segments;
+      m.positions.insert(m.positions.end(), {float(std::sin(t) * std::cos(f)),
+                                             float(std::sin(t) * std::sin(f)), float(std::cos(t))});
+    }
+  const uint32_t north = (rings - 1) * segments, south = north + 1;
+  m.positions.insert(m.positions.end(), {0.f, 0.f, 1.f, 0.f, 0.f, -1.f});
+  std::map<std::array<uint32_t, 3>, uint32_t> wedges;  // (vertex, u = 1 at the seam, south)
+  const auto corner = [&](uint32_t r, uint32_t j, bool wrap, bool below) {
+    const uint32_t v = r == 0 ? north : r == rings ? south : (r - 1) * segments + j % segments;
+    const bool seam = wrap && j == segments;
+    auto [it, fresh] = wedges.try_emplace({v, seam, below}, a.wedge_count());
+    if (fresh) {
+      a.wedge_vertices.push_back(v);
+      a.texcoords[0].insert(a.texcoords[0].end(), {float(j) / segments, float(r) / rings});
+      const float* p = &m.positions[size_t(v) * 3];
+      if (below)
+        a.normals.insert(a.normals.end(), {0.f, 0.f, -1.f});
+      else
+        a.normals.insert(a.normals.end(), {p[0], p[1], p[2]});
+    }
+    m.indices.push_back(v);
+    a.corner_wedges.push_back(it->second);
+  };
+  for (uint32_t r = 0; r < rings; ++r)
+    for (uint32_t j = 0; j < segments; ++j) {
+      const bool below = r >= equator, wrap = j + 1 == segments;
+      const uint32_t q[4][2] = {{r, j}, {r + 1, j}, {r + 1, j + 1}, {r, j + 1}};
+      for (const auto& t : {std::array<int, 3>{0, 1, 2}, std::array<int, 3>{0, 2, 3}}) {
+        if ((r == 0 && t[2] == 3) || (r + 1 == rings && t[1] == 1)) continue;  // pole fans
+        for (int k : t) corner(q[k][0], q[k][1], wrap, below);
+      }
+    }
+  ASSERT_GT(a.wedge_count(), m.positions.size() / 3 + segments);  // the seam and the crease
+  for (bool lossless : {true, false}) {
+    SCOPED_TRACE(lossless ? "lossless" : "quantized");
+    Encoded e;
+    pmz::Decoder d;
+    ASSERT_NO_FATAL_FAILURE(encode_and_decode(m, lossless, e, d));
+    expect_consistent(d);
+    if (lossless)
+      expect_full(d, e, 0, 0, 0);
+    else
+      expect_full(d, e, 1.f / 4095 * 0.51f, 0.005f, 0);
+  }
+}
+
 // Textured samples from Debian's assimp-testmodels (corpus-assimp, when fetched): an OBJ with
 // four materials and a glTF with one, lossless and with the default quantization.
 TEST(AttrRoundTrip, AssimpSamples) {
@@ -197,13 +262,9 @@ TEST(AttrRoundTrip, AssimpSamples) {
     ++tested;
     for (bool lossless : {true, false}) {
       SCOPED_TRACE(std::string(name) + (lossless ? " lossless" : " quantized"));
-      pmz::WriteOptions opt;
-      if (lossless) opt.position_bits = opt.texcoord_bits = opt.normal_bits = opt.color_bits = 0;
       Encoded e;
-      encode(mesh, opt, e);
       pmz::Decoder d;
-      ASSERT_EQ(d.feed(e.bytes.data(), e.bytes.size()), pmz::Status::ok) << d.error_message();
-      d.refine();
+      ASSERT_NO_FATAL_FAILURE(encode_and_decode(mesh, lossless, e, d));
       ASSERT_EQ(d.material_count(), mesh.attributes.materials.size());
       for (uint32_t m = 0; m < d.material_count(); ++m) {
         EXPECT_EQ(d.material(m)->name, mesh.attributes.materials[m].name);
