@@ -158,6 +158,7 @@ uint32_t chart_fan(const ProgressiveMesh& pm, const AttributeState& s, uint32_t 
 }
 
 inline constexpr uint32_t kMaxNormalFan = 32;
+inline constexpr double kHalfPi = 1.5707963267948966;  // binary64 nearest pi / 2 (14.3)
 
 // atan(t) for t >= 0 from +, -, *, / only, so that every decoder computes the same bits (a
 // library's atan may differ in the last bit between platforms): a degree-11 odd polynomial on
@@ -172,7 +173,7 @@ PMZ_SMALL double atan_nonnegative(double t) {
   p = p * x2 - 0.33262347;
   p = p * x2 + 0.99997726;
   p = p * x;
-  return above ? 1.5707963267948966 - p : p;
+  return above ? kHalfPi - p : p;
 }
 
 // The normal predicted from positions (spec/format.md section 14.3, "Normal prediction"): the
@@ -200,7 +201,7 @@ PMZ_SMALL void predict_normal(const ProgressiveMesh& pm, const int32_t* coords,
     if (!(l > 0)) continue;
     const double d = e[0] * f[0] + e[1] * f[1] + e[2] * f[2];
     const double a = atan_nonnegative(d > 0 ? l / d : -d / l);  // the angle at x, below
-    const double w = (d > 0 ? a : 1.5707963267948966 + a) / l;
+    const double w = (d > 0 ? a : kHalfPi + a) / l;
     for (int j = 0; j < 3; ++j) n[j] = n[j] + m[j] * w;
   }
   if (n[0] == 0 && n[1] == 0 && n[2] == 0) return;
