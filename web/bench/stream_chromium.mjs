@@ -22,6 +22,9 @@
 //                                     [WORKER=1]   (0: decode on the drawing thread)
 //                                     [QUERY]      (more viewer parameters, e.g. render=page,
 //                                                   drawms=0; 'A|B': runs alternate A, B, ...)
+// With gputime=1 in QUERY, each drawn canvas frame's time in the GPU process (render.js) gives
+// gpu_median_ms / gpu_max_ms while decoding and, in worst_gaps, gpu: the longest of the canvas
+// frames drawn in the 100 ms before that page gap ended.
 // PMZ_VIEWER_DIR: another built viewer; PMZ_BENCH_FRAMES=PREFIX: raw frames per run.
 import { mkdtempSync, rmSync, writeFileSync } from 'node:fs';
 import { loadavg, tmpdir } from 'node:os';
@@ -79,8 +82,13 @@ for (let r = 0; r < runs * variants.length; ++r) {
   const redraws = intervals(drawn);
   const levels = drawn.filter((f, i) => i === 0 || f.faces !== drawn[i - 1].faces);
   const newLevels = intervals(levels);
+  // gpu: the longest time a canvas frame drawn within the 100 ms before the gap's end took in
+  // the GPU process (its fence, see render.js), when recorded.
+  const gpuBefore = (t) => Math.max(0, ...cf.filter((c) => c.drawn && c.gpu !== undefined && c.t <= t && c.t > t - 100)
+    .map((c) => c.gpu));
   const worst = during.slice(1).map((f, i) => ({ gap: +(f.t - during[i].t).toFixed(1), at: +(f.t - firstBytes).toFixed(1),
-    faces: during[i].faces, js: +(during[i].js || 0).toFixed(1) })).sort((a, b) => b.gap - a.gap).slice(0, 3);
+    faces: during[i].faces, js: +(during[i].js || 0).toFixed(1), gpu: +gpuBefore(f.t).toFixed(1) }))
+    .sort((a, b) => b.gap - a.gap).slice(0, 3);
   const worstRedraws = drawn.slice(1).map((f, i) => ({ gap: +(f.t - drawn[i].t).toFixed(1), at: +(f.t - firstBytes).toFixed(1),
     faces: drawn[i].faces, work: +drawn[i].work.toFixed(1), render: +drawn[i].render.toFixed(1),
     js: +(drawn[i].js || 0).toFixed(1) })).sort((a, b) => b.gap - a.gap).slice(0, 3);
@@ -117,7 +125,12 @@ for (let r = 0; r < runs * variants.length; ++r) {
     // held-back mesh is after decoding); and the page's own frame callbacks.
     frame_js_max_ms: +Math.max(0, ...before.map((f) => f.js || 0)).toFixed(1),
     page_js_max_ms: +Math.max(0, ...during.map((f) => f.js || 0)).toFixed(1),
-    long_tasks: tasks.length, long_task_max_ms: +Math.max(0, ...tasks.map((x) => x.duration)).toFixed(1) });
+    long_tasks: tasks.length, long_task_max_ms: +Math.max(0, ...tasks.map((x) => x.duration)).toFixed(1),
+    // The canvas frames' time in the GPU process while decoding (gputime=1, render.js).
+    ...(() => {
+      const g = before.filter((f) => f.drawn && f.gpu !== undefined).map((f) => f.gpu).sort((a, b) => a - b);
+      return { gpu_median_ms: quantile(g, 0.5), gpu_max_ms: top(g) };
+    })() });
 }
 server.close();
 // Per query: the median of each figure over its runs (the lower one of an even count).
@@ -130,7 +143,7 @@ const medians = variants.map((query) => {
   for (const k of ['loadavg', 'first_object_ms', 'first_1000_faces_ms', 'complete_ms', 'gap_median_ms', 'gap_p95_ms',
     'gap_max_ms', 'gaps_over_50ms', 'frames', 'redraw_gap_median_ms', 'redraw_gap_p95_ms', 'redraw_gap_max_ms',
     'new_level_gap_median_ms', 'new_level_gap_max_ms', 'shown_max_while_decoding', 'final_frame_gap_ms',
-    'update_max_ms', 'frame_js_max_ms', 'page_js_max_ms', 'long_tasks', 'long_task_max_ms']) out[k] = median(rs.map((x) => x[k]));
+    'update_max_ms', 'frame_js_max_ms', 'page_js_max_ms', 'long_tasks', 'long_task_max_ms', 'gpu_median_ms', 'gpu_max_ms']) out[k] = median(rs.map((x) => x[k]));
   return out;
 });
 console.log(JSON.stringify({ file: path.basename(file), viewer: path.resolve(viewerDir), rate, width, height, worker,

@@ -64,6 +64,23 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
   renderer.setPixelRatio(software ? 1 : pixelRatio);
   renderer.setSize(width, height, false);
   renderer.setClearColor(BACKGROUND);
+  // Under a software renderer (SwiftShader in headless Chromium) the canvas's backing store is
+  // at DECODE_SCALE of its size while a stream decodes (?decodescale=F, 1: always full size),
+  // full size again from the first frame drawn once it completed or failed. There the display
+  // compositor waits for each drawn canvas frame before it sends the page's next frame (session
+  // 27's trace), and a canvas frame costs per pixel too (shading, read-back, software
+  // compositing): at half the width and height the page's longest gaps while decoding fell from
+  // 33-67 ms to 17 ms at load 6-9 (tests/bench/RESULTS.md, web section, session 28). The faces
+  // shown still rise; the object is drawn at full resolution once complete.
+  const DECODE_SCALE = software ? (params.has('decodescale') ? Number(params.get('decodescale')) : 0.5) : 1;
+  const cssSize = { width, height };
+  let scaledDown = false;
+  function scaleForDecoding(on) {
+    if (on === scaledDown) return;
+    scaledDown = on;
+    renderer.setPixelRatio((software ? 1 : pixelRatio) * (on ? DECODE_SCALE : 1));
+    renderer.setSize(cssSize.width, cssSize.height, false);
+  }
   const scene = new THREE.Scene();
   const camera = new THREE.PerspectiveCamera(40, width / height, 0.01, 100);
   camera.position.set(0, 0, 3);
@@ -144,6 +161,22 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
   // the time), so that a CPU renderer (SwiftShader) has the cores the worker would take.
   const YIELD_DRAW = params.get('yielddraw') === '1';
   let yieldAgain = 0;  // performance.now() before which no new pause is asked for
+
+  // ?gputime=1 (benchmarks): each drawn frame gets gpu, the ms from its render() to when a fence
+  // after its commands was seen signalled (polled every few ms): how long the GPU process (the
+  // compositor's wait included) took to run it. No EXT_disjoint_timer_query in SwiftShader.
+  const GPU_TIME = params.get('gputime') === '1';
+  const gl2 = renderer.getContext();
+  let inFlight = null;  // {sync, t, frame}
+  function pollFence() {
+    if (gl2.getSyncParameter(inFlight.sync, gl2.SYNC_STATUS) !== gl2.SIGNALED) {
+      setTimeout(pollFence, 2);
+      return;
+    }
+    if (inFlight.frame) inFlight.frame.gpu = performance.now() - inFlight.t;
+    gl2.deleteSync(inFlight.sync);
+    inFlight = null;
+  }
 
   // The face limit for the stream now (null: none).
   function faceLimit(shownFaces, fullFaces) {
@@ -281,6 +314,8 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
     drawCost.proven = 0;
     try {
       await shadersReady;  // and the draw calibration: the first face limit
+      // Before the first bytes: resizing the drawing buffer at the first object frame delayed it.
+      if (DECODE_SCALE !== 1) scaleForDecoding(true);
       const loader = new PMZLoader(undefined, { geomorph: true, autoUpdate: false, worker: useWorker,
         faceLimit: faceLimit(0, Infinity) });
       const stream = await loader.stream(source, (s) => {
@@ -392,6 +427,7 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
       current.stream.pauseDecoding(ms);
       yieldAgain = t0r + 2 * ms;
     }
+    if (scaledDown && drawn && (status.complete || status.error)) scaleForDecoding(false);
     if (drawn) renderer.render(scene, camera);
     redraw = false;
     const now = performance.now();
@@ -403,6 +439,12 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
     if (frames.length < 100000) {
       frames.push({ t, faces: status.faces, bytes: status.bytes, work, render: now - t0r, drawn,
         limit, decoded: current ? current.stream.decodedFaces : 0, js: 0 });
+    }
+    if (GPU_TIME && drawn && !inFlight) {
+      inFlight = { sync: gl2.fenceSync(gl2.SYNC_GPU_COMMANDS_COMPLETE, 0), t: now,
+        frame: frames.length < 100000 ? frames[frames.length - 1] : null };
+      gl2.flush();
+      setTimeout(pollFence, 2);
     }
     if (now - rate.t >= 500) {
       rate = { t: now, splits: 0, perSecond: rate.splits / ((now - rate.t) / 1000) };
@@ -545,6 +587,7 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
         case 'resize':
           camera.aspect = m.width / m.height;
           camera.updateProjectionMatrix();
+          Object.assign(cssSize, { width: m.width, height: m.height });
           renderer.setSize(m.width, m.height, false);
           redraw = true;
           break;
