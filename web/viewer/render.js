@@ -69,9 +69,10 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
   // full size again from the first frame drawn once it completed or failed. There the display
   // compositor waits for each drawn canvas frame before it sends the page's next frame (session
   // 27's trace), and a canvas frame costs per pixel too (shading, read-back, software
-  // compositing): at half the width and height the page's longest gaps while decoding fell from
-  // 33-67 ms to 17 ms at load 6-9 (tests/bench/RESULTS.md, web section, session 28). The faces
-  // shown still rise; the object is drawn at full resolution once complete.
+  // compositing): at half the width and height the page's longest gap while decoding was within
+  // 50 ms in 25 of 27 runs at load 1.3-9, against 16 of 27 at full size (tests/bench/RESULTS.md,
+  // web section, session 28). The faces shown still rise; the object is drawn at full resolution
+  // once complete. (Drawing on the page, render=page, it did not help.)
   const DECODE_SCALE = software ? (params.has('decodescale') ? Number(params.get('decodescale')) : 0.5) : 1;
   const cssSize = { width, height };
   let scaledDown = false;
