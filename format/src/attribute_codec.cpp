@@ -126,9 +126,11 @@ bool crosses(const AttributeState& s, uint32_t a, uint32_t b, uint32_t normals_a
 }
 
 // The chart fan (normals_at = kNoCorner, at most kMaxChartFan corners) or the normal fan (at
-// most kMaxNormalFan).
+// most kMaxNormalFan). *closed: whether the walk came back to c (then the fan is all of x's
+// faces, and a walk that crosses more edges, the normal fan, gives the same corners in the same
+// order).
 uint32_t walk_fan(const ProgressiveMesh& pm, const AttributeState& s, uint32_t c, FanCorner* out,
-                  uint32_t max, uint32_t normals_at) {
+                  uint32_t max, uint32_t normals_at, bool* closed = nullptr) {
   uint32_t n = 0;
   out[n++] = {c, wedge_at(s, next_corner(c)), wedge_at(s, prev_corner(c))};
   for (uint32_t i = 0; n < max;) {  // out[i] is the last corner reached this way
@@ -137,7 +139,10 @@ uint32_t walk_fan(const ProgressiveMesh& pm, const AttributeState& s, uint32_t c
     const uint32_t w = wedge_at(s, next_corner(o));
     if (!crosses(s, out[i].next_wedge, w, normals_at)) break;
     const uint32_t at = prev_corner(o);
-    if (at == c) return n;  // the fan closed
+    if (at == c) {  // the fan closed
+      if (closed) *closed = true;
+      return n;
+    }
     out[n] = {at, wedge_at(s, next_corner(at)), w};
     i = n++;
   }
@@ -153,11 +158,9 @@ uint32_t walk_fan(const ProgressiveMesh& pm, const AttributeState& s, uint32_t c
   return n;
 }
 
-uint32_t chart_fan(const ProgressiveMesh& pm, const AttributeState& s, uint32_t c, FanCorner* out) {
-  return walk_fan(pm, s, c, out, kMaxChartFan, kNoCorner);
-}
-
 inline constexpr uint32_t kMaxNormalFan = 32;
+// A closed chart fan is the normal fan (predict_normal() reuses it).
+static_assert(kMaxChartFan <= kMaxNormalFan);
 inline constexpr double kHalfPi = 1.5707963267948966;  // binary64 nearest pi / 2 (14.3)
 
 // atan(t) for t >= 0 from +, -, *, / only, so that every decoder computes the same bits (a
@@ -179,12 +182,14 @@ PMZ_SMALL double atan_nonnegative(double t) {
 // The normal predicted from positions (spec/format.md section 14.3, "Normal prediction"): the
 // normal fan's face normals weighted by their angle at x (as most tools weight vertex normals),
 // octahedral into p; p is left as it is when the sum is zero. Binary64, each operation rounded in
-// the order written.
+// the order written. fan / fan_n: c's chart fan, reused when it closed (closed).
 PMZ_SMALL void predict_normal(const ProgressiveMesh& pm, const int32_t* coords,
-                              const AttributeState& s, uint32_t c, int32_t* p) {
-  const uint32_t at = 2 * s.head.texcoord_sets;
-  FanCorner fan[kMaxNormalFan];
-  const uint32_t fan_n = walk_fan(pm, s, c, fan, kMaxNormalFan, at);
+                              const AttributeState& s, uint32_t c, const FanCorner* chart,
+                              uint32_t fan_n, bool closed, int32_t* p) {
+  FanCorner walked[kMaxNormalFan];
+  const FanCorner* fan = chart;
+  if (!closed)
+    fan = walked, fan_n = walk_fan(pm, s, c, walked, kMaxNormalFan, 2 * s.head.texcoord_sets);
   const int32_t* px = coords + size_t(pm.corner_vertex[c]) * 3;
   double n[3] = {0, 0, 0};
   for (uint32_t i = 0; i < fan_n; ++i) {
@@ -221,11 +226,12 @@ PredictionKind predict(const ProgressiveMesh& pm, const int32_t* coords, const A
     pred[i] = ref == kNoCorner ? 0 : s.values[size_t(ref) * s.stride + i];
   PredictionKind kind;
   FanCorner fan[kMaxChartFan];
-  const uint32_t fan_n = chart_fan(pm, s, c, fan);
+  bool closed = false;
+  const uint32_t fan_n = walk_fan(pm, s, c, fan, kMaxChartFan, kNoCorner, &closed);
   if (h.normals && h.normal_bits) {
     const uint32_t at = 2 * h.texcoord_sets;
     int32_t geo[2] = {pred[at], pred[at + 1]};
-    predict_normal(pm, coords, s, c, geo);
+    predict_normal(pm, coords, s, c, fan, fan_n, closed, geo);
     if (ref != kNoCorner) {
       kind.scored = true;
       kind.neighbour[0] = pred[at], kind.neighbour[1] = pred[at + 1];
