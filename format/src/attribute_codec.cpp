@@ -238,11 +238,12 @@ PredictionKind predict(const ProgressiveMesh& pm, const int32_t* coords, const A
       kind.geometric[0] = geo[0], kind.geometric[1] = geo[1];
     }
     if (normal_score <= 0) pred[at] = geo[0], pred[at + 1] = geo[1];
-    // How far the fan's neighbours' normals lie from the prediction (octahedral steps).
+    // How far the fan's neighbours' normals lie from the prediction (octahedral steps). In a
+    // closed fan every previous a-wedge is another corner's next one: the next ones suffice.
     uint32_t spread = 0;
     bool any = false;
     for (uint32_t i = 0; i < fan_n; ++i)
-      for (uint32_t w : {fan[i].next_wedge, fan[i].prev_wedge}) {
+      for (uint32_t w : {fan[i].next_wedge, closed ? kNoCorner : fan[i].prev_wedge}) {
         if (w == kNoCorner) continue;
         any = true;
         for (uint32_t k = 0; k < 2; ++k) {
