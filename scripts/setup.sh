@@ -18,5 +18,10 @@ packages=(build-essential cmake ninja-build pkg-config git
 command -v npm >/dev/null || packages+=(nodejs npm)
 bash scripts/install_packages.sh setup "${packages[@]}"
 
+# The project's git hooks (scripts/git-hooks: the commit subject's length), in a git work tree.
+if git rev-parse --is-inside-work-tree >/dev/null 2>&1; then
+  git config core.hooksPath scripts/git-hooks
+fi
+
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null
 cmake --build "$build" -j "$(nproc)"
