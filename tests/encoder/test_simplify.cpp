@@ -295,7 +295,10 @@ TEST(Simplify, GuardWithUnboundedSlackIsThePaperAlone) {
 // the surface (about 500e-4). The guarded sequence is also deterministic.
 TEST(Simplify, GuardLowersTheWorstCaseOnElephant) {
   const std::string path = pmz_test::corpus_mesh("elephant");
-  if (path.empty()) GTEST_SKIP() << "no corpus (set PMZ_CORPUS or run scripts/fetch_corpus.sh)";
+  if (path.empty()) {
+    if (pmz_test::corpus_required()) FAIL() << "elephant missing from the corpus";
+    GTEST_SKIP() << "no corpus (set PMZ_CORPUS or run scripts/fetch_corpus.sh)";
+  }
   pmz::IndexedMesh mesh;
   std::string error;
   ASSERT_TRUE(pmz::read_mesh(path, mesh, error)) << error;
