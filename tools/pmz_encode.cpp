@@ -157,6 +157,7 @@ int main(int argc, char** argv) {
   if (dir_opt->count() && std::count(inputs.begin(), inputs.end(), "-"))
     return usage("a mesh read from stdin needs -o FILE (it has no name for --out-dir)");
   simplifier.apply(settings.simplify);
+  settings.simplify.clusters.position_bits = settings.write.position_bits;
   settings.stdin_format = format;
 
   std::vector<std::string> outputs;

@@ -13,6 +13,7 @@ struct SimplifierCli {
   std::string metric = "guarded";
   std::string attributes = "full";
   MetricParams params;
+  uint32_t cluster_vertices = 0;
 
   // --metric, --attributes, --attribute-weight, then the parameters (--epsilon ...
   // --guard-slack), each --help line with its default.
@@ -56,6 +57,10 @@ struct SimplifierCli {
                    "guarded: collapses whose bound exceeds this times the worst bound so far are "
                    "penalised")
         ->capture_default_str();
+    app.add_option("--cluster-vertices", cluster_vertices,
+                   "experimental: simplify in cells of about this many vertices first, then in "
+                   "cells twice as wide, up to the whole mesh (0: the whole mesh at once)")
+        ->capture_default_str();
   }
 
   // The parsed values into the engine's options (metric, attribute mode, parameters).
@@ -67,6 +72,7 @@ struct SimplifierCli {
                          : attributes == "seams"       ? AttributeMode::seams
                                                        : AttributeMode::full;
     options.params = params;
+    options.clusters.vertices = cluster_vertices;
   }
 };
 

@@ -10,9 +10,11 @@
 
 #include "attr_collapse.hpp"
 #include "attr_simplify.hpp"
+#include "cluster_grid.hpp"
 #include "halfedge.hpp"
 #include "metric.hpp"
 #include "parallel.hpp"
+#include "pmz/format.hpp"
 #include "survivors.hpp"
 
 namespace pmz {
@@ -224,6 +226,10 @@ class Engine {
   bool stats_enabled = false;
   uint64_t faces = 0;
   std::vector<HalfEdgeCollapse>* record = nullptr;
+  // Hierarchical simplification: while `cells` is set, a collapse u -> v is legal only when u,
+  // v and every neighbour of both have one cell[] (encoder/src/cluster_grid.hpp says why).
+  std::vector<uint64_t> cell;
+  bool cells = false;
 
   bool init(const IndexedMesh& input, const SimplifyOptions& options, std::string& error);
   void run(const SimplifyOptions& options);
@@ -482,19 +488,26 @@ bool Engine::legal(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb) {
   }
   // Seams and material boundaries: along them or not at all (spec/algorithm.md section 7).
   if (attr.active && !attr.allowed(m, u, v)) return false;
+  const uint64_t home = cells ? cell[u] : 0;
+  if (cells && cell[v] != home) return false;
   const uint32_t vl = ha != kNone ? m.vert[HalfEdgeMesh::prev(ha)] : kNone;
   const uint32_t vr = hb != kNone ? m.vert[HalfEdgeMesh::prev(hb)] : kNone;
   // Link condition: u and v share no neighbour but the wedge vertices (else the collapse
   // pinches the surface or closes a handle or a 3-edge hole).
   new_mark();
   uint32_t valence_u = 0, valence_v = 0;
-  for_each_neighbour(m, u, [&](uint32_t w, uint32_t) { mark[w] = mark_id, ++valence_u; });
+  bool foreign = false;  // a neighbour in another cell
+  for_each_neighbour(m, u, [&](uint32_t w, uint32_t) {
+    mark[w] = mark_id, ++valence_u;
+    foreign |= cells && cell[w] != home;
+  });
   bool shared = false;
   for_each_neighbour(m, v, [&](uint32_t w, uint32_t) {
     ++valence_v;
     shared |= mark[w] == mark_id && w != vl && w != vr;
+    foreign |= cells && cell[w] != home;
   });
-  if (shared) return false;
+  if (shared || foreign) return false;
   if (!boundary_edge && valence_u == 3 && valence_v == 3) return false;  // a tetrahedron stays
   // Geometry of the faces that survive around u, with u moved onto v.
   const uint32_t fa = ha != kNone ? HalfEdgeMesh::face(ha) : kNone,
@@ -811,6 +824,13 @@ bool Engine::init(const IndexedMesh& input, const SimplifyOptions& options, std:
 void Engine::run(const SimplifyOptions& options) {
   auto t0 = Clock::now();
   const uint32_t n = m.vertex_count();
+  // A later run (the next level of a hierarchical simplification) keys every vertex afresh: the
+  // collapses the last level's cells held back are candidates again.
+  heap.reset(n);
+  for (uint32_t v = 0; v < n; ++v) {
+    if (m.out[v] != kNone) refresh_torsion(v);
+    stale[v] &= uint8_t(~(kKeyStale | kGuardDeferred));
+  }
   {
     // The initial keys on two threads (T is not stale at the start, nothing else is written),
     // pushed in vertex order.
@@ -972,6 +992,48 @@ void reorder_for_locality(const IndexedMesh& in, IndexedMesh& out, std::vector<u
   }
 }
 
+// The levels of a hierarchical simplification (SimplifyOptions::clusters): one run of the
+// engine per grid, finest first, each down to phase_ratio of its start; `levels` gets each
+// level's grid and first collapse. The caller runs the last level (the whole mesh).
+void run_cell_levels(Engine& engine, const SimplifyOptions& options,
+                     std::vector<CollapseSequence::Level>& levels) {
+  const SimplifyOptions::Clusters& clusters = options.clusters;
+  const uint32_t n = engine.m.vertex_count();
+  // The writer's integer coordinates (the same bounding box and quantizer: writer.cpp).
+  float lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) lo[a] = INFINITY, hi[a] = -INFINITY;
+  for (uint32_t v = 0; v < n; ++v)
+    for (int a = 0; a < 3; ++a)
+      lo[a] = std::min(lo[a], engine.m.p(v)[a]), hi[a] = std::max(hi[a], engine.m.p(v)[a]);
+  Quantizer quant;
+  quant.init(clusters.position_bits, lo, hi);
+  std::vector<int32_t> coords(size_t(n) * 3);
+  for (uint32_t v = 0; v < n; ++v)
+    for (int a = 0; a < 3; ++a) coords[size_t(v) * 3 + a] = quant.quantize(engine.m.p(v)[a], a);
+  double area = 0;  // of the surface, in integer units
+  for (uint32_t f = 0; f < engine.m.face_count(); ++f) {
+    const int32_t* p = &coords[size_t(engine.m.vert[HalfEdgeMesh::half_edge(f, 0)]) * 3];
+    const int32_t* q = &coords[size_t(engine.m.vert[HalfEdgeMesh::half_edge(f, 1)]) * 3];
+    const int32_t* r = &coords[size_t(engine.m.vert[HalfEdgeMesh::half_edge(f, 2)]) * 3];
+    area += detail::triangle_area(p, q, r);
+  }
+  SimplifyOptions level = options;
+  level.progress = nullptr;
+  engine.cells = true;
+  engine.cell.resize(n);
+  for (CellGrid grid = detail::cell_grid_for(coords, area, clusters.vertices);
+       detail::grid_cuts(grid, coords); grid = grid.coarser()) {
+    for (uint32_t v = 0; v < n; ++v) engine.cell[v] = grid.cell(&coords[size_t(v) * 3]);
+    levels.push_back({grid, engine.record->size()});
+    level.target_faces = std::max<uint64_t>(options.target_faces,
+                                            uint64_t(double(engine.faces) * clusters.phase_ratio));
+    engine.run(level);
+    if (options.target_faces && engine.faces <= options.target_faces) break;
+  }
+  engine.cells = false;
+  levels.push_back({CellGrid{}, engine.record->size()});
+}
+
 }  // namespace
 
 bool simplify(const IndexedMesh& input, const SimplifyOptions& options, CollapseSequence& out,
@@ -1003,8 +1065,12 @@ bool simplify(const IndexedMesh& input, const SimplifyOptions& options, Collapse
   out.mesh = input;
   out.collapses.clear();
   out.collapses.reserve(input.vertex_count());
+  out.levels.clear();
   engine.record = &out.collapses;
   engine.stats.setup = seconds_since(t0);
+  if (options.clusters.vertices > 0 &&
+      engine.m.vertex_count() > 2 * uint64_t(options.clusters.vertices))
+    run_cell_levels(engine, options, out.levels);
   engine.run(options);
   auto input_id = [&](uint32_t v) { return v == kNone ? kNoVertex : order[v]; };
   for (HalfEdgeCollapse& c : out.collapses)

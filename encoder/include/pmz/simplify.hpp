@@ -59,6 +59,34 @@ struct MetricParams {
   float attribute_weight = 0.5f;
 };
 
+// One level of a hierarchical simplification (SimplifyOptions::clusters): a grid of cubes over
+// the file's integer coordinates (spec/format.md section 5); the cell index on axis a is
+// floor((c[a] - origin[a]) / side).
+struct CellGrid {
+  int64_t side = 0;  // > 0 for a grid; 0: one cell, the whole mesh
+  int64_t origin[3] = {0, 0, 0};
+
+  // The grid of the next level up: twice the side, its planes half this side away from these.
+  CellGrid coarser() const {
+    CellGrid g;
+    g.side = side * 2;
+    for (int a = 0; a < 3; ++a) g.origin[a] = origin[a] + side / 2;
+    return g;
+  }
+  // The cell of integer coordinates c, the three indices packed 21 bits each (taken modulo
+  // 2^21: grids are made with fewer cells than that per axis); 0 for every c when side is 0.
+  uint64_t cell(const int32_t c[3]) const {
+    if (side <= 0) return 0;
+    uint64_t key = 0;
+    for (int a = 0; a < 3; ++a) {
+      const int64_t d = int64_t(c[a]) - origin[a];
+      const int64_t i = d >= 0 ? d / side : -((-d + side - 1) / side);
+      key = (key << 21) | (uint64_t(i) & 0x1FFFFF);
+    }
+    return key;
+  }
+};
+
 // Where the time went (seconds), filled when SimplifyOptions::stats is set.
 struct SimplifyStats {
   double setup = 0, initial_costs = 0, collapse = 0, update_terms = 0, update_costs = 0, total = 0;
@@ -74,6 +102,20 @@ struct SimplifyOptions {
   SimplifyStats* stats = nullptr;
   uint64_t target_faces = 0;  // stop at this face count (0: as far as legal collapses go)
   double max_cost = -1;       // stop when the cheapest collapse costs more (<0: no limit)
+  // Hierarchical simplification (experimental; the encoder side of a cluster format). With
+  // vertices > 0 and a mesh of more than twice that many vertices, the engine runs in levels:
+  // the first on a grid of cells of about `vertices` vertices each (encoder/src/cluster_grid.hpp),
+  // each next on a grid of twice the side whose planes lie between the last one's, until a grid
+  // no longer cuts the mesh; then one level on the whole mesh, as without clusters. Within a
+  // level a collapse is legal only when u, v and every neighbour of both lie in one cell, and the
+  // level ends when the faces have dropped to phase_ratio of its start (or no legal collapse is
+  // left). Cells are cut on the writer's integer coordinates: position_bits must be the
+  // writer's (WriteOptions::position_bits).
+  struct Clusters {
+    uint32_t vertices = 0;  // 0: off
+    uint32_t position_bits = 14;
+    double phase_ratio = 0.5;
+  } clusters;
   // Progress callback (fraction done 0..1); may be empty.
   std::function<void(double)> progress;
 };
@@ -82,6 +124,14 @@ struct CollapseSequence {
   IndexedMesh mesh;  // the input as the engine saw it (after repair), full resolution
   std::vector<HalfEdgeCollapse> collapses;  // in the order performed
   std::vector<uint32_t> base_indices;       // faces left after all collapses, input vertex ids
+  // With SimplifyOptions::clusters: the levels, finest first. Level i holds the collapses from
+  // first_collapse up to the next level's, each inside one cell of its grid (u, v and their
+  // neighbours at the time); the last level's grid has side 0 (the whole mesh). Empty without.
+  struct Level {
+    CellGrid grid;
+    uint64_t first_collapse = 0;
+  };
+  std::vector<Level> levels;
 };
 
 // Runs the engine. Returns false with a one-line message on input it cannot handle.

@@ -1,0 +1,32 @@
+// The cells of a hierarchical simplification: at every level a grid of cubes over the file's
+// integer coordinates (spec/format.md section 5), its side twice the level below's and its
+// planes half a cell of the level below away from that level's planes.
+//
+// A collapse is confined to a cell when u, v and every neighbour of both lie in it; such a
+// collapse reads and writes only faces and vertices of its cell, so the collapses of different
+// cells of one level commute, and their inverses (vertex splits) decode independently once the
+// cells of the coarser level that overlap theirs are decoded. Because each level's planes lie
+// between the planes of the level below, a vertex held back by a border at one level is inside
+// a cell at the next: no border stays at full detail up the hierarchy (nested cells, as a k-d
+// tree gives, keep the coarsest cut at full detail until the last level).
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "pmz/simplify.hpp"
+
+namespace pmz::detail {
+
+// The area of the triangle (p, q, r) of integer coordinates.
+double triangle_area(const int32_t p[3], const int32_t q[3], const int32_t r[3]);
+
+// The finest grid for cells of about `cell_vertices` vertices on a surface of `area` with the
+// vertices `coords` (3 per vertex): the side s with s^2 / area * vertices = cell_vertices, at
+// least 2 and more than extent / 2^20 (so fewer than 2^20 cells per axis), its planes from the
+// smallest coordinates.
+CellGrid cell_grid_for(const std::vector<int32_t>& coords, double area, uint32_t cell_vertices);
+
+// Whether a grid still cuts the coordinates (more than one cell along some axis).
+bool grid_cuts(const CellGrid& g, const std::vector<int32_t>& coords);
+
+}  // namespace pmz::detail
