@@ -2,11 +2,10 @@
 """Checks that every section reference in the tree names its document and an existing heading.
 
 A reference is "section N", "sections N and M", "section N.M" or "§N". It must follow the name
-of a Markdown document of the tree ("spec/format.md section 9.2", "`docs/algorithm-notes.md`,
+of a Markdown document of the tree ("spec/format.md section 9.2", "`docs/design.md`,
 section 4"), and that document must have a heading numbered N ("## 9. ..." or "### 9.2 ...").
-Inside spec/*.md and docs/*.md a reference without a document name means the document itself
-(docs/design-notes.md keeps the old numbering of the specification's sections in its own
-headings). Anywhere else a reference without a document is an error: after the specification
+Inside spec/*.md and docs/*.md a reference without a document name means the document itself.
+Anywhere else a reference without a document is an error: after the specification
 was renumbered, "spec section 8" could mean either numbering.
 
 usage: scripts/check_spec_refs.py [FILE...]   (default: every tracked text file; exit 1 on errors)
@@ -87,7 +86,7 @@ def check_file(rel):
 def self_test():
     good = ["// spec/format.md section 9.2", "// (spec/format.md, section 11.3, \"mixed\")",
             "// `spec/algorithm.md` (section 6 there)", "// spec/format.md sections 3, 4, 8 and 11",
-            "// the counts of spec/format.md\n// section 12.", "# docs/algorithm-notes.md section 4",
+            "// the counts of spec/format.md\n// section 12.", "# docs/design.md section 4",
             "// (spec/format.md section 9.6, 21 models per slot)"]
     bad = ["// spec section 9.2", "// (section 4)", "// spec/format.md section 15",
            "// spec/format.md section 9.17", "// spec/format.md sections 9.1 and 99",

@@ -7,7 +7,7 @@
 #                                web/dist/viewer/index.html (static files, ?src=URL)
 #   bash scripts/web.sh test     build, then the node API tests and the headless Chromium tests
 #
-# Build knobs (defaults; tests/bench/RESULTS.md has what each measured): PMZ_WASM_OPT, the
+# Build knobs (defaults; docs/design.md section 9 says why): PMZ_WASM_OPT, the
 # refinement loop's files (-O3); PMZ_WASM_COLD_OPT, the other files (-Os); PMZ_WASM_LINK_OPT, the
 # LTO link (-Os); PMZ_WASM_POST_OPT, binaryen's wasm-opt after the link ("-Oz --converge"; empty:
 # none); PMZ_WASM_FEATURES, the wasm features (bulk memory, non-trapping float-to-int,

@@ -1,12 +1,12 @@
 // bench-metric-sweep [--eps E] [--c0 C] [--wt W] [--mem M] [--bw B] [--ratio R]... MESH...
-// The experiment of docs/algorithm-notes.md section 4, in process: for each mesh and face ratio
+// The parameter search of docs/design.md section 2, in process: for each mesh and face ratio
 // (default 0.1 and 0.02), simplify to round(R * F) faces with multifeature (the given
 // parameters, defaults otherwise) and with qem, then pmz::compare each result with the input
 // (default samples). Prints one line per mesh and ratio (mean and max symmetric error / bbox
 // diagonal, x1e-4) and the median multifeature / qem ratio of the means per ratio; a mesh that
 // both metrics simplify exactly (mean below 1e-10 of the diagonal) counts 1. For the first
 // metric also: the two one-sided maxima, where the max is, the max over the input vertices
-// alone and the guard's final bound (docs/algorithm-notes.md section 6).
+// alone and the guard's final bound (docs/design.md section 2).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>

@@ -11,7 +11,7 @@
 // figure on a quiet machine is wall time (wasm_over_native_wall): the native decode runs on one
 // thread, while node's process CPU also counts V8's background threads (TurboFan tiering up the
 // wasm functions, GC), which run beside the decode on another core; under load, where wall time
-// waits for a core, the CPU ratio is the steadier one (tests/bench/RESULTS.md, web section).
+// waits for a core, the CPU ratio is the steadier one (docs/benchmarks.md).
 import { execFileSync } from 'node:child_process';
 import { readFileSync } from 'node:fs';
 import { createRequire } from 'node:module';

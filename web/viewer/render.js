@@ -68,10 +68,10 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
   // at DECODE_SCALE of its size while a stream decodes (?decodescale=F in (0, 1], default 0.5;
   // 1: always full size), full size again from the first frame drawn once it completed or
   // failed. There the display compositor waits for each drawn canvas frame before it sends the
-  // page's next frame (session 27's trace), and a canvas frame costs per pixel too (shading,
-  // read-back, software compositing): at half the width and height the page's longest gap
-  // while decoding was within 50 ms in 25 of 27 runs at load 1.3-9, against 16 of 27 at full
-  // size (tests/bench/RESULTS.md, web section, session 28). The faces shown still rise; the
+  // page's next frame (a Chromium trace shows it), and a canvas frame costs per pixel too
+  // (shading, read-back, software compositing): at half the width and height the page's longest
+  // gap while decoding was within 50 ms in 25 of 27 runs at load 1.3-9, against 16 of 27 at full
+  // size (docs/benchmarks.md, "Web viewer frames"). The faces shown still rise; the
   // object is drawn at full resolution once complete. (Drawing on the page, render=page, it did
   // not help.)
   const askedScale = Number(params.get('decodescale'));  // 0 when absent, NaN when not a number

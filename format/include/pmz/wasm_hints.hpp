@@ -28,7 +28,7 @@
 // A cache-line prefetch of an address inside a live buffer. WebAssembly has no prefetch
 // instruction (clang drops __builtin_prefetch there), so the wasm build loads the byte instead:
 // the out-of-order core issues the miss early just the same, only its retirement waits for it
-// (bunny00-loop2 in node: tests/bench/RESULTS.md, web section). Only for an address inside a
+// (bunny00-loop2 in node: docs/design.md section 9). Only for an address inside a
 // buffer (a wasm load beyond memory traps). A macro: native code stays the same as
 // __builtin_prefetch written out (GCC inlines differently around a wrapper function).
 #if defined(__wasm__)
