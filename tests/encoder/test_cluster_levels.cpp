@@ -11,9 +11,12 @@
 #include <string>
 #include <vector>
 
+#include "pmz/cluster_plan.hpp"
 #include "pmz/compare.hpp"
+#include "pmz/decoder.hpp"
 #include "pmz/format.hpp"
 #include "pmz/simplify.hpp"
+#include "pmz/writer.hpp"
 #include "simplify_test_meshes.hpp"
 
 namespace {
@@ -232,6 +235,109 @@ TEST(ClusterLevels, QualityAtTenAndTwoPercentNearTheWholeMeshEngine) {
     EXPECT_LT(e_tiered, 1.10 * e_plain) << "at " << fraction << " of the faces";
     EXPECT_GT(e_plain, 0);
   }
+}
+
+TEST(ClusterPlan, NodesCoverEveryCollapseOnceAfterTheirParents) {
+  const IndexedMesh mesh = bumpy_sphere(5);
+  const CollapseSequence seq = run(mesh, clustered(200));
+  const pmz::ClusterPlan plan = pmz::plan_clusters(seq, 14);
+  ASSERT_GT(plan.nodes.size(), seq.levels.size());
+  // Every collapse in exactly one node.
+  std::vector<int> seen(seq.collapses.size(), 0);
+  for (uint64_t i : plan.collapses) ++seen[i];
+  EXPECT_EQ(plan.collapses.size(), seq.collapses.size());
+  EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), ptrdiff_t(seq.collapses.size()));
+  const std::vector<int32_t> coords = file_coords(mesh, 14);
+  const uint32_t last = uint32_t(seq.levels.size() - 1);
+  EXPECT_EQ(plan.nodes.front().level, last);  // the whole mesh's node decodes first
+  for (size_t k = 0; k < plan.nodes.size(); ++k) {
+    const pmz::ClusterNode& node = plan.nodes[k];
+    if (node.level != last) {
+      EXPECT_FALSE(node.parents.empty()) << "node " << k;
+    }
+    for (uint32_t p : node.parents) {
+      EXPECT_LT(p, k) << "node " << k;
+      EXPECT_GT(plan.nodes[p].level, node.level) << "node " << k;
+    }
+    // Its collapses are of its level and cell, and its sphere holds their vertices.
+    const pmz::CellGrid& grid = seq.levels[node.level].grid;
+    for (uint64_t j = node.first; j < node.first + node.count; ++j) {
+      const HalfEdgeCollapse& c = seq.collapses[plan.collapses[j]];
+      ASSERT_GE(plan.collapses[j], seq.levels[node.level].first_collapse);
+      if (grid.side > 0)
+        for (int a = 0; a < 3; ++a) {
+          const int64_t lo = grid.origin[a] + node.cell[a] * grid.side;
+          EXPECT_GE(coords[size_t(c.u) * 3 + a], lo);
+          EXPECT_LT(coords[size_t(c.u) * 3 + a], lo + grid.side);
+        }
+      double d2 = 0;
+      for (int a = 0; a < 3; ++a) {
+        const double d = mesh.positions[size_t(c.v) * 3 + a] - node.center[a];
+        d2 += d * d;
+      }
+      EXPECT_LE(std::sqrt(d2), node.radius * 1.0001 + 1e-6);
+    }
+  }
+  // Any node whose cell overlaps a coarser node's cell lists it (or the coarser one is not
+  // needed: it is then an ancestor through another parent). Checked on the next level up.
+  for (size_t k = 0; k < plan.nodes.size(); ++k) {
+    const pmz::ClusterNode& x = plan.nodes[k];
+    if (x.level + 1 >= last) continue;
+    const pmz::CellGrid& g = seq.levels[x.level].grid;
+    const pmz::CellGrid& h = seq.levels[x.level + 1].grid;
+    for (size_t j = 0; j < plan.nodes.size(); ++j) {
+      const pmz::ClusterNode& y = plan.nodes[j];
+      if (y.level != x.level + 1) continue;
+      bool overlap = true;
+      for (int a = 0; a < 3; ++a) {
+        const int64_t x0 = g.origin[a] + x.cell[a] * g.side, y0 = h.origin[a] + y.cell[a] * h.side;
+        overlap &= x0 < y0 + h.side && y0 < x0 + g.side;
+      }
+      const bool listed = std::count(x.parents.begin(), x.parents.end(), uint32_t(j)) > 0;
+      EXPECT_EQ(overlap, listed) << "node " << k << " and node " << j;
+    }
+  }
+}
+
+TEST(ClusterPlan, NodeOrderReplaysToTheSameBaseMesh) {
+  const IndexedMesh mesh = bumpy_sphere(5);
+  const CollapseSequence seq = run(mesh, clustered(200));
+  const pmz::ClusterPlan plan = pmz::plan_clusters(seq, 14);
+  const CollapseSequence ordered = pmz::node_ordered(seq, plan);
+  ASSERT_EQ(ordered.collapses.size(), seq.collapses.size());
+  Replay a(mesh), b(mesh);
+  for (const HalfEdgeCollapse& c : seq.collapses) ASSERT_TRUE(a.collapse(c));
+  for (size_t i = 0; i < ordered.collapses.size(); ++i)
+    ASSERT_TRUE(b.collapse(ordered.collapses[i])) << "collapse " << i;
+  EXPECT_EQ(a.face_set(), b.face_set());
+  // The writer takes the node order, and the stream decodes to the whole mesh.
+  std::vector<uint8_t> bytes;
+  std::string error;
+  ASSERT_TRUE(pmz::write_pmz(ordered, pmz::WriteOptions{}, bytes, error)) << error;
+  pmz::Decoder decoder;
+  ASSERT_EQ(decoder.feed(bytes.data(), bytes.size()), pmz::Status::ok);
+  ASSERT_EQ(decoder.finish(), pmz::Status::ok);
+  EXPECT_EQ(decoder.refine(), seq.collapses.size());
+  EXPECT_EQ(decoder.status(), pmz::Status::ok);
+  EXPECT_EQ(decoder.vertex_count(), mesh.vertex_count());
+  EXPECT_EQ(decoder.face_count(), mesh.face_count());
+  // The schedule: independent nodes give two workers real parallel work.
+  const pmz::ClusterSchedule one = pmz::schedule_clusters(plan, 1);
+  const pmz::ClusterSchedule two = pmz::schedule_clusters(plan, 2);
+  EXPECT_EQ(one.makespan, one.total);
+  EXPECT_EQ(one.total, seq.collapses.size());
+  EXPECT_LT(one.critical_path, one.total);
+  EXPECT_LT(two.makespan, one.makespan * 0.8);
+  EXPECT_GE(two.makespan, std::max(one.critical_path, (one.total + 1) / 2));
+}
+
+TEST(ClusterPlan, ASequenceWithoutLevelsIsOneNode) {
+  const IndexedMesh mesh = bumpy_sphere(3);
+  const CollapseSequence seq = run(mesh, pmz::SimplifyOptions{});
+  const pmz::ClusterPlan plan = pmz::plan_clusters(seq, 14);
+  ASSERT_EQ(plan.nodes.size(), 1u);
+  EXPECT_EQ(plan.nodes[0].count, seq.collapses.size());
+  EXPECT_TRUE(plan.nodes[0].parents.empty());
 }
 
 }  // namespace
