@@ -1,6 +1,8 @@
-// The outcome of decoding .pmz bytes: the decoder's public status, also what the codec's own
-// stream decoders (format/, e.g. decode_base) return when a caller must tell failures apart.
-// The error convention of the libraries is in docs/design-notes.md ("Errors").
+// The outcome of decoding .pmz bytes: what the codec's own stream decoders (format/, e.g.
+// decode_base) return when a caller must tell failures apart, and the decoder's public status
+// (installed with pmz/decoder.hpp, which includes it; status_name is defined in the decoder
+// library, whose messages use it). The error convention of the libraries is in
+// docs/design.md section 8 ("Errors").
 #pragma once
 
 #include "pmz/export.h"
