@@ -12,7 +12,6 @@
 
 #include "attr_writer.hpp"
 #include "pmz/base_codec.hpp"
-#include "pmz/decoder.hpp"
 #include "pmz/fan_wedge.hpp"
 #include "pmz/format.hpp"
 #include "pmz/progressive_mesh.hpp"
