@@ -1,4 +1,4 @@
-// A procedural sample mesh for the demo and tests: no downloaded data needed.
+// A procedural sample mesh for pmz-demo and the tests: no downloaded data needed.
 #pragma once
 #include <cstdint>
 
