@@ -6,11 +6,12 @@
 #include <cstdio>
 #include <string>
 
+#include "pmz/app_support.hpp"
 #include "pmz/compare.hpp"
 #include "pmz/mesh.hpp"
-#include "tool_common.hpp"
 #include "tool_mesh.hpp"
 
+namespace app_support = pmz::app_support;
 namespace tool = pmz::tool;
 
 namespace {
@@ -30,7 +31,7 @@ const char* site_name(pmz::DistanceStats::Site site) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  tool::init("pmz-compare");
+  app_support::init("pmz-compare");
   CLI::App app{
       "pmz-compare: Metro-style surface distance between two meshes (both directions).\n"
       "Relative values are divided by the bounding-box diagonal of ORIGINAL.\n"
@@ -58,11 +59,11 @@ int main(int argc, char** argv) {
   app.add_flag("--one-sided", one_sided, "only ORIGINAL -> OTHER");
   app.add_flag("--no-attributes", no_attributes, "skip the attribute error");
   app.add_flag("--json", json, "print one JSON object");
-  tool::set_footer(app);
-  if (int rc = tool::parse(app, argc, argv); rc >= 0) return rc;
+  app_support::set_footer(app);
+  if (int rc = app_support::parse(app, argc, argv); rc >= 0) return rc;
   if (const std::string problem = tool::stdin_input_problem({original_path, other_path}, format);
       !problem.empty())
-    return tool::usage_error(problem);
+    return app_support::usage_error(problem);
   options.both_directions = !one_sided;
   options.attributes = !no_attributes;
 
@@ -70,13 +71,13 @@ int main(int argc, char** argv) {
   std::string error;
   if (!tool::read_mesh_input(original_path, format, original, error) ||
       !tool::read_mesh_input(other_path, format, other, error)) {
-    tool::print_error(error);
-    return tool::kExitFailure;
+    app_support::print_error(error);
+    return app_support::kExitFailure;
   }
   pmz::CompareResult r;
   if (!pmz::compare(original, other, options, r, error)) {
-    tool::print_error(error);
-    return tool::kExitFailure;
+    app_support::print_error(error);
+    return app_support::kExitFailure;
   }
   const double inv = r.diag > 0 ? 1.0 / r.diag : 0.0;
   if (json) {

@@ -1,7 +1,7 @@
 // pmz-decode: decode a .pmz stream (or its first N bytes, as a partial download would) to
 // OBJ (+MTL)/PLY/glb with its attributes, or OFF, at a chosen level of detail. Reads a file or
 // stdin (-); the level goes to meshio's writer as an IndexedMesh (decoder -> IndexedMesh ->
-// write_mesh_to) into a safe output (tool_common: temporary + rename, or stdout with -). No
+// write_mesh_to) into a safe output (app_support: temporary + rename, or stdout with -). No
 // OpenMesh.
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -10,15 +10,16 @@
 #include <vector>
 
 #include "decoded_mesh.hpp"
+#include "pmz/app_support.hpp"
 #include "pmz/decoder.hpp"
 #include "pmz/mesh.hpp"
-#include "tool_common.hpp"
 #include "tool_mesh.hpp"
 
+namespace app_support = pmz::app_support;
 namespace tool = pmz::tool;
 
 int main(int argc, char** argv) {
-  tool::init("pmz-decode");
+  app_support::init("pmz-decode");
   CLI::App app{
       "pmz-decode: decode a .pmz stream (or its first N bytes) to OBJ/PLY/OFF/glb at a chosen "
       "level of detail",
@@ -45,38 +46,39 @@ int main(int argc, char** argv) {
                "so)");
   of->excludes(orr)->excludes(ov);
   orr->excludes(ov);
-  tool::set_footer(app,
-                   "Without --faces, --ratio or --vertices: the finest level the input holds. A "
-                   "target beyond what the input holds gets a warning and the finest level it "
-                   "holds.");
-  if (int rc = tool::parse(app, argc, argv); rc >= 0) return rc;
+  app_support::set_footer(
+      app,
+      "Without --faces, --ratio or --vertices: the finest level the input holds. A "
+      "target beyond what the input holds gets a warning and the finest level it "
+      "holds.");
+  if (int rc = app_support::parse(app, argc, argv); rc >= 0) return rc;
 
-  if (format.empty()) format = tool::extension(output);
+  if (format.empty()) format = app_support::extension(output);
   if (format != "obj" && format != "ply" && format != "off" && format != "glb") {
-    tool::print_error(output == "-"
-                          ? "writing to stdout needs --format obj|ply|off|glb (see --help)"
-                          : output +
-                                ": output must end in .obj, .ply, .off or .glb, or give "
-                                "--format (see --help)");
-    return tool::kExitUsage;
+    app_support::print_error(output == "-"
+                                 ? "writing to stdout needs --format obj|ply|off|glb (see --help)"
+                                 : output +
+                                       ": output must end in .obj, .ply, .off or .glb, or give "
+                                       "--format (see --help)");
+    return app_support::kExitUsage;
   }
-  if (tool::same_file(input, output)) {
-    tool::print_error(output, "is the input file; not overwriting it");
-    return tool::kExitFailure;
+  if (app_support::same_file(input, output)) {
+    app_support::print_error(output, "is the input file; not overwriting it");
+    return app_support::kExitFailure;
   }
   const std::string shown = input == "-" ? "stdin" : input;
   // Opened first: an unwritable output fails before the work, and the temporary (removed on
   // error and on SIGINT/SIGTERM) exists while the input streams in.
-  tool::OutputFile out;
+  app_support::OutputFile out;
   std::string error;
   if (!out.open(output, format == "ply" || format == "glb", error)) {
-    tool::print_error(error);
-    return tool::kExitFailure;
+    app_support::print_error(error);
+    return app_support::kExitFailure;
   }
   std::vector<uint8_t> data;
-  if (!tool::read_input(input, data, error)) {
-    tool::print_error(error);
-    return tool::kExitFailure;
+  if (!app_support::read_input(input, data, error)) {
+    app_support::print_error(error);
+    return app_support::kExitFailure;
   }
   size_t n = bytes ? std::min<size_t>(bytes, data.size()) : data.size();
   pmz::Decoder d;
@@ -86,16 +88,17 @@ int main(int argc, char** argv) {
   if (s != pmz::Status::ok) {
     // A damaged stream still has a last good level, but writing it unasked would pass a coarse
     // mesh off as the file's content: only --salvage writes it (and still exits 1).
-    tool::print_error(shown, tool::library_message(d.error_message()));
+    app_support::print_error(shown, app_support::library_message(d.error_message()));
     if (!salvage) {
-      tool::print_error(shown, nothing_written);
-      return tool::kExitFailure;
+      app_support::print_error(shown, nothing_written);
+      return app_support::kExitFailure;
     }
-    if (!d.info().base_done) return tool::kExitFailure;
+    if (!d.info().base_done) return app_support::kExitFailure;
   }
   if (!d.info().base_done) {
-    tool::print_error(shown, "the first " + std::to_string(n) + " bytes do not hold the base mesh");
-    return tool::kExitFailure;
+    app_support::print_error(shown,
+                             "the first " + std::to_string(n) + " bytes do not hold the base mesh");
+    return app_support::kExitFailure;
   }
   const pmz::StreamInfo& info = d.info();
   // 0 is a level like any other (the base mesh), not "unset": options are told apart by count.
@@ -112,12 +115,12 @@ int main(int argc, char** argv) {
   // only now, and is treated like damage found while reading.
   const bool refine_failed = s == pmz::Status::ok && d.status() != pmz::Status::ok;
   if (d.status() != pmz::Status::ok && d.status() != s)
-    tool::print_error(shown, tool::library_message(d.error_message()));
+    app_support::print_error(shown, app_support::library_message(d.error_message()));
   if (refine_failed) {
     s = d.status();
     if (!salvage) {
-      tool::print_error(shown, nothing_written);
-      return tool::kExitFailure;
+      app_support::print_error(shown, nothing_written);
+      return app_support::kExitFailure;
     }
   }
   // A target the given bytes cannot reach: say what it asked and what was written.
@@ -126,24 +129,26 @@ int main(int argc, char** argv) {
                                          : "the " + std::string(bytes ? "first " : "") +
                                                std::to_string(n) + " bytes hold";
   if ((of->count() || orr->count()) && d.face_count() < wanted_faces)
-    tool::print_error(shown, "warning: " + std::to_string(wanted_faces) + " faces asked; " + held +
-                                 " " + std::to_string(d.face_count()) +
-                                 (all_available ? "" : " of " + std::to_string(info.full_faces)) +
-                                 ": writing those");
+    app_support::print_error(
+        shown, "warning: " + std::to_string(wanted_faces) + " faces asked; " + held + " " +
+                   std::to_string(d.face_count()) +
+                   (all_available ? "" : " of " + std::to_string(info.full_faces)) +
+                   ": writing those");
   if (ov->count() && d.vertex_count() < vertices)
-    tool::print_error(shown,
-                      "warning: " + std::to_string(vertices) + " vertices asked; " + held + " " +
-                          std::to_string(d.vertex_count()) +
-                          (all_available ? "" : " of " + std::to_string(info.full_vertices)) +
-                          ": writing those");
+    app_support::print_error(
+        shown, "warning: " + std::to_string(vertices) + " vertices asked; " + held + " " +
+                   std::to_string(d.vertex_count()) +
+                   (all_available ? "" : " of " + std::to_string(info.full_vertices)) +
+                   ": writing those");
   const pmz::IndexedMesh level = tool::decoded_mesh(d);
   tool::warn_if_attributes_lost(output, format, level);
   if (!tool::write_mesh_into(out, format, level, error) || !out.commit(error)) {
-    tool::print_error(error);
-    return tool::kExitFailure;
+    app_support::print_error(error);
+    return app_support::kExitFailure;
   }
   std::fprintf(stderr, "pmz-decode: %u faces, %u vertices (%llu of %llu splits)\n", d.face_count(),
                d.vertex_count(), (unsigned long long)d.splits_applied(),
                (unsigned long long)info.total_splits);
-  return s == pmz::Status::ok || (bytes && !refine_failed) ? tool::kExitOk : tool::kExitFailure;
+  return s == pmz::Status::ok || (bytes && !refine_failed) ? app_support::kExitOk
+                                                           : app_support::kExitFailure;
 }

@@ -9,12 +9,12 @@
 #include <string>
 #include <vector>
 
+#include "pmz/app_support.hpp"
 #include "pmz/compare.hpp"
 #include "pmz/decoder.hpp"
 #include "pmz/sample_mesh.hpp"
 #include "pmz/simplify.hpp"
 #include "pmz/writer.hpp"
-#include "tool_common.hpp"
 
 namespace {
 
@@ -32,7 +32,7 @@ pmz::IndexedMesh current_mesh(const pmz::Decoder& d) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  pmz::tool::init("pmz-demo");
+  pmz::app_support::init("pmz-demo");
   if (argc > 1 && (!std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h"))) {
     std::printf(
         "usage: pmz-demo [OUT_DIR] [--faces N]\n"
@@ -41,7 +41,7 @@ int main(int argc, char** argv) {
         "per level of detail: faces, bytes that had to arrive, and the symmetric Hausdorff\n"
         "error (mean / max, relative to the bounding-box diagonal). OUT_DIR defaults to\n"
         "./pmz-demo; it also receives sample.obj and the decoded levels as lod_*.obj.\n\n%s\n",
-        pmz::tool::kExitStatusHelp);
+        pmz::app_support::kExitStatusHelp);
     return 0;
   }
   std::filesystem::path out_dir = "pmz-demo";
@@ -87,8 +87,8 @@ int main(int argc, char** argv) {
   }
   const double t_write = seconds_since(t0);
   const auto pmz_path = out_dir / "sample.pmz";
-  if (!pmz::tool::write_output(pmz_path.string(), bytes.data(), bytes.size(), error)) {
-    pmz::tool::print_error(error);
+  if (!pmz::app_support::write_output(pmz_path.string(), bytes.data(), bytes.size(), error)) {
+    pmz::app_support::print_error(error);
     return 1;
   }
   std::printf(

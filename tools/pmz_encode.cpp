@@ -12,16 +12,17 @@
 #include <string>
 #include <thread>
 
+#include "pmz/app_support.hpp"
 #include "pmz/format.hpp"
 #include "pmz/mesh.hpp"
 #include "pmz/simplify.hpp"
 #include "pmz/writer.hpp"
-#include "tool_common.hpp"
 #include "tool_mesh.hpp"
 #include "tool_simplify.hpp"
 
 namespace {
 
+namespace app_support = pmz::app_support;
 namespace tool = pmz::tool;
 
 struct EncodeSettings {
@@ -33,13 +34,13 @@ struct EncodeSettings {
 // Encodes one asset; on success `line` is its summary line, else `error` is one line naming
 // the file.
 bool encode(const std::string& input, const std::string& output, const EncodeSettings& settings,
-            tool::Progress* progress, std::string& line, std::string& error) {
-  if (tool::same_file(input, output))
+            app_support::Progress* progress, std::string& line, std::string& error) {
+  if (app_support::same_file(input, output))
     return error = output + ": is the input file; not overwriting it", false;
   const auto t0 = std::chrono::steady_clock::now();
   // Opened first: an unwritable output fails before minutes of work, and the temporary (removed
   // on error and on SIGINT/SIGTERM) exists while the work runs.
-  tool::OutputFile out;
+  app_support::OutputFile out;
   if (!out.open(output, true, error)) return false;
   pmz::IndexedMesh mesh;
   if (progress) progress->update("reading", 0);
@@ -93,7 +94,7 @@ bool encode(const std::string& input, const std::string& output, const EncodeSet
 }  // namespace
 
 int main(int argc, char** argv) {
-  tool::init("pmz-encode");
+  app_support::init("pmz-encode");
   CLI::App app{
       "pmz-encode: simplify meshes with the multi-feature metric and write each as a progressive "
       ".pmz stream",
@@ -143,11 +144,11 @@ int main(int argc, char** argv) {
   app.add_flag("--symbol-stats", settings.write.symbol_stats,
                "also print the code length per kind of split symbol (groups, choice, wedges, "
                "residual slots)");
-  tool::add_progress_options(app, quiet, force_progress);
-  tool::set_footer(app);
-  if (int rc = tool::parse(app, argc, argv); rc >= 0) return rc;
+  app_support::add_progress_options(app, quiet, force_progress);
+  app_support::set_footer(app);
+  if (int rc = app_support::parse(app, argc, argv); rc >= 0) return rc;
 
-  auto usage = tool::usage_error;
+  auto usage = app_support::usage_error;
   if (out_opt->count() == 0 && dir_opt->count() == 0)
     return usage("give -o FILE (one input) or --out-dir DIR");
   if (out_opt->count() && inputs.size() > 1)
@@ -166,8 +167,8 @@ int main(int argc, char** argv) {
   } else {
     std::error_code ec;
     if (!std::filesystem::is_directory(out_dir, ec)) {
-      tool::print_error(out_dir, "not a folder");
-      return tool::kExitFailure;
+      app_support::print_error(out_dir, "not a folder");
+      return app_support::kExitFailure;
     }
     std::set<std::string> seen;
     for (const std::string& in : inputs) {
@@ -179,16 +180,16 @@ int main(int argc, char** argv) {
   }
 
   if (inputs.size() == 1) {
-    tool::Progress progress(quiet, force_progress);
+    app_support::Progress progress(quiet, force_progress);
     std::string line, error;
     if (!encode(inputs[0], outputs[0], settings, progress.enabled() ? &progress : nullptr, line,
                 error)) {
-      tool::print_error(error);
-      return tool::kExitFailure;
+      app_support::print_error(error);
+      return app_support::kExitFailure;
     }
     // With -o -, stdout carries the stream: the summary goes to stderr.
     std::fprintf(outputs[0] == "-" ? stderr : stdout, "%s\n", line.c_str());
-    return tool::kExitOk;
+    return app_support::kExitOk;
   }
 
   // A batch: workers take the next asset until none is left, largest files first so that no
@@ -202,7 +203,7 @@ int main(int argc, char** argv) {
   }
   std::stable_sort(order.begin(), order.end(),
                    [](const auto& a, const auto& b) { return a.first > b.first; });
-  tool::Progress progress(quiet, force_progress);
+  app_support::Progress progress(quiet, force_progress);
   std::mutex print_mutex;
   std::atomic<size_t> next{0};
   size_t finished = 0, failed = 0;
@@ -217,7 +218,7 @@ int main(int argc, char** argv) {
         std::printf("%s\n", line.c_str());
         std::fflush(stdout);
       } else {
-        tool::print_error(error);
+        app_support::print_error(error);
         ++failed;
       }
       progress.update("encoded", double(++finished) / double(inputs.size()));
@@ -230,9 +231,9 @@ int main(int argc, char** argv) {
   for (std::thread& t : workers) t.join();
   progress.clear();
   if (failed) {
-    tool::print_error(std::to_string(failed) + " of " + std::to_string(inputs.size()) +
-                      " assets failed");
-    return tool::kExitFailure;
+    app_support::print_error(std::to_string(failed) + " of " + std::to_string(inputs.size()) +
+                             " assets failed");
+    return app_support::kExitFailure;
   }
-  return tool::kExitOk;
+  return app_support::kExitOk;
 }

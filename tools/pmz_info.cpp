@@ -11,15 +11,15 @@
 #include <string>
 #include <vector>
 
+#include "pmz/app_support.hpp"
 #include "pmz/decoder.hpp"
 #include "pmz/format.hpp"
 #include "pmz/split_chunk.hpp"
-#include "tool_common.hpp"
 
-namespace tool = pmz::tool;
+namespace app_support = pmz::app_support;
 
 int main(int argc, char** argv) {
-  tool::init("pmz-info");
+  app_support::init("pmz-info");
   CLI::App app{
       "pmz-info: print a .pmz file's header, counts, bytes per section and bits per vertex split "
       "(without decoding the splits unless --decode)",
@@ -30,16 +30,17 @@ int main(int argc, char** argv) {
   app.add_flag("--json", json, "machine-readable output");
   app.add_flag("--decode", decode,
                "also apply every split (finds damage in their symbols) and time the refinement");
-  tool::set_footer(app,
-                   "A truncated file is described up to where it ends (exit 0, 'truncated' / "
-                   "\"complete\": false); a damaged one up to the damage (exit 1).");
-  if (int rc = tool::parse(app, argc, argv); rc >= 0) return rc;
+  app_support::set_footer(
+      app,
+      "A truncated file is described up to where it ends (exit 0, 'truncated' / "
+      "\"complete\": false); a damaged one up to the damage (exit 1).");
+  if (int rc = app_support::parse(app, argc, argv); rc >= 0) return rc;
 
   std::vector<uint8_t> data;
   std::string error;
-  if (!tool::read_input(input, data, error)) {
-    tool::print_error(error);
-    return tool::kExitFailure;
+  if (!app_support::read_input(input, data, error)) {
+    app_support::print_error(error);
+    return app_support::kExitFailure;
   }
   const std::string shown = input == "-" ? "stdin" : input;
   pmz::Decoder d;
@@ -48,8 +49,8 @@ int main(int argc, char** argv) {
   const bool truncated = s == pmz::Status::truncated;
   const bool damaged = s != pmz::Status::ok && !truncated;
   if (!d.info().header_done) {
-    tool::print_error(shown, tool::library_message(d.error_message()));
-    return tool::kExitFailure;
+    app_support::print_error(shown, app_support::library_message(d.error_message()));
+    return app_support::kExitFailure;
   }
   double refine_s = 0, refine_cpu = 0, warm_s = 0, warm_cpu = 0;
   if (decode && !damaged) {
@@ -62,8 +63,8 @@ int main(int argc, char** argv) {
     refine_cpu = double(std::clock() - c0) / CLOCKS_PER_SEC;
     // Wedge and residual symbols are decoded as splits are first applied: damage shows now.
     if (d.status() != pmz::Status::ok) {
-      tool::print_error(shown, tool::library_message(d.error_message()));
-      return tool::kExitFailure;
+      app_support::print_error(shown, app_support::library_message(d.error_message()));
+      return app_support::kExitFailure;
     }
     // Again with memory already touched and positions computed: the per-frame refinement cost.
     d.coarsen();
@@ -190,8 +191,8 @@ int main(int argc, char** argv) {
     }
   }
   if (damaged) {
-    tool::print_error(shown, tool::library_message(d.error_message()));
-    return tool::kExitFailure;
+    app_support::print_error(shown, app_support::library_message(d.error_message()));
+    return app_support::kExitFailure;
   }
-  return tool::kExitOk;
+  return app_support::kExitOk;
 }

@@ -5,16 +5,17 @@
 #include <cmath>
 #include <cstdio>
 
+#include "pmz/app_support.hpp"
 #include "pmz/mesh.hpp"
 #include "pmz/simplify.hpp"
-#include "tool_common.hpp"
 #include "tool_mesh.hpp"
 #include "tool_simplify.hpp"
 
+namespace app_support = pmz::app_support;
 namespace tool = pmz::tool;
 
 int main(int argc, char** argv) {
-  tool::init("pmz-simplify");
+  app_support::init("pmz-simplify");
   CLI::App app{
       "pmz-simplify: simplify a triangle mesh by half-edge collapses (multi-feature metric or "
       "QEM)",
@@ -36,19 +37,19 @@ int main(int argc, char** argv) {
   ratio_opt->excludes(faces_opt);
   simplifier.add_to(app);
   app.add_flag("-v,--verbose", verbose, "print where the time went");
-  tool::add_progress_options(app, quiet, force_progress);
-  tool::set_footer(app);
-  if (int rc = tool::parse(app, argc, argv); rc >= 0) return rc;
-  auto usage = tool::usage_error;
+  app_support::add_progress_options(app, quiet, force_progress);
+  app_support::set_footer(app);
+  if (int rc = app_support::parse(app, argc, argv); rc >= 0) return rc;
+  auto usage = app_support::usage_error;
   if (ratio_opt->count() == 0 && faces_opt->count() == 0)
     return usage("give --ratio R or --faces N");
   if (ratio_opt->count() && !(ratio > 0 && ratio <= 1)) return usage("--ratio must be in (0, 1]");
   if (faces_opt->count() && faces == 0) return usage("--faces must be at least 1");
   if ((input == "-" || output == "-") && format.empty())
     return usage("stdin or stdout (-) needs --format obj|off|ply|stl");
-  if (tool::same_file(input, output)) {
-    tool::print_error(output, "is the input file; not overwriting it");
-    return tool::kExitFailure;
+  if (app_support::same_file(input, output)) {
+    app_support::print_error(output, "is the input file; not overwriting it");
+    return app_support::kExitFailure;
   }
   pmz::SimplifyOptions options;
   simplifier.apply(options);
@@ -56,8 +57,8 @@ int main(int argc, char** argv) {
   std::string error;
   pmz::IndexedMesh mesh;
   if (!tool::read_mesh_input(input, format, mesh, error)) {
-    tool::print_error(error);
-    return tool::kExitFailure;
+    app_support::print_error(error);
+    return app_support::kExitFailure;
   }
   tool::warn_if_attributes_lost(
       output, format.empty() ? output.substr(output.find_last_of('.') + 1) : format, mesh);
@@ -67,7 +68,7 @@ int main(int argc, char** argv) {
                          : std::max<uint64_t>(1, uint64_t(std::llround(ratio * double(in_faces))));
   pmz::SimplifyStats stats;
   options.stats = &stats;
-  tool::Progress progress(quiet, force_progress);
+  app_support::Progress progress(quiet, force_progress);
   if (progress.enabled()) options.progress = [&](double f) { progress.update("simplifying", f); };
   const auto t0 = std::chrono::steady_clock::now();
   pmz::CollapseSequence seq;
@@ -76,13 +77,13 @@ int main(int argc, char** argv) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   progress.clear();
   if (!ok) {
-    tool::print_error(input == "-" ? "stdin" : input, error);
-    return tool::kExitFailure;
+    app_support::print_error(input == "-" ? "stdin" : input, error);
+    return app_support::kExitFailure;
   }
   pmz::IndexedMesh result = pmz::mesh_after(seq, seq.collapses.size());
   if (!tool::write_mesh_output(output, format, result, error)) {
-    tool::print_error(error);
-    return tool::kExitFailure;
+    app_support::print_error(error);
+    return app_support::kExitFailure;
   }
   // With -o -, stdout carries the mesh: the summary goes to stderr.
   FILE* report = output == "-" ? stderr : stdout;
@@ -100,5 +101,5 @@ int main(int argc, char** argv) {
         stats.setup, stats.initial_costs, stats.collapse, stats.update_terms, stats.update_costs,
         (unsigned long long)stats.cost_evaluations, (unsigned long long)stats.legality_checks,
         (unsigned long long)stats.guard_checks, (unsigned long long)stats.guard_deferrals);
-  return tool::kExitOk;
+  return app_support::kExitOk;
 }

@@ -6,7 +6,7 @@
 #include <functional>
 #include <vector>
 
-#include "tool_common.hpp"
+#include "pmz/app_support.hpp"
 
 namespace pmz::tool {
 
@@ -31,8 +31,8 @@ bool read_mesh_input(const std::string& path, const std::string& stdin_format, I
     shown = "stdin";
     std::vector<uint8_t> bytes;
     ScratchFile scratch;
-    ok = read_input("-", bytes, error) &&
-         scratch.create(bytes, name(), "." + stdin_format, error) &&
+    ok = app_support::read_input("-", bytes, error) &&
+         scratch.create(bytes, app_support::name(), "." + stdin_format, error) &&
          read_mesh(scratch.path(), mesh, stats, error);
     if (!ok) replace_all(error, scratch.path(), shown);
   } else {
@@ -102,14 +102,15 @@ bool write_mesh_into(OutputFile& out, const std::string& format, const IndexedMe
 void warn_if_attributes_lost(const std::string& output, const std::string& format,
                              const IndexedMesh& mesh) {
   if (!mesh.attributes.empty() && (format == "off" || format == "stl"))
-    print_error(output == "-" ? "stdout" : output,
-                "." + format + " holds positions and triangles only; the attributes (" +
-                    mesh.attributes.describe() + ") are not written (use .obj, .ply or .glb)");
+    app_support::print_error(
+        output == "-" ? "stdout" : output,
+        "." + format + " holds positions and triangles only; the attributes (" +
+            mesh.attributes.describe() + ") are not written (use .obj, .ply or .glb)");
 }
 
 bool write_mesh_output(const std::string& path, const std::string& format, const IndexedMesh& mesh,
                        std::string& error) {
-  const std::string ext = format.empty() ? extension(path) : format;
+  const std::string ext = format.empty() ? app_support::extension(path) : format;
   OutputFile out;
   if (!out.open(path, ext == "ply" || ext == "stl" || ext == "glb", error)) return false;
   return write_mesh_into(out, ext, mesh, error) && out.commit(error);

@@ -1,4 +1,4 @@
-// The mesh side of the tools' shared behaviour (tool_common.hpp): a mesh read from a file or
+// The mesh side of the tools' shared behaviour (pmz/app_support.hpp): a mesh read from a file or
 // stdin, a mesh written to any output pmz::OutputFile handles. Needs the mesh module.
 #pragma once
 #include <CLI/CLI.hpp>

@@ -26,11 +26,11 @@
 #include "lod.hpp"
 #include "materials.hpp"
 #include "mesh_mirror.hpp"
+#include "pmz/app_support.hpp"
 #include "renderer.hpp"
 #include "source.hpp"
 #include "static_mesh.hpp"
 #include "stream.hpp"
-#include "tool_common.hpp"
 #include "ui.hpp"
 
 using namespace pmzview;
@@ -165,7 +165,7 @@ void log_line(double t, const Stats& s, const char* note) {
                s.total_splits, s.frames_per_second, s.update_ms, note[0] ? " " : "", note);
 }
 
-// Encoded in memory, then written like every tool's output (tool::write_output: a temporary
+// Encoded in memory, then written like every tool's output (app_support::write_output: a temporary
 // renamed into place, symlinks kept, devices written directly, removed on error and signals).
 bool write_png(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb,
                std::string& error) {
@@ -178,7 +178,7 @@ bool write_png(const std::string& path, int width, int height, const std::vector
     error = path + ": cannot encode the PNG";
     return false;
   }
-  return pmz::tool::write_output(path, png.data(), png.size(), error);
+  return pmz::app_support::write_output(path, png.data(), png.size(), error);
 }
 
 int parse(int argc, char** argv, Options& o) {
@@ -226,7 +226,7 @@ int parse(int argc, char** argv, Options& o) {
                  "refinement time per frame in milliseconds (at least 30% of the last frame's)")
       ->type_name("MS")
       ->check(CLI::PositiveNumber);
-  pmz::tool::set_footer(app, kKeyHelp);
+  pmz::app_support::set_footer(app, kKeyHelp);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -1,9 +1,9 @@
-// What every pmz command-line tool does the same way: the exit-code convention, one-line
-// errors ("pmz-encode: out.pmz: cannot write: No space left on device"), CLI11 set-up, `-` for
-// stdin/stdout, safe output files (temporary + rename for regular files, removed on error and on
-// SIGINT/SIGTERM/SIGHUP/SIGPIPE; symlinks keep pointing at their updated target; devices and FIFOs
-// written directly: meshio's OutputFile) and a progress bar on stderr. Standard library, CLI11
-// and meshio only: the decoder's tools use it too.
+// What every pmz program (the command-line tools and pmz-view) does the same way: the
+// exit-code convention, one-line errors ("pmz-encode: out.pmz: cannot write: No space left on
+// device"), CLI11 set-up, `-` for stdin/stdout, safe output files (temporary + rename for regular
+// files, removed on error and on SIGINT/SIGTERM/SIGHUP/SIGPIPE; symlinks keep pointing at their
+// updated target; devices and FIFOs written directly: meshio's OutputFile) and a progress bar on
+// stderr. Standard library, CLI11 and meshio only: the decoder's tools and the viewer use it too.
 #pragma once
 #include <CLI/CLI.hpp>
 #include <cstdint>
@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-namespace pmz::tool {
+namespace pmz::app_support {
 
 // The convention of every tool (stated in each --help and the README).
 constexpr int kExitOk = 0;       // success
@@ -81,4 +81,4 @@ class Progress {
 // Adds --quiet and --progress to a tool.
 void add_progress_options(CLI::App& app, bool& quiet, bool& force);
 
-}  // namespace pmz::tool
+}  // namespace pmz::app_support

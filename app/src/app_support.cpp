@@ -1,4 +1,4 @@
-#include "tool_common.hpp"
+#include "pmz/app_support.hpp"
 
 #include <fcntl.h>
 #include <signal.h>
@@ -11,7 +11,7 @@
 #include <cstring>
 #include <filesystem>
 
-namespace pmz::tool {
+namespace pmz::app_support {
 
 const char* const kExitStatusHelp =
     "Exit status: 0 success, 1 failure (bad or damaged input, cannot read or write), 2 usage "
@@ -161,4 +161,4 @@ void add_progress_options(CLI::App& app, bool& quiet, bool& force) {
   q->excludes(p);
 }
 
-}  // namespace pmz::tool
+}  // namespace pmz::app_support
