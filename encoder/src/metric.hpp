@@ -3,6 +3,7 @@
 #pragma once
 #include <cmath>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "halfedge.hpp"
@@ -115,5 +116,24 @@ double mean_edge_length(const HalfEdgeMesh& m);
 // tests check it against the formula of spec/algorithm.md). NaN if (u, v) is not an edge.
 float initial_collapse_cost(const IndexedMesh& mesh, const SimplifyOptions& options, uint32_t u,
                             uint32_t v);
+
+// A collapse u -> v in the engine's queue (input ids). cached: the key the heap holds. current:
+// its cost from the engine's cached terms (T recomputed first where flagged stale, as before any
+// key). fresh: its cost computed from scratch on the current mesh (every face and vertex term,
+// torsion and quadric rebuilt; the accumulated quadric summed anew from the input's over the
+// vertices merged into each; the attribute term as the engine holds it). key_stale: the key is
+// marked for recomputation when it reaches the top (it may be out of date by design);
+// deferred: the key is the guard's penalised cost.
+struct QueuedCollapse {
+  uint32_t u, v;
+  float cached, current, fresh;
+  bool key_stale, deferred;
+};
+
+// Runs the engine on `mesh` as simplify() does for k collapses (fewer if it stops before) and
+// lists every queued collapse: a testing seam, the cached keys against the metric's meaning.
+// False with a message on input the engine refuses.
+bool queued_collapses(const IndexedMesh& mesh, const SimplifyOptions& options, uint64_t k,
+                      std::vector<QueuedCollapse>& out, std::string& error);
 
 }  // namespace pmz::detail

@@ -230,9 +230,14 @@ class Engine {
   // v and every neighbour of both have one cell[] (encoder/src/cluster_grid.hpp says why).
   std::vector<uint64_t> cell;
   bool cells = false;
+  uint64_t max_collapses = UINT64_MAX;  // run() stops after this many (detail::queued_collapses)
 
   bool init(const IndexedMesh& input, const SimplifyOptions& options, std::string& error);
   void run(const SimplifyOptions& options);
+  // The queue now, each key beside its collapse's cost from scratch (detail::queued_collapses);
+  // input: the mesh init() was given, collapses: those performed (engine ids).
+  void queued(const IndexedMesh& input, const std::vector<HalfEdgeCollapse>& collapses,
+              std::vector<QueuedCollapse>& out) const;
   // The cost of u -> v as the heap would key it now; NaN if (u, v) is not an edge.
   float edge_cost(uint32_t u, uint32_t v) const {
     float c = std::numeric_limits<float>::quiet_NaN();
@@ -857,7 +862,7 @@ void Engine::run(const SimplifyOptions& options) {
   const uint64_t progress_step = std::max<uint64_t>(1, start_faces / 200);
   uint64_t next_progress = progress_step;
   while (!heap.empty()) {
-    if (goal && faces <= goal) break;
+    if ((goal && faces <= goal) || record->size() >= max_collapses) break;
     const uint32_t u = heap.top(), v = target[u];
     if (stale[u] & kKeyStale) {
       stale[u] &= uint8_t(~kKeyStale);
@@ -922,6 +927,47 @@ void Engine::run(const SimplifyOptions& options) {
   }
   stats.collapse = seconds_since(t0) - stats.update_terms - stats.update_costs;
   stats.guard_worst_bound = worst_bound;
+}
+
+void Engine::queued(const IndexedMesh& input, const std::vector<HalfEdgeCollapse>& collapses,
+                    std::vector<QueuedCollapse>& out) const {
+  // A copy whose every cached term is rebuilt from the current mesh: the input's quadrics summed
+  // over each vertex's merged vertices (the accumulated quadric), the face and vertex terms with
+  // torsion, the current quadric and its self error.
+  Engine fresh = *this;
+  HalfEdgeMesh start;
+  std::string error;
+  build_halfedge(input, start, error);
+  std::vector<Quadric> initial, merged(m.vertex_count());
+  initial_quadrics(start, params.boundary_weight, initial);
+  CollapseSequence performed;
+  performed.mesh = input;
+  performed.collapses = collapses;
+  const std::vector<uint32_t> survivor = collapse_survivors(performed, collapses.size());
+  for (uint32_t x = 0; x < m.vertex_count(); ++x) merged[survivor[x]].add(initial[x]);
+  if (metric == Metric::multifeature) fresh.feat.compute_all(m);
+  for (uint32_t v = 0; v < m.vertex_count(); ++v) {
+    if (m.out[v] == kNone) continue;
+    if (metric == Metric::qem) {
+      fresh.quad[v] = merged[v];
+    } else {
+      current_quadric(m, fresh.feat, v, params.boundary_weight, fresh.quad[v]);
+      for (int i = 0; i < 10; ++i)
+        fresh.quad[v].a[i] += double(params.quadric_memory) * merged[v].a[i];
+    }
+    fresh.self_error[v] = fresh.quad[v].error(m.p(v)) * inv_unit4;
+  }
+  // And the cost from the engine's own terms, T first brought up to date where it is flagged
+  // stale, as it would be before a key is computed.
+  Engine now = *this;
+  out.clear();
+  for (uint32_t u = 0; u < m.vertex_count(); ++u) {
+    if (!heap.contains(u)) continue;
+    now.refresh_torsion(u);
+    out.push_back({u, target[u], heap.key(u), now.edge_cost(u, target[u]),
+                   fresh.edge_cost(u, target[u]), (stale[u] & kKeyStale) != 0,
+                   (stale[u] & kGuardDeferred) != 0});
+  }
 }
 
 // Renumbers vertices along a Morton curve and faces by their first vertex, so that neighbours
@@ -1034,11 +1080,10 @@ void run_cell_levels(Engine& engine, const SimplifyOptions& options,
   levels.push_back({CellGrid{}, engine.record->size()});
 }
 
-}  // namespace
-
-bool simplify(const IndexedMesh& input, const SimplifyOptions& options, CollapseSequence& out,
-              std::string& error) {
-  const auto t0 = Clock::now();
+// Checks the input, renumbers it for locality (local; order[engine id] = input id) and sets the
+// engine up on it.
+bool start_engine(const IndexedMesh& input, const SimplifyOptions& options, Engine& engine,
+                  IndexedMesh& local, std::vector<uint32_t>& order, std::string& error) {
   // Indices out of range are refused by the half-edge build; check first so reordering can
   // index safely.
   const uint32_t vertex_count = input.vertex_count();
@@ -1051,16 +1096,25 @@ bool simplify(const IndexedMesh& input, const SimplifyOptions& options, Collapse
     error = "index count is not a multiple of three";
     return false;
   }
+  reorder_for_locality(input, local, order);
+  if (!engine.init(local, options, error)) {
+    HalfEdgeMesh unordered;  // again in input numbering, so the message names input vertices
+    build_halfedge(input, unordered, error);
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool simplify(const IndexedMesh& input, const SimplifyOptions& options, CollapseSequence& out,
+              std::string& error) {
+  const auto t0 = Clock::now();
   std::vector<uint32_t> order;
   Engine engine;
   {
     IndexedMesh local;
-    reorder_for_locality(input, local, order);
-    if (!engine.init(local, options, error)) {
-      HalfEdgeMesh unordered;  // again in input numbering, so the message names input vertices
-      build_halfedge(input, unordered, error);
-      return false;
-    }
+    if (!start_engine(input, options, engine, local, order, error)) return false;
   }
   out.mesh = input;
   out.collapses.clear();
@@ -1094,6 +1148,21 @@ float initial_collapse_cost(const IndexedMesh& mesh, const SimplifyOptions& opti
   std::string error;
   if (!engine.init(mesh, options, error)) return std::numeric_limits<float>::quiet_NaN();
   return engine.edge_cost(u, v);
+}
+
+bool queued_collapses(const IndexedMesh& mesh, const SimplifyOptions& options, uint64_t k,
+                      std::vector<QueuedCollapse>& out, std::string& error) {
+  Engine engine;
+  IndexedMesh local;
+  std::vector<uint32_t> order;
+  if (!start_engine(mesh, options, engine, local, order, error)) return false;
+  std::vector<HalfEdgeCollapse> collapses;
+  engine.record = &collapses;
+  engine.max_collapses = k;
+  engine.run(options);
+  engine.queued(local, collapses, out);
+  for (QueuedCollapse& q : out) q.u = order[q.u], q.v = order[q.v];
+  return true;
 }
 
 }  // namespace detail
