@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # pmz in the browser: builds the WebAssembly decoder (Debian's emscripten), the npm package
 # pmz-decoder (ES module + TypeScript declarations + three.js loader) and the web viewer.
-# Installs what is missing first (apt: emscripten, chromium; npm: web/'s devDependencies).
+# Installs what is missing first (apt: emscripten, chromium, ninja-build; npm: web/'s
+# devDependencies). One "web: " line per step on stderr; a run rebuilds only what changed.
 #
 #   bash scripts/web.sh          build: web/dist/pmz-decoder-VERSION.tgz (npm pack) and
 #                                web/dist/viewer/index.html (static files, ?src=URL)
@@ -11,22 +12,33 @@
 # refinement loop's files (-O3); PMZ_WASM_COLD_OPT, the other files (-Os); PMZ_WASM_LINK_OPT, the
 # LTO link (-Os); PMZ_WASM_POST_OPT, binaryen's wasm-opt after the link ("-Oz --converge"; empty:
 # none); PMZ_WASM_FEATURES, the wasm features (bulk memory, non-trapping float-to-int,
-# sign extension: every browser since 2021 and node 16+); PMZ_WASM_MALLOC (emmalloc).
+# sign extension: every browser since 2021 and node 16+); PMZ_WASM_MALLOC (emmalloc); PMZ_WEB_JOBS,
+# compiles at once (nproc).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
 mode=${1:-build}
+# One line per step on stderr, each starting "web: ".
+say() { echo "web: $*" >&2; }
+case $mode in build | test) ;; *)
+  say "unknown mode $mode (build or test)"
+  exit 2
+  ;;
+esac
 
-packages=(emscripten chromium)
+packages=(emscripten chromium ninja-build)
 command -v npm >/dev/null || packages+=(nodejs npm)
+say "Debian packages: ${packages[*]}"
 bash scripts/install_packages.sh web "${packages[@]}"
 # Debian's emscripten takes acorn and friends from /usr/share/nodejs (node-acorn), which a node
 # that is not Debian's own does not search.
 export NODE_PATH=/usr/share/nodejs${NODE_PATH:+:$NODE_PATH}
 
 if [ ! -d web/node_modules/three ] || [ ! -d web/node_modules/puppeteer-core ]; then
-  echo "web: npm install (web/)" >&2
+  say "npm ci (web/'s devDependencies)"
   (cd web && PUPPETEER_SKIP_DOWNLOAD=1 npm ci --no-audit --no-fund --loglevel=error)
+else
+  say "npm devDependencies: present (web/node_modules)"
 fi
 
 # The decoder library's sources: standard C++ only, linked with LTO (the writer-side code in
@@ -49,16 +61,9 @@ link_opt=${PMZ_WASM_LINK_OPT:--Os}
 post_opt=${PMZ_WASM_POST_OPT--Oz --converge}
 out=web/build
 pkg=web/dist/pkg
-obj=$out/obj
-rm -rf "$obj" && mkdir -p "$out" "$pkg" "$obj/hot" "$obj/cold"
 features=(${PMZ_WASM_FEATURES--mbulk-memory -mnontrapping-fptoint -msign-ext})
 cxxflags=(-std=c++20 -flto -fno-exceptions "${features[@]}" -Wall -Wextra
   -I"$root/decoder/include" -I"$root/format/include")
-# Each set in one em++ call (objects land in the current directory), the two sets in parallel.
-(cd "$obj/hot" && em++ "${cxxflags[@]}" $opt -c "${hot[@]/#/$root/}") &
-hot_job=$!
-(cd "$obj/cold" && em++ "${cxxflags[@]}" $cold_opt -c "${cold[@]/#/$root/}")
-wait "$hot_job"
 # A standalone module (no emscripten JS runtime: web/src/pmz_wasm.js instantiates it, 2 KB
 # instead of emscripten's 14 KB of glue). -sFILESYSTEM=0: no file I/O. -fno-exceptions (above): a
 # failed allocation aborts, which the JS wrapper reports as out_of_memory, the only exception the
@@ -67,52 +72,166 @@ wait "$hot_job"
 # smaller than dlmalloc, as fast here (the decoder makes few, large allocations). Linking -Os and
 # wasm-opt -Oz after it: -3.4 KB, no slower (the hot files' -O3 inlining and unrolling happen
 # before the link).
-em++ $link_opt -flto "${features[@]}" "$obj"/hot/*.o "$obj"/cold/*.o \
-  -o "$out/pmz_wasm.wasm" --no-entry -sSTANDALONE_WASM=1 -sFILESYSTEM=0 -sALLOW_MEMORY_GROWTH=1 \
-  -sWASM_BIGINT=1 -sMALLOC=${PMZ_WASM_MALLOC:-emmalloc} -sEXPORTED_FUNCTIONS="[$exports,\"_malloc\",\"_free\"]"
-# (wasm-opt takes the features from the module's target_features section.)
-[ -z "$post_opt" ] || wasm-opt $post_opt "$out/pmz_wasm.wasm" -o "$out/pmz_wasm.wasm"
+ldflags=($link_opt -flto "${features[@]}" --no-entry -sSTANDALONE_WASM=1 -sFILESYSTEM=0
+  -sALLOW_MEMORY_GROWTH=1 -sWASM_BIGINT=1 -sMALLOC=${PMZ_WASM_MALLOC:-emmalloc}
+  -sEXPORTED_FUNCTIONS="[$exports,\"_malloc\",\"_free\"]")
 
-rm -rf "$pkg" && mkdir -p "$pkg"
-cp web/pkg/package.json web/pkg/README.md "$pkg/"
-cp web/src/*.js web/src/*.d.ts "$out/pmz_wasm.wasm" "$pkg/"
-rm -f web/dist/*.tgz
-(cd "$pkg" && npm pack --silent --pack-destination "$root/web/dist" >/dev/null)
+# The wasm is built by ninja (web/build/build.ninja, written here): each source compiled on its
+# own (em++ -MMD: its headers are tracked), so a run recompiles only the sources whose file or
+# headers changed, or whose command changed (the knobs above), relinks only when an object or
+# the link command changed, and does nothing when nothing did. toolchain.txt (em++'s and
+# wasm-opt's versions, rewritten only when they change) is an input of every step: a new
+# emscripten rebuilds everything.
+mkdir -p "$out"
+# ninja's escapes: in a path `$`, ` ` and `:`; in a variable's value `$` (the value is run by sh:
+# shell-quoted words).
+ninja_path() {
+  local s=${1//\$/\$\$}
+  s=${s// /\$ }
+  printf '%s' "${s//:/\$:}"
+}
+ninja_words() {
+  local w s=
+  for w in "$@"; do s+=" $(printf '%q' "$w")"; done
+  s=${s# }
+  printf '%s' "${s//\$/\$\$}"
+}
+# Writes FILE from stdin only when its bytes differ (its mtime says when it last changed).
+write_if_changed() {
+  local tmp="$1.tmp.$$"
+  cat >"$tmp"
+  if cmp -s "$tmp" "$1"; then rm -f "$tmp"; else mv -f "$tmp" "$1"; fi
+}
+{
+  em++ --version | sed -n 1p
+  [ -z "$post_opt" ] || wasm-opt --version
+} | write_if_changed "$out/toolchain.txt"
+objects=()
+{
+  echo "# Written by scripts/web.sh (run that, not ninja): the WebAssembly decoder."
+  echo "rule cxx"
+  echo "  command = em++ \$flags -MMD -MF \$out.d -c \$in -o \$out"
+  echo "  depfile = \$out.d"
+  echo "  deps = gcc"
+  echo "  description = em++ \$opt \$src"
+  echo "rule link"
+  echo "  command = em++ \$flags \$in -o \$out"
+  echo "  description = em++ link (LTO, $link_opt)"
+  # (wasm-opt takes the features from the module's target_features section.)
+  if [ -n "$post_opt" ]; then
+    echo "rule post"
+    echo "  command = wasm-opt $(ninja_words $post_opt) \$in -o \$out"
+    echo "  description = wasm-opt $post_opt"
+  else
+    echo "rule post"
+    echo "  command = cp \$in \$out"
+    echo "  description = copy (no wasm-opt)"
+  fi
+  # Each set's objects by name, hot then cold: the link's input order.
+  for set in hot cold; do
+    if [ $set = hot ]; then files=("${hot[@]}") level=$opt; else files=("${cold[@]}") level=$cold_opt; fi
+    mapfile -t files < <(for f in "${files[@]}"; do echo "$(basename "$f" .cpp).o $f"; done | LC_ALL=C sort)
+    for line in "${files[@]}"; do
+      o=obj/$set/${line%% *} f=${line#* }
+      objects+=("$o")
+      echo "build $(ninja_path "$o"): cxx $(ninja_path "$root/$f") | toolchain.txt"
+      echo "  flags = $(ninja_words "${cxxflags[@]}" $level)"
+      echo "  opt = $level"
+      echo "  src = $f"
+    done
+  done
+  echo "build pmz_wasm.link.wasm: link $(printf '%s ' "${objects[@]}")| toolchain.txt"
+  echo "  flags = $(ninja_words "${ldflags[@]}")"
+  echo "build pmz_wasm.wasm: post pmz_wasm.link.wasm | toolchain.txt"
+  echo "default pmz_wasm.wasm"
+} | write_if_changed "$out/build.ninja"
+ninja_jobs=${PMZ_WEB_JOBS:-$(nproc)}
+if (cd "$out" && ninja -n -j "$ninja_jobs") | grep -q '^ninja: no work to do'; then
+  say "wasm: up to date ($out/pmz_wasm.wasm)"
+else
+  say "wasm: building what changed (ninja in $out, $ninja_jobs jobs)"
+  (cd "$out" && NINJA_STATUS='web:   [%f/%t] ' ninja -j "$ninja_jobs") >&2
+fi
+
+# The package and the viewer are staged afresh (small copies), then synced into web/dist file
+# by file: only files whose bytes differ are written, so their mtimes and the tarball stay as
+# they are when nothing changed.
+stage=$out/stage
+rm -rf "$stage" && mkdir -p "$stage/pkg" "$stage/viewer/vendor"
+changed=0
+sync_tree() {  # STAGE DEST: DEST made equal to STAGE; changed=1 when a file was written or removed
+  local f
+  mkdir -p "$2"
+  while IFS= read -r -d '' f; do
+    if ! cmp -s "$1/$f" "$2/$f"; then
+      mkdir -p "$(dirname "$2/$f")"
+      cp "$1/$f" "$2/$f"
+      changed=1
+    fi
+  done < <(cd "$1" && find . -type f -print0)
+  while IFS= read -r -d '' f; do
+    if [ ! -f "$1/$f" ]; then
+      rm -f "$2/$f"
+      changed=1
+    fi
+  done < <(cd "$2" && find . -type f -print0)
+}
+
+cp web/pkg/package.json web/pkg/README.md "$stage/pkg/"
+cp web/src/*.js web/src/*.d.ts "$out/pmz_wasm.wasm" "$stage/pkg/"
+changed=0
+sync_tree "$stage/pkg" "$pkg"
+tgz=(web/dist/pmz-decoder-*.tgz)
+if [ $changed = 1 ] || [ ! -f "${tgz[0]}" ]; then
+  rm -f web/dist/*.tgz
+  (cd "$pkg" && npm pack --silent --pack-destination "$root/web/dist" >/dev/null)
+  tgz=(web/dist/pmz-decoder-*.tgz)
+  say "package: packed ${tgz[0]}"
+else
+  say "package: up to date (${tgz[0]})"
+fi
 
 # The viewer: static files; three and the package resolved by an import map.
 viewer=web/dist/viewer
-rm -rf "$viewer" && mkdir -p "$viewer/vendor"
-cp web/viewer/* "$viewer/"
-cp -r "$pkg" "$viewer/pmz"
+cp web/viewer/* "$stage/viewer/"
+cp -r "$stage/pkg" "$stage/viewer/pmz"
 # Module workers have no import map (the viewer draws in one): its copy of the loader imports
 # three by path, the same module the page's import map gives.
-sed -i "s#from 'three';#from '../vendor/three.module.js';#" "$viewer/pmz/three.js"
-cp web/node_modules/three/build/three.module.js "$viewer/vendor/"
-cp web/node_modules/three/examples/jsm/controls/OrbitControls.js "$viewer/vendor/"
+sed -i "s#from 'three';#from '../vendor/three.module.js';#" "$stage/viewer/pmz/three.js"
+cp web/node_modules/three/build/three.module.js "$stage/viewer/vendor/"
+cp web/node_modules/three/examples/jsm/controls/OrbitControls.js "$stage/viewer/vendor/"
+changed=0
+sync_tree "$stage/viewer" "$viewer"
+rm -rf "$stage"
+if [ $changed = 1 ]; then say "viewer: updated $viewer/index.html"; else say "viewer: up to date ($viewer)"; fi
 
 wasm_bytes=$(stat -c %s "$out/pmz_wasm.wasm")
 glue_bytes=$(stat -c %s web/src/pmz_wasm.js)
 gz_bytes=$(cat "$out/pmz_wasm.wasm" web/src/pmz_wasm.js | gzip -9 | wc -c)
-echo "web: $(ls web/dist/*.tgz), $viewer/index.html; wasm $wasm_bytes + glue $glue_bytes bytes" \
-  "($gz_bytes gzip -9)" >&2
+say "size: wasm $wasm_bytes + glue $glue_bytes bytes ($gz_bytes gzip -9)"
 
 if [ "$mode" = test ]; then
   bin=${PMZ_BIN:-$root/build/bin}
   # pmz-encode and pmz-dump-arrays: the attribute tests' streams and native reference arrays.
   tools=(pmz-decode pmz-demo pmz-encode pmz-dump-arrays)
+  built=0
   for t in "${tools[@]}"; do
     if [ ! -x "$bin/$t" ]; then
+      say "native tools: building ${tools[*]} (cmake, build/)"
       cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
       cmake --build build -j "$(nproc)" --target "${tools[@]}"
+      built=1
       break
     fi
   done
+  [ $built = 1 ] || say "native tools: present ($bin)"
   sample=web/build/demo/sample.pmz
   if [ ! -f "$sample" ] || [ "$bin/pmz-demo" -nt "$sample" ]; then
+    say "sample: pmz-demo $sample"
     "$bin/pmz-demo" web/build/demo >/dev/null
+  else
+    say "sample: up to date ($sample)"
   fi
+  say "tests: node --test web/test/*.test.mjs (node API, headless Chromium)"
   PMZ_BIN=$bin PMZ_WEB_SAMPLE=$PWD/$sample node --test web/test/*.test.mjs
-elif [ "$mode" != build ]; then
-  echo "web: unknown mode $mode (build or test)" >&2
-  exit 2
 fi

@@ -1,0 +1,51 @@
+// scripts/web.sh builds only what changed: run again with no change, it compiles, links and
+// packs nothing (the objects, the wasm, the tarball and the viewer's files keep their mtimes)
+// and says so, one "web: " line per step. (Under scripts/web.sh test both runs find the build
+// just made; run alone, the first one may build.)
+import assert from 'node:assert/strict';
+import { spawnSync } from 'node:child_process';
+import { readdirSync, statSync } from 'node:fs';
+import path from 'node:path';
+import { test } from 'node:test';
+
+import { rootDir, webDir } from './common.mjs';
+
+function buildRun() {
+  const r = spawnSync('bash', [path.join(rootDir, 'scripts', 'web.sh'), 'build'],
+    { cwd: rootDir, encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'] });
+  assert.equal(r.status, 0, `scripts/web.sh build failed:\n${r.stdout}${r.stderr}`);
+  return r;
+}
+
+// path -> mtime (ns) of every file under the build's outputs.
+function outputTimes() {
+  const times = {};
+  const walk = (dir) => {
+    for (const e of readdirSync(dir, { withFileTypes: true })) {
+      const p = path.join(dir, e.name);
+      if (e.isDirectory()) walk(p);
+      else times[path.relative(webDir, p)] = statSync(p, { bigint: true }).mtimeNs;
+    }
+  };
+  for (const dir of ['build/obj', 'dist']) walk(path.join(webDir, dir));
+  times['build/pmz_wasm.wasm'] = statSync(path.join(webDir, 'build', 'pmz_wasm.wasm'), { bigint: true }).mtimeNs;
+  return times;
+}
+
+test('a second scripts/web.sh run with no change rebuilds nothing and says so', () => {
+  buildRun();
+  const before = outputTimes();
+  assert.ok(Object.keys(before).some((f) => f.endsWith('.o')), 'no wasm objects under web/build/obj');
+  assert.ok(Object.keys(before).some((f) => /^dist\/pmz-decoder-.*\.tgz$/.test(f)), 'no tarball in web/dist');
+  const again = buildRun();
+  const after = outputTimes();
+  const touched = Object.keys({ ...before, ...after }).filter((f) => before[f] !== after[f]);
+  assert.deepEqual(touched, [], 'the second run rewrote these');
+  const lines = again.stderr.trim().split('\n');
+  for (const line of lines) assert.match(line, /^web: /, `a line not of a step: ${line}`);
+  assert.ok(lines.includes('web: wasm: up to date (web/build/pmz_wasm.wasm)'), again.stderr);
+  assert.ok(lines.some((l) => /^web: package: up to date/.test(l)), again.stderr);
+  assert.ok(lines.some((l) => /^web: viewer: up to date/.test(l)), again.stderr);
+  assert.doesNotMatch(again.stderr, /em\+\+|wasm-opt|packed/);
+  assert.equal(again.stdout, '');
+});
