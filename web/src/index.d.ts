@@ -83,7 +83,8 @@ export declare class Decoder {
   /** Undoes up to maxSplits applied splits (all when absent); returns how many. */
   coarsen(maxSplits?: number): number;
   /** Refines for at most budgetMs milliseconds (default 8) and at most maxSplits splits
-   * (default: no limit); returns the splits applied. */
+   * (default: no limit); returns the splits applied. After an error the splits that arrived
+   * before the damage are still applied (as refine() does); 0 once none is left. */
   refineFor(budgetMs?: number, maxSplits?: number): number;
   /** The smallest level with at least `faces` faces, clamped to what is available. */
   setFaceTarget(faces: number): void;

@@ -279,7 +279,9 @@ export class Decoder {
   clearChanges() { this._call((m) => m._pmz_decoder_clear_changes(this._ptr)); }
 
   // Applies available splits for at most budgetMs (in batches that adapt to the rate seen),
-  // and at most maxSplits of them. Returns the splits applied.
+  // and at most maxSplits of them. Returns the splits applied. After an error (a truncated or
+  // damaged stream) the splits that arrived before the damage are still applied, as refine()
+  // does (pmz-decode --salvage's level); 0 once none is left to apply.
   refineFor(budgetMs = 8, maxSplits = Infinity) {
     const start = performance.now();
     let total = 0, batch = this._batch || 256;
@@ -289,7 +291,7 @@ export class Decoder {
       const n = this.refine(want);
       total += n;
       const now = performance.now();
-      if (n < want || total >= maxSplits || this.status !== 'ok') break;
+      if (n < want || total >= maxSplits) break;
       const per = (now - t0) / n;
       // Aim each batch at a quarter of the budget left.
       batch = Math.max(16, Math.min(1 << 20, Math.floor((budgetMs - (now - start)) / 4 / (per || 1e-4))));

@@ -50,6 +50,10 @@ export interface PMZStreamState {
   status: PmzStatus;
   /** Every byte decoded, finish() ok and (when following the stream) the finest level shown. */
   complete: boolean;
+  /** Decoding ended: complete, or failed (status, error) with every split that arrived before
+   * the damage applied and shown (pmz-decode --salvage's level). A failed stream refines on
+   * until then. */
+  ended: boolean;
   readonly error: string;
   readonly faceCount: number;
   readonly vertexCount: number;

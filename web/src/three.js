@@ -206,7 +206,11 @@ export class PMZStream {
     this.totalBytes = 0;
     this.status = 'ok';
     this.complete = false;  // see update()
+    // Decoding ended (see update()): complete, or failed with what arrived before the damage
+    // shown.
+    this.ended = false;
     this._finished = false;
+    this._stalled = false;  // failed, and refinement applies no more splits
     this._held = false;  // the geometry shows an older level than the decoder's (faceLimit)
     this._baseShown = false;
     this._shownVertices = 0;
@@ -246,10 +250,18 @@ export class PMZStream {
   // refinement. With faceLimit, following the stream: refinement goes up to the limit and,
   // while bytes arrive, waits there; once every byte is in it goes on, but the geometry keeps
   // the level at the limit until every split is applied, then shows the finest level at once.
+  // A failed stream (truncated or damaged; status and error say why) is refined on the same
+  // way up to what arrived before the damage (pmz-decode --salvage's level).
   update(budgetMs = this.frameBudgetMs) {
     const d = this.decoder;
     const info = d.info();
-    if (!info.baseDone) return false;
+    if (this.status === 'ok' && d.status !== 'ok') this.status = d.status;
+    // No more bytes come once finish() ran or feeding failed.
+    const bytesEnded = this._finished || this.status !== 'ok';
+    if (!info.baseDone) {
+      this.ended = this.status !== 'ok';  // failed before the base mesh: nothing to show
+      return false;
+    }
     if (!this._baseShown) {  // the base mesh first, not refined yet
       this._baseShown = true;
       return this._sync();
@@ -257,8 +269,8 @@ export class PMZStream {
     if (this.faceTarget === null) {
       // Within the limit (a split adds at most two faces); past it once every byte is in.
       const within = this.faceLimit === null ? Infinity : Math.floor((this.faceLimit - d.faceCount) / 2);
-      const room = within > 0 ? within : this._finished ? Infinity : 0;
-      if (room > 0) d.refineFor(budgetMs, room);
+      const room = within > 0 ? within : bytesEnded ? Infinity : 0;
+      if (room > 0 && d.refineFor(budgetMs, room) === 0 && d.status !== 'ok') this._stalled = true;
     } else if (this.faceTarget !== d.faceCount) {
       d.setFaceTarget(this.faceTarget);
     }
@@ -266,7 +278,10 @@ export class PMZStream {
     const allApplied = d.splitsApplied === info.totalSplits;
     // Complete: every byte decoded and, when following the stream, the finest level shown.
     this.complete = this._finished && this.status === 'ok' && (this.faceTarget !== null || allApplied);
-    const decodingEnded = this._finished && (this.status !== 'ok' || allApplied);
+    const failed = this.status !== 'ok';
+    const decodingEnded = bytesEnded && (allApplied ||
+                                         failed && (this._stalled || d.splitsApplied >= d.splitsAvailable));
+    this.ended = this.complete || failed && (this.faceTarget !== null || decodingEnded);
     this._held = this.faceTarget === null && this.faceLimit !== null && d.faceCount > this.faceLimit &&
       !decodingEnded;
     return this._held ? false : this._sync();
@@ -309,6 +324,7 @@ export class PMZWorkerStream {
     this.totalBytes = 0;
     this.status = 'ok';
     this.complete = false;
+    this.ended = false;  // as PMZStream's
     this.faceCount = 0;
     this.vertexCount = 0;
     this.decodedFaces = 0;
@@ -415,6 +431,9 @@ export class PMZWorkerStream {
     this.complete = !!this._done && this._done.status === 'ok' && this.status === 'ok' &&
       this._pending.length === 0 &&
       (this.faceTarget !== null || this.splitsApplied === this._info.totalSplits);
+    // The worker's 'done' comes once decoding ended (failed: with what arrived before the
+    // damage applied), after the updates it posted.
+    this.ended = this.complete || (!!this._done && this._done.status !== 'ok' && this._pending.length === 0);
     return changed;
   }
 
@@ -539,7 +558,7 @@ export class PMZLoader extends Loader {
     const tick = () => {
       s.update();
       if (onUpdate) onUpdate(s);
-      if (!s.complete && s.status === 'ok') requestAnimationFrame(tick);
+      if (!s.complete && !s.ended) requestAnimationFrame(tick);
     };
     if (inWorker && (typeof source === 'string' || source instanceof URL ||
                      (source && typeof source.stream === 'function'))) {

@@ -7,7 +7,8 @@
 //               {type: 'limit', faces} (null: none; see PMZWorkerStream.faceLimit) |
 //               {type: 'pause', ms} (no refinement for ms) |
 //               {type: 'snapshot', id} | {type: 'close'}
-// Messages out: {type: 'update', ...} (see post()), {type: 'done', status, error},
+// Messages out: {type: 'update', ...} (see post()), {type: 'done', status, error} (decoding
+//               ended: see work()),
 //               {type: 'snapshot', id, positions, indices, render}, {type: 'failed', error}
 import { createDecoder } from './index.js';
 import { renderArrays, renderUpdate, transferables } from './render_update.js';
@@ -25,6 +26,10 @@ let shown = { faces: 0, vertices: 0 };  // the level the page was last sent
 let bytes = 0, totalBytes = 0;
 let firstBytesAt = null;  // ms since the epoch (timeOrigin + now: comparable across threads)
 let finished = false, doneSent = false;
+// A failed stream (truncated or damaged) still shows what arrived before the damage, as
+// pmz-decode --salvage does: refinement goes on while it applies splits; stalled once it
+// applies none (every split that arrived is in, or the next one is the damaged one).
+let stalled = false;
 let renderState = { shownVertices: 0 };
 let materialsPosted = false;
 let basePosted = false;
@@ -100,16 +105,18 @@ function work() {
   const room = () => splitRoom(d.faceCount);
   if (info.baseDone) {
     if (faceTarget === null) {
-      if (room() > 0) d.refineFor(SLICE_MS, room());
+      if (room() > 0 && d.refineFor(SLICE_MS, room()) === 0 && d.status !== 'ok') stalled = true;
     } else if (faceTarget !== d.faceCount) {
       d.setFaceTarget(faceTarget);
     }
   }
-  const decoded = finished && (d.status !== 'ok' || d.splitsApplied === info.totalSplits);
+  // Decoding ended: every byte in and every split applied, or failed with nothing more to apply.
+  const failed = d.status !== 'ok';
+  const decoded = finished && (d.splitsApplied === info.totalSplits ||
+                               failed && (!info.baseDone || stalled || d.splitsApplied >= d.splitsAvailable));
   post(info, faceTarget !== null || faceLimit === null || d.faceCount <= faceLimit || decoded);
-  if (d.status === 'ok' && faceTarget === null && d.splitsApplied < d.splitsAvailable && room() > 0) schedule();
-  if (finished && !doneSent && (d.status !== 'ok' || faceTarget !== null ||
-                                d.splitsApplied === info.totalSplits)) {
+  if (!stalled && faceTarget === null && d.splitsApplied < d.splitsAvailable && room() > 0) schedule();
+  if (finished && !doneSent && (decoded || faceTarget !== null)) {
     doneSent = true;
     self.postMessage({ type: 'done', status: d.status, error: d.error });
   }
@@ -146,7 +153,8 @@ async function handle(msg) {
     case 'feed':
       if (firstBytesAt === null) firstBytesAt = performance.timeOrigin + performance.now();
       bytes += msg.bytes.length;
-      if (decoder.status === 'ok') decoder.feed(msg.bytes);
+      // The page stops feeding at an error: no more bytes (finish() keeps the error).
+      if (decoder.status === 'ok' && decoder.feed(msg.bytes) !== 'ok') finish();
       schedule();
       break;
     case 'finish': finish(); break;

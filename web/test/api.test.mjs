@@ -216,6 +216,23 @@ test('hostile streams give error names and one-line errors', async () => {
     assert.ok(seen.has(s), `no case gave ${s}: ${[...seen]}`);
 });
 
+// After an error the splits that arrived before the damage are still applied: refineFor()
+// within its budget (not one batch and stop), as refine() does.
+test('refineFor() after a truncation applies what arrived within its budget', async () => {
+  const { createDecoder } = await importPackage();
+  const bytes = readFileSync(demoPmz());
+  const d = await createDecoder();
+  assert.equal(d.feed(bytes.subarray(0, 60000)), 'ok');
+  assert.equal(d.finish(), 'truncated');
+  const available = d.splitsAvailable;
+  assert.ok(available > 10000, `${available} splits available`);
+  assert.equal(d.refineFor(60000), available);
+  assert.equal(d.splitsApplied, available);
+  assert.equal(d.refineFor(60000), 0);
+  assert.equal(d.status, 'truncated');
+  d.dispose();
+});
+
 test('a decoder after dispose() throws a plain error, others keep working', async () => {
   const { createDecoder } = await importPackage();
   const a = await createDecoder(), b = await createDecoder();

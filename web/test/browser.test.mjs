@@ -5,26 +5,34 @@
 // and the final level both show the object, in the canvas and in screenshots of the page, and
 // differ.
 import assert from 'node:assert/strict';
-import { mkdtempSync, rmSync, statSync, writeFileSync } from 'node:fs';
+import { mkdtempSync, readFileSync, rmSync, statSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import path from 'node:path';
 import { after, before, test } from 'node:test';
 import puppeteer from 'puppeteer-core';
 
-import { CHECKER_BLUE, CHECKER_RED, demoPmz, encodeNative, nativeArrays, nativeDecode, webDir,
-  writeTexturedTorus } from './common.mjs';
+import { CHECKER_BLUE, CHECKER_RED, demoPmz, encodeNative, importPackage, nativeArrays, nativeDecode,
+  webDir, writeTexturedTorus } from './common.mjs';
 import { CHROMIUM_ARGS, serveViewer } from './serve.mjs';
 
 const RATE = 10 * 1024;  // bytes per second: the 80 KB sample takes about 8 s (frames are slow on a loaded machine)
 let server, browser, profile;
 
 let textured;  // the seamed textured torus (red / blue checkerboard) as .pmz, checker.png beside it
+// The sample's first TRUNCATED_BYTES bytes (`head -c`): a truncated stream whose last good level
+// has many more faces than the base mesh.
+const TRUNCATED_BYTES = 60000;
+let truncated;
 
 before(async () => {
   const work = mkdtempSync(path.join(tmpdir(), 'pmz-web-textured-'));
   textured = encodeNative(writeTexturedTorus(work), path.join(work, 'textured.pmz'));
+  truncated = path.join(work, 'truncated.pmz');
+  writeFileSync(truncated, readFileSync(demoPmz()).subarray(0, TRUNCATED_BYTES));
   server = await serveViewer(path.join(webDir, 'dist', 'viewer'), { 'sample.pmz': demoPmz(),
-    'textured.pmz': textured, 'checker.png': path.join(work, 'checker.png') }, RATE);
+    'textured.pmz': textured, 'checker.png': path.join(work, 'checker.png'),
+    // Served at once, as from a local server.
+    'truncated.pmz': { file: truncated, bytesPerSecond: Infinity } }, RATE);
   profile = mkdtempSync(path.join(tmpdir(), 'pmz-chromium-'));
   browser = await puppeteer.launch({ executablePath: process.env.PMZ_CHROMIUM || '/usr/bin/chromium',
     headless: true, args: [...CHROMIUM_ARGS, `--user-data-dir=${profile}`] });
@@ -260,6 +268,50 @@ test('the viewer reports a bad stream as a one-line error', async () => {
   assert.equal(s.complete, false);
   await page.close();
 });
+
+// A truncated stream shows what arrived before the damage in every mode, with the error in
+// the overlay: as many faces as the npm API's decoder reaches (feed, finish, refine).
+for (const query of ['', '&worker=0', '&render=page', '&render=page&worker=0']) {
+  test(`a truncated stream shows its last good level and the error${query ? ` (?${query.slice(1)})` : ''}`, async () => {
+    const { createDecoder } = await importPackage();
+    const d = await createDecoder();
+    assert.equal(d.feed(readFileSync(truncated)), 'ok');
+    assert.equal(d.finish(), 'truncated');
+    d.refine();
+    const expected = d.faceCount;
+    d.dispose();
+    assert.ok(expected > 100 * 4, `the npm API reaches only ${expected} faces`);
+
+    const page = await browser.newPage();
+    const messages = [];
+    page.on('pageerror', (e) => messages.push(String(e)));
+    await page.setViewport({ width: 320, height: 240 });
+    const { port } = server.address();
+    await page.goto(`http://127.0.0.1:${port}/index.html?src=/stream/truncated.pmz${query}`);
+    // Until decoding ended, or (without that signal) the error is in and the faces shown did
+    // not change for 3 s.
+    let s, same = 0;
+    const deadline = Date.now() + 60000;
+    for (let last = -1; ; last = s.faces) {
+      await sleep(250);
+      s = await page.evaluate(() => ({ ...window.pmzStatus }));
+      same = s.faces === last ? same + 1 : 0;
+      if (s.ended || (s.error && same >= 12)) break;
+      assert.ok(Date.now() < deadline, `not ended after 60 s: ${JSON.stringify(s)} ${messages}`);
+    }
+    assert.match(s.error, /truncated/);
+    assert.equal(s.complete, false);
+    assert.equal(s.ended, true);
+    assert.equal(s.faces, expected, `faces shown (${JSON.stringify(s)}) against the npm API's`);
+    // The overlay shows both.
+    await sleep(300);
+    const overlay = await page.$eval('#overlay', (e) => e.textContent);
+    assert.match(overlay, /^error +.*truncated/m, overlay);
+    assert.equal(Number(/^faces +(\S+)/m.exec(overlay)[1].replace(/\D/g, '')), expected, overlay);
+    assert.ok((await page.evaluate(() => window.pmzSnapshot())).coverage > 0.05);
+    await page.close();
+  });
+}
 
 // Among the pixels that show the object: the shares where the checkerboard's red or blue
 // dominates (as tests/viewer/viewer_test.py measures the native viewer's textured shots).

@@ -94,3 +94,43 @@ test('faceLimit null follows the stream; a raised limit lets it refine on', asyn
   assert.equal(s.decoder.splitsApplied, s.decoder.splitsAvailable);
   s.dispose();
 });
+
+// A truncated stream (the sample's first 60,000 bytes) through PMZLoader as an application
+// uses it (autoUpdate: update() every animation frame): once the error is in, refinement goes
+// on to the level a plain decoder reaches (feed, finish, refine: pmz-decode --salvage's), the
+// geometry shows it, and the stream ends there with the error.
+test('PMZLoader refines a truncated stream up to what arrived, then ends', async () => {
+  const { createDecoder } = await importPackage();
+  const { PMZLoader } = await importThreeLoader();
+  const bytes = readFileSync(demoPmz()).subarray(0, 60000);
+  const d = await createDecoder();
+  assert.equal(d.feed(bytes), 'ok');
+  assert.equal(d.finish(), 'truncated');
+  d.refine();
+  const salvage = { positions: d.positions().slice(), indices: d.indices().slice() };
+  d.dispose();
+  const hadFrames = 'requestAnimationFrame' in globalThis;
+  const saved = globalThis.requestAnimationFrame;
+  globalThis.requestAnimationFrame = (f) => setTimeout(() => f(performance.now()), 4);
+  try {
+    for (const faceLimit of [null, 1000]) {
+      const s = await new PMZLoader(undefined, { faceLimit }).stream(new Blob([bytes]));
+      assert.equal(await s.done, 'truncated');
+      const deadline = Date.now() + 30000;
+      while (!s.ended) {
+        assert.ok(Date.now() < deadline, `not ended: ${s.faceCount} faces`);
+        await new Promise((r) => setTimeout(r, 20));
+      }
+      assert.equal(s.status, 'truncated');
+      assert.match(s.error, /truncated/);
+      assert.equal(s.complete, false);
+      const shown = drawn(s);
+      assert.equal(s.faceCount, salvage.indices.length / 3, `faceLimit ${faceLimit}`);
+      assert.ok(sameBits(shown.positions, salvage.positions) && sameBits(shown.indices, salvage.indices),
+        `faceLimit ${faceLimit}: the geometry differs from the decoder's last good level`);
+      s.dispose();
+    }
+  } finally {
+    if (hadFrames) globalThis.requestAnimationFrame = saved; else delete globalThis.requestAnimationFrame;
+  }
+});

@@ -1,6 +1,7 @@
 // A static server for web/dist/viewer on 127.0.0.1 whose /stream/NAME responses (streams and
-// the textures beside them) are
-// throttled to `bytesPerSecond` (chunks every 10 ms), with Content-Length.
+// the textures beside them) are throttled to `bytesPerSecond` (chunks every 10 ms), with
+// Content-Length. streams[NAME]: a file, or {file, bytesPerSecond (Infinity: at once), delayMs
+// (before the response starts)}; server.requests[NAME]: when each request came (Date.now()).
 import { createReadStream, readFileSync, statSync } from 'node:fs';
 import http from 'node:http';
 import path from 'node:path';
@@ -9,23 +10,31 @@ const TYPES = { '.html': 'text/html', '.js': 'text/javascript', '.mjs': 'text/ja
   '.wasm': 'application/wasm', '.json': 'application/json', '.png': 'image/png' };
 
 export function serveViewer(viewerDir, streams, bytesPerSecond) {
+  const requests = {};
   const server = http.createServer((req, res) => {
     const url = new URL(req.url, 'http://127.0.0.1');
     const name = decodeURIComponent(url.pathname);
     if (name.startsWith('/stream/') && streams[name.slice(8)]) {
-      const bytes = readFileSync(streams[name.slice(8)]);
-      res.writeHead(200, { 'content-type': TYPES[path.extname(name)] || 'application/octet-stream',
-        'content-length': bytes.length, 'cache-control': 'no-store' });
-      const tick = 10;
-      let at = 0;
-      const start = Date.now();
-      const send = () => {
-        // Paced by the clock, not by timer counts: late timers send what is due.
-        const due = Math.min(bytes.length, Math.round((Date.now() - start + tick) * bytesPerSecond / 1000));
-        if (due > at) { res.write(bytes.subarray(at, due)); at = due; }
-        if (at < bytes.length) setTimeout(send, tick); else res.end();
+      const entry = streams[name.slice(8)];
+      const { file, bytesPerSecond: rate = bytesPerSecond, delayMs = 0 } =
+        typeof entry === 'string' ? { file: entry } : entry;
+      (requests[name.slice(8)] ??= []).push(Date.now());
+      const bytes = readFileSync(file);
+      const respond = () => {
+        res.writeHead(200, { 'content-type': TYPES[path.extname(name)] || 'application/octet-stream',
+          'content-length': bytes.length, 'cache-control': 'no-store' });
+        const tick = 10;
+        let at = 0;
+        const start = Date.now();
+        const send = () => {
+          // Paced by the clock, not by timer counts: late timers send what is due.
+          const due = Math.min(bytes.length, Math.round((Date.now() - start + tick) * rate / 1000));
+          if (due > at) { res.write(bytes.subarray(at, due)); at = due; }
+          if (at < bytes.length) setTimeout(send, tick); else res.end();
+        };
+        send();
       };
-      send();
+      if (delayMs > 0) setTimeout(respond, delayMs); else respond();
       return;
     }
     const file = path.join(viewerDir, path.normalize(name === '/' ? '/index.html' : name));
@@ -39,6 +48,7 @@ export function serveViewer(viewerDir, streams, bytesPerSecond) {
       res.writeHead(404).end();
     }
   });
+  server.requests = requests;
   return new Promise((resolve) => server.listen(0, '127.0.0.1', () => resolve(server)));
 }
 

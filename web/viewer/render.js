@@ -66,12 +66,13 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
   renderer.setClearColor(BACKGROUND);
   // Under a software renderer (SwiftShader in headless Chromium) the canvas's backing store is
   // at DECODE_SCALE of its size while a stream decodes (?decodescale=F in (0, 1], default 0.5;
-  // 1: always full size), full size again from the first frame drawn once it completed or
-  // failed. There the display compositor waits for each drawn canvas frame before it sends the
-  // page's next frame (a Chromium trace shows it), and a canvas frame costs per pixel too
-  // (shading, read-back, software compositing): at half the width and height the page's longest
-  // gap while decoding was within 50 ms in 25 of 27 runs at load 1.3-9, against 16 of 27 at full
-  // size (docs/benchmarks.md, "Web viewer frames"). The faces shown still rise; the
+  // 1: always full size), full size again from the first frame drawn once decoding ended
+  // (complete, or failed and what arrived before the damage shown). There the display
+  // compositor waits for each drawn canvas frame before it sends the page's next frame (a
+  // Chromium trace shows it), and a canvas frame costs per pixel too (shading, read-back,
+  // software compositing): at half the width and height the page's longest gap while decoding
+  // was within 50 ms in 25 of 27 runs at load 1.3-9, against 16 of 27 at full size
+  // (docs/benchmarks.md, "Web viewer frames"). The faces shown still rise; the
   // object is drawn at full resolution once complete. (Drawing on the page, render=page, it did
   // not help.)
   const askedScale = Number(params.get('decodescale'));  // 0 when absent, NaN when not a number
@@ -255,8 +256,10 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
   }
 
   // The stream's state for the page (pmzStatus, the overlay), timings (this thread's
-  // performance.now() ms) and one entry per animation frame here (the canvas's frames).
-  const status = { faces: 0, vertices: 0, bytes: 0, totalBytes: 0, complete: false, error: '' };
+  // performance.now() ms) and one entry per animation frame here (the canvas's frames). ended:
+  // decoding ended (complete, or failed: a stream that failed shows what arrived before the
+  // damage, the error beside it; PMZStream.ended).
+  const status = { faces: 0, vertices: 0, bytes: 0, totalBytes: 0, complete: false, ended: false, error: '' };
   let timing = { firstBytes: null, firstObjectFrame: null };
   let frames = [];
   let attributes = null;  // tests: the attributes the geometry draws with, and how many materials
@@ -310,7 +313,7 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
       redraw = true;
     }
     morphTicks = [];
-    Object.assign(status, { faces: 0, vertices: 0, bytes: 0, totalBytes: 0, complete: false, error: '' });
+    Object.assign(status, { faces: 0, vertices: 0, bytes: 0, totalBytes: 0, complete: false, ended: false, error: '' });
     timing = { firstBytes: null, firstObjectFrame: null };
     frames = [];
     attributes = null;
@@ -335,6 +338,7 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
       if (result !== 'ok') setError(stream.error || result);
     } catch (e) {
       setError(e && e.message ? e.message : e);
+      status.ended = true;
     }
   }
 
@@ -355,7 +359,7 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
   function postState(limit) {
     const s = current && current.stream;
     const state = { type: 'state', status, info: s ? s.info() : null, timing, attributes, calibration,
-      overlay: s ? { limited: limit !== null && !status.complete, decodedFaces: s.decodedFaces,
+      overlay: s ? { limited: limit !== null && !status.ended, decodedFaces: s.decodedFaces,
         rate: Math.round(rate.perSecond) } : null };
     const text = JSON.stringify(state);
     if (text !== posted) {
@@ -407,7 +411,8 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
       rate.splits += Math.max(0, s.splitsApplied - before);
       if (timing.firstBytes === null && s.firstBytesTime != null) timing.firstBytes = s.firstBytesTime;
       Object.assign(status, { bytes: s.bytes, totalBytes: s.totalBytes });
-      Object.assign(status, { faces: s.faceCount, vertices: s.vertexCount, complete: s.complete });
+      Object.assign(status, { faces: s.faceCount, vertices: s.vertexCount, complete: s.complete,
+        ended: status.ended || s.ended });
       if (s.status !== 'ok') setError(s.error);
       const m = current.materials && (morphOn ? current.materials.morph : current.materials.plain);
       if (m && current.mesh.material !== m) {
@@ -430,7 +435,7 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
       current.stream.pauseDecoding(ms);
       yieldAgain = t0r + 2 * ms;
     }
-    if (scaledDown && drawn && (status.complete || status.error)) scaleForDecoding(false);
+    if (scaledDown && drawn && status.ended) scaleForDecoding(false);
     if (drawn) renderer.render(scene, camera);
     redraw = false;
     const now = performance.now();

@@ -35,7 +35,7 @@ let controls = new OrbitControls(camera, canvas);
 // State for tests and scripts: window.pmzStatus, timings (performance.now() ms of this page) and
 // one entry per animation frame of this page (window.pmzFrames); the canvas's own frames come
 // from window.pmzCanvasFrames().
-const status = { faces: 0, vertices: 0, bytes: 0, totalBytes: 0, complete: false, error: '' };
+const status = { faces: 0, vertices: 0, bytes: 0, totalBytes: 0, complete: false, ended: false, error: '' };
 window.pmzStatus = status;
 window.pmzTiming = { firstBytes: null, firstObjectFrame: null };
 window.pmzFrames = [];
@@ -151,7 +151,7 @@ lod.addEventListener('input', () => {
 });
 
 function open(source) {
-  Object.assign(status, { faces: 0, vertices: 0, bytes: 0, totalBytes: 0, complete: false, error: '' });
+  Object.assign(status, { faces: 0, vertices: 0, bytes: 0, totalBytes: 0, complete: false, ended: false, error: '' });
   window.pmzTiming = { firstBytes: null, firstObjectFrame: null };
   window.pmzFrames = [];
   window.pmzLongTasks = [];
