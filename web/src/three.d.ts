@@ -1,5 +1,6 @@
-import { BufferGeometry, Loader, LoadingManager, Material, MeshStandardMaterial,
-  MeshStandardMaterialParameters, Texture, TextureLoader } from 'three';
+import { BufferGeometry, Loader, LoadingManager, MagnificationTextureFilter, Material,
+  MeshStandardMaterial, MeshStandardMaterialParameters, MinificationTextureFilter, Texture,
+  TextureLoader, Wrapping } from 'three';
 import { Decoder, DecoderOptions, PmzMaterial, PmzStatus, StreamInfo } from './index.js';
 
 export interface PMZOptions extends DecoderOptions {
@@ -106,9 +107,20 @@ export declare function geomorphMaterial(
   seconds?: number,
 ): (() => void) & { uniforms: { pmzTime: { value: number }; pmzDuration: { value: number } } };
 
+/** How pmzMaterials() samples textures (the stream carries no sampler): glTF's and MTL's
+ * default, as pmz-view: RepeatWrapping in u and v, LinearFilter magnification,
+ * LinearMipmapLinearFilter minification. */
+export declare const PMZ_TEXTURE_SAMPLER: Readonly<{
+  wrapS: Wrapping;
+  wrapT: Wrapping;
+  magFilter: MagnificationTextureFilter;
+  minFilter: MinificationTextureFilter;
+}>;
+
 /** three.js materials indexed like the stream's material table (one plain material without a
- * table): base colour, base colour texture (resolved against the .pmz URL), vertex colours,
- * smooth shading with decoded normals. Call once the base mesh is in. */
+ * table): base colour, base colour texture (resolved against the .pmz URL; sampled as
+ * PMZ_TEXTURE_SAMPLER, options.sampler overriding), vertex colours, smooth shading with decoded
+ * normals. Call once the base mesh is in. */
 export declare function pmzMaterials(
   stream: PMZStream | PMZWorkerStream,
   options?: {
@@ -116,6 +128,7 @@ export declare function pmzMaterials(
     parameters?: MeshStandardMaterialParameters;
     color?: number;
     textureLoader?: TextureLoader;
+    sampler?: Partial<typeof PMZ_TEXTURE_SAMPLER>;
     onTextureLoad?: (texture: Texture) => void;
     onTextureError?: (url: string, error: unknown) => void;
   },

@@ -3,8 +3,9 @@
 // attributes (format 8.0) a render vertex is an attribute wedge (as in the native viewer): uv,
 // uv1, normal and color attributes beside position, and a group per run of faces of one
 // material when the stream has several (pmzMaterials() makes the three.js materials).
-import { Box3, BufferAttribute, BufferGeometry, Color, DoubleSide, Loader, MeshStandardMaterial,
-  Sphere, SRGBColorSpace, TextureLoader, Vector3 } from 'three';
+import { Box3, BufferAttribute, BufferGeometry, Color, DoubleSide, LinearFilter,
+  LinearMipmapLinearFilter, Loader, MeshStandardMaterial, RepeatWrapping, Sphere, SRGBColorSpace,
+  TextureLoader, Vector3 } from 'three';
 import { createDecoder, feedStream } from './index.js';
 import { renderArrays, renderUpdate } from './render_update.js';
 
@@ -475,13 +476,21 @@ function textureUrl(uri, base) {
   }
 }
 
+// How textures are sampled. The stream carries no sampler (a material is its name, base colour
+// and texture references), so the default of glTF's sampler and of MTL (no -clamp) is taken,
+// as pmz-view samples: repeated in u and v (texture coordinates outside [0, 1] tile), linear
+// magnification, mipmapped linear minification.
+export const PMZ_TEXTURE_SAMPLER = Object.freeze({ wrapS: RepeatWrapping, wrapT: RepeatWrapping,
+  magFilter: LinearFilter, minFilter: LinearMipmapLinearFilter });
+
 // three.js materials for a stream, indexed like its material table (the geometry's groups'
 // materialIndex), one plain material without a table: MeshStandardMaterial with the base
 // colour, the base colour texture (resolved relative to the .pmz URL, options.baseUrl or the
-// stream's), vertex colours when the geometry has them, and smooth shading with decoded
-// normals (flat without). Call once the base mesh is in (the geometry has its attributes).
-// options: parameters (more MeshStandardMaterial parameters), color (without a table),
-// textureLoader, onTextureLoad(texture) (e.g. to redraw), onTextureError(url, error).
+// stream's; sampled as PMZ_TEXTURE_SAMPLER says), vertex colours when the geometry has them,
+// and smooth shading with decoded normals (flat without). Call once the base mesh is in (the
+// geometry has its attributes). options: parameters (more MeshStandardMaterial parameters),
+// color (without a table), textureLoader, sampler (PMZ_TEXTURE_SAMPLER's fields to override),
+// onTextureLoad(texture) (e.g. to redraw), onTextureError(url, error).
 export function pmzMaterials(stream, options = {}) {
   const g = stream.geometry;
   const has = (name) => !!g.getAttribute(name);
@@ -491,6 +500,7 @@ export function pmzMaterials(stream, options = {}) {
     flatShading: !has('normal'), vertexColors: has('color'), ...options.parameters, ...params });
   const table = stream.materials();
   if (!table.length) return [make({ color: has('color') ? 0xffffff : options.color ?? 0xd8c8a8 })];
+  const sampler = { ...PMZ_TEXTURE_SAMPLER, ...options.sampler };
   return table.map((m) => {
     const material = make({ name: m.name, color: new Color(m.baseColor[0], m.baseColor[1], m.baseColor[2]),
       opacity: m.baseColor[3], transparent: m.baseColor[3] < 1 });
@@ -498,6 +508,7 @@ export function pmzMaterials(stream, options = {}) {
       const url = textureUrl(m.baseColorTexture, base);
       material.map = loader.load(url, options.onTextureLoad, undefined,
         (e) => (options.onTextureError ? options.onTextureError(url, e) : console.warn(`pmz: texture ${url} not loaded`)));
+      Object.assign(material.map, sampler);
       material.map.colorSpace = SRGBColorSpace;
     }
     return material;

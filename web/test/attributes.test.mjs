@@ -252,6 +252,14 @@ for (const [name, make] of Object.entries(streams)) {
       assert.equal(urls[i], expected);
       assert.ok(expected.startsWith('http://example.test/models/'), expected);
     }
+    // Textures are sampled as glTF's and MTL's default sampler: repeated, mipmapped.
+    const { LinearFilter, LinearMipmapLinearFilter, RepeatWrapping } = await import('three');
+    const maps = materials.filter((m) => m.map).map((m) => m.map);
+    assert.equal(maps.length, textured.length);
+    for (const t of maps) {
+      assert.deepEqual([t.wrapS, t.wrapT, t.magFilter, t.minFilter, t.colorSpace],
+        [RepeatWrapping, RepeatWrapping, LinearFilter, LinearMipmapLinearFilter, 'srgb']);
+    }
     s.dispose();
   });
 }

@@ -12,7 +12,7 @@ import { after, before, test } from 'node:test';
 import puppeteer from 'puppeteer-core';
 
 import { CHECKER_BLUE, CHECKER_RED, demoPmz, encodeNative, importPackage, nativeArrays, nativeDecode,
-  webDir, writeTexturedTorus } from './common.mjs';
+  webDir, writeTexturedTorus, writeTiledPlane } from './common.mjs';
 import { CHROMIUM_ARGS, serveViewer } from './serve.mjs';
 
 const RATE = 10 * 1024;  // bytes per second: the 80 KB sample takes about 8 s (frames are slow on a loaded machine)
@@ -29,10 +29,12 @@ before(async () => {
   textured = encodeNative(writeTexturedTorus(work), path.join(work, 'textured.pmz'));
   truncated = path.join(work, 'truncated.pmz');
   writeFileSync(truncated, readFileSync(demoPmz()).subarray(0, TRUNCATED_BYTES));
+  const tiled = encodeNative(writeTiledPlane(work), path.join(work, 'tiled.pmz'));
   server = await serveViewer(path.join(webDir, 'dist', 'viewer'), { 'sample.pmz': demoPmz(),
     'textured.pmz': textured, 'checker.png': path.join(work, 'checker.png'),
     // Served at once, as from a local server.
-    'truncated.pmz': { file: truncated, bytesPerSecond: Infinity } }, RATE);
+    'truncated.pmz': { file: truncated, bytesPerSecond: Infinity },
+    'tiled.pmz': tiled, 'tiles.png': path.join(work, 'tiles.png') }, RATE);
   profile = mkdtempSync(path.join(tmpdir(), 'pmz-chromium-'));
   browser = await puppeteer.launch({ executablePath: process.env.PMZ_CHROMIUM || '/usr/bin/chromium',
     headless: true, args: [...CHROMIUM_ARGS, `--user-data-dir=${profile}`] });
@@ -58,15 +60,15 @@ const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 // What the page shows (a screenshot: the composited page, the canvas drawn in a worker too) in
 // the band between the overlay and the controls, as a pmzSnapshot()-like {coverage, pixels}:
 // the share of pixels not the background, and a 200-pixel-wide copy.
-async function screenBand(page, file) {
+async function screenBand(page, file, width = 200) {
   const png = Buffer.from(await page.screenshot());
   if (file) writeFileSync(file, png);
-  return page.evaluate(async (b64) => {
+  return page.evaluate(async (b64, width) => {
     const img = new Image();
     img.src = `data:image/png;base64,${b64}`;
     await img.decode();
     const top = Math.round(img.height * 0.25), bottom = Math.round(img.height * 0.85);
-    const w = 200, h = Math.round(200 * (bottom - top) / img.width);
+    const w = width, h = Math.round(width * (bottom - top) / img.width);
     const c = document.createElement('canvas');
     c.width = w;
     c.height = h;
@@ -76,8 +78,8 @@ async function screenBand(page, file) {
     let covered = 0;
     for (let i = 0; i < px.length; i += 4)
       if (Math.abs(px[i] - 0x20) + Math.abs(px[i + 1] - 0x24) + Math.abs(px[i + 2] - 0x2a) > 24) ++covered;
-    return { coverage: covered / (w * h), pixels: Array.from(px) };
-  }, png.toString('base64'));
+    return { coverage: covered / (w * h), pixels: Array.from(px), width: w };
+  }, png.toString('base64'), width);
 }
 
 // window.pmzStatus every 25 ms until the stream is complete or failed (at most 60 s).
@@ -378,3 +380,46 @@ for (const query of ['', '&worker=0', '&render=page']) {
     await page.close();
   });
 }
+
+// Texture coordinates outside [0, 1] tile the texture (REPEAT: glTF's default sampler and
+// MTL's, as pmz-view draws): on the tiled rectangle (u from -7.6 to 8.5) the checkerboard's
+// squares alternate all the way across, 32 of them; clamped to the edge, only the two squares
+// of u in [0, 1] would, the rest smeared into stripes along u.
+for (const query of ['', '&render=page']) {
+  test(`texture coordinates outside [0, 1] repeat the texture${query ? ` (?${query.slice(1)})` : ''}`, async () => {
+    const page = await browser.newPage();
+    const messages = [];
+    page.on('console', (m) => messages.push(m.text()));
+    page.on('pageerror', (e) => messages.push(String(e)));
+    await page.setViewport({ width: 640, height: 480 });
+    const { port } = server.address();
+    await page.goto(`http://127.0.0.1:${port}/index.html?src=/stream/tiled.pmz${query}`);
+    await page.waitForFunction(() => window.pmzStatus && (window.pmzStatus.complete || window.pmzStatus.error),
+      { timeout: 60000, polling: 100 });
+    assert.equal(await page.evaluate(() => window.pmzStatus.error), '', messages.join('\n'));
+    await page.evaluate(() => { document.getElementById('morph').checked = false; });
+    let view, shares;
+    for (let i = 0; i < 50; ++i) {  // the texture arrives after the mesh
+      await sleep(200);
+      view = await screenBand(page, null, 640);
+      shares = checkerShares(view);
+      if (shares.red > 0.15 && shares.blue > 0.15) break;
+    }
+    assert.ok(shares.red > 0.15 && shares.blue > 0.15, `the texture is not shown: ${JSON.stringify(shares)} ${messages}`);
+    // The most red / blue alternations along one row of the page.
+    let most = 0;
+    for (let y = 0, h = view.pixels.length / 4 / view.width; y < h; ++y) {
+      let flips = 0, last = null;
+      for (let x = 0; x < view.width; ++x) {
+        const i = 4 * (y * view.width + x), [r, b] = [view.pixels[i], view.pixels[i + 2]];
+        const c = r > b + 60 ? 'red' : b > r + 60 ? 'blue' : null;
+        if (c && last && c !== last) ++flips;
+        if (c) last = c;
+      }
+      most = Math.max(most, flips);
+    }
+    assert.ok(most >= 20, `at most ${most} red / blue alternations along a row (32 squares across)`);
+    await page.close();
+  });
+}
+

@@ -161,6 +161,32 @@ export function writeTexturedTorus(dir, { texture = 'checker.png', rings = 96, s
   return path.join(dir, 'textured.obj');
 }
 
+// A flat 4 x 1 rectangle whose texture coordinates run far outside [0, 1] (u from -7.6 to 8.5,
+// v from -1.3 to 2.7: the texture tiles 16 times across and 4 times up it), with a 64-pixel
+// red / blue checkerboard of 2 x 2 squares (tiles.png): a square every half unit of u and v,
+// 32 across. tiled.obj in dir.
+export const TILED_U = [-7.6, 8.5];
+export function writeTiledPlane(dir, { columns = 48, rows = 12 } = {}) {
+  const lines = ['mtllib tiled.mtl', 'usemtl tiles'];
+  for (let j = 0; j <= rows; ++j)
+    for (let i = 0; i <= columns; ++i) {
+      lines.push(`v ${(4 * i / columns - 2).toFixed(6)} ${(j / rows - 0.5).toFixed(6)} 0`);
+      const u = TILED_U[0] + (TILED_U[1] - TILED_U[0]) * i / columns, v = -1.3 + 4 * j / rows;
+      lines.push(`vt ${u.toFixed(6)} ${v.toFixed(6)}`);
+    }
+  const at = (i, j) => 1 + j * (columns + 1) + i;
+  for (let j = 0; j < rows; ++j)
+    for (let i = 0; i < columns; ++i) {
+      const [a, b, c, d] = [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)];
+      lines.push(`f ${a}/${a} ${b}/${b} ${c}/${c}`, `f ${a}/${a} ${c}/${c} ${d}/${d}`);
+    }
+  writeFileSync(path.join(dir, 'tiled.obj'), lines.join('\n') + '\n');
+  writeFileSync(path.join(dir, 'tiled.mtl'), 'newmtl tiles\nKd 1 1 1\nmap_Kd tiles.png\n');
+  writeFileSync(path.join(dir, 'tiles.png'),
+    pngBytes(64, 64, (x, y) => ((x >> 5) + (y >> 5)) % 2 ? CHECKER_RED : CHECKER_BLUE));
+  return path.join(dir, 'tiled.obj');
+}
+
 // A textured asset of Debian's assimp-testmodels (scripts/fetch_assimp_models.sh puts them in
 // corpus-assimp/), or null when they are not there.
 export function assimpTextured() {
