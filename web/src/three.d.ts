@@ -120,7 +120,10 @@ export declare const PMZ_TEXTURE_SAMPLER: Readonly<{
 /** three.js materials indexed like the stream's material table (one plain material without a
  * table): base colour, base colour texture (resolved against the .pmz URL; sampled as
  * PMZ_TEXTURE_SAMPLER, options.sampler overriding), vertex colours, smooth shading with decoded
- * normals. Call once the base mesh is in. */
+ * normals. Until a texture arrives (or when it cannot be loaded) the material's map is one
+ * white texel, so the base colour is drawn; the texture becomes the map when it loads
+ * (onTextureLoad then, e.g. to give it to the material's clones). Call once the base mesh is
+ * in. */
 export declare function pmzMaterials(
   stream: PMZStream | PMZWorkerStream,
   options?: {
@@ -129,7 +132,7 @@ export declare function pmzMaterials(
     color?: number;
     textureLoader?: TextureLoader;
     sampler?: Partial<typeof PMZ_TEXTURE_SAMPLER>;
-    onTextureLoad?: (texture: Texture) => void;
+    onTextureLoad?: (texture: Texture, material: MeshStandardMaterial) => void;
     onTextureError?: (url: string, error: unknown) => void;
   },
 ): MeshStandardMaterial[];

@@ -3,7 +3,7 @@
 // attributes (format 8.0) a render vertex is an attribute wedge (as in the native viewer): uv,
 // uv1, normal and color attributes beside position, and a group per run of faces of one
 // material when the stream has several (pmzMaterials() makes the three.js materials).
-import { Box3, BufferAttribute, BufferGeometry, Color, DoubleSide, LinearFilter,
+import { Box3, BufferAttribute, BufferGeometry, Color, DataTexture, DoubleSide, LinearFilter,
   LinearMipmapLinearFilter, Loader, MeshStandardMaterial, RepeatWrapping, Sphere, SRGBColorSpace,
   TextureLoader, Vector3 } from 'three';
 import { createDecoder, feedStream } from './index.js';
@@ -483,14 +483,27 @@ function textureUrl(uri, base) {
 export const PMZ_TEXTURE_SAMPLER = Object.freeze({ wrapS: RepeatWrapping, wrapT: RepeatWrapping,
   magFilter: LinearFilter, minFilter: LinearMipmapLinearFilter });
 
+// One white texel: a material's map until its texture arrives, so the base colour is drawn
+// meanwhile (as pmz-view does; a map without its image samples black) by the textured program
+// itself (no recompile when the texture comes).
+function whiteTexel() {
+  const t = new DataTexture(new Uint8Array([255, 255, 255, 255]), 1, 1);
+  t.colorSpace = SRGBColorSpace;
+  t.needsUpdate = true;
+  return t;
+}
+
 // three.js materials for a stream, indexed like its material table (the geometry's groups'
 // materialIndex), one plain material without a table: MeshStandardMaterial with the base
 // colour, the base colour texture (resolved relative to the .pmz URL, options.baseUrl or the
 // stream's; sampled as PMZ_TEXTURE_SAMPLER says), vertex colours when the geometry has them,
-// and smooth shading with decoded normals (flat without). Call once the base mesh is in (the
-// geometry has its attributes). options: parameters (more MeshStandardMaterial parameters),
-// color (without a table), textureLoader, sampler (PMZ_TEXTURE_SAMPLER's fields to override),
-// onTextureLoad(texture) (e.g. to redraw), onTextureError(url, error).
+// and smooth shading with decoded normals (flat without). Until a texture arrives, or when it
+// cannot be loaded, the material's map is one white texel (the base colour is drawn); the
+// texture becomes the map when it loads. Call once the base mesh is in (the geometry has its
+// attributes). options: parameters (more MeshStandardMaterial parameters), color (without a
+// table), textureLoader, sampler (PMZ_TEXTURE_SAMPLER's fields to override),
+// onTextureLoad(texture, material) (e.g. to redraw, or to give the texture to the material's
+// clones), onTextureError(url, error).
 export function pmzMaterials(stream, options = {}) {
   const g = stream.geometry;
   const has = (name) => !!g.getAttribute(name);
@@ -501,15 +514,20 @@ export function pmzMaterials(stream, options = {}) {
   const table = stream.materials();
   if (!table.length) return [make({ color: has('color') ? 0xffffff : options.color ?? 0xd8c8a8 })];
   const sampler = { ...PMZ_TEXTURE_SAMPLER, ...options.sampler };
+  let white = null;
   return table.map((m) => {
     const material = make({ name: m.name, color: new Color(m.baseColor[0], m.baseColor[1], m.baseColor[2]),
       opacity: m.baseColor[3], transparent: m.baseColor[3] < 1 });
     if (m.baseColorTexture && has('uv')) {
       const url = textureUrl(m.baseColorTexture, base);
-      material.map = loader.load(url, options.onTextureLoad, undefined,
-        (e) => (options.onTextureError ? options.onTextureError(url, e) : console.warn(`pmz: texture ${url} not loaded`)));
-      Object.assign(material.map, sampler);
-      material.map.colorSpace = SRGBColorSpace;
+      material.map = white ??= whiteTexel();
+      const texture = loader.load(url, (t) => {
+        material.map = t;
+        if (options.onTextureLoad) options.onTextureLoad(t, material);
+      }, undefined,
+      (e) => (options.onTextureError ? options.onTextureError(url, e) : console.warn(`pmz: texture ${url} not loaded`)));
+      Object.assign(texture, sampler);
+      texture.colorSpace = SRGBColorSpace;
     }
     return material;
   });

@@ -238,9 +238,17 @@ for (const [name, make] of Object.entries(streams)) {
 
     // Materials: one per table entry, textures resolved against the stream's URL.
     s.url = 'http://example.test/models/stream.pmz';
-    const urls = [];
-    const loader = { load: (url) => { urls.push(url); return { colorSpace: '' }; } };
-    const materials = pmzMaterials(s, { textureLoader: loader });
+    const urls = [], loads = [];
+    const loader = {
+      load: (url, onLoad) => {
+        const texture = { colorSpace: '' };
+        urls.push(url);
+        loads.push(() => onLoad(texture));
+        return texture;
+      },
+    };
+    const loaded = [];
+    const materials = pmzMaterials(s, { textureLoader: loader, onTextureLoad: (t, m) => loaded.push([t, m]) });
     const table = s.materials();
     assert.equal(materials.length, Math.max(1, table.length));
     assert.equal(materials[0].flatShading, !s.decoder.normals().length);
@@ -252,11 +260,18 @@ for (const [name, make] of Object.entries(streams)) {
       assert.equal(urls[i], expected);
       assert.ok(expected.startsWith('http://example.test/models/'), expected);
     }
-    // Textures are sampled as glTF's and MTL's default sampler: repeated, mipmapped.
+    // Until its texture loads a material's map is one white texel (its base colour is drawn);
+    // then the texture, sampled as glTF's and MTL's default sampler: repeated, mipmapped.
     const { LinearFilter, LinearMipmapLinearFilter, RepeatWrapping } = await import('three');
-    const maps = materials.filter((m) => m.map).map((m) => m.map);
-    assert.equal(maps.length, textured.length);
-    for (const t of maps) {
+    const withMap = materials.filter((m) => m.map);
+    assert.equal(withMap.length, textured.length);
+    for (const m of withMap) {
+      assert.deepEqual([m.map.image.width, m.map.image.height, [...m.map.image.data]], [1, 1, [255, 255, 255, 255]]);
+    }
+    for (const load of loads) load();
+    assert.equal(loaded.length, textured.length);
+    for (const [t, m] of loaded) {
+      assert.equal(m.map, t);
       assert.deepEqual([t.wrapS, t.wrapT, t.magFilter, t.minFilter, t.colorSpace],
         [RepeatWrapping, RepeatWrapping, LinearFilter, LinearMipmapLinearFilter, 'srgb']);
     }

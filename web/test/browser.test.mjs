@@ -23,6 +23,10 @@ let textured;  // the seamed textured torus (red / blue checkerboard) as .pmz, c
 // has many more faces than the base mesh.
 const TRUNCATED_BYTES = 60000;
 let truncated;
+// The textured torus with a green base colour whose texture (late.png) is served LATE_MS after
+// it is asked for.
+const LATE_MS = 4000;
+const LATE_KD = '0.2 0.8 0.3';
 
 before(async () => {
   const work = mkdtempSync(path.join(tmpdir(), 'pmz-web-textured-'));
@@ -30,11 +34,15 @@ before(async () => {
   truncated = path.join(work, 'truncated.pmz');
   writeFileSync(truncated, readFileSync(demoPmz()).subarray(0, TRUNCATED_BYTES));
   const tiled = encodeNative(writeTiledPlane(work), path.join(work, 'tiled.pmz'));
+  const late = mkdtempSync(path.join(tmpdir(), 'pmz-web-late-'));
+  const lateStream = encodeNative(writeTexturedTorus(late, { texture: 'late.png', kd: LATE_KD }),
+    path.join(late, 'late.pmz'));
   server = await serveViewer(path.join(webDir, 'dist', 'viewer'), { 'sample.pmz': demoPmz(),
     'textured.pmz': textured, 'checker.png': path.join(work, 'checker.png'),
     // Served at once, as from a local server.
     'truncated.pmz': { file: truncated, bytesPerSecond: Infinity },
-    'tiled.pmz': tiled, 'tiles.png': path.join(work, 'tiles.png') }, RATE);
+    'tiled.pmz': tiled, 'tiles.png': path.join(work, 'tiles.png'),
+    'late.pmz': lateStream, 'late.png': { file: path.join(late, 'checker.png'), delayMs: LATE_MS } }, RATE);
   profile = mkdtempSync(path.join(tmpdir(), 'pmz-chromium-'));
   browser = await puppeteer.launch({ executablePath: process.env.PMZ_CHROMIUM || '/usr/bin/chromium',
     headless: true, args: [...CHROMIUM_ARGS, `--user-data-dir=${profile}`] });
@@ -423,3 +431,55 @@ for (const query of ['', '&render=page']) {
   });
 }
 
+// A textured stream is drawn in its base colour (green here) until its texture arrives (here
+// LATE_MS after it is asked for), not black; then textured.
+for (const query of ['', '&render=page']) {
+  test(`a textured stream shows its base colour until the texture arrives${query ? ` (?${query.slice(1)})` : ''}`, async () => {
+    const page = await browser.newPage();
+    const messages = [];
+    page.on('console', (m) => messages.push(m.text()));
+    page.on('pageerror', (e) => messages.push(String(e)));
+    await page.setViewport({ width: 320, height: 240 });
+    const { port } = server.address();
+    const asked = (server.requests['late.png'] || []).length;
+    await page.goto(`http://127.0.0.1:${port}/index.html?src=/stream/late.pmz${query}`);
+    // Among the pixels showing the object: the shares near black and green.
+    const look = (shot) => {
+      const bg = [shot.pixels[0], shot.pixels[1], shot.pixels[2]];
+      let shown = 0, dark = 0, green = 0;
+      for (let i = 0; i < shot.pixels.length; i += 4) {
+        const [r, g, b] = [shot.pixels[i], shot.pixels[i + 1], shot.pixels[i + 2]];
+        if (Math.max(Math.abs(r - bg[0]), Math.abs(g - bg[1]), Math.abs(b - bg[2])) <= 24) continue;
+        ++shown;
+        if (Math.max(r, g, b) < 45) ++dark;
+        if (g > r + 30 && g > b + 30) ++green;
+      }
+      return { covered: shown / (shot.pixels.length / 4), dark: dark / Math.max(1, shown),
+        green: green / Math.max(1, shown), shot };
+    };
+    // Frames until the texture's response starts.
+    const looks = [];
+    const deadline = Date.now() + 60000;
+    for (;;) {
+      const times = server.requests['late.png'] || [];
+      if (times.length > asked && Date.now() > times[times.length - 1] + LATE_MS - 400) break;
+      assert.ok(Date.now() < deadline, `the texture was not asked for: ${messages}`);
+      looks.push(look(await page.evaluate(() => window.pmzSnapshot())));
+      await sleep(100);
+    }
+    const drawn = looks.filter((l) => l.covered > 0.02);
+    assert.ok(drawn.length >= 3, `${drawn.length} frames with the object before the texture`);
+    for (const l of drawn) assert.ok(l.dark < 0.5, `drawn near black before the texture: ${l.dark} of the object`);
+    const based = drawn.filter((l) => l.green > 0.6);
+    assert.ok(based.length > 0, `the base colour was never drawn: green at most ${Math.max(...drawn.map((l) => l.green))}`);
+    // Then the texture (times the base colour): the object is green no more.
+    let after = null;
+    for (let i = 0; i < 100 && !(after && after.green < 0.3); ++i) {
+      await sleep(200);
+      after = look(await page.evaluate(() => window.pmzSnapshot()));
+    }
+    assert.ok(after.green < 0.3, `still the base colour after the texture came: green ${after.green} ${messages}`);
+    assert.ok(!messages.some((m) => /texture .* not loaded/.test(m)), messages.join('\n'));
+    await page.close();
+  });
+}

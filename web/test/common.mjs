@@ -132,8 +132,9 @@ export function pngBytes(width, height, pixel) {
 export const CHECKER_RED = [230, 40, 30], CHECKER_BLUE = [30, 60, 230];
 
 // A rippled torus with texture coordinates wrapping in u and v (a seam: the vertices there get
-// two wedges), an MTL naming `texture`, and a red / blue checkerboard PNG: textured.obj in dir.
-export function writeTexturedTorus(dir, { texture = 'checker.png', rings = 96, segments = 48 } = {}) {
+// two wedges), an MTL naming `texture` with base colour `kd`, and a red / blue checkerboard PNG
+// (checker.png): textured.obj in dir.
+export function writeTexturedTorus(dir, { texture = 'checker.png', rings = 96, segments = 48, kd = '1 1 1' } = {}) {
   const point = (a, b) => {
     const r = 0.35 * (1 + 0.18 * Math.sin(5 * a) * Math.cos(3 * b));
     return [(1 + r * Math.cos(b)) * Math.cos(a), r * Math.sin(b), (1 + r * Math.cos(b)) * Math.sin(a)];
@@ -155,7 +156,7 @@ export function writeTexturedTorus(dir, { texture = 'checker.png', rings = 96, s
     }
   }
   writeFileSync(path.join(dir, 'textured.obj'), lines.join('\n') + '\n');
-  writeFileSync(path.join(dir, 'textured.mtl'), `newmtl checker\nKd 1 1 1\nmap_Kd ${texture}\n`);
+  writeFileSync(path.join(dir, 'textured.mtl'), `newmtl checker\nKd ${kd}\nmap_Kd ${texture}\n`);
   writeFileSync(path.join(dir, 'checker.png'),
     pngBytes(64, 64, (x, y) => ((x >> 3) + (y >> 3)) % 2 ? CHECKER_RED : CHECKER_BLUE));
   return path.join(dir, 'textured.obj');

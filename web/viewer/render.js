@@ -268,14 +268,21 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
   // Streams with attributes (texture coordinates, normals, colours, materials) are drawn with
   // pmzMaterials(): textured, lit with their normals; each with a geomorph twin.
   let morphTicks = [];  // geomorph clocks of the dressed materials
+  // Until its texture arrives a material draws its base colour (pmzMaterials: a white texel
+  // as its map); the texture then goes to its geomorph twin too.
   function dress(stream) {
+    const twins = new Map();
     const plain = pmzMaterials(stream, {
-      onTextureLoad: requestRedraw,
+      onTextureLoad: (texture, m) => {
+        if (twins.has(m)) twins.get(m).map = texture;
+        requestRedraw();
+      },
       onTextureError: (url) => post({ type: 'warn', text: `pmz viewer: texture ${url} not loaded; drawn untextured` }),
       textureLoader: typeof document === 'undefined' ? bitmapTextureLoader() : undefined,
     });
     const morphing = plain.map((m) => {
       const twin = m.clone();
+      twins.set(m, twin);
       morphTicks.push(geomorphMaterial(twin, GLIDE_SECONDS));
       return twin;
     });
