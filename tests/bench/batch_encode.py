@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""Batch encoding against sequential runs (issue 14: 8 assets with -j 2 in at most 0.6x the
-time of 8 sequential runs).
+"""Batch encoding against sequential runs (target: 8 assets with -j 2 in at most 0.6x the
+time of 8 sequential runs, docs/benchmarks.md).
 
 Side by side, alternating which goes first in each round: one `pmz-encode A B ... --out-dir D
 -j JOBS` against one `pmz-encode X -o D/X.pmz` per asset, one after the other. Prints each

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""pmz benchmark driver: runs our tools and the peers side by side on the corpus, measures
+"""pmz benchmark driver: runs pmz's tools and the peers side by side on the corpus, measures
 error with pmz-compare, and writes a Markdown report and plots (error vs face ratio).
 
 Entry point: tests/bench/run.sh (builds, fetches the corpus, calls this). Rows are data:
@@ -47,7 +47,7 @@ SIMPLIFIERS = {
     "pmz-qem": dict(
         tool="bin/pmz-simplify",
         cmd=lambda b, i, o, f, w: [b / "bin/pmz-simplify", i, "-o", o, "--faces", f, "--metric", "qem"]),
-    "pmz-prefix": dict(  # a prefix of the .pmz stream decoded to F faces (issue 5's fidelity target)
+    "pmz-prefix": dict(  # a prefix of the .pmz stream decoded to F faces (prefix fidelity)
         tool="bin/pmz-decode",
         needs=["bin/pmz-encode"],
         prepare=lambda b, i, w: [b / "bin/pmz-encode", i, "-o", w / "full.pmz"],
@@ -73,7 +73,7 @@ CODECS = {
         tool="bin/pmz-encode", needs=["bin/pmz-decode"], ext=".pmz",
         encode=lambda b, off, ply, o: [b / "bin/pmz-encode", off, "-o", o, "--position-bits", "14"],
         decode=lambda b, i, o: [b / "bin/pmz-decode", i, "-o", o]),
-    # The speed level (issue 17): simpler models, faster to decode, larger.
+    # The speed level: simpler models, faster to decode, larger.
     "pmz level 1 (14 bits)": dict(
         tool="bin/pmz-encode", needs=["bin/pmz-decode"], ext=".pmz",
         encode=lambda b, off, ply, o: [b / "bin/pmz-encode", off, "-o", o, "--position-bits", "14",
@@ -128,7 +128,7 @@ def run_timed(argv, cwd=None):
 
 
 def algorithm_seconds(stdout):
-    """In-process time of the algorithm alone, when the tool reports it: our harness programs
+    """In-process time of the algorithm alone, when the tool reports it: the harness programs
     print {"seconds": ...}; pmz-simplify ends its summary line with "N.NNN s"."""
     for line in stdout.splitlines():
         line = line.strip()
@@ -171,7 +171,7 @@ def compare(build, original, other, samples=None):
 
 
 def off_counts(path):
-    """Vertex and face counts from an OFF header (our corpus is OFF)."""
+    """Vertex and face counts from an OFF header (the corpus is OFF)."""
     with open(path, errors="replace") as f:
         tokens = []
         for line in f:

@@ -1,6 +1,6 @@
 // bench-stream: feeds a .pmz file to the decoder library the way a streaming client does and
 // times it. Two uses:
-//  - the interleaving pattern of issue 17: slices of --slice bytes, refine(--refine) after
+//  - a streaming client's interleaving: slices of --slice bytes, refine(--refine) after
 //    each feed (--refine 0: once, after the last slice); prints the decoder's CPU and wall time.
 //  - a link of --mbit Mbit/s on a virtual clock: slice i has arrived at (i + 1) * slice * 8 /
 //    rate; the clock is max(arrival, clock) before each feed and advances by the measured time

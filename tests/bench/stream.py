@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Streaming benchmark (issue 17): when does a client on a link of R Mbit/s see a good mesh?
+"""Streaming benchmark: when does a client on a link of R Mbit/s see a good mesh?
 
 For each mesh and link rate, the time (transfer and decoding overlapped, as a streaming client
 overlaps them) until the mean error first drops below 1e-3 and 1e-4 of the bounding-box

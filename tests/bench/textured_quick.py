@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 # Usage: textured_quick.py BUILD SET OUT [mesh,mesh,...]   (SET: textured.py OUT/set)
-# Quick harness (issue 15 (b), (c)): per mesh and ratio, gltfpack -si R -noq, pmz-simplify to
+# Quick harness for two textured figures: per mesh and ratio, gltfpack -si R -noq, pmz-simplify to
 # its face count (b); pmz-simplify at the nominal count, geometry-only at the count reached (c).
 import json, subprocess, sys, statistics
 from pathlib import Path

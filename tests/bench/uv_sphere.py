@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""A UV sphere as OBJ for the attribute decode-speed target of issue 15 (a textured ~100k-face
+"""A UV sphere as OBJ for the attribute decode-speed target (a textured ~100k-face
 asset against its geometry-only stream): rings x segments, a texture seam at u = 0 / 1, one
 texture coordinate per pole triangle, smooth normals (one per vertex). The same layout as
 tests/meshio/test_mesh_attributes.cpp's uv_sphere(). --plain writes positions and faces only.
