@@ -1,6 +1,6 @@
 // The multi-feature cost of a collapse, recomputed in this file from the formulas of
 // spec/algorithm.md section 2 (the paper's eq. 1-3 with pmz's normalisations), in double and with
-// none of the encoder's helpers: every directed edge of a cube corner, a bent sheet and a saddle
+// none of the encoder's functions: every directed edge of a cube corner, a bent sheet and a saddle
 // against the engine's own cost, and the terms (C_norm, B, T, sigma) against metric.cpp. The
 // tolerances are float rounding: dropping a factor, flipping a sign or changing a
 // normalisation moves some of the values by far more.

@@ -626,7 +626,7 @@ TEST(MeshAttributes, FuzzPlyAttributeIndexOverflowIsRefused) {
   EXPECT_EQ(error.find('\n'), std::string::npos) << error;
 }
 
-// fuzz_mesh_ply (the long reader run of issue 14) found an ASCII PLY with normals declaring
+// fuzz_mesh_ply (a long run) found an ASCII PLY with normals declaring
 // 3.3e17 vertices: the normals were reserved before the count was checked (std::length_error,
 // an abort). The count is now bounded by the bytes left, and the file refused with one line.
 TEST(MeshAttributes, FuzzPlyHugeCountWithNormalsIsRefused) {
@@ -639,7 +639,7 @@ TEST(MeshAttributes, FuzzPlyHugeCountWithNormalsIsRefused) {
   EXPECT_EQ(error.find('\n'), std::string::npos) << error;
 }
 
-// fuzz_mesh_ply (the CI fuzz stage of session 25) found a binary PLY whose float32 vertex index
+// fuzz_mesh_ply (the CI fuzz stage) found a binary PLY whose float32 vertex index
 // is 2.8e20: the range error converted it to int64_t, which is undefined beyond int64's range
 // (UBSan). Such an index is now named as it is, and the file refused with one line.
 TEST(MeshAttributes, FuzzPlyFloatIndexBeyondInt64IsRefused) {

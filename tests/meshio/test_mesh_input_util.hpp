@@ -1,4 +1,4 @@
-// Helpers shared by the mesh input tests: temporary files and the manifold/face-kept checks.
+// What the mesh input tests share: temporary files and the manifold/face-kept checks.
 #pragma once
 #include <gtest/gtest.h>
 #include <unistd.h>

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The tools' command-line conventions (issue 14, item 2 and 4), one check per case:
+"""The tools' command-line conventions, one check per case:
 `-` for stdin/stdout (pmz-encode, pmz-decode, pmz-compare), outputs through symlinks / onto devices and FIFOs / onto the input,
 temporaries removed on error and on signals, one-line errors with the reason, exit codes
 (0 ok, 1 failure, 2 usage), defaults in --help, the progress bar, pmz-info without decoding
