@@ -42,11 +42,11 @@ else
 fi
 
 # The decoder library's sources: standard C++ only, linked with LTO (the writer-side code in
-# format/ is dropped). Size budget (issue 16: .wasm + pmz_wasm.js at most 120,000 bytes, 50 KB
-# gzip): the refinement loop's files are compiled -O3 ($opt), the rest -Os: the chunk set-up
-# (coding.cpp: byte reader, CRC, range decoder set-up), the base mesh, attributes, the C API
-# (the -O3 files' own once-per-chunk functions are minsize in wasm: PMZ_SMALL_IN_WASM). Every
-# other decoder source (a new file) is -Os too.
+# format/ is dropped). Size budget (docs/benchmarks.md: .wasm + pmz_wasm.js at most 120,000
+# bytes, 50 KB gzip): the refinement loop's files are compiled -O3 ($opt), the rest -Os: the
+# chunk set-up (coding.cpp: byte reader, CRC, range decoder set-up), the base mesh, attributes,
+# the C API (the -O3 files' own once-per-chunk functions are minsize in wasm:
+# PMZ_SMALL_IN_WASM). Every other decoder source (a new file) is -Os too.
 hot=(decoder/src/decoder.cpp format/src/split_chunk.cpp format/src/vertex_choice.cpp
   format/src/progressive_mesh.cpp format/src/geometry.cpp format/src/fan_wedge.cpp
   format/src/speed_level.cpp)

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Web benchmarks (issue 16): decoder size and decode speed side by side with npm draco3d, and
+# Web benchmarks: decoder size and decode speed side by side with npm draco3d, and
 # streaming in headless Chromium over a 2 MB/s link. Needs bash scripts/web.sh (the package),
 # build/bin/pmz-encode, build/bench/bench-stream, draco_encoder and the corpus.
 #   bash web/bench/run.sh [MESH.off=corpus/bunny00-loop2.off] [OUT_DIR=bench-out/web]

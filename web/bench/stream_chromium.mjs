@@ -4,7 +4,7 @@
 // overlay; window.pmzFrames) and the canvas's (the drawing side's frame loop, in the drawing
 // worker by default, on the page with render=page; window.pmzCanvasFrames()). gap_* are the
 // page's frames between the first body bytes and the frame that showed the finest level (the
-// issue's "the page keeps a frame at least every 50 ms while decoding"); redraw_gap_* the
+// target "the page keeps a frame at least every 50 ms while decoding"); redraw_gap_* the
 // intervals between the canvas's frames that drew (new geometry, view or glide), new_level_gap_*
 // between those that drew a new face count; worst_gaps the three longest page gaps (js: that
 // page frame's callback), worst_redraw_gaps the three longest redraw intervals with what the
