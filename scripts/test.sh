@@ -13,6 +13,7 @@ jobs=$(nproc)
 
 bash scripts/setup.sh build
 bash scripts/check_format.sh
+bash scripts/check_words.sh
 # The corpus is fetched with apt-get: where apt-get exists a failed fetch fails the run (the
 # real-mesh tests would otherwise skip silently), unless PMZ_CORPUS_OPTIONAL=1 says to go on.
 if bash scripts/fetch_corpus.sh build; then
