@@ -1,0 +1,558 @@
+// pmz for OpenMesh: encode an OpenMesh triangle mesh, and keep one in step with a streaming
+// decoder. Header-only; the `openmesh` component of the installed CMake package:
+//
+//   find_package(pmz REQUIRED COMPONENTS openmesh)
+//   target_link_libraries(app PRIVATE pmz::openmesh)
+//
+// pmz::openmesh brings pmz::decoder, OpenMesh's OpenMeshCore and, when installed, pmz::encoder.
+//
+// Usage:
+//
+//   #include <pmz/openmesh.hpp>
+//   OpenMesh::TriMesh_ArrayKernelT<> tri = ...;  // with any standard properties
+//   std::vector<uint8_t> bytes;
+//   std::string error;
+//   if (!pmz::openmesh::encode(tri, bytes, error)) die(error);
+//
+//   pmz::Decoder decoder;
+//   pmz::openmesh::MeshView<> view(decoder);  // owns an OpenMesh::TriMesh_ArrayKernelT<>
+//   decoder.feed(bytes.data(), bytes.size());
+//   view.set_face_target(5000);   // decoder.set_face_target, then view.update()
+//   view.refine(100);             // or call the decoder, then view.update()
+//   use(view.mesh());             // vertex i and face i are the decoder's vertex i and face i
+//
+// Encoding (to_mesh, encode): the mesh's vertices (deleted ones skipped), its triangles, and per
+// corner the attributes pmz carries: normals, texture coordinates (texcoords2D) and colours, each
+// from the halfedge property (per corner: seams and creases kept), else the vertex property,
+// else (colours only) the face property; ConvertOptions picks another source or none. Corners
+// of one vertex with equal values share a wedge (pmz/mesh.hpp). Integer colours are scaled by
+// their type's maximum to [0, 1].
+//
+// Decoding (MeshView): update() brings the owned mesh to the decoder's current level through
+// Decoder::changes() and clears that report (a renderer that uploads the same deltas reads
+// changes() before update()). Vertices are appended or removed at the end; each rewritten face
+// is deleted and added again so that it lands at its own index, and the deleted elements are
+// then garbage-collected. Attributes: halfedge properties get each corner's wedge (exact);
+// vertex properties the vertex's lowest-numbered wedge (one side of a seam); face colours, when
+// asked for, the face's first corner's. Only the texture coordinate set ViewOptions::texcoord_set
+// is kept (OpenMesh has one 2D set); materials are not carried.
+//
+// Cost: see MeshView.
+#pragma once
+#if defined(__GNUC__) && !defined(__clang__)
+// OpenMesh's properties push default-constructed vectors (Property.hh), whose components are
+// uninitialized: GCC's -Wmaybe-uninitialized reports each colour property type instantiated.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <OpenMesh/Core/Utils/vector_traits.hh>
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include "pmz/decoder.hpp"
+#if __has_include("pmz/writer.hpp")
+#include "pmz/mesh.hpp"
+#include "pmz/simplify.hpp"
+#include "pmz/writer.hpp"
+#define PMZ_OPENMESH_HAS_ENCODER 1
+#endif
+
+namespace pmz::openmesh {
+
+using TriMesh = OpenMesh::TriMesh_ArrayKernelT<>;
+
+namespace detail {
+
+inline constexpr uint32_t kNone = 0xFFFFFFFFu;
+
+template <class Color>
+constexpr uint32_t color_size() {
+  return uint32_t(OpenMesh::vector_traits<Color>::size_);
+}
+template <class Color>
+constexpr float color_scale() {
+  using Scalar = typename OpenMesh::vector_traits<Color>::value_type;
+  if constexpr (std::is_integral_v<Scalar>) return float(std::numeric_limits<Scalar>::max());
+  return 1.0f;
+}
+// Colour -> count floats in [0, 1] (alpha 1 when the type has none).
+template <class Color>
+void color_to_floats(const Color& c, float* out, uint32_t count) {
+  for (uint32_t k = 0; k < count; ++k)
+    out[k] = k < color_size<Color>() ? float(c[int(k)]) / color_scale<Color>() : 1.0f;
+}
+template <class Color>
+Color color_from_floats(const float* in, uint32_t count) {
+  using Scalar = typename OpenMesh::vector_traits<Color>::value_type;
+  Color c;
+  for (uint32_t k = 0; k < color_size<Color>(); ++k) {
+    const float x = k < count ? in[k] : 1.0f;
+    if constexpr (std::is_integral_v<Scalar>)
+      c[int(k)] = Scalar(std::clamp(x, 0.0f, 1.0f) * color_scale<Color>() + 0.5f);
+    else
+      c[int(k)] = Scalar(x);
+  }
+  return c;
+}
+
+}  // namespace detail
+
+#ifdef PMZ_OPENMESH_HAS_ENCODER
+
+// Where an attribute's per-corner values come from. automatic: the halfedge property if the
+// mesh has it, else the vertex property, else (colours) the face property, else none. face is
+// accepted for normals and colours.
+enum class Source { automatic, none, vertex, halfedge, face };
+
+struct ConvertOptions {
+  Source normals = Source::automatic;
+  Source texcoords = Source::automatic;
+  Source colors = Source::automatic;
+};
+
+namespace detail {
+
+inline bool resolve(Source wanted, bool has_h, bool has_v, bool has_f, bool face_ok,
+                    const char* what, Source& out, std::string& error) {
+  has_f = has_f && face_ok;
+  if (wanted == Source::automatic)
+    wanted = has_h   ? Source::halfedge
+             : has_v ? Source::vertex
+             : has_f ? Source::face
+                     : Source::none;
+  const bool has = wanted == Source::none || (wanted == Source::halfedge && has_h) ||
+                   (wanted == Source::vertex && has_v) || (wanted == Source::face && has_f);
+  if (!has) {
+    error = std::string("pmz::openmesh::to_mesh: ") + what + " requested from " +
+            (wanted == Source::halfedge ? "halfedge"
+             : wanted == Source::vertex ? "vertex"
+                                        : "face") +
+            " properties, which the mesh does not have" + (face_ok ? "" : " (or cannot have)");
+    return false;
+  }
+  out = wanted;
+  return true;
+}
+
+}  // namespace detail
+
+// The mesh as pmz's encoder takes it: vertices in handle order (deleted ones skipped), faces in
+// handle order with their corners in face-halfedge order, and the attributes (see the top of
+// this file). False with a one-line message when an explicitly requested property is missing.
+template <class Mesh>
+bool to_mesh(const Mesh& mesh, IndexedMesh& out, std::string& error,
+             const ConvertOptions& options = {}) {
+  static_assert(Mesh::is_trimesh(), "pmz::openmesh::to_mesh takes a triangle mesh");
+  out = {};
+  Source ns, ts, cs;
+  if (!detail::resolve(options.normals, mesh.has_halfedge_normals(), mesh.has_vertex_normals(),
+                       mesh.has_face_normals(), true, "normals", ns, error) ||
+      !detail::resolve(options.texcoords, mesh.has_halfedge_texcoords2D(),
+                       mesh.has_vertex_texcoords2D(), false, false, "texture coordinates", ts,
+                       error) ||
+      !detail::resolve(options.colors, mesh.has_halfedge_colors(), mesh.has_vertex_colors(),
+                       mesh.has_face_colors(), true, "colours", cs, error))
+    return false;
+  if (mesh.n_vertices() >= detail::kNone || mesh.n_faces() >= detail::kNone / 3) {
+    error = "pmz::openmesh::to_mesh: more than 2^32 vertices or corners";
+    return false;
+  }
+  using Color = typename Mesh::Color;
+  const uint32_t color_n = cs == Source::none ? 0 : std::min(detail::color_size<Color>(), 4u);
+
+  std::vector<uint32_t> id(mesh.n_vertices(), detail::kNone);
+  out.positions.reserve(mesh.n_vertices() * 3);
+  for (auto v : mesh.vertices()) {
+    id[size_t(v.idx())] = out.vertex_count();
+    const auto& p = mesh.point(v);
+    out.positions.insert(out.positions.end(), {float(p[0]), float(p[1]), float(p[2])});
+  }
+  MeshAttributes& a = out.attributes;
+  const bool wedges = ns != Source::none || ts != Source::none || cs != Source::none;
+  if (wedges) {
+    if (ts != Source::none) a.texcoords.resize(1);
+    a.color_components = color_n < 3 ? 0 : color_n;
+  }
+  // Per vertex, its wedges as a list (head, next); a corner reuses an equal one.
+  std::vector<uint32_t> head(wedges ? out.vertex_count() : 0, detail::kNone), next;
+  out.indices.reserve(mesh.n_faces() * 3);
+  if (wedges) a.corner_wedges.reserve(mesh.n_faces() * 3);
+  for (auto f : mesh.faces()) {
+    for (auto h : mesh.fh_range(f)) {
+      const auto vh = mesh.to_vertex_handle(h);
+      const uint32_t v = id[size_t(vh.idx())];
+      out.indices.push_back(v);
+      if (!wedges) continue;
+      float value[9];
+      float* at = value;
+      if (ts != Source::none) {
+        const auto& t = ts == Source::halfedge ? mesh.texcoord2D(h) : mesh.texcoord2D(vh);
+        *at++ = float(t[0]);
+        *at++ = float(t[1]);
+      }
+      if (ns != Source::none) {
+        const auto& n = ns == Source::halfedge ? mesh.normal(h)
+                        : ns == Source::vertex ? mesh.normal(vh)
+                                               : mesh.normal(f);
+        for (int k = 0; k < 3; ++k) *at++ = float(n[k]);
+      }
+      if (a.color_components) {
+        detail::color_to_floats(cs == Source::halfedge ? mesh.color(h)
+                                : cs == Source::vertex ? mesh.color(vh)
+                                                       : mesh.color(f),
+                                at, a.color_components);
+        at += a.color_components;
+      }
+      auto same = [&](uint32_t w) {
+        const float* x = value;
+        if (ts != Source::none)
+          for (int k = 0; k < 2; ++k)
+            if (a.texcoords[0][size_t(w) * 2 + k] != *x++) return false;
+        if (ns != Source::none)
+          for (int k = 0; k < 3; ++k)
+            if (a.normals[size_t(w) * 3 + k] != *x++) return false;
+        for (uint32_t k = 0; k < a.color_components; ++k)
+          if (a.colors[size_t(w) * a.color_components + k] != *x++) return false;
+        return true;
+      };
+      uint32_t w = head[v];
+      while (w != detail::kNone && !same(w)) w = next[w];
+      if (w == detail::kNone) {
+        w = a.wedge_count();
+        a.wedge_vertices.push_back(v);
+        next.push_back(head[v]);
+        head[v] = w;
+        const float* x = value;
+        if (ts != Source::none) a.texcoords[0].insert(a.texcoords[0].end(), x, x + 2), x += 2;
+        if (ns != Source::none) a.normals.insert(a.normals.end(), x, x + 3), x += 3;
+        a.colors.insert(a.colors.end(), x, x + a.color_components);
+      }
+      a.corner_wedges.push_back(w);
+    }
+  }
+  return true;
+}
+
+struct EncodeOptions {
+  ConvertOptions convert;
+  SimplifyOptions simplify;
+  WriteOptions write;
+  // When set: decoded vertex i is to_mesh's vertex (*vertex_order)[i] (the mesh's i-th
+  // non-deleted vertex).
+  std::vector<uint32_t>* vertex_order = nullptr;
+};
+
+// to_mesh, pmz::simplify and pmz::write_pmz: the .pmz bytes in `out`. False with a one-line
+// message (from whichever step refused).
+template <class Mesh>
+bool encode(const Mesh& mesh, std::vector<uint8_t>& out, std::string& error,
+            const EncodeOptions& options = {}) {
+  IndexedMesh indexed;
+  CollapseSequence seq;
+  if (!to_mesh(mesh, indexed, error, options.convert) ||
+      !simplify(indexed, options.simplify, seq, error) ||
+      !write_pmz(seq, options.write, out, error))
+    return false;
+  if (options.vertex_order) *options.vertex_order = decoded_vertex_order(seq, options.write);
+  return true;
+}
+
+#endif  // PMZ_OPENMESH_HAS_ENCODER
+
+struct ViewOptions {
+  bool vertex_attributes = true;    // vertex normals, texcoords2D, colours: lowest wedge's
+  bool halfedge_attributes = true;  // halfedge normals, texcoords2D, colours: per corner
+  bool face_colors = false;         // face colours: the first corner's
+  uint32_t texcoord_set = 0;        // which of the file's texture coordinate sets
+  // An update that deletes and adds more than this fraction of the faces rebuilds the mesh
+  // instead (bunny00's middle level: 1000 splits 6.4 ms incremental, 8.6 ms rebuilt; 10000
+  // splits 21.6 and 12 ms).
+  double rebuild_fraction = 0.25;
+};
+
+// An OpenMesh triangle mesh kept at the decoder's level. Vertex i and face i of mesh() are the
+// decoder's vertex i and face i (positions(), indices(): face i's vertices in order, starting
+// at its halfedge), with the attributes the file has (see the top of this file).
+//
+// Cost of update(): the faces it deletes and adds, plus one OpenMesh garbage collection, which
+// walks the whole mesh (it compacts the arrays and remaps every handle) and dominates small
+// steps. Measured with bench-openmesh-view (CPU time, median, a shared 2-core machine), at the
+// middle level of bunny00 (37.7k faces): the decoder's refine or coarsen of 1 / 100 / 1000 splits
+// 0.006 / 0.03 / 0.2 ms, update() 3.8 / 4.2 / 6.5 ms, a rebuild 8-9 ms; of bunny00-loop2 (603k
+// faces): 1 / 1000 / 10000 splits 0.09 / 0.7 / 3.5 ms, update() 160-215 / 213 / 244 ms, a
+// rebuild 420-500 ms. Beyond ViewOptions::rebuild_fraction of the faces, update() rebuilds.
+template <class Mesh = TriMesh>
+class MeshView {
+ public:
+  explicit MeshView(Decoder& decoder, const ViewOptions& options = {})
+      : decoder_(&decoder), options_(options) {}
+
+  // Brings mesh() to the decoder's level and clears the decoder's change report. False (with
+  // error()) when OpenMesh refused a face the decoder has (not a manifold mesh there); the mesh
+  // then lacks that face.
+  bool update() {
+    const Decoder& d = *decoder_;
+    const MeshChanges& ch = d.changes();
+    error_.clear();
+    bool ok;
+    if (ch.all || !layout_matches() || !incremental()) {
+      ok = rebuild();
+    } else {
+      ok = true;
+    }
+    decoder_->clear_changes();
+    return ok && error_.empty();
+  }
+  uint64_t refine(uint64_t max_splits = UINT64_MAX) {
+    const uint64_t n = decoder_->refine(max_splits);
+    update();
+    return n;
+  }
+  uint64_t coarsen(uint64_t max_splits = UINT64_MAX) {
+    const uint64_t n = decoder_->coarsen(max_splits);
+    update();
+    return n;
+  }
+  void set_face_target(uint64_t faces) {
+    decoder_->set_face_target(faces);
+    update();
+  }
+
+  const Mesh& mesh() const { return mesh_; }
+  // For adding properties (e.g. face normals) or changing their values. Changing connectivity,
+  // points or the status flags breaks the correspondence; call rebuild() after doing so.
+  Mesh& mesh() { return mesh_; }
+  Decoder& decoder() const { return *decoder_; }
+  const std::string& error() const { return error_; }  // empty when the last update was ok
+  // How the last update went: rebuilt from scratch, or how many faces it deleted and added.
+  bool last_rebuilt() const { return rebuilt_; }
+  uint64_t last_faces_added() const { return faces_added_; }
+
+  // Rebuilds mesh() from the decoder's arrays (does not clear the change report).
+  bool rebuild() {
+    const Decoder& d = *decoder_;
+    rebuilt_ = true;
+    faces_added_ = 0;
+    error_.clear();
+    mesh_.clean();
+    request_properties();
+    const uint32_t nv = d.vertex_count(), nf = d.face_count();
+    mesh_.reserve(nv, size_t(nf) * 3 / 2 + 16, nf);
+    const float* p = d.positions();
+    for (uint32_t v = 0; v < nv; ++v) mesh_.add_vertex(point(p + size_t(v) * 3));
+    for (uint32_t f = 0; f < nf; ++f)
+      if (!add_face(f)) return false;
+    wedge_vertices_.assign(d.wedge_vertices(), d.wedge_vertices() + d.wedge_count());
+    first_wedge_.assign(nv, detail::kNone);
+    for (uint32_t w = d.wedge_count(); w-- > 0;) first_wedge_[wedge_vertices_[w]] = w;
+    if (attributes_) {
+      for (uint32_t f = 0; f < nf; ++f) face_attributes(f);
+      for (uint32_t v = 0; v < nv; ++v) vertex_attributes(v);
+    }
+    return true;
+  }
+
+ private:
+  using VH = OpenMesh::VertexHandle;
+  using FH = OpenMesh::FaceHandle;
+  using HH = OpenMesh::HalfedgeHandle;
+
+  static typename Mesh::Point point(const float* p) {
+    using S = typename OpenMesh::vector_traits<typename Mesh::Point>::value_type;
+    return typename Mesh::Point(S(p[0]), S(p[1]), S(p[2]));
+  }
+
+  // The properties this decoder's attributes fill, as requested on the mesh.
+  struct Layout {
+    bool normals = false, texcoords = false, colors = false;
+    bool operator==(const Layout&) const = default;
+  };
+  Layout wanted() const {
+    const Decoder& d = *decoder_;
+    Layout l;
+    l.normals = d.normals() != nullptr;
+    l.texcoords = d.texcoords(options_.texcoord_set) != nullptr;
+    l.colors = d.colors() != nullptr && d.color_components() >= 3;
+    return l;
+  }
+  bool layout_matches() const { return built_ && wanted() == layout_; }
+  void request_properties() {
+    built_ = true;
+    mesh_.request_vertex_status();
+    mesh_.request_edge_status();
+    mesh_.request_halfedge_status();
+    mesh_.request_face_status();
+    const Layout l = wanted();
+    const bool v = options_.vertex_attributes, h = options_.halfedge_attributes;
+    // (Requested once per kind: OpenMesh counts requests.)
+    if (l.normals && !layout_.normals) {
+      if (v) mesh_.request_vertex_normals();
+      if (h) mesh_.request_halfedge_normals();
+    }
+    if (l.texcoords && !layout_.texcoords) {
+      if (v) mesh_.request_vertex_texcoords2D();
+      if (h) mesh_.request_halfedge_texcoords2D();
+    }
+    if (l.colors && !layout_.colors) {
+      if (v) mesh_.request_vertex_colors();
+      if (h) mesh_.request_halfedge_colors();
+      if (options_.face_colors) mesh_.request_face_colors();
+    }
+    layout_ = l;
+    attributes_ = l.normals || l.texcoords || l.colors;
+  }
+
+  // Adds the decoder's face f as the mesh's next face, its halfedge at the first corner.
+  bool add_face(uint32_t f) {
+    const uint32_t* t = decoder_->indices() + size_t(f) * 3;
+    const FH fh = mesh_.add_face(VH(int(t[0])), VH(int(t[1])), VH(int(t[2])));
+    ++faces_added_;
+    if (!fh.is_valid()) {
+      error_ = "pmz::openmesh::MeshView: OpenMesh refused face " + std::to_string(f) + " (" +
+               std::to_string(t[0]) + " " + std::to_string(t[1]) + " " + std::to_string(t[2]) +
+               "): the mesh is not manifold there";
+      return false;
+    }
+    HH h = mesh_.halfedge_handle(fh);
+    while (mesh_.to_vertex_handle(h).idx() != int(t[0])) h = mesh_.next_halfedge_handle(h);
+    mesh_.set_halfedge_handle(fh, h);
+    return true;
+  }
+  // The mesh's face f has the decoder's face f's corners, in order.
+  bool face_matches(uint32_t f) const {
+    const uint32_t* t = decoder_->indices() + size_t(f) * 3;
+    HH h = mesh_.halfedge_handle(FH(int(f)));
+    for (int k = 0; k < 3; ++k, h = mesh_.next_halfedge_handle(h))
+      if (mesh_.to_vertex_handle(h).idx() != int(t[k])) return false;
+    return true;
+  }
+
+  void face_attributes(uint32_t f) {
+    const Decoder& d = *decoder_;
+    const uint32_t* wedges = d.wedge_indices() + size_t(f) * 3;
+    const FH fh{int(f)};
+    if (options_.halfedge_attributes) {
+      HH h = mesh_.halfedge_handle(fh);
+      for (int k = 0; k < 3; ++k, h = mesh_.next_halfedge_handle(h)) {
+        const uint32_t w = wedges[k];
+        if (layout_.normals) mesh_.set_normal(h, normal(w));
+        if (layout_.texcoords) mesh_.set_texcoord2D(h, texcoord(w));
+        if (layout_.colors) mesh_.set_color(h, color(w));
+      }
+    }
+    if (options_.face_colors && layout_.colors) mesh_.set_color(fh, color(wedges[0]));
+  }
+  void vertex_attributes(uint32_t v) {
+    const uint32_t w = first_wedge_[v];
+    if (!options_.vertex_attributes || w == detail::kNone) return;
+    const VH vh{int(v)};
+    if (layout_.normals) mesh_.set_normal(vh, normal(w));
+    if (layout_.texcoords) mesh_.set_texcoord2D(vh, texcoord(w));
+    if (layout_.colors) mesh_.set_color(vh, color(w));
+  }
+  typename Mesh::Normal normal(uint32_t w) const {
+    using S = typename OpenMesh::vector_traits<typename Mesh::Normal>::value_type;
+    const float* n = decoder_->normals() + size_t(w) * 3;
+    return typename Mesh::Normal(S(n[0]), S(n[1]), S(n[2]));
+  }
+  typename Mesh::TexCoord2D texcoord(uint32_t w) const {
+    using S = typename OpenMesh::vector_traits<typename Mesh::TexCoord2D>::value_type;
+    const float* t = decoder_->texcoords(options_.texcoord_set) + size_t(w) * 2;
+    return typename Mesh::TexCoord2D(S(t[0]), S(t[1]));
+  }
+  typename Mesh::Color color(uint32_t w) const {
+    const uint32_t n = decoder_->color_components();
+    return detail::color_from_floats<typename Mesh::Color>(decoder_->colors() + size_t(w) * n, n);
+  }
+
+  // The change report applied to the mesh; false when a rebuild is the better (or only) way.
+  bool incremental() {
+    const Decoder& d = *decoder_;
+    const MeshChanges& ch = d.changes();
+    const uint32_t v0 = uint32_t(mesh_.n_vertices()), f0 = uint32_t(mesh_.n_faces());
+    const uint32_t v1 = d.vertex_count(), f1 = d.face_count();
+    const uint32_t w0 = uint32_t(wedge_vertices_.size()), w1 = d.wedge_count();
+    const uint32_t fb = std::min(ch.face_begin, f0), vb = std::min(ch.vertex_begin, v0);
+    const uint32_t wb = std::min(ch.wedge_begin, w0), keep = std::min(f0, f1);
+    // Faces kept but rewritten, ascending: the listed ones below fb, then [fb, keep).
+    rewritten_.clear();
+    for (uint32_t f : ch.modified_faces)
+      if (f < fb && f < keep) rewritten_.push_back(f);
+    std::sort(rewritten_.begin(), rewritten_.end());
+    rewritten_.erase(std::unique(rewritten_.begin(), rewritten_.end()), rewritten_.end());
+    for (uint32_t f = fb; f < keep; ++f) rewritten_.push_back(f);
+    const uint64_t work = rewritten_.size() + (f1 > f0 ? f1 - f0 : f0 - f1);
+    if (double(work) > options_.rebuild_fraction * double(std::max(f0, f1))) return false;
+
+    rebuilt_ = false;
+    faces_added_ = 0;
+    bool deleted = false;
+    for (uint32_t f : rewritten_) mesh_.delete_face(FH(int(f)), false), deleted = true;
+    for (uint32_t f = f1; f < f0; ++f) mesh_.delete_face(FH(int(f)), false), deleted = true;
+    for (uint32_t v = v1; v < v0; ++v) {
+      if (!mesh_.is_isolated(VH(int(v)))) return false;  // (not what the decoder does)
+      mesh_.status(VH(int(v))).set_deleted(true);
+      deleted = true;
+    }
+    const float* p = d.positions();
+    for (uint32_t v = vb; v < std::min(v0, v1); ++v) mesh_.set_point(VH(int(v)), point(p + v * 3));
+    for (uint32_t v = v0; v < v1; ++v) mesh_.add_vertex(point(p + size_t(v) * 3));
+    // New faces land at their indices; the rewritten ones are added in descending order, so
+    // that the garbage collection (which fills the first hole from the last element) moves each
+    // into its own hole.
+    for (uint32_t f = f0; f < f1; ++f)
+      if (!add_face(f)) return false;
+    for (size_t i = rewritten_.size(); i-- > 0;)
+      if (!add_face(rewritten_[i])) return false;
+    if (deleted) mesh_.garbage_collection();
+    if (mesh_.n_vertices() != v1 || mesh_.n_faces() != f1) return false;
+    for (uint32_t f : rewritten_)
+      if (!face_matches(f)) return false;
+
+    // Wedges: [wb, w0) are gone or replaced, [wb, w1) new; a vertex's lowest wedge changes only
+    // when it is among them.
+    changed_vertices_.clear();
+    for (uint32_t w = wb; w < w0; ++w) {
+      const uint32_t v = wedge_vertices_[w];
+      if (v < v1 && first_wedge_[v] == w) first_wedge_[v] = detail::kNone;
+    }
+    first_wedge_.resize(v1, detail::kNone);
+    wedge_vertices_.resize(wb);
+    wedge_vertices_.insert(wedge_vertices_.end(), d.wedge_vertices() + wb, d.wedge_vertices() + w1);
+    for (uint32_t w = wb; w < w1; ++w) {
+      const uint32_t v = wedge_vertices_[w];
+      if (first_wedge_[v] == detail::kNone || w < first_wedge_[v]) {
+        first_wedge_[v] = w;
+        changed_vertices_.push_back(v);
+      }
+    }
+    if (attributes_) {
+      for (uint32_t f : rewritten_) face_attributes(f);
+      for (uint32_t f = f0; f < f1; ++f) face_attributes(f);
+      for (uint32_t v : changed_vertices_) vertex_attributes(v);
+    }
+    return true;
+  }
+
+  Decoder* decoder_;
+  ViewOptions options_;
+  Mesh mesh_;
+  std::string error_;
+  bool built_ = false, attributes_ = false, rebuilt_ = false;
+  Layout layout_;
+  uint64_t faces_added_ = 0;
+  std::vector<uint32_t> wedge_vertices_;  // the decoder's, as of the last update
+  std::vector<uint32_t> first_wedge_;     // per vertex: its lowest-numbered wedge (or kNone)
+  std::vector<uint32_t> rewritten_, changed_vertices_;
+};
+
+}  // namespace pmz::openmesh
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
