@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # scripts/check_words.sh on planted lines in a temporary file: each narrating line is flagged
 # (exit 1, "file:line:" named), and lines that only look alike (s32(x), helper_function, -s14,
-# "section 12's statuses") pass. The words are assembled from pieces so that this file itself
+# a section reference) pass. The words are assembled from pieces so that this file itself
 # passes the check.
 set -euo pipefail
 check="$(cd "$(dirname "$0")/../.." && pwd)/scripts/check_words.sh"
