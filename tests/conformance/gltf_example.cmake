@@ -1,4 +1,6 @@
-# ctest gltf_example: scripts/pmz_to_glb.py reproduces docs/gltf/torus.glb.
+# ctest gltf_example: scripts/pmz_to_glb.py reproduces docs/gltf/torus.glb, and the GLB carries
+# the whole stream: decoded from the GLB's bytes, every level of the vector's .expected file and
+# the full mesh the extension announces (check_glb_stream.py).
 execute_process(COMMAND ${PYTHON} ${SCRIPT} --decoder ${DECODE} ${INPUT} -o ${OUT}
   RESULT_VARIABLE rc ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
@@ -17,4 +19,10 @@ string(REGEX REPLACE "(..)(..)(..)(..)" "\\4\\3\\2\\1" len "${len}")
 math(EXPR len "0x${len}")
 if(NOT head STREQUAL "676c544602000000" OR NOT len EQUAL size)
   message(FATAL_ERROR "${OUT}: not a GLB 2.0 header of its size (${head}, ${len} vs ${size})")
+endif()
+# The stream inside the GLB, decoded to the full mesh and the levels between.
+execute_process(COMMAND ${PYTHON} ${CHECK} --decoder ${DECODE} --stream ${INPUT}
+  --expected ${LEVELS} ${OUT} RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "${OUT}: the stream it carries does not decode as its vector:\n${err}")
 endif()
