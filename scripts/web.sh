@@ -106,7 +106,19 @@ write_if_changed() {
   em++ --version | sed -n 1p
   [ -z "$post_opt" ] || wasm-opt --version
 } | write_if_changed "$out/toolchain.txt"
-objects=()
+# Each set's sources by object name, hot then cold: "set/name.o source" lines, the link's
+# input order.
+mapfile -t builds < <(for set in hot cold; do
+  if [ $set = hot ]; then files=("${hot[@]}"); else files=("${cold[@]}"); fi
+  for f in "${files[@]}"; do echo "$set/$(basename "$f" .cpp).o $f"; done | LC_ALL=C sort
+done)
+objects=("${builds[@]%% *}")
+objects=("${objects[@]/#/obj/}")
+# Objects of sources that are gone.
+for o in "$out"/obj/*/*.o; do
+  [ -e "$o" ] || continue
+  [[ " ${objects[*]} " == *" ${o#"$out"/} "* ]] || rm -f "$o" "$o.d"
+done
 {
   echo "# Written by scripts/web.sh (run that, not ninja): the WebAssembly decoder."
   echo "rule cxx"
@@ -127,18 +139,13 @@ objects=()
     echo "  command = cp \$in \$out"
     echo "  description = copy (no wasm-opt)"
   fi
-  # Each set's objects by name, hot then cold: the link's input order.
-  for set in hot cold; do
-    if [ $set = hot ]; then files=("${hot[@]}") level=$opt; else files=("${cold[@]}") level=$cold_opt; fi
-    mapfile -t files < <(for f in "${files[@]}"; do echo "$(basename "$f" .cpp).o $f"; done | LC_ALL=C sort)
-    for line in "${files[@]}"; do
-      o=obj/$set/${line%% *} f=${line#* }
-      objects+=("$o")
-      echo "build $(ninja_path "$o"): cxx $(ninja_path "$root/$f") | toolchain.txt"
-      echo "  flags = $(ninja_words "${cxxflags[@]}" $level)"
-      echo "  opt = $level"
-      echo "  src = $f"
-    done
+  for line in "${builds[@]}"; do
+    o=obj/${line%% *} f=${line#* }
+    if [[ $o == obj/hot/* ]]; then level=$opt; else level=$cold_opt; fi
+    echo "build $(ninja_path "$o"): cxx $(ninja_path "$root/$f") | toolchain.txt"
+    echo "  flags = $(ninja_words "${cxxflags[@]}" $level)"
+    echo "  opt = $level"
+    echo "  src = $f"
   done
   echo "build pmz_wasm.link.wasm: link $(printf '%s ' "${objects[@]}")| toolchain.txt"
   echo "  flags = $(ninja_words "${ldflags[@]}")"
