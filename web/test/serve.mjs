@@ -52,6 +52,8 @@ export function serveViewer(viewerDir, streams, bytesPerSecond) {
   return new Promise((resolve) => server.listen(0, '127.0.0.1', () => resolve(server)));
 }
 
-export const CHROMIUM_ARGS = ['--headless', '--no-sandbox', '--use-gl=swiftshader',
+// WebGL through SwiftShader (with --disable-gpu too: the same renderer); callers add a fresh
+// --user-data-dir.
+export const CHROMIUM_ARGS = ['--headless', '--no-sandbox', '--disable-gpu', '--use-gl=swiftshader',
   '--enable-unsafe-swiftshader', '--disable-background-networking', '--disable-component-update',
   '--disable-sync', '--no-first-run'];
