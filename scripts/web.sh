@@ -184,7 +184,8 @@ sync_tree() {  # STAGE DEST: DEST made equal to STAGE; changed=1 when a file was
   done < <(cd "$2" && find . -type f -print0)
 }
 
-cp web/pkg/package.json web/pkg/README.md "$stage/pkg/"
+cp web/pkg/package.json "$stage/pkg/"
+cp web/README.md "$stage/pkg/README.md"  # the package's README is the web one
 cp web/src/*.js web/src/*.d.ts "$out/pmz_wasm.wasm" "$stage/pkg/"
 changed=0
 sync_tree "$stage/pkg" "$pkg"
