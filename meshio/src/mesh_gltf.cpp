@@ -7,8 +7,6 @@
 #define TINYGLTF_NO_STB_IMAGE
 #define TINYGLTF_NO_STB_IMAGE_WRITE
 #define TINYGLTF_NO_EXTERNAL_IMAGE
-#include "mesh_gltf.hpp"
-
 #include <tiny_gltf.h>
 
 #include <algorithm>
@@ -17,6 +15,9 @@
 #include <cstring>
 #include <filesystem>
 #include <sstream>
+
+#include "mesh_formats.hpp"
+#include "reader_support.hpp"
 
 namespace pmz {
 
