@@ -210,170 +210,212 @@ bool make_plan(const CollapseSequence& seq, const WriteOptions& opt, Plan& plan,
 }
 
 using Face = std::array<uint32_t, 3>;
-Face canonical_face(uint32_t a, uint32_t b, uint32_t c) {
-  if (b < a && b < c) return {b, c, a};
-  if (c < a && c < b) return {c, a, b};
-  return {a, b, c};
-}
-
-}  // namespace
-
-bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector<uint8_t>& out,
-               std::string& error, WriteStats* stats) {
+// What write_pmz refuses before any work.
+bool check_write_input(const CollapseSequence& seq, const WriteOptions& opt, std::string& error) {
   if (opt.position_bits > 30) return error = "position bits must be 0..30", false;
   if (opt.level > kMaxLevel) return error = "level must be 0..1", false;
-  const bool speed = opt.level == kLevelSpeed;
   for (float x : seq.mesh.positions)
     if (!std::isfinite(x)) return error = "non-finite vertex coordinate", false;
-  Plan plan;
-  if (!make_plan(seq, opt, plan, error)) return false;
-  const IndexedMesh& mesh = seq.mesh;
-  const uint32_t base_n = plan.base_vertices;
-  const uint32_t total_v = uint32_t(plan.input_of.size());
-  const uint32_t splits = total_v - base_n;
+  return true;
+}
 
-  FileHeader h;
+// HEAD's fields known before the splits are coded (all but the curvature weights and the
+// flags), and every vertex's quantized position by decoded id.
+void begin_header(const IndexedMesh& mesh, const Plan& plan, const WriteOptions& opt, FileHeader& h,
+                  std::vector<int32_t>& coords) {
   Quantizer quant;
   file_quantizer(mesh, opt.position_bits, h, quant);
-  std::vector<int32_t> coords(size_t(total_v) * 3);  // decoded ids
+  const uint32_t total_v = uint32_t(plan.input_of.size());
+  coords.resize(size_t(total_v) * 3);
   for (uint32_t d = 0; d < total_v; ++d)
     for (int a = 0; a < 3; ++a)
       coords[d * 3 + a] = quant.quantize(mesh.positions[plan.input_of[d] * 3 + a], a);
-
-  h.base_vertices = base_n;
+  h.base_vertices = plan.base_vertices;
   h.base_faces = uint32_t(plan.base_faces.size() / 3);
   h.full_faces = mesh.face_count();
-  h.total_splits = splits;
+  h.total_splits = total_v - plan.base_vertices;
   h.level = opt.level;
-  // Attributes (spec/format.md section 14.1): the ATTR chunks follow BASE and each SPLT chunk.
-  std::unique_ptr<AttributeWriter> attrs;
-  if (!mesh.attributes.empty()) {
-    attrs = std::make_unique<AttributeWriter>();
-    if (!attrs->init(seq, plan.order.size(), opt, plan.input_of, error)) return false;
-  }
-  std::vector<uint8_t> base_attributes, chunk_attributes;
+}
 
-  // Splits: replay in final order with the decoder's core to get ranks and predictions. The
-  // curvature weight (HEAD) is the file's: one replay codes the splits once per candidate
-  // (only the residuals differ) and the smallest is kept (spec/format.md section 13).
-  // The speed level has no curvature offsets: one candidate, (0, 0).
-  const size_t kCandidates = speed ? 1 : std::size(kCurvatureCandidates);
-  ProgressiveMesh pm;
-  std::vector<uint8_t> trial[std::size(kCurvatureCandidates)];
-  WriteStats trial_st[std::size(kCurvatureCandidates)];
-  {
-    if (!pm.build(base_n, plan.base_faces.data(), h.base_faces, error)) return false;
-    if (attrs) attrs->encode_base(pm, coords.data(), base_attributes);
-    std::vector<SplitSymbols> chunk[std::size(kCurvatureCandidates)];
-    std::vector<GroupCode> chunk_groups;
-    std::vector<uint32_t> chunk_choice, vs;  // connectivity: the same for every candidate
-    std::vector<uint8_t> payload;
-    WedgeScratch scratch;
-    VertexChoice choice;
-    choice.reset(pm, coords.data(), h.position_bits, !speed);
-    std::unique_ptr<SplitModels> models[std::size(kCurvatureCandidates)];
-    for (auto& m : models) {
+constexpr size_t kMaxCandidates = std::size(kCurvatureCandidates);
+
+// The splits: replayed in final order with the decoder's core to get ranks and predictions.
+// The curvature weight (HEAD) is the file's: one replay codes the splits once per candidate
+// (only the residuals differ) into SPLT chunks (each followed by its ATTR chunk), and the
+// smallest is kept (spec/format.md section 13). The speed level has no curvature offsets: one
+// candidate, (0, 0).
+class SplitCoder {
+ public:
+  SplitCoder(const CollapseSequence& seq, const WriteOptions& opt, const Plan& plan,
+             std::vector<int32_t>& coords, AttributeWriter* attrs)
+      : seq_(seq),
+        opt_(opt),
+        plan_(plan),
+        coords_(coords),
+        attrs_(attrs),
+        speed_(opt.level == kLevelSpeed),
+        candidates_(speed_ ? 1 : kMaxCandidates) {}
+
+  // The base mesh built (and its attributes coded into base_attributes), the choice set up.
+  bool start(const FileHeader& h, std::vector<uint8_t>& base_attributes, std::string& error) {
+    if (!pm_.build(plan_.base_vertices, plan_.base_faces.data(), h.base_faces, error)) return false;
+    if (attrs_) attrs_->encode_base(pm_, coords_.data(), base_attributes);
+    choice_.reset(pm_, coords_.data(), h.position_bits, !speed_);
+    for (auto& m : models_) {
       m = std::make_unique<SplitModels>();
-      m->speed = speed;
+      m->speed = speed_;
     }
-    uint32_t chunk_limit = kFirstChunkSplits;
-    auto flush = [&]() {
-      if (chunk_groups.empty()) return;
-      for (size_t k = 0; k < kCandidates; ++k) {
-        payload.clear();
-        uint64_t sizes[kSplitStreamCount];
-        encode_split_chunk(chunk_groups, chunk_choice, chunk[k].data(), chunk[k].size(), *models[k],
-                           payload, sizes, opt.symbol_stats ? trial_st[k].symbol_bits : nullptr);
-        trial_st[k].connectivity_bits += sizes[kStreamConnectivity] * 8;
-        trial_st[k].geometry_bits += sizes[kStreamGeometry] * 8;
-        const size_t before = trial[k].size();
-        append_chunk(trial[k], kChunkSplits, payload);
-        if (attrs) {
-          if (k == 0) attrs->finish_chunk(chunk_attributes);
-          const size_t at_attributes = trial[k].size();
-          append_chunk(trial[k], kChunkAttributes, chunk_attributes);
-          trial_st[k].attribute_bytes += trial[k].size() - at_attributes;
-        }
-        trial_st[k].split_bytes += trial[k].size() - before;
-        chunk[k].clear();
-      }
-      chunk_groups.clear();
-      chunk_choice.clear();
-      chunk_limit = std::min(chunk_limit * 2, kMaxChunkSplits);
-    };
+    return true;
+  }
+
+  // Every stream group in order: the whole group, in a chunk of its own if it does not fit the
+  // current one; a group over kMaxGroupPiece in pieces of that size.
+  bool code_groups(std::string& error) {
     uint32_t at = 0;
-    for (uint32_t group : plan.group_sizes) {
+    for (uint32_t group : plan_.group_sizes) {
       for (uint32_t left = group; left;) {
-        // A stream group: the whole group, in a chunk of its own if it does not fit the current
-        // one; a group over kMaxGroupPiece in pieces of that size.
-        if (!chunk[0].empty() && chunk[0].size() + left > chunk_limit) flush();
+        if (!chunk_[0].empty() && chunk_[0].size() + left > chunk_limit_) flush();
         const uint32_t n = std::min(left, kMaxGroupPiece);
-        vs.clear();
-        for (uint32_t i = at; i < at + n; ++i)
-          vs.push_back(plan.decoded_id[seq.collapses[plan.order[i]].v]);
-        choice.start_group();
-        bool near;
-        if (!choice_bits(choice, pm, pm.vertex_count(), vs, chunk_choice, near))
-          return error = "internal: a group's split vertices are adjacent", false;
-        chunk_groups.push_back({n, near});
+        if (!code_group_piece(at, n, error)) return false;
+        at += n;
         left -= n;
-        for (uint32_t i = 0; i < n; ++i) {
-          const uint32_t collapse = plan.order[at++];
-          const HalfEdgeCollapse& c = seq.collapses[collapse];
-          uint32_t v = plan.decoded_id[c.v];
-          uint32_t vl = c.vl == kNoVertex ? kNoVertex : plan.decoded_id[c.vl];
-          uint32_t vr = c.vr == kNoVertex ? kNoVertex : plan.decoded_id[c.vr];
-          uint32_t rl, rr;
-          if (!pm.gather_ring(v) || !find_ranks(pm, vl, vr, rl, rr) ||
-              plan.decoded_id[c.u] != pm.vertex_count())
-            return error = "internal: reordered split does not replay", false;
-          SplitSymbols code;
-          code.v = v;
-          code.wedge_context = wedge_context(uint32_t(pm.ring().size()), pm.ring_closed());
-          if (!(speed ? wedge_index(pm, rl, rr, code.wedge_count, code.wedge_rank)
-                      : wedge_symbols(coords.data(), choice.degrees(), v, pm, rl, rr,
-                                      code.wedge_count, code.wedge_rank, scratch)) ||
-              !pm.split_gathered(v, rl, rr))
-            return error = "internal: split rejected", false;
-          code.rank_context = rank_context(pm.ring_closed(), !speed && scratch.confident);
-          choice.applied(pm, coords.data(), rl != kNoRank, rr != kNoRank);
-          const uint32_t u = pm.vertex_count() - 1;
-          if (attrs) attrs->encode_split(pm, coords.data(), collapse, rl != kNoRank, rr != kNoRank);
-          if (speed) {
-            PositionPrediction pred;
-            speed_predict_position(coords.data(), pm.u_ring(), pred);
-            position_residuals(pred, &coords[size_t(u) * 3], code.residual);
-            for (int s = 0; s < 3; ++s)
-              code.residual_context[s] = pred.context[s], code.mix_context[s] = 0;
-            chunk[0].push_back(code);
-            continue;
-          }
-          RingBasis basis;  // the ring part once; per candidate only the offset and contexts
-          ring_basis(coords.data(), pm.u_ring(), pm.ring(), true, true, basis);
-          for (size_t k = 0; k < kCandidates; ++k) {
-            PositionPrediction pred;
-            predict_from_basis(coords.data(), pm.u_ring(), uint32_t(pm.ring().size()), basis,
-                               kCurvatureCandidates[k].curvature, kCurvatureCandidates[k].fine,
-                               pred);
-            position_residuals(pred, &coords[size_t(u) * 3], code.residual);
-            for (int s = 0; s < 3; ++s)
-              code.residual_context[s] = pred.context[s], code.mix_context[s] = pred.mix[s];
-            chunk[k].push_back(code);
-          }
-        }
-        if (chunk[0].size() >= chunk_limit) flush();
+        if (chunk_[0].size() >= chunk_limit_) flush();
       }
     }
     flush();
+    return true;
   }
-  size_t best = 0;
-  for (size_t k = 1; k < kCandidates; ++k)
-    if (trial[k].size() < trial[best].size()) best = k;
-  h.curvature = kCurvatureCandidates[best].curvature;
-  h.fine_curvature = kCurvatureCandidates[best].fine;
-  std::vector<uint8_t>& split_bytes = trial[best];
-  WriteStats st = trial_st[best];
 
+  // The candidate with the fewest split bytes (the first of equals).
+  size_t best() const {
+    size_t best = 0;
+    for (size_t k = 1; k < candidates_; ++k)
+      if (trial_[k].size() < trial_[best].size()) best = k;
+    return best;
+  }
+  const std::vector<uint8_t>& split_bytes(size_t k) const { return trial_[k]; }
+  const WriteStats& stats(size_t k) const { return trial_st_[k]; }
+  // The full mesh, after code_groups.
+  const ProgressiveMesh& mesh() const { return pm_; }
+
+ private:
+  // The choice bits of n splits from final position `at`, then each split.
+  bool code_group_piece(uint32_t at, uint32_t n, std::string& error) {
+    vs_.clear();
+    for (uint32_t i = at; i < at + n; ++i)
+      vs_.push_back(plan_.decoded_id[seq_.collapses[plan_.order[i]].v]);
+    choice_.start_group();
+    bool near;
+    if (!choice_bits(choice_, pm_, pm_.vertex_count(), vs_, chunk_choice_, near))
+      return error = "internal: a group's split vertices are adjacent", false;
+    chunk_groups_.push_back({n, near});
+    for (uint32_t i = at; i < at + n; ++i)
+      if (!code_split(plan_.order[i], error)) return false;
+    return true;
+  }
+
+  // One split: applied to the replay, its wedge and rank symbols, its attributes, and its
+  // position residuals once per candidate.
+  bool code_split(uint32_t collapse, std::string& error) {
+    const HalfEdgeCollapse& c = seq_.collapses[collapse];
+    uint32_t v = plan_.decoded_id[c.v];
+    uint32_t vl = c.vl == kNoVertex ? kNoVertex : plan_.decoded_id[c.vl];
+    uint32_t vr = c.vr == kNoVertex ? kNoVertex : plan_.decoded_id[c.vr];
+    uint32_t rl, rr;
+    if (!pm_.gather_ring(v) || !find_ranks(pm_, vl, vr, rl, rr) ||
+        plan_.decoded_id[c.u] != pm_.vertex_count())
+      return error = "internal: reordered split does not replay", false;
+    SplitSymbols code;
+    code.v = v;
+    code.wedge_context = wedge_context(uint32_t(pm_.ring().size()), pm_.ring_closed());
+    if (!(speed_ ? wedge_index(pm_, rl, rr, code.wedge_count, code.wedge_rank)
+                 : wedge_symbols(coords_.data(), choice_.degrees(), v, pm_, rl, rr,
+                                 code.wedge_count, code.wedge_rank, scratch_)) ||
+        !pm_.split_gathered(v, rl, rr))
+      return error = "internal: split rejected", false;
+    code.rank_context = rank_context(pm_.ring_closed(), !speed_ && scratch_.confident);
+    choice_.applied(pm_, coords_.data(), rl != kNoRank, rr != kNoRank);
+    const uint32_t u = pm_.vertex_count() - 1;
+    if (attrs_) attrs_->encode_split(pm_, coords_.data(), collapse, rl != kNoRank, rr != kNoRank);
+    if (speed_) {
+      PositionPrediction pred;
+      speed_predict_position(coords_.data(), pm_.u_ring(), pred);
+      position_residuals(pred, &coords_[size_t(u) * 3], code.residual);
+      for (int s = 0; s < 3; ++s)
+        code.residual_context[s] = pred.context[s], code.mix_context[s] = 0;
+      chunk_[0].push_back(code);
+      return true;
+    }
+    RingBasis basis;  // the ring part once; per candidate only the offset and contexts
+    ring_basis(coords_.data(), pm_.u_ring(), pm_.ring(), true, true, basis);
+    for (size_t k = 0; k < candidates_; ++k) {
+      PositionPrediction pred;
+      predict_from_basis(coords_.data(), pm_.u_ring(), uint32_t(pm_.ring().size()), basis,
+                         kCurvatureCandidates[k].curvature, kCurvatureCandidates[k].fine, pred);
+      position_residuals(pred, &coords_[size_t(u) * 3], code.residual);
+      for (int s = 0; s < 3; ++s)
+        code.residual_context[s] = pred.context[s], code.mix_context[s] = pred.mix[s];
+      chunk_[k].push_back(code);
+    }
+    return true;
+  }
+
+  // Ends the current chunk: its SPLT chunk (and ATTR chunk) per candidate; the next may hold
+  // twice as many splits, up to kMaxChunkSplits.
+  void flush() {
+    if (chunk_groups_.empty()) return;
+    for (size_t k = 0; k < candidates_; ++k) {
+      payload_.clear();
+      uint64_t sizes[kSplitStreamCount];
+      encode_split_chunk(chunk_groups_, chunk_choice_, chunk_[k].data(), chunk_[k].size(),
+                         *models_[k], payload_, sizes,
+                         opt_.symbol_stats ? trial_st_[k].symbol_bits : nullptr);
+      trial_st_[k].connectivity_bits += sizes[kStreamConnectivity] * 8;
+      trial_st_[k].geometry_bits += sizes[kStreamGeometry] * 8;
+      const size_t before = trial_[k].size();
+      append_chunk(trial_[k], kChunkSplits, payload_);
+      if (attrs_) {
+        if (k == 0) attrs_->finish_chunk(chunk_attributes_);
+        const size_t at_attributes = trial_[k].size();
+        append_chunk(trial_[k], kChunkAttributes, chunk_attributes_);
+        trial_st_[k].attribute_bytes += trial_[k].size() - at_attributes;
+      }
+      trial_st_[k].split_bytes += trial_[k].size() - before;
+      chunk_[k].clear();
+    }
+    chunk_groups_.clear();
+    chunk_choice_.clear();
+    chunk_limit_ = std::min(chunk_limit_ * 2, kMaxChunkSplits);
+  }
+
+  const CollapseSequence& seq_;
+  const WriteOptions& opt_;
+  const Plan& plan_;
+  std::vector<int32_t>& coords_;
+  AttributeWriter* attrs_;
+  const bool speed_;
+  const size_t candidates_;
+  ProgressiveMesh pm_;
+  VertexChoice choice_;
+  WedgeScratch scratch_;
+  std::unique_ptr<SplitModels> models_[kMaxCandidates];
+  std::vector<uint8_t> trial_[kMaxCandidates];
+  WriteStats trial_st_[kMaxCandidates];
+  // The chunk being gathered: its symbols per candidate, its groups and choice bits (the same
+  // for every candidate).
+  std::vector<SplitSymbols> chunk_[kMaxCandidates];
+  std::vector<GroupCode> chunk_groups_;
+  std::vector<uint32_t> chunk_choice_, vs_;
+  std::vector<uint8_t> payload_, chunk_attributes_;
+  uint32_t chunk_limit_ = kFirstChunkSplits;
+};
+
+// The file: signature, HEAD (with the attribute header), BASE (the stream alone: its counts are
+// HEAD's) and its ATTR chunk, the chosen candidate's split chunks, END.
+void assemble_file(FileHeader& h, const Plan& plan, const AttributeWriter* attrs,
+                   const std::vector<uint8_t>& base_attributes,
+                   const std::vector<uint8_t>& split_bytes, WriteStats& st,
+                   std::vector<uint8_t>& out) {
   out.assign(kSignature, kSignature + 8);
   std::vector<uint8_t> head;
   if (attrs) h.flags |= kFlagAttributes;
@@ -385,8 +427,7 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
   }
   append_chunk(out, kChunkHead, head);
   st.header_bytes = out.size();
-  append_chunk(out, kChunkBase,
-               plan.base_stream);  // BASE: the stream alone (its counts are HEAD's)
+  append_chunk(out, kChunkBase, plan.base_stream);
   if (attrs) {
     const size_t before = out.size();
     append_chunk(out, kChunkAttributes, base_attributes);
@@ -395,8 +436,17 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
   st.base_bytes = out.size() - st.header_bytes;
   out.insert(out.end(), split_bytes.begin(), split_bytes.end());
   append_chunk(out, kChunkEnd, {});
+}
 
-  // The full decode must reproduce the input's faces (as a set, up to rotation).
+Face canonical_face(uint32_t a, uint32_t b, uint32_t c) {
+  if (b < a && b < c) return {b, c, a};
+  if (c < a && c < b) return {c, a, b};
+  return {a, b, c};
+}
+
+// The full decode must reproduce the input's faces (as a set, up to rotation).
+bool check_full_decode(const IndexedMesh& mesh, const ProgressiveMesh& pm, const Plan& plan,
+                       std::string& error) {
   std::vector<Face> want, got;
   for (uint32_t f = 0; f < mesh.face_count(); ++f)
     want.push_back(
@@ -408,7 +458,35 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
   std::sort(want.begin(), want.end());
   std::sort(got.begin(), got.end());
   if (want != got) return error = "internal: decoded faces differ from the input", false;
-  if (attrs && !attrs->check_full(pm, error)) return false;
+  return true;
+}
+
+}  // namespace
+
+bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector<uint8_t>& out,
+               std::string& error, WriteStats* stats) {
+  if (!check_write_input(seq, opt, error)) return false;
+  Plan plan;
+  if (!make_plan(seq, opt, plan, error)) return false;
+  FileHeader h;
+  std::vector<int32_t> coords;
+  begin_header(seq.mesh, plan, opt, h, coords);
+  // Attributes (spec/format.md section 14.1): the ATTR chunks follow BASE and each SPLT chunk.
+  std::unique_ptr<AttributeWriter> attrs;
+  if (!seq.mesh.attributes.empty()) {
+    attrs = std::make_unique<AttributeWriter>();
+    if (!attrs->init(seq, plan.order.size(), opt, plan.input_of, error)) return false;
+  }
+  std::vector<uint8_t> base_attributes;
+  SplitCoder splits(seq, opt, plan, coords, attrs.get());
+  if (!splits.start(h, base_attributes, error) || !splits.code_groups(error)) return false;
+  const size_t best = splits.best();
+  h.curvature = kCurvatureCandidates[best].curvature;
+  h.fine_curvature = kCurvatureCandidates[best].fine;
+  WriteStats st = splits.stats(best);
+  assemble_file(h, plan, attrs.get(), base_attributes, splits.split_bytes(best), st, out);
+  if (!check_full_decode(seq.mesh, splits.mesh(), plan, error)) return false;
+  if (attrs && !attrs->check_full(splits.mesh(), error)) return false;
   if (stats) *stats = st;
   return true;
 }
