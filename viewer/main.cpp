@@ -54,7 +54,8 @@ struct Options {
   double budget_ms = 6;
 };
 
-int fail(const std::string& message) {
+// "pmz-view: message" on stderr; the exit status of a failed run.
+int print_failure(const std::string& message) {
   std::fprintf(stderr, "pmz-view: %s\n", message.c_str());
   return 1;
 }
@@ -251,310 +252,391 @@ int parse(int argc, char** argv, Options& o) {
   return -1;  // go on
 }
 
+// pmz-view's run. A mesh file is shown whole; a .pmz stream is decoded on its own thread while
+// the frames show what has arrived. The steps: open the source, then the window and the
+// renderer, then one of three ways to the end: a screenshot of a mesh file, a screenshot of a
+// stream's requested prefix, or the interactive loop (update, draw, measure, wait per frame).
+class Viewer {
+ public:
+  explicit Viewer(const Options& o)
+      : o_(o), screenshot_(!o.screenshot.empty()), is_static_(is_mesh_file(o.source)) {}
+  Viewer(const Viewer&) = delete;
+  Viewer& operator=(const Viewer&) = delete;
+
+  int run() {
+    if (!open_input()) return print_failure(error_);
+    curl_global_init(CURL_GLOBAL_DEFAULT);
+    if (!open_window()) return print_failure(error_);
+    const int rc = show();
+    close_window();
+    curl_global_cleanup();
+    return rc;
+  }
+
+ private:
+  // The mesh file, read whole, or the stream's source (file, stdin or URL), opened.
+  bool open_input() {
+    if (!is_static_) {
+      source_ = open_source(o_.source, error_);
+      return source_ != nullptr;
+    }
+    if (o_.bytes || o_.rate_kbps > 0 || o_.faces_set || o_.ratio_set)
+      std::fprintf(stderr,
+                   "pmz-view: warning: %s is a mesh file, shown whole: --bytes, --rate, --faces "
+                   "and --ratio apply to .pmz streams\n",
+                   o_.source.c_str());
+    return load_static_mesh(o_.source, static_mesh_, error_);
+  }
+
+  // An OpenGL 3.3 core context: in a visible window, or in a hidden one for a screenshot (which
+  // renders into its own framebuffer).
+  bool open_window() {
+    if (!std::getenv("DISPLAY") && !std::getenv("WAYLAND_DISPLAY")) {
+      error_ =
+          "no display: DISPLAY is not set (run in a desktop session, or headless under xvfb-run "
+          "-a)";
+      return false;
+    }
+    glfwSetErrorCallback(on_glfw_error);
+    if (!glfwInit()) {
+      error_ = "cannot open a window: " + g_glfw_error + " (no usable display? try xvfb-run -a)";
+      return false;
+    }
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+    glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+    glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+    glfwWindowHint(GLFW_SAMPLES, 4);
+    glfwWindowHint(GLFW_VISIBLE, screenshot_ ? GLFW_FALSE : GLFW_TRUE);
+    window_ = screenshot_ ? glfwCreateWindow(64, 64, "pmz-view", nullptr, nullptr)
+                          : glfwCreateWindow(o_.width, o_.height,
+                                             ("pmz-view: " + o_.source).c_str(), nullptr, nullptr);
+    if (!window_) {
+      glfwTerminate();
+      error_ = "cannot create an OpenGL 3.3 core window: " + g_glfw_error;
+      return false;
+    }
+    glfwMakeContextCurrent(window_);
+    glfwSwapInterval(1);
+    return true;
+  }
+
+  // The renderer (it needs the context) released before the window.
+  void close_window() {
+    renderer_.reset();
+    glfwDestroyWindow(window_);
+    glfwTerminate();
+  }
+
+  // Everything that needs the window: the renderer, the view, the stream; then to the end.
+  int show() {
+    renderer_ = std::make_unique<Renderer>();
+    if (!renderer_->init(error_)) return print_failure(error_);
+    set_up_view();
+    if (!is_static_) {
+      StreamOptions stream_options;
+      stream_options.bytes_per_second = o_.rate_kbps * 1000;
+      stream_options.byte_limit = o_.bytes;
+      stream_.start(std::move(source_), stream_options);
+    }
+    t0_ = Clock::now();
+    if (is_static_) show_static_mesh();
+    const int rc = !screenshot_ ? run_interactive()
+                   : is_static_ ? write_screenshot("")
+                                : screenshot_of_stream();
+    stream_.stop();
+    // A texture fetch (curl) still running ends before the renderer and curl are released.
+    if (textures_pending_.valid()) textures_pending_.wait();
+    return rc;
+  }
+
+  // The camera and the view state from the options.
+  void set_up_view() {
+    reset_camera_angles();
+    state_.smooth = !o_.flat;
+    state_.wireframe = o_.wireframe;
+    state_.geomorph = !o_.no_geomorph;
+    state_.attributes = !o_.no_attributes;
+    state_.lod.follow = !o_.faces_set && !o_.ratio_set;
+    state_.lod.faces = o_.faces;
+    ratio_pending_ = o_.ratio_set;
+  }
+
+  void reset_camera_angles() {
+    camera_.yaw = o_.yaw_degrees * float(M_PI / 180);
+    camera_.pitch = o_.pitch_degrees * float(M_PI / 180);
+  }
+
+  // A mesh file: its materials and textures, its mesh mirrored once, its statistics.
+  void show_static_mesh() {
+    const std::vector<ViewMaterial> materials =
+        view_materials(static_mesh_.mesh.attributes.materials);
+    use_materials(*renderer_, o_.source, materials,
+                  read_textures(materials, static_mesh_.texture_directory),
+                  static_mesh_.texcoord_origin_top);
+    mirror_.sync(static_mesh_.frame(), 0, 0);
+    stats_.faces = stats_.base_faces = mirror_.face_count;
+    stats_.full_faces = mirror_.face_count;
+    stats_.vertices = mirror_.vertex_count;
+    stats_.base_done = stats_.complete = true;
+    stats_.attributes = mirror_.has_wedges;
+    stats_.attributes_line = describe_attributes(mirror_, materials.size());
+  }
+
+  // One frame of the mirrored mesh into --screenshot; `note` ends the summary line.
+  int write_screenshot(const std::string& note) {
+    renderer_->upload(mirror_);
+    frame_camera(camera_, info_, mirror_, float(o_.width) / float(o_.height));
+    RenderOptions render_options;
+    render_options.smooth = state_.smooth;
+    render_options.wireframe = state_.wireframe;
+    render_options.attributes = state_.attributes;
+    std::vector<uint8_t> rgb;
+    if (!renderer_->capture(camera_, o_.width, o_.height, render_options, rgb, error_) ||
+        !write_png(o_.screenshot, o_.width, o_.height, rgb, error_))
+      return print_failure(error_);
+    std::printf("pmz-view: wrote %s (%dx%d): %u faces, %u vertices%s%s\n", o_.screenshot.c_str(),
+                o_.width, o_.height, stats_.faces, stats_.vertices, note.c_str(),
+                stats_.attributes_line.empty() ? "" : (", " + stats_.attributes_line).c_str());
+    return 0;
+  }
+
+  // The whole requested prefix first, then exactly that level of detail.
+  int screenshot_of_stream() {
+    while (!stream_.done()) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    if (!stream_.error().empty()) return print_failure(o_.source + ": " + stream_.error());
+    {
+      std::lock_guard<std::mutex> lock(stream_.mutex);
+      pmz::Decoder& decoder = stream_.decoder;
+      if (decoder.info().base_done) {
+        if (ratio_pending_)
+          state_.lod.faces = uint64_t(std::llround(o_.ratio * double(decoder.info().full_faces)));
+        stepper_.step(decoder, state_.lod, -1);
+        mirror_.sync(decoder, 0, 0);
+        stream_materials(decoder, o_.source, stream_material_table_, texture_directory_);
+      }
+      read_stats(decoder, stats_, info_);
+    }
+    use_materials(*renderer_, o_.source, stream_material_table_,
+                  read_textures(stream_material_table_, texture_directory_), false);
+    stats_.attributes_line = describe_attributes(mirror_, stream_material_table_.size());
+    if (!stats_.base_done) return print_failure(no_base_mesh_message());
+    return write_screenshot(", " + std::to_string(stream_.bytes_received()) + " bytes read");
+  }
+
+  std::string no_base_mesh_message() const {
+    return o_.bytes ? "the first " + std::to_string(o_.bytes) + " bytes do not hold the base mesh"
+                    : o_.source + ": the stream ended before its base mesh";
+  }
+
+  // The window's frames until it is closed, the stream fails for good, or (with
+  // --exit-when-complete) everything is shown.
+  int run_interactive() {
+    start_overlay();
+    int rc = 0;
+    while (!glfwWindowShouldClose(window_)) {
+      const double t = seconds_since(t0_);
+      loop_.last_frame_seconds = t - loop_.frame_start;
+      loop_.frame_start = t;
+      const float now = float(t);
+      const float morph_seconds = state_.geomorph ? state_.morph_seconds : 0;
+      update_mesh(now, morph_seconds);
+      const bool stream_done = is_static_ || stream_.done();
+      if (!check_stream(stream_done, rc)) break;
+      draw_frame(now, morph_seconds);
+      measure_window(t);
+      const bool finished =
+          is_static_ || (stream_done && stream_.error().empty() && stepper_.settled() &&
+                         (stats_.complete || o_.bytes) &&
+                         (!state_.lod.follow || stats_.splits_applied == stats_.splits_available));
+      if (o_.log && (t >= loop_.next_log || (finished && o_.exit_when_complete))) {
+        log_line(t, stats_, finished ? "complete" : "");
+        loop_.next_log = t + 0.1;
+      }
+      if (finished && o_.exit_when_complete) break;
+      wait_for_next_frame(t, now, morph_seconds, stream_done);
+    }
+    stop_overlay();
+    return rc;
+  }
+
+  void start_overlay() {
+    install_input(window_, &camera_, &state_, &stats_);
+    IMGUI_CHECKVERSION();
+    ImGui::CreateContext();
+    ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini in the working directory
+    ImGui::StyleColorsDark();
+    ImGui_ImplGlfw_InitForOpenGL(window_, true);
+    ImGui_ImplOpenGL3_Init("#version 330 core");
+  }
+
+  void stop_overlay() {
+    ImGui_ImplOpenGL3_Shutdown();
+    ImGui_ImplGlfw_Shutdown();
+    ImGui::DestroyContext();
+  }
+
+  // What arrived since the last frame into the mirror and the renderer, with the statistics.
+  void update_mesh(float now, float morph_seconds) {
+    const auto update_start = Clock::now();
+    if (!is_static_) sync_with_decoder(now, morph_seconds);  // a mesh file was synced once
+    if (textures_pending_.valid() &&
+        textures_pending_.wait_for(std::chrono::seconds(0)) == std::future_status::ready)
+      use_materials(*renderer_, o_.source, stream_material_table_, textures_pending_.get(), false);
+    renderer_->upload(mirror_);
+    loop_.window_update_ms = std::max(loop_.window_update_ms, seconds_since(update_start) * 1000);
+    stats_.bytes = stream_.bytes_received();
+    stats_.bytes_total = stream_.bytes_total();
+  }
+
+  // Refines within the frame's budget and mirrors the decoder's mesh. Never waits on the worker
+  // for long: a busy lock costs a frame or two at most.
+  void sync_with_decoder(float now, float morph_seconds) {
+    const bool locked =
+        loop_.lock_misses >= 3 ? (stream_.mutex.lock(), true) : stream_.mutex.try_lock();
+    if (!locked) {
+      ++loop_.lock_misses;
+      return;
+    }
+    loop_.lock_misses = 0;
+    pmz::Decoder& decoder = stream_.decoder;
+    if (ratio_pending_ && decoder.info().header_done) {
+      state_.lod.faces = uint64_t(std::llround(o_.ratio * double(decoder.info().full_faces)));
+      ratio_pending_ = false;
+    }
+    if (decoder.info().base_done) {
+      // The budget, or a share of the last frame when frames are slow anyway (software GL, huge
+      // meshes): refinement then keeps pace instead of crawling a batch a frame.
+      const double budget =
+          std::min(std::max(o_.budget_ms / 1000, 0.3 * loop_.last_frame_seconds), 1.0);
+      loop_.window_splits += stepper_.step(decoder, state_.lod, budget);
+      mirror_.sync(decoder, now, morph_seconds);
+    }
+    read_stats(decoder, stats_, info_);
+    const bool read_materials_now = stats_.base_done && !stream_materials_read_;
+    if (read_materials_now)
+      stream_materials(decoder, o_.source, stream_material_table_, texture_directory_);
+    stream_.mutex.unlock();
+    if (read_materials_now) {
+      // Base colours now; the textures are read (or fetched) on their own thread and drawn
+      // once they are in, so neither the stream nor the frames wait for them.
+      renderer_->set_materials(stream_material_table_, {}, false);
+      textures_pending_ =
+          std::async(std::launch::async, read_textures, stream_material_table_, texture_directory_);
+      stream_materials_read_ = true;
+    }
+    stats_.attributes = mirror_.has_wedges;
+    stats_.attributes_line = describe_attributes(mirror_, stream_material_table_.size());
+  }
+
+  // A stream error is reported once. False (rc set) when the run ends here: nothing to show, a
+  // run that promised to end on success, or a stream that ended before its base mesh.
+  bool check_stream(bool stream_done, int& rc) {
+    if (stream_done && !stream_.error().empty() && !loop_.error_reported) {
+      loop_.error_reported = true;
+      stats_.error = stream_.error();
+      if (!stats_.base_done || o_.exit_when_complete) {
+        rc = print_failure(o_.source + ": " + stats_.error);
+        return false;
+      }
+      std::fprintf(stderr, "pmz-view: %s: %s (showing what was decoded)\n", o_.source.c_str(),
+                   stats_.error.c_str());
+    }
+    if (stream_done && stream_.error().empty() && !stats_.base_done) {
+      rc = print_failure(no_base_mesh_message());
+      return false;
+    }
+    return true;
+  }
+
+  // The view framed (first frame, or on reset), the mesh and the overlay drawn, buffers swapped.
+  void draw_frame(float now, float morph_seconds) {
+    int fb_width = 0, fb_height = 0;
+    glfwGetFramebufferSize(window_, &fb_width, &fb_height);
+    if ((!loop_.framed || state_.reset_view) && fb_height > 0) {
+      loop_.framed = frame_camera(camera_, info_, mirror_, float(fb_width) / float(fb_height));
+      if (state_.reset_view) reset_camera_angles();
+      state_.reset_view = false;
+    }
+    RenderOptions render_options;
+    render_options.smooth = state_.smooth;
+    render_options.wireframe = state_.wireframe;
+    render_options.morph_seconds = morph_seconds;
+    render_options.now = now;
+    render_options.attributes = state_.attributes;
+    renderer_->draw(camera_, fb_width, fb_height, render_options);
+    ImGui_ImplOpenGL3_NewFrame();
+    ImGui_ImplGlfw_NewFrame();
+    ImGui::NewFrame();
+    draw_overlay(state_, stats_);
+    ImGui::Render();
+    ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+    glfwSwapBuffers(window_);
+  }
+
+  // Splits and frames per second, and the slowest update, over half-second windows.
+  void measure_window(double t) {
+    ++loop_.window_frames;
+    if (t - loop_.window_start < 0.5) return;
+    stats_.splits_per_second = double(loop_.window_splits) / (t - loop_.window_start);
+    stats_.frames_per_second = double(loop_.window_frames) / (t - loop_.window_start);
+    stats_.update_ms = loop_.window_update_ms;
+    loop_.window_update_ms = 0;
+    loop_.window_start = t;
+    loop_.window_splits = loop_.window_frames = 0;
+  }
+
+  // Idle (nothing arriving, refining or gliding): sleeps until input instead of spinning.
+  // Otherwise caps at ~60 fps where swaps do not wait for vblank (e.g. Xvfb).
+  void wait_for_next_frame(double t, float now, float morph_seconds, bool stream_done) {
+    const bool idle = is_static_ || (stream_done && stepper_.settled() &&
+                                     now - mirror_.last_morph_start > morph_seconds);
+    const double frame_seconds = seconds_since(t0_) - t;
+    if (idle) {
+      glfwWaitEventsTimeout(0.25);
+      return;
+    }
+    if (frame_seconds < 1.0 / 60)
+      std::this_thread::sleep_for(std::chrono::duration<double>(1.0 / 60 - frame_seconds));
+    glfwPollEvents();
+  }
+
+  const Options& o_;
+  const bool screenshot_, is_static_;
+  std::string error_;
+  StaticMesh static_mesh_;
+  std::unique_ptr<Source> source_;
+  GLFWwindow* window_ = nullptr;
+  std::unique_ptr<Renderer> renderer_;
+  Camera camera_;
+  ViewState state_;
+  bool ratio_pending_ = false;  // --ratio needs the header's full face count
+  Stats stats_;
+  pmz::StreamInfo info_;
+  MeshMirror mirror_;
+  LodStepper stepper_;
+  Stream stream_;
+  Clock::time_point t0_;
+  // A stream's materials, read once its base mesh is in; its textures on their own thread.
+  std::vector<ViewMaterial> stream_material_table_;
+  std::string texture_directory_;
+  bool stream_materials_read_ = false;
+  std::future<Textures> textures_pending_;
+  // The interactive loop's state across frames.
+  struct {
+    bool framed = false, error_reported = false;
+    int lock_misses = 0;
+    double next_log = 0, window_start = 0;
+    uint64_t window_splits = 0, window_frames = 0;
+    double window_update_ms = 0;  // slowest decoder step + mirror + upload in the window
+    double last_frame_seconds = 0, frame_start = 0;
+  } loop_;
+};
+
 }  // namespace
 
 int main(int argc, char** argv) {
   Options o;
   if (int rc = parse(argc, argv, o); rc >= 0) return rc;
-  const bool screenshot = !o.screenshot.empty();
-
-  std::string error;
-  const bool is_static = is_mesh_file(o.source);
-  StaticMesh static_mesh;
-  std::unique_ptr<Source> source;
-  if (is_static) {
-    if (o.bytes || o.rate_kbps > 0 || o.faces_set || o.ratio_set)
-      std::fprintf(stderr,
-                   "pmz-view: warning: %s is a mesh file, shown whole: --bytes, --rate, --faces "
-                   "and --ratio apply to .pmz streams\n",
-                   o.source.c_str());
-    if (!load_static_mesh(o.source, static_mesh, error)) return fail(error);
-  } else {
-    source = open_source(o.source, error);
-    if (!source) return fail(error);
-  }
-  curl_global_init(CURL_GLOBAL_DEFAULT);
-
-  if (!std::getenv("DISPLAY") && !std::getenv("WAYLAND_DISPLAY"))
-    return fail(
-        "no display: DISPLAY is not set (run in a desktop session, or headless under xvfb-run -a)");
-  glfwSetErrorCallback(on_glfw_error);
-  if (!glfwInit())
-    return fail("cannot open a window: " + g_glfw_error + " (no usable display? try xvfb-run -a)");
-  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
-  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
-  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
-  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
-  glfwWindowHint(GLFW_SAMPLES, 4);
-  // A screenshot renders into its own framebuffer: the window only carries the context.
-  glfwWindowHint(GLFW_VISIBLE, screenshot ? GLFW_FALSE : GLFW_TRUE);
-  GLFWwindow* window = screenshot
-                           ? glfwCreateWindow(64, 64, "pmz-view", nullptr, nullptr)
-                           : glfwCreateWindow(o.width, o.height, ("pmz-view: " + o.source).c_str(),
-                                              nullptr, nullptr);
-  if (!window) {
-    glfwTerminate();
-    return fail("cannot create an OpenGL 3.3 core window: " + g_glfw_error);
-  }
-  glfwMakeContextCurrent(window);
-  glfwSwapInterval(1);
-
-  int rc = 0;
-  {
-    Renderer renderer;
-    if (!renderer.init(error)) {
-      glfwDestroyWindow(window);
-      glfwTerminate();
-      return fail(error);
-    }
-    Camera camera;
-    camera.yaw = o.yaw_degrees * float(M_PI / 180);
-    camera.pitch = o.pitch_degrees * float(M_PI / 180);
-    ViewState state;
-    state.smooth = !o.flat;
-    state.wireframe = o.wireframe;
-    state.geomorph = !o.no_geomorph;
-    state.attributes = !o.no_attributes;
-    state.lod.follow = !o.faces_set && !o.ratio_set;
-    state.lod.faces = o.faces;
-    bool ratio_pending = o.ratio_set;  // needs the header's full face count
-    Stats stats;
-    pmz::StreamInfo info;
-    MeshMirror mirror;
-    LodStepper stepper;
-
-    Stream stream;
-    if (!is_static) {
-      StreamOptions stream_options;
-      stream_options.bytes_per_second = o.rate_kbps * 1000;
-      stream_options.byte_limit = o.bytes;
-      stream.start(std::move(source), stream_options);
-    }
-    const auto t0 = Clock::now();
-    size_t material_count = 0;
-    // A stream's materials, read once its base mesh is in.
-    std::vector<ViewMaterial> stream_material_table;
-    std::string texture_directory;
-    bool stream_materials_read = false;
-    std::future<Textures> textures_pending;
-    if (is_static) {
-      const std::vector<ViewMaterial> materials =
-          view_materials(static_mesh.mesh.attributes.materials);
-      use_materials(renderer, o.source, materials,
-                    read_textures(materials, static_mesh.texture_directory),
-                    static_mesh.texcoord_origin_top);
-      material_count = materials.size();
-      mirror.sync(static_mesh.frame(), 0, 0);
-      stats.faces = stats.base_faces = mirror.face_count;
-      stats.full_faces = mirror.face_count;
-      stats.vertices = mirror.vertex_count;
-      stats.base_done = stats.complete = true;
-      stats.attributes = mirror.has_wedges;
-      stats.attributes_line = describe_attributes(mirror, material_count);
-    }
-
-    // One frame of the mirrored mesh into --screenshot; `note` ends the summary line.
-    auto write_screenshot = [&](const std::string& note) {
-      renderer.upload(mirror);
-      frame_camera(camera, info, mirror, float(o.width) / float(o.height));
-      RenderOptions render_options;
-      render_options.smooth = state.smooth;
-      render_options.wireframe = state.wireframe;
-      render_options.attributes = state.attributes;
-      std::vector<uint8_t> rgb;
-      if (!renderer.capture(camera, o.width, o.height, render_options, rgb, error) ||
-          !write_png(o.screenshot, o.width, o.height, rgb, error))
-        return fail(error);
-      std::printf("pmz-view: wrote %s (%dx%d): %u faces, %u vertices%s%s\n", o.screenshot.c_str(),
-                  o.width, o.height, stats.faces, stats.vertices, note.c_str(),
-                  stats.attributes_line.empty() ? "" : (", " + stats.attributes_line).c_str());
-      return 0;
-    };
-
-    if (screenshot && is_static) {
-      rc = write_screenshot("");
-    } else if (screenshot) {
-      // The whole requested prefix first, then exactly that level of detail.
-      while (!stream.done()) std::this_thread::sleep_for(std::chrono::milliseconds(5));
-      if (!stream.error().empty()) {
-        rc = fail(o.source + ": " + stream.error());
-      } else {
-        {
-          std::lock_guard<std::mutex> lock(stream.mutex);
-          pmz::Decoder& decoder = stream.decoder;
-          if (decoder.info().base_done) {
-            if (ratio_pending)
-              state.lod.faces = uint64_t(std::llround(o.ratio * double(decoder.info().full_faces)));
-            stepper.step(decoder, state.lod, -1);
-            mirror.sync(decoder, 0, 0);
-            stream_materials(decoder, o.source, stream_material_table, texture_directory);
-          }
-          read_stats(decoder, stats, info);
-        }
-        use_materials(renderer, o.source, stream_material_table,
-                      read_textures(stream_material_table, texture_directory), false);
-        stats.attributes_line = describe_attributes(mirror, stream_material_table.size());
-        if (!stats.base_done) {
-          rc = fail(o.bytes ? "the first " + std::to_string(o.bytes) +
-                                  " bytes do not hold the base mesh"
-                            : o.source + ": the stream ended before its base mesh");
-        } else {
-          rc = write_screenshot(", " + std::to_string(stream.bytes_received()) + " bytes read");
-        }
-      }
-    } else {
-      install_input(window, &camera, &state, &stats);
-      IMGUI_CHECKVERSION();
-      ImGui::CreateContext();
-      ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini in the working directory
-      ImGui::StyleColorsDark();
-      ImGui_ImplGlfw_InitForOpenGL(window, true);
-      ImGui_ImplOpenGL3_Init("#version 330 core");
-
-      bool framed = false, error_reported = false;
-      int lock_misses = 0;
-      double next_log = 0, window_start = 0;
-      uint64_t window_splits = 0, window_frames = 0;
-      double window_update_ms = 0;  // slowest decoder step + mirror + upload in the window
-      double last_frame_seconds = 0, frame_start = 0;
-      while (!glfwWindowShouldClose(window)) {
-        const double t = seconds_since(t0);
-        last_frame_seconds = t - frame_start;
-        frame_start = t;
-        const float now = float(t);
-        const float morph_seconds = state.geomorph ? state.morph_seconds : 0;
-        const auto update_start = Clock::now();
-        // Never wait on the worker for long: a busy lock costs a frame or two at most.
-        bool locked = !is_static &&
-                      (lock_misses >= 3 ? (stream.mutex.lock(), true) : stream.mutex.try_lock());
-        if (is_static) {
-          // Synced once before the loop; nothing arrives.
-        } else if (locked) {
-          lock_misses = 0;
-          pmz::Decoder& decoder = stream.decoder;
-          if (ratio_pending && decoder.info().header_done) {
-            state.lod.faces = uint64_t(std::llround(o.ratio * double(decoder.info().full_faces)));
-            ratio_pending = false;
-          }
-          if (decoder.info().base_done) {
-            // The budget, or a share of the last frame when frames are slow anyway (software
-            // GL, huge meshes): refinement then keeps pace instead of crawling a batch a frame.
-            const double budget =
-                std::min(std::max(o.budget_ms / 1000, 0.3 * last_frame_seconds), 1.0);
-            window_splits += stepper.step(decoder, state.lod, budget);
-            mirror.sync(decoder, now, morph_seconds);
-          }
-          read_stats(decoder, stats, info);
-          const bool read_materials_now = stats.base_done && !stream_materials_read;
-          if (read_materials_now)
-            stream_materials(decoder, o.source, stream_material_table, texture_directory);
-          stream.mutex.unlock();
-          if (read_materials_now) {
-            // Base colours now; the textures are read (or fetched) on their own thread and
-            // drawn once they are in, so neither the stream nor the frames wait for them.
-            renderer.set_materials(stream_material_table, {}, false);
-            textures_pending = std::async(std::launch::async, read_textures, stream_material_table,
-                                          texture_directory);
-            stream_materials_read = true;
-          }
-          stats.attributes = mirror.has_wedges;
-          stats.attributes_line = describe_attributes(mirror, stream_material_table.size());
-        } else {
-          ++lock_misses;
-        }
-        if (textures_pending.valid() &&
-            textures_pending.wait_for(std::chrono::seconds(0)) == std::future_status::ready)
-          use_materials(renderer, o.source, stream_material_table, textures_pending.get(), false);
-        renderer.upload(mirror);
-        window_update_ms = std::max(window_update_ms, seconds_since(update_start) * 1000);
-        stats.bytes = stream.bytes_received();
-        stats.bytes_total = stream.bytes_total();
-
-        const bool stream_done = is_static || stream.done();
-        if (stream_done && !stream.error().empty() && !error_reported) {
-          error_reported = true;
-          stats.error = stream.error();
-          // Nothing to show, or a run that promised to end on success: give up now.
-          if (!stats.base_done || o.exit_when_complete) {
-            rc = fail(o.source + ": " + stats.error);
-            break;
-          }
-          std::fprintf(stderr, "pmz-view: %s: %s (showing what was decoded)\n", o.source.c_str(),
-                       stats.error.c_str());
-        }
-        if (stream_done && stream.error().empty() && !stats.base_done) {
-          rc = fail(o.bytes ? "the first " + std::to_string(o.bytes) +
-                                  " bytes do not hold the base mesh"
-                            : o.source + ": the stream ended before its base mesh");
-          break;
-        }
-
-        int fb_width = 0, fb_height = 0;
-        glfwGetFramebufferSize(window, &fb_width, &fb_height);
-        if ((!framed || state.reset_view) && fb_height > 0) {
-          framed = frame_camera(camera, info, mirror, float(fb_width) / float(fb_height));
-          if (state.reset_view) {
-            camera.yaw = o.yaw_degrees * float(M_PI / 180);
-            camera.pitch = o.pitch_degrees * float(M_PI / 180);
-          }
-          state.reset_view = false;
-        }
-
-        RenderOptions render_options;
-        render_options.smooth = state.smooth;
-        render_options.wireframe = state.wireframe;
-        render_options.morph_seconds = morph_seconds;
-        render_options.now = now;
-        render_options.attributes = state.attributes;
-        renderer.draw(camera, fb_width, fb_height, render_options);
-        ImGui_ImplOpenGL3_NewFrame();
-        ImGui_ImplGlfw_NewFrame();
-        ImGui::NewFrame();
-        draw_overlay(state, stats);
-        ImGui::Render();
-        ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
-        glfwSwapBuffers(window);
-
-        ++window_frames;
-        if (t - window_start >= 0.5) {
-          stats.splits_per_second = double(window_splits) / (t - window_start);
-          stats.frames_per_second = double(window_frames) / (t - window_start);
-          stats.update_ms = window_update_ms;
-          window_update_ms = 0;
-          window_start = t;
-          window_splits = window_frames = 0;
-        }
-        const bool finished =
-            is_static || (stream_done && stream.error().empty() && stepper.settled() &&
-                          (stats.complete || o.bytes) &&
-                          (!state.lod.follow || stats.splits_applied == stats.splits_available));
-        if (o.log && (t >= next_log || (finished && o.exit_when_complete))) {
-          log_line(t, stats, finished ? "complete" : "");
-          next_log = t + 0.1;
-        }
-        if (finished && o.exit_when_complete) break;
-
-        // Idle (nothing arriving, refining or gliding): sleep until input instead of spinning.
-        const bool idle = is_static || (stream_done && stepper.settled() &&
-                                        now - mirror.last_morph_start > morph_seconds);
-        const double frame_seconds = seconds_since(t0) - t;
-        if (idle) {
-          glfwWaitEventsTimeout(0.25);
-        } else {
-          // Cap at ~60 fps where swaps do not wait for vblank (e.g. Xvfb).
-          if (frame_seconds < 1.0 / 60)
-            std::this_thread::sleep_for(std::chrono::duration<double>(1.0 / 60 - frame_seconds));
-          glfwPollEvents();
-        }
-      }
-      ImGui_ImplOpenGL3_Shutdown();
-      ImGui_ImplGlfw_Shutdown();
-      ImGui::DestroyContext();
-    }
-    stream.stop();
-  }
-  glfwDestroyWindow(window);
-  glfwTerminate();
-  curl_global_cleanup();
-  return rc;
+  return Viewer(o).run();
 }
