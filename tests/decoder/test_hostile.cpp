@@ -1284,6 +1284,86 @@ TEST(Hostile, AttributeChunksOutOfPlaceAreCorrupt) {
   }
 }
 
+// A type-5 chunk in a stream without attributes is a chunk of unknown type (spec/format.md
+// sections 3 and 14): its CRC is checked, its payload is not read, and the levels are those of
+// the stream without it.
+TEST(Hostile, AttributeChunkWithoutAttributesIsSkipped) {
+  const Bytes file = read_vector("sphere-q14.pmz");
+  ASSERT_FALSE(file.empty());
+  const std::vector<size_t> at = chunk_offsets(file);
+  ASSERT_GE(at.size(), 4u);  // HEAD BASE SPLT ... END
+  pmz::Decoder plain;
+  ASSERT_EQ(plain.feed(file.data(), file.size()), pmz::Status::ok);
+  ASSERT_EQ(plain.finish(), pmz::Status::ok);
+  plain.refine();
+  const std::vector<float> want(plain.positions(), plain.positions() + plain.vertex_count() * 3);
+  const std::vector<uint32_t> want_faces(plain.indices(), plain.indices() + plain.face_count() * 3);
+  Bytes attr;  // not an ATTR payload at all: a decoder that read it would refuse it
+  pmz::append_chunk(attr, 5, {0xFF, 0x00, 0x13, 0x37, 0xFF, 0xFF, 0xFF});
+  for (const size_t before : {at[1], at[2], at[3]}) {  // before BASE, before / after a SPLT
+    Bytes b(file.begin(), file.begin() + std::ptrdiff_t(before));
+    b.insert(b.end(), attr.begin(), attr.end());
+    b.insert(b.end(), file.begin() + std::ptrdiff_t(before), file.end());
+    pmz::Decoder d;
+    ASSERT_EQ(d.feed(b.data(), b.size()), pmz::Status::ok) << "at " << before;
+    ASSERT_EQ(d.finish(), pmz::Status::ok) << "at " << before;
+    d.refine();
+    EXPECT_EQ(d.status(), pmz::Status::ok);
+    EXPECT_EQ(d.wedge_count(), 0u);
+    EXPECT_EQ(std::vector<float>(d.positions(), d.positions() + d.vertex_count() * 3), want);
+    EXPECT_EQ(std::vector<uint32_t>(d.indices(), d.indices() + d.face_count() * 3), want_faces);
+    b[before + 2] ^= 1;  // its CRC is checked all the same
+    pmz::Decoder bad;
+    EXPECT_EQ(bad.feed(b.data(), b.size()), pmz::Status::bad_checksum) << "at " << before;
+  }
+}
+
+// With attributes BASE is accepted only once its ATTR chunk has decoded (spec/format.md section
+// 14.1): before it, and after a refused one, there is no level 0.
+TEST(Hostile, BaseWithAttributesWaitsForItsAttrChunk) {
+  const Bytes file = read_vector("seamed-q.pmz");
+  ASSERT_FALSE(file.empty());
+  const std::vector<size_t> at = chunk_offsets(file);
+  ASSERT_GE(at.size(), 6u);  // HEAD BASE ATTR SPLT ATTR ... END
+  {                          // the stream ends before the base ATTR
+    const Bytes b(file.begin(), file.begin() + std::ptrdiff_t(at[2]));
+    pmz::Decoder d;
+    ASSERT_EQ(d.feed(b.data(), b.size()), pmz::Status::ok);
+    EXPECT_FALSE(d.info().base_done);
+    EXPECT_EQ(d.vertex_count(), 0u);
+    EXPECT_EQ(d.face_count(), 0u);
+    EXPECT_EQ(d.splits_available(), 0u);
+    EXPECT_EQ(d.finish(), pmz::Status::truncated);
+    EXPECT_EQ(d.vertex_count(), 0u);
+  }
+  {  // the base ATTR cut short (its CRC repaired): refused, and still no level
+    const size_t end = at[3];
+    pmz::ChunkFrame f;
+    ASSERT_TRUE(frame_at(file, at[2], f));
+    ASSERT_GE(f.payload_size, 2u);
+    Bytes b(file.begin(), file.begin() + std::ptrdiff_t(at[2]));
+    Bytes attr;
+    pmz::append_chunk(attr, 5,
+                      Bytes(file.begin() + std::ptrdiff_t(at[2] + f.header_size),
+                            file.begin() + std::ptrdiff_t(at[2] + f.header_size + 1)));
+    b.insert(b.end(), attr.begin(), attr.end());
+    b.insert(b.end(), file.begin() + std::ptrdiff_t(end), file.end());
+    pmz::Decoder d;
+    EXPECT_EQ(d.feed(b.data(), b.size()), pmz::Status::corrupt);
+    EXPECT_FALSE(d.info().base_done);
+    EXPECT_EQ(d.vertex_count(), 0u);
+    EXPECT_EQ(d.face_count(), 0u);
+  }
+  {  // the whole base ATTR: level 0 with its a-wedges
+    const Bytes b(file.begin(), file.begin() + std::ptrdiff_t(at[3]));
+    pmz::Decoder d;
+    ASSERT_EQ(d.feed(b.data(), b.size()), pmz::Status::ok);
+    EXPECT_TRUE(d.info().base_done);
+    EXPECT_EQ(d.vertex_count(), d.info().base_vertices);
+    EXPECT_GT(d.wedge_count(), 0u);
+  }
+}
+
 TEST(Hostile, EveryByteOfTheSampleFile) {
   FILE* fp = std::fopen(PMZ_SOURCE_DIR "/tests/data/sample.pmz", "rb");
   if (!fp) GTEST_SKIP() << "tests/data/sample.pmz absent";
