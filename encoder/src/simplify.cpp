@@ -258,13 +258,17 @@ class Engine {
   // link condition keeps holes open), so it is set once.
   // kGuardDeferred: the key is the guard's penalised cost of the collapse to target (set when
   // the collapse was held back; any recomputation of the key clears it).
+  // kCellHeld: a collapse out of the vertex was illegal only for the cells (hierarchical
+  // simplification): its key is keyed afresh when the next level starts.
   enum : uint8_t {
     kTorsionStale = 1,
     kKeyStale = 2,
     kInputQuadric = 4,
     kBoundary = 8,
-    kGuardDeferred = 16
+    kGuardDeferred = 16,
+    kCellHeld = 32
   };
+  bool keyed = false;  // the heap holds the keys of an earlier run
   std::vector<uint8_t> stale;
   // Scratch: a stamp per vertex for set membership, and buffers reused across collapses.
   std::vector<uint32_t> mark;
@@ -494,7 +498,10 @@ bool Engine::legal(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb) {
   // Seams and material boundaries: along them or not at all (spec/algorithm.md section 7).
   if (attr.active && !attr.allowed(m, u, v)) return false;
   const uint64_t home = cells ? cell[u] : 0;
-  if (cells && cell[v] != home) return false;
+  if (cells && cell[v] != home) {
+    stale[u] |= kCellHeld;
+    return false;
+  }
   const uint32_t vl = ha != kNone ? m.vert[HalfEdgeMesh::prev(ha)] : kNone;
   const uint32_t vr = hb != kNone ? m.vert[HalfEdgeMesh::prev(hb)] : kNone;
   // Link condition: u and v share no neighbour but the wedge vertices (else the collapse
@@ -512,7 +519,11 @@ bool Engine::legal(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb) {
     shared |= mark[w] == mark_id && w != vl && w != vr;
     foreign |= cells && cell[w] != home;
   });
-  if (shared || foreign) return false;
+  if (shared) return false;
+  if (foreign) {
+    stale[u] |= kCellHeld;
+    return false;
+  }
   if (!boundary_edge && valence_u == 3 && valence_v == 3) return false;  // a tetrahedron stays
   // Geometry of the faces that survive around u, with u moved onto v.
   const uint32_t fa = ha != kNone ? HalfEdgeMesh::face(ha) : kNone,
@@ -829,14 +840,15 @@ bool Engine::init(const IndexedMesh& input, const SimplifyOptions& options, std:
 void Engine::run(const SimplifyOptions& options) {
   auto t0 = Clock::now();
   const uint32_t n = m.vertex_count();
-  // A later run (the next level of a hierarchical simplification) keys every vertex afresh: the
-  // collapses the last level's cells held back are candidates again.
-  heap.reset(n);
-  for (uint32_t v = 0; v < n; ++v) {
-    if (m.out[v] != kNone) refresh_torsion(v);
-    stale[v] &= uint8_t(~(kKeyStale | kGuardDeferred));
-  }
-  {
+  if (keyed) {
+    // A later run (the next level of a hierarchical simplification): the vertices whose best
+    // collapse the last level's cells held back are keyed afresh; the other keys stand.
+    for (uint32_t v = 0; v < n; ++v)
+      if (stale[v] & kCellHeld) {
+        stale[v] &= uint8_t(~kCellHeld);
+        set_key(v, best_candidate(v));
+      }
+  } else {
     // The initial keys on two threads (T is not stale at the start, nothing else is written),
     // pushed in vertex order.
     std::vector<Candidate> initial(n);
@@ -852,8 +864,9 @@ void Engine::run(const SimplifyOptions& options) {
       target[v] = initial[v].target;
       heap.push_unordered(v, initial[v].cost);
     }
+    heap.build();
+    keyed = true;
   }
-  heap.build();
   stats.initial_costs = seconds_since(t0);
   t0 = Clock::now();
 
