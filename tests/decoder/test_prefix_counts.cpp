@@ -29,8 +29,8 @@ uint64_t varint(const std::vector<uint8_t>& b, size_t& at) {
   return 0;
 }
 
-// The container as a reader of sections 3 and 8 sees it: after each chunk, the stream length up to
-// its end and the splits available there.
+// The container as a reader of spec/format.md sections 3 and 8 sees it: after each chunk, the
+// stream length up to its end and the splits available there.
 struct Layout {
   uint64_t base_vertices = 0, base_faces = 0, total_splits = 0, full_faces = 0;
   bool attributes = false;
