@@ -45,11 +45,11 @@ int main(int argc, char** argv) {
   bool json = false, one_sided = false;
   bool no_attributes = false;
   app.add_option("ORIGINAL", original_path,
-                 "reference mesh (OBJ/OFF/PLY/STL/glTF; - for stdin with --format)")
+                 tool::mesh_files_help("reference mesh", false, "- for stdin with --format"))
       ->required();
   app.add_option("OTHER", other_path, "mesh to measure against it (- for stdin with --format)")
       ->required();
-  tool::add_stdin_format_option(app, format);
+  tool::add_format_option(app, format, true, false, "format of a mesh read from stdin");
   app.add_option(
       "--samples", options.samples,
       "face samples per direction (default: 10x the larger face count, within [200k, 2M])");

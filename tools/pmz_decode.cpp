@@ -1,5 +1,6 @@
-// pmz-decode: decode a .pmz stream (or its first N bytes, as a partial download would) to
-// OBJ (+MTL)/PLY/glb with its attributes, or OFF, at a chosen level of detail. Reads a file or
+// pmz-decode: decode a .pmz stream (or its first N bytes, as a partial download would) to any
+// mesh format meshio writes (OBJ with its MTL, PLY and glb keep the attributes), at a chosen
+// level of detail. Reads a file or
 // stdin (-); the level goes to meshio's writer as an IndexedMesh (decoder -> IndexedMesh ->
 // write_mesh_to) into a safe output (app_support: temporary + rename, or stdout with -). No
 // OpenMesh.
@@ -21,17 +22,19 @@ namespace tool = pmz::tool;
 int main(int argc, char** argv) {
   app_support::init("pmz-decode");
   CLI::App app{
-      "pmz-decode: decode a .pmz stream (or its first N bytes) to OBJ/PLY/OFF/glb at a chosen "
-      "level of detail",
+      "pmz-decode: decode a .pmz stream (or its first N bytes) to a mesh at a chosen level of "
+      "detail",
       "pmz-decode"};
   std::string input, output, format;
   uint64_t faces = 0, vertices = 0, bytes = 0;
   double ratio = 1;
   app.add_option("input", input, "input .pmz (- for stdin)")->required();
-  app.add_option("-o,--output", output, "output mesh (.obj, .ply, .glb or .off; - for stdout)")
+  app.add_option("-o,--output", output,
+                 tool::mesh_files_help("output mesh", true,
+                                       "- for stdout; .off and .stl hold no attributes"))
       ->required();
-  app.add_option("--format", format, "output format (default: the output's extension)")
-      ->check(CLI::IsMember({"obj", "ply", "off"}));
+  tool::add_format_option(app, format, false, true,
+                          "format of an output without a mesh extension (stdout, devices)");
   auto* of =
       app.add_option("--faces", faces, "smallest level with at least N faces (0: the base mesh)");
   auto* orr =
@@ -53,15 +56,9 @@ int main(int argc, char** argv) {
       "holds.");
   if (int rc = app_support::parse(app, argc, argv); rc >= 0) return rc;
 
-  if (format.empty()) format = app_support::extension(output);
-  if (format != "obj" && format != "ply" && format != "off" && format != "glb") {
-    app_support::print_error(output == "-"
-                                 ? "writing to stdout needs --format obj|ply|off|glb (see --help)"
-                                 : output +
-                                       ": output must end in .obj, .ply, .off or .glb, or give "
-                                       "--format (see --help)");
-    return app_support::kExitUsage;
-  }
+  std::string problem;
+  format = app_support::mesh_output_format(output, format, problem);
+  if (format.empty()) return app_support::usage_error(problem);
   if (app_support::same_file(input, output)) {
     app_support::print_error(output, "is the input file; not overwriting it");
     return app_support::kExitFailure;
@@ -71,7 +68,7 @@ int main(int argc, char** argv) {
   // error and on SIGINT/SIGTERM) exists while the input streams in.
   app_support::OutputFile out;
   std::string error;
-  if (!out.open(output, format == "ply" || format == "glb", error)) {
+  if (!out.open(output, tool::binary_mesh_format(format), error)) {
     app_support::print_error(error);
     return app_support::kExitFailure;
   }

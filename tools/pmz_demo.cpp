@@ -33,9 +33,13 @@ pmz::IndexedMesh current_mesh(const pmz::Decoder& d) {
 
 int main(int argc, char** argv) {
   pmz::app_support::init("pmz-demo");
+  if (argc > 1 && !std::strcmp(argv[1], "--version")) {
+    std::printf("pmz-demo %s\n", pmz::app_support::version());
+    return 0;
+  }
   if (argc > 1 && (!std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h"))) {
     std::printf(
-        "usage: pmz-demo [OUT_DIR] [--faces N]\n"
+        "usage: pmz-demo [OUT_DIR] [--faces N] | --version\n"
         "Makes a procedural sample mesh (sharp creases + smooth ripples, ~50k triangles),\n"
         "encodes it to OUT_DIR/sample.pmz, streams it back through the decoder and prints,\n"
         "per level of detail: faces, bytes that had to arrive, and the symmetric Hausdorff\n"

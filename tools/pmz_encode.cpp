@@ -105,7 +105,8 @@ int main(int argc, char** argv) {
   bool quiet = false, force_progress = false;
   EncodeSettings settings;
   tool::SimplifierCli simplifier;
-  app.add_option("inputs", inputs, "input meshes (OBJ/OFF/PLY/STL); - reads one from stdin")
+  app.add_option("inputs", inputs,
+                 tool::mesh_files_help("input meshes", false, "- reads one from stdin"))
       ->required()
       ->type_name("MESH...");
   auto* out_opt = app.add_option("-o,--output", output, "output .pmz (- for stdout)");
@@ -115,7 +116,7 @@ int main(int argc, char** argv) {
   app.add_option("-j,--jobs", jobs, "assets encoded at once with --out-dir (default: cores)")
       ->check(CLI::Range(1u, 1024u))
       ->capture_default_str();
-  tool::add_stdin_format_option(app, format);
+  tool::add_format_option(app, format, true, false, "format of a mesh read from stdin");
   simplifier.add_to(app);
   app.add_option("--position-bits", settings.write.position_bits,
                  "quantization bits (0 = lossless float32)")

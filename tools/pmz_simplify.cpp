@@ -1,5 +1,5 @@
 // pmz-simplify: simplify a mesh to a face count or ratio with the multi-feature metric (or
-// plain QEM) and write it as OBJ/OFF/PLY.
+// plain QEM) and write it in any format meshio writes (pmz/mesh_file_formats.hpp).
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cmath>
@@ -25,12 +25,15 @@ int main(int argc, char** argv) {
   uint64_t faces = 0;
   bool verbose = false, quiet = false, force_progress = false;
   tool::SimplifierCli simplifier;
-  app.add_option("input", input, "input mesh (OBJ, OFF, PLY, STL; - for stdin with --format)")
+  app.add_option("input", input, tool::mesh_files_help("input mesh", false, "- for stdin"))
       ->required();
   app.add_option("-o,--output", output,
-                 "output mesh (.obj, .ply, .glb with attributes; .off, .stl; - for stdout)")
+                 tool::mesh_files_help("output mesh", true,
+                                       "- for stdout; .off and .stl hold no attributes"))
       ->required();
-  tool::add_stdin_format_option(app, format, "format of stdin and stdout (default: by extension)");
+  tool::add_format_option(app, format, true, true,
+                          "format of stdin, and of an output without a mesh extension (stdout, "
+                          "devices)");
   auto* ratio_opt =
       app.add_option("--ratio", ratio, "target face count as a fraction of the input's (0..1]");
   auto* faces_opt = app.add_option("--faces", faces, "target face count");
@@ -45,8 +48,11 @@ int main(int argc, char** argv) {
     return usage("give --ratio R or --faces N");
   if (ratio_opt->count() && !(ratio > 0 && ratio <= 1)) return usage("--ratio must be in (0, 1]");
   if (faces_opt->count() && faces == 0) return usage("--faces must be at least 1");
-  if ((input == "-" || output == "-") && format.empty())
-    return usage("stdin or stdout (-) needs --format obj|off|ply|stl");
+  if (const std::string problem = tool::stdin_input_problem({input}, format); !problem.empty())
+    return usage(problem);
+  std::string problem;
+  const std::string output_format = app_support::mesh_output_format(output, format, problem);
+  if (output_format.empty()) return usage(problem);
   if (app_support::same_file(input, output)) {
     app_support::print_error(output, "is the input file; not overwriting it");
     return app_support::kExitFailure;
@@ -60,8 +66,7 @@ int main(int argc, char** argv) {
     app_support::print_error(error);
     return app_support::kExitFailure;
   }
-  tool::warn_if_attributes_lost(
-      output, format.empty() ? output.substr(output.find_last_of('.') + 1) : format, mesh);
+  tool::warn_if_attributes_lost(output, output_format, mesh);
   const uint64_t in_faces = mesh.face_count();
   options.target_faces =
       faces_opt->count() ? faces
@@ -81,7 +86,7 @@ int main(int argc, char** argv) {
     return app_support::kExitFailure;
   }
   pmz::IndexedMesh result = pmz::mesh_after(seq, seq.collapses.size());
-  if (!tool::write_mesh_output(output, format, result, error)) {
+  if (!tool::write_mesh_output(output, output_format, result, error)) {
     app_support::print_error(error);
     return app_support::kExitFailure;
   }

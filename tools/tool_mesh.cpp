@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "pmz/app_support.hpp"
+#include "pmz/mesh_file_formats.hpp"
 
 namespace pmz::tool {
 
@@ -16,6 +17,21 @@ void replace_all(std::string& s, const std::string& from, const std::string& to)
   if (from.empty()) return;
   for (size_t at = 0; (at = s.find(from, at)) != std::string::npos; at += to.size())
     s.replace(at, from.size(), to);
+}
+
+// A glTF read from stdin has no folder to look its buffer files up in (the temporary it is
+// parsed from would give it /tmp): only embedded buffers are read.
+bool no_external_gltf_buffers(const std::string& format, const std::vector<uint8_t>& bytes,
+                              std::string& error) {
+  if (format != "gltf" && format != "glb") return true;
+  const std::vector<std::string> files = gltf_external_buffers(
+      std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+  if (files.empty()) return true;
+  error =
+      "stdin: a glTF read from stdin can use only embedded buffers (a .glb's own or data: "
+      "URIs), and this one references '" +
+      files.front() + "'; give the file's path instead";
+  return false;
 }
 
 }  // namespace
@@ -32,6 +48,7 @@ bool read_mesh_input(const std::string& path, const std::string& stdin_format, I
     std::vector<uint8_t> bytes;
     ScratchFile scratch;
     ok = app_support::read_input("-", bytes, error) &&
+         no_external_gltf_buffers(stdin_format, bytes, error) &&
          scratch.create(bytes, app_support::name(), "." + stdin_format, error) &&
          read_mesh(scratch.path(), mesh, stats, error);
     if (!ok) replace_all(error, scratch.path(), shown);
@@ -43,15 +60,26 @@ bool read_mesh_input(const std::string& path, const std::string& stdin_format, I
   return ok;
 }
 
-CLI::Option* add_stdin_format_option(CLI::App& app, std::string& format, const std::string& help) {
-  return app.add_option("--format", format, help)
-      ->check(CLI::IsMember({"obj", "off", "ply", "stl"}));
+CLI::Option* add_format_option(CLI::App& app, std::string& format, bool read, bool write,
+                               const std::string& help) {
+  std::vector<std::string> names;
+  for (const MeshFileFormat& f : mesh_file_formats())
+    if ((read && f.read) || (write && f.write)) names.push_back(f.name);
+  std::string list;
+  for (const std::string& name : names) list += (list.empty() ? "" : "|") + name;
+  return app.add_option("--format", format, help + ": " + list)->check(CLI::IsMember(names));
+}
+
+std::string mesh_files_help(const std::string& what, bool written, const std::string& rest) {
+  return what + " (" + mesh_format_list(written, ", ", " or ", ".") +
+         (rest.empty() ? "" : "; " + rest) + ")";
 }
 
 std::string stdin_input_problem(const std::vector<std::string>& inputs, const std::string& format) {
   const auto n = std::count(inputs.begin(), inputs.end(), "-");
   if (n > 1) return "stdin given twice";
-  if (n == 1 && format.empty()) return "a mesh read from stdin needs --format obj|off|ply|stl";
+  if (n == 1 && format.empty())
+    return "a mesh read from stdin needs --format " + mesh_format_list(false, "|");
   return "";
 }
 
@@ -108,12 +136,16 @@ void warn_if_attributes_lost(const std::string& output, const std::string& forma
             mesh.attributes.describe() + ") are not written (use .obj, .ply or .glb)");
 }
 
+bool binary_mesh_format(const std::string& format) {
+  const MeshFileFormat* f = find_mesh_file_format(format);
+  return f && f->binary;
+}
+
 bool write_mesh_output(const std::string& path, const std::string& format, const IndexedMesh& mesh,
                        std::string& error) {
-  const std::string ext = format.empty() ? app_support::extension(path) : format;
   OutputFile out;
-  if (!out.open(path, ext == "ply" || ext == "stl" || ext == "glb", error)) return false;
-  return write_mesh_into(out, ext, mesh, error) && out.commit(error);
+  if (!out.open(path, binary_mesh_format(format), error)) return false;
+  return write_mesh_into(out, format, mesh, error) && out.commit(error);
 }
 
 }  // namespace pmz::tool

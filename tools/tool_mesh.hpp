@@ -10,25 +10,32 @@
 
 namespace pmz::tool {
 
-// Reads `path` ("-": stdin, parsed as `stdin_format`: obj, off, ply or stl) and repairs it;
+// Reads `path` ("-": stdin, parsed as `stdin_format`, any format meshio reads) and repairs it;
 // repairs are reported on stderr ("pmz: FILE: ...") as by pmz::read_mesh. Errors name the file
-// ("stdin" for -).
+// ("stdin" for -). A glTF on stdin has no folder around it: one that names external buffer files
+// is refused (only embedded buffers: a .glb's own or data: URIs).
 bool read_mesh_input(const std::string& path, const std::string& stdin_format, IndexedMesh& mesh,
                      std::string& error);
 
-// --format FORMAT (obj, off, ply, stl): how a mesh read from stdin (-) is parsed; `help` says
-// what else it applies to.
-CLI::Option* add_stdin_format_option(CLI::App& app, std::string& format,
-                                     const std::string& help = "format of a mesh read from stdin");
+// --format FORMAT, one of the formats meshio reads (`read`), writes (`write`) or either; `help`
+// says what it applies to, and the accepted names are appended to it.
+CLI::Option* add_format_option(CLI::App& app, std::string& format, bool read, bool write,
+                               const std::string& help);
+// "input mesh (.obj, .off, .ply, .stl, .gltf or .glb; ...)": `what` and the formats read
+// (`written` false) or written, then `rest` ("- for stdin with --format").
+std::string mesh_files_help(const std::string& what, bool written, const std::string& rest);
 // The usage error of `inputs` reading stdin: "-" given twice, or without --format (`format`).
 // "" when there is none.
 std::string stdin_input_problem(const std::vector<std::string>& inputs, const std::string& format);
 
-// Writes `mesh` as `format` (obj, off, ply, stl; "": by the extension) to `path` ("-": stdout)
-// through an OutputFile: symlinks keep pointing at the updated file, devices and FIFOs are
-// written directly, a failed or interrupted write leaves no temporary behind.
+// Writes `mesh` as `format` (a format meshio writes, e.g. from app_support::mesh_output_format)
+// to `path` ("-": stdout) through an OutputFile: symlinks keep pointing at the updated file,
+// devices and FIFOs are written directly, a failed or interrupted write leaves no temporary
+// behind. Binary formats are never written to a terminal.
 bool write_mesh_output(const std::string& path, const std::string& format, const IndexedMesh& mesh,
                        std::string& error);
+// Whether `format` is written as binary data (OutputFile::open's `binary`).
+bool binary_mesh_format(const std::string& format);
 
 // Never a silent loss: one line on stderr when `format` (off, stl) cannot hold the mesh's
 // attributes.

@@ -27,6 +27,7 @@
 #include "materials.hpp"
 #include "mesh_mirror.hpp"
 #include "pmz/app_support.hpp"
+#include "pmz/mesh_file_formats.hpp"
 #include "renderer.hpp"
 #include "source.hpp"
 #include "static_mesh.hpp"
@@ -185,8 +186,8 @@ bool write_png(const std::string& path, int width, int height, const std::vector
 int parse(int argc, char** argv, Options& o) {
   CLI::App app{"pmz-view: stream a .pmz mesh and watch it refine as its bytes arrive.", "pmz-view"};
   app.add_option("source", o.source,
-                 "a .pmz file, - for stdin, an http:// or https:// URL, or a mesh file "
-                 "(.obj .ply .gltf .glb .off .stl) shown as it is")
+                 "a .pmz file, - for stdin, an http:// or https:// URL, or a mesh file (" +
+                     pmz::mesh_format_list(false, ", ", " or ", ".") + ") shown as it is")
       ->required();
   app.add_option("--rate", o.rate_kbps, "throttle the source to KBPS kilobytes (1000 B) per second")
       ->type_name("KBPS")
@@ -228,14 +229,7 @@ int parse(int argc, char** argv, Options& o) {
       ->type_name("MS")
       ->check(CLI::PositiveNumber);
   pmz::app_support::set_footer(app, kKeyHelp);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  } catch (const CLI::ParseError& e) {
-    std::fprintf(stderr, "pmz-view: %s (see --help)\n", e.what());
-    return 2;
-  }
+  if (int rc = pmz::app_support::parse(app, argc, argv); rc >= 0) return rc;
   o.faces_set = faces->count() > 0;
   o.ratio_set = ratio->count() > 0;
   if (!size.empty()) {

@@ -4,6 +4,8 @@
 #include <cctype>
 #include <numeric>
 
+#include "pmz/mesh_file_formats.hpp"
+
 namespace pmzview {
 
 bool is_mesh_file(const std::string& source) {
@@ -12,9 +14,7 @@ bool is_mesh_file(const std::string& source) {
   std::string ext = source.substr(dot + 1);
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return std::tolower(c); });
-  for (const char* known : {"obj", "ply", "gltf", "glb", "off", "stl"})
-    if (ext == known) return true;
-  return false;
+  return pmz::mesh_format_readable(ext);
 }
 
 std::string directory_of(const std::string& path) {

@@ -11,6 +11,8 @@
 #include <cstring>
 #include <filesystem>
 
+#include "pmz/mesh_file_formats.hpp"
+
 namespace pmz::app_support {
 
 const char* const kExitStatusHelp =
@@ -56,9 +58,16 @@ std::string library_message(const std::string& message) {
   return message.rfind("pmz: ", 0) == 0 ? message.substr(5) : message;
 }
 
+const char* version() { return PMZ_APP_VERSION; }
+
 int parse(CLI::App& app, int argc, char** argv) {
+  app.set_version_flag("--version", app.get_name() + " " + version(),
+                       "print the program's name and version, then exit");
   try {
     app.parse(argc, argv);
+  } catch (const CLI::CallForVersion& e) {
+    app.exit(e);
+    return kExitOk;
   } catch (const CLI::CallForHelp& e) {
     app.exit(e);
     return kExitOk;
@@ -66,7 +75,8 @@ int parse(CLI::App& app, int argc, char** argv) {
     app.exit(e);
     return kExitOk;
   } catch (const CLI::ParseError& e) {
-    return usage_error(e.what());
+    std::fprintf(stderr, "%s: %s (see --help)\n", app.get_name().c_str(), e.what());
+    return kExitUsage;
   }
   return -1;
 }
@@ -116,6 +126,24 @@ std::string extension(const std::string& path) {
   if (!e.empty()) e.erase(0, 1);
   for (char& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
   return e;
+}
+
+std::string mesh_output_format(const std::string& output, const std::string& format,
+                               std::string& problem) {
+  const std::string ext = output == "-" ? "" : extension(output);
+  if (mesh_format_writable(ext)) return ext;
+  if (mesh_format_writable(format)) return format;
+  const std::string written = mesh_format_list(true, "|");
+  if (!format.empty())
+    problem = "--format " + format + " is read, not written: meshes are written as " + written;
+  else if (output == "-")
+    problem = "stdout (-) has no extension to name its format: give --format " + written;
+  else if (ext.empty())
+    problem = output + " has no extension to name its format: give --format " + written;
+  else
+    problem = output + ": no mesh format '." + ext + "' is written: name it " +
+              mesh_format_list(true, ", ", " or ", ".") + ", or give --format " + written;
+  return "";
 }
 
 bool write_output(const std::string& path, const void* data, size_t size, std::string& error) {

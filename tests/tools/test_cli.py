@@ -537,6 +537,145 @@ def case_batch_encoding():
           f"{r.returncode}")
 
 
+
+# ---- mesh formats: one list, one output rule, every writer writes them all ----
+
+# What meshio reads and writes (pmz/mesh_file_formats.hpp), as a user sees it.
+READ_FORMATS = ["obj", "off", "ply", "stl", "gltf", "glb"]
+WRITTEN_FORMATS = ["obj", "off", "ply", "stl", "glb"]
+MESH_READERS = ["pmz-encode", "pmz-simplify", "pmz-compare"]
+# Each writer's arguments before -o (pmz-simplify halves the sample).
+MESH_WRITERS = {"pmz-decode": [SAMPLE_PMZ], "pmz-simplify": [SAMPLE_OBJ, "--ratio", "0.5"]}
+
+
+def case_output_without_extension_takes_format():
+    d = fresh("no_extension")
+    messages = {}
+    for name, args in MESH_WRITERS.items():
+        r = run([tool(name)] + args + ["-o", "/dev/null", "--format", "obj"])
+        check(r.returncode == 0, f"{name} -o /dev/null --format obj: rc={r.returncode} "
+              f"{err_text(r)}")
+        out = os.path.join(d, name + "-plain")
+        r = run([tool(name)] + args + ["-o", out, "--format", "ply"])
+        check(r.returncode == 0 and open(out, "rb").read().startswith(b"ply\n"),
+              f"{name} -o NAME --format ply: no PLY written: rc={r.returncode} {err_text(r)}")
+        for output in ["/dev/null", "-", os.path.join(d, "plain")]:
+            r = run([tool(name)] + args + ["-o", output])
+            e = err_text(r)
+            check(r.returncode == 2 and e.count("\n") == 1 and e.startswith(name + ": ") and
+                  "--format " + "|".join(WRITTEN_FORMATS) in e,
+                  f"{name} -o {output} without --format: expected exit 2 and one line naming "
+                  f"--format and the formats written, got {r.returncode}: {e!r}")
+            messages.setdefault(output, set()).add(e[len(name) + 2:])
+    check(not os.path.exists(os.path.join(d, "plain")), "a refused output was written")
+    for output, texts in messages.items():
+        check(len(texts) == 1, f"-o {output}: the tools word the same rule differently: {texts}")
+
+
+def case_every_writer_writes_every_format():
+    d = fresh("all_formats")
+    magic = {"obj": b"v ", "off": b"OFF", "ply": b"ply\n", "glb": b"glTF"}
+    for name, args in MESH_WRITERS.items():
+        for fmt in WRITTEN_FORMATS:
+            out = os.path.join(d, f"{name}.{fmt}")
+            r = run([tool(name)] + args + ["-o", out])
+            check(r.returncode == 0 and os.path.getsize(out) > 0,
+                  f"{name} -o x.{fmt}: rc={r.returncode} {err_text(r)}")
+            data = open(out, "rb").read()
+            check(data.startswith(magic.get(fmt, b"")) and (fmt != "stl" or
+                  len(data) == 84 + 50 * int.from_bytes(data[80:84], "little")),
+                  f"{name} -o x.{fmt}: not a .{fmt} file")
+            r = run([tool(name)] + args + ["-o", "-", "--format", fmt])
+            check(r.returncode == 0 and r.stdout == data,
+                  f"{name} -o - --format {fmt} to a pipe: rc={r.returncode} {err_text(r)}; "
+                  f"{len(r.stdout)} bytes, the file has {len(data)}")
+        # Binary data still never goes to a terminal.
+        master, slave = pty.openpty()
+        p = subprocess.Popen([tool(name)] + args + ["-o", "-", "--format", "glb"], stdout=slave,
+                             stderr=subprocess.PIPE)
+        os.close(slave)
+        _, err = p.communicate(timeout=60)
+        seen = read_pty(master)
+        os.close(master)
+        check(p.returncode == 1 and b"terminal" in err and b"glTF" not in seen,
+              f"{name} -o - --format glb on a terminal: expected a refusal, got "
+              f"{p.returncode}: {err!r}")
+
+
+def gltf_json(uri):
+    # One triangle: three float positions, then three uint16 indices.
+    return {"asset": {"version": "2.0"}, "buffers": [{"byteLength": 42, "uri": uri}],
+            "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
+                            {"buffer": 0, "byteOffset": 36, "byteLength": 6}],
+            "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                           "min": [0, 0, 0], "max": [1, 1, 0]},
+                          {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+            "nodes": [{"mesh": 0}], "scenes": [{"nodes": [0]}], "scene": 0}
+
+
+def case_gltf_from_stdin():
+    import base64
+    import struct
+    d = fresh("gltf_stdin")
+    glb = os.path.join(d, "s.glb")
+    r = run([tool("pmz-decode"), SAMPLE_PMZ, "-o", glb])
+    check(r.returncode == 0, f"pmz-decode -o s.glb: rc={r.returncode} {err_text(r)}")
+    data = open(glb, "rb").read()
+    for name, args in [("pmz-encode", ["-", "--format", "glb", "-o", os.path.join(d, "e.pmz")]),
+                       ("pmz-simplify", ["-", "--format", "glb", "--ratio", "0.5", "-o",
+                                         os.path.join(d, "s.obj")]),
+                       ("pmz-compare", [glb, "-", "--format", "glb"])]:
+        r = run([tool(name)] + args, input=data)
+        check(r.returncode == 0, f"{name} - --format glb: rc={r.returncode} {err_text(r)}")
+    buffer = struct.pack("<9f3H", 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 1, 2)
+    embedded = json.dumps(gltf_json("data:application/octet-stream;base64," +
+                                    base64.b64encode(buffer).decode())).encode()
+    r = run([tool("pmz-compare"), "-", glb, "--format", "gltf", "--samples", "1000"],
+            input=embedded)
+    check(r.returncode == 0, f"pmz-compare - --format gltf (data: URI): rc={r.returncode} "
+          f"{err_text(r)}")
+    open(os.path.join(d, "tri.bin"), "wb").write(buffer)
+    external = os.path.join(d, "tri.gltf")
+    open(external, "w").write(json.dumps(gltf_json("tri.bin")))
+    r = run([tool("pmz-compare"), external, glb, "--samples", "1000"])
+    check(r.returncode == 0, f"pmz-compare tri.gltf (buffer beside it): rc={r.returncode} "
+          f"{err_text(r)}")
+    r = run([tool("pmz-compare"), "-", glb, "--format", "gltf"], input=open(external, "rb").read(),
+            cwd=d)
+    e = err_text(r)
+    check(r.returncode == 1 and e.count("\n") == 1 and e.startswith("pmz-compare: stdin: ") and
+          "embedded" in e and "tri.bin" in e,
+          f"a .gltf on stdin naming a buffer file: expected exit 1 and one line saying only "
+          f"embedded buffers are read, got {r.returncode}: {e!r}")
+
+
+def all_programs():
+    names = TOOLS + ["pmz-demo", "pmz-view"]
+    return [n for n in names if n in TOOLS or os.path.exists(tool(n))]
+
+
+def case_version():
+    version = os.environ.get("PMZ_PROJECT_VERSION", "")
+    check(version, "PMZ_PROJECT_VERSION (the CMake project version) is not set")
+    for name in all_programs():
+        r = run([tool(name), "--version"])
+        check(r.returncode == 0 and r.stdout.decode() == f"{name} {version}\n",
+              f"{name} --version: expected exit 0 and '{name} {version}', got {r.returncode}: "
+              f"{r.stdout!r} {err_text(r)}")
+
+
+def case_help_names_the_formats():
+    for name in MESH_READERS + ["pmz-view"] + list(MESH_WRITERS):
+        if not os.path.exists(tool(name)):
+            continue
+        h = run([tool(name), "--help"]).stdout.decode()
+        wanted = (READ_FORMATS if name in MESH_READERS + ["pmz-view"] else []) + \
+                 (WRITTEN_FORMATS if name in MESH_WRITERS else [])
+        missing = [f for f in wanted if f".{f}" not in h]
+        check(not missing, f"{name} --help does not name {missing}")
+
+
 CASES = [(n[5:], f) for n, f in sorted(globals().items()) if n.startswith("case_")]
 
 

@@ -33,8 +33,12 @@ void print_error(const std::string& file, const std::string& text);
 // A library message without its "pmz: " prefix (the tool's line names the tool and file).
 std::string library_message(const std::string& message);
 
-// Parses; on --help prints it and returns kExitOk, on a usage error prints "tool: what (see
-// --help)" and returns kExitUsage; returns -1 when the tool should go on.
+// The project's version ("0.1.0"): every program's --version prints "NAME VERSION".
+const char* version();
+
+// Parses, with --version added; on --help or --version prints it and returns kExitOk (even
+// without the required arguments), on a usage error prints "NAME: what (see --help)" (NAME: the
+// app's name) and returns kExitUsage; returns -1 when the program should go on.
 int parse(CLI::App& app, int argc, char** argv);
 // A usage error found after parsing: prints "tool: what (see --help)", returns kExitUsage.
 int usage_error(const std::string& what);
@@ -53,6 +57,14 @@ bool same_file(const std::string& a, const std::string& b);
 
 // Lower-case extension without the dot ("" if none).
 std::string extension(const std::string& path);
+
+// The format a mesh output is written in, one rule for every program: the output's extension
+// when it names a format meshio writes (pmz/mesh_file_formats.hpp), else `format` (the --format
+// option) for an output without one (stdout "-", devices such as /dev/null, any other name).
+// Returns "" with a usage message naming the accepted formats in `problem` when neither gives a
+// format meshio writes.
+std::string mesh_output_format(const std::string& output, const std::string& format,
+                               std::string& problem);
 
 // Safe output files and scratch files: meshio's one implementation (pmz/output_file.hpp), whose
 // registered temporaries init()'s signal handler removes.
