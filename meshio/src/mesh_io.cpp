@@ -13,6 +13,7 @@
 
 #include "mesh_formats.hpp"
 #include "pmz/mesh.hpp"
+#include "pmz/mesh_file_formats.hpp"
 #include "pmz/output_file.hpp"
 #include "reader_support.hpp"
 #include "writer_support.hpp"
@@ -41,12 +42,15 @@ void write_body(Writer& w, const std::string& ext, const IndexedMesh& m, const s
 
 }  // namespace
 
-bool known_input(const std::string& ext) {
-  return ext == ".obj" || ext == ".off" || ext == ".ply" || ext == ".stl" || ext == ".gltf" ||
-         ext == ".glb";
+// The formats read and written are pmz/mesh_file_formats.hpp's list; `ext` here has its dot.
+static bool known_input(const std::string& ext) {
+  return ext.size() > 1 && mesh_format_readable(std::string_view(ext).substr(1));
 }
 
-const char* const kInputFormats = ".obj, .off, .ply, .stl, .gltf or .glb";
+static std::string unknown_format(const std::string& path, const std::string& ext, bool written) {
+  return path + ": unknown mesh format '" + ext + "' (expected " +
+         mesh_format_list(written, ", ", " or ", ".") + ")";
+}
 
 // One check of every reader's attribute output before repair indexes into it: each corner
 // array covers every corner and each index is kNoAttribute or names an entry of its pool.
@@ -83,7 +87,7 @@ bool parse_polygon_soup(const std::string& path, std::string_view data, PolygonS
   out.face_offsets.push_back(0);
   std::string ext = lower_extension(path);
   if (!known_input(ext)) {
-    error = path + ": unknown mesh format '" + ext + "' (expected " + kInputFormats + ")";
+    error = unknown_format(path, ext, false);
     return false;
   }
   if (data.empty()) {
@@ -108,7 +112,7 @@ bool read_polygon_soup(const std::string& path, PolygonSoup& out, std::string& e
   out = PolygonSoup();
   std::string ext = lower_extension(path);
   if (!known_input(ext)) {
-    error = path + ": unknown mesh format '" + ext + "' (expected " + kInputFormats + ")";
+    error = unknown_format(path, ext, false);
     return false;
   }
   std::string data;
@@ -186,8 +190,8 @@ namespace {
 // agree with the geometry.
 bool check_writable(const std::string& path, const std::string& ext, const IndexedMesh& mesh,
                     std::string& error) {
-  if (ext != ".obj" && ext != ".off" && ext != ".ply" && ext != ".stl" && ext != ".glb") {
-    error = path + ": unknown mesh format '" + ext + "' (expected .obj, .off, .ply, .stl or .glb)";
+  if (ext.size() < 2 || !mesh_format_writable(std::string_view(ext).substr(1))) {
+    error = unknown_format(path, ext, true);
     return false;
   }
   for (uint32_t i : mesh.indices)
