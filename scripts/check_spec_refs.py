@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Checks that every section reference in the tree names its document and an existing heading.
 
 A reference is "section N", "sections N and M", "section N.M" or "§N". It must follow the name

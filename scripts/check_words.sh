@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Fails (exit 1, one "file:line: text" per hit) when a text file narrates how the project was
 # made instead of saying what the software does: numbered work periods ("session 27", "s28",
 # "27's trace"), work-item numbers ("issue 15", "task 3"), people and roles ("the lead",

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # The main job on an embedded default: a procedural sample mesh (creases + smooth parts,
 # ~50k triangles) is encoded to .pmz and decoded at several levels of detail.
 set -euo pipefail

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Puts Debian's assimp-testmodels (textured OBJ/PLY/glTF samples and malformed files, used by the
 # attribute tests) into ./corpus-assimp/ (gitignored; never committed). Tests skip without it.
 #

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Builds the benchmark corpus in ./corpus/ (gitignored; meshes are never committed) from the
 # mesh collection of Debian's libcgal-demo package, plus one ~1M-face mesh.
 #

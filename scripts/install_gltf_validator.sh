@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Installs the Khronos glTF validator (npm package gltf-validator) into BUILD_DIR/gltf-validator
 # for the test that validates the .glb files pmz writes (GltfOutput.KhronosValidatorAccepts).
 # Usage: scripts/install_gltf_validator.sh [BUILD_DIR]   (default build)

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Installs gltfpack (npm package gltfpack: meshoptimizer's glTF simplifier as WebAssembly) into
 # BUILD_DIR/gltfpack for the textured benchmark (tests/bench/textured.py), which compares
 # pmz-simplify with `gltfpack -si RATIO` at equal face counts.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Installs the given Debian packages that are missing (apt-get; needs root only then).
 # Usage: scripts/install_packages.sh CALLER PACKAGE...   (CALLER prefixes the messages)
 set -euo pipefail

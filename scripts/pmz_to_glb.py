@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Wraps a .pmz stream in a binary glTF 2.0 asset (docs/gltf-binding.md, draft).
 
 The base mesh becomes an ordinary triangle primitive (POSITION, indices), so a loader without

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # The whole test suite, as CI runs it:
 #   1. Release build + ctest (with the real-mesh corpus from libcgal-demo; where apt-get exists a
 #      failed fetch fails the run, see below),

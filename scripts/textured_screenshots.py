@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Makes the README's textured streaming screenshots (docs/images/viewer-textured.png).
 
   python3 scripts/textured_screenshots.py [--build build] [--mesh corpus/bunny00.off] [--out PNG]

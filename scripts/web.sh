@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # pmz in the browser: builds the WebAssembly decoder (Debian's emscripten), the npm package
 # pmz-decoder (ES module + TypeScript declarations + three.js loader) and the web viewer.
 # Installs what is missing first (apt: emscripten, chromium, ninja-build; npm: web/'s

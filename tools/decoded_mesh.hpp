@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The decoder's current level as an IndexedMesh for meshio's write_mesh: positions and faces,
 // and with attributes (format 8.0) the wedges (the decoder's a-wedges: texture coordinates,
 // normals, colours), the faces' materials and the material table.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pmz-compare ORIGINAL OTHER [--format F] [--samples N] [--json] (either mesh may be - for
 // stdin): Metro-style symmetric Hausdorff distance,
 // where the maximum is, and the attribute error at corresponding surface points when both meshes

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pmz-decode: decode a .pmz stream (or its first N bytes, as a partial download would) to any
 // mesh format meshio writes (OBJ with its MTL, PLY and glb keep the attributes), at a chosen
 // level of detail. Reads a file or

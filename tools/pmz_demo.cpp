@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pmz-demo: the whole job on an embedded default. Makes the procedural sample mesh, encodes it
 // to .pmz with the multi-feature metric, then streams the file into the decoder and reports,
 // for several levels of detail, how many bytes had to arrive and how far the mesh is from the

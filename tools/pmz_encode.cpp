@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pmz-encode: simplify meshes and write each as a progressive .pmz stream. One input with -o
 // (a file, or - for stdout), or many with --out-dir encoded by -j worker threads (one line per
 // asset; a failing asset does not stop the others).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pmz-generate: a procedural terrain of any size as a binary PLY (samples/include/pmz/terrain.hpp),
 // written while it is made: tests and benchmarks of large meshes need no download.
 #include <CLI/CLI.hpp>

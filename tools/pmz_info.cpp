@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pmz-info: a .pmz file's header, counts, bytes per section and per stream, and bits per
 // vertex split divided into connectivity (groups, vertex choice, wedges) and geometry (residuals):
 // the two streams of every SPLT chunk.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pmz-simplify: simplify a mesh to a face count or ratio with the multi-feature metric (or
 // plain QEM) and write it in any format meshio writes (pmz/mesh_file_formats.hpp).
 #include <CLI/CLI.hpp>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "tool_mesh.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The mesh side of the tools' shared behaviour (pmz/app_support.hpp): a mesh read from a file or
 // stdin, a mesh written to any output pmz::OutputFile handles. Needs the mesh module.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The simplifier's options, defined once for pmz-encode and pmz-simplify: the metric, how
 // attributes steer it, and the metric's parameters (defaults: pmz::MetricParams), so both tools
 // simplify alike for the same command line.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Orbit camera: yaw/pitch/distance around a target, framed on the mesh's bounding sphere.
 #pragma once
 #include <array>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "lod.hpp"
 
 #include <chrono>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Moves the decoder's level of detail toward a target in bounded steps, so a big jump (e.g.
 // base mesh to 1M faces) spreads over frames instead of stalling one.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pmz-view: streams a .pmz file, stdin or URL and shows the mesh refining as bytes arrive.
 // The worker thread (stream.cpp) reads and feeds the decoder; this thread moves the level of
 // detail within a per-frame time budget, mirrors the changes and uploads only those. A mesh

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "materials.hpp"
 
 #include <stb/stb_image.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Materials as pmz-view draws them: a base colour times an optional base-colour texture, read
 // with stb_image (Debian's libstb) from the file the mesh's MTL / glTF material names.
 #pragma once

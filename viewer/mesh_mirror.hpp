@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The render thread's copy of the decoder's mesh, plus what the GPU needs beyond it:
 // geomorph start positions/times and smooth vertex normals. sync() folds in only what the
 // decoder reports as changed and records which ranges the GPU buffers must re-upload.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "renderer.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // OpenGL 3.3 core renderer: the mesh in GPU buffers that grow geometrically and receive only
 // the ranges MeshMirror marks dirty; lit shading (flat from screen-space derivatives, or
 // smooth from the mirrored vertex normals or the decoded ones), a wireframe overlay and GPU

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Byte sources for pmz-view: a file, stdin or an http(s) URL, read on the worker thread and
 // optionally throttled to simulate a slow network.
 #pragma once

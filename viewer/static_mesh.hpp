@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A mesh file (OBJ, PLY, glTF, OFF, STL) shown as it is, through the same mirror and renderer
 // as a stream: one frame that reports everything.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The decode worker: reads a Source on its own thread and feeds the shared decoder, so the
 // render thread never waits on IO. The decoder is not thread-safe; `mutex` guards it. The
 // worker holds it only while feeding one slice (<= 64 KiB), the render thread while it

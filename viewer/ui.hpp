@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Interaction: mouse camera controls, keys, and the Dear ImGui overlay.
 #pragma once
 #define GLFW_INCLUDE_NONE

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "pmz/app_support.hpp"
 
 #include <fcntl.h>

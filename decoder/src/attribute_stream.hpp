@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Internal: the decoder's attribute wedges (spec/format.md section 14). The ATTR chunks are
 // decoded lazily like the SPLT symbols: a split's wedges when it is first applied; what it
 // assigned is kept so re-applying it after coarsening reads no bytes, and undoing it follows

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The attribute stream's once-per-file parts (HEAD's fields, the base ATTR chunk), apart from
 // the per-split ones in attribute_stream.cpp so that they can be built for size.
 #include "attribute_stream.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // C API: a thin layer over pmz::Decoder; no exception crosses it.
 #include <new>
 

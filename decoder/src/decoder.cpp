@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The streaming decoder: frames chunks out of whatever slices arrive, decodes which vertices
 // split when a chunk arrives (validated before anything is appended), decodes each split's
 // wedge and position when it is first applied (their contexts come from the mesh), keeps what

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "attr_collapse.hpp"
 
 #include <algorithm>

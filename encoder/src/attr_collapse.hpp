@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Internal: the collapse rule for attribute wedges (one definition for the simplifier's
 // legality and cost code and for the writer), and a literal replay of a collapse sequence that
 // applies it to a mesh's faces and corner wedges.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Attribute wedges in the collapse engine: seams as discontinuity curves and the attribute
 // deviation term (spec/algorithm.md section 7).
 #include "attr_simplify.hpp"

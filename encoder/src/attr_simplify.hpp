@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Internal: attribute wedges on the collapse engine's half-edge mesh (spec/algorithm.md section
 // 7). Material boundaries (and, in AttributeMode::seams, texture and normal seams too) are
 // discontinuity curves: a collapse moves a vertex along one or not at all, and their corners

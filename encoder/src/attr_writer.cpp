@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "attr_writer.hpp"
 
 #include <algorithm>

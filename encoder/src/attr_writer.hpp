@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Internal: the writer's side of attribute wedges (spec/format.md section 14). Replays the
 // collapse sequence with the collapse rule (fine to coarse) to know every level's wedges, then,
 // as the writer replays the decoder's splits (coarse to fine), codes each assigned corner's

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The cells of a hierarchical simplification: at every level a grid of cubes over the file's
 // integer coordinates (spec/format.md section 5), its side twice the level below's and its
 // planes half a cell of the level below away from that level's planes.

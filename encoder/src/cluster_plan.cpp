@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "pmz/cluster_plan.hpp"
 
 #include <algorithm>

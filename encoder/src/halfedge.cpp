@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Builds the engine's half-edge arrays from an indexed mesh, rejecting non-manifold input.
 #include "halfedge.hpp"
 

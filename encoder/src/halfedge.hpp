@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Internal: a triangle mesh as flat half-edge arrays, the collapse engine's working topology.
 // Half-edge h = 4 * face + corner (corner 0..2; slot 3 is padding, vert and twin kNone) runs
 // from the vertex at corner h to the vertex at next(h); twin[h] is the opposite half-edge in the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The multi-feature metric's terms (Wang, Qiao & Zhou): quadrics, C_norm (eq. 1), torsion
 // (eq. 2) and the edge-length ratio (eq. 3). The readings the paper leaves open are argued in
 // spec/algorithm.md.

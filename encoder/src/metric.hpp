@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Internal: the terms of the paper's multi-feature metric (spec/algorithm.md) on the half-edge
 // mesh, cached per face and per vertex so that a collapse recomputes only its neighbourhood.
 #pragma once

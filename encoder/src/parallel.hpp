@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Internal: the engine's set-up on two threads. Each loop run this way computes every index
 // independently of the others (no shared sums), so the results are the same bits as one thread's.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The collapse engine: half-edge collapses u -> v in order of the metric's cost, each vertex
 // keyed in a binary heap by its cheapest outgoing collapse, recomputing only the neighbourhood
 // a collapse touches (spec/algorithm.md).

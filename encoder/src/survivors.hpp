@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Which input vertex each input vertex has become after a prefix of a collapse sequence: the one
 // definition behind mesh_after() and the writer's base mesh.
 #pragma once

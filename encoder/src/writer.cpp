@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The .pmz writer: inverts a collapse sequence into vertex splits, groups them into batches of
 // independent splits (within windows of the greedy order, so the mesh at every window boundary
 // is the greedy prefix), and codes them by replaying the decoder's own ProgressiveMesh.

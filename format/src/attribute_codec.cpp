@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "pmz/attribute_codec.hpp"
 
 #include <algorithm>

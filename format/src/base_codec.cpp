@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "pmz/base_codec.hpp"
 
 #include <memory>

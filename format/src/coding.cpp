@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "pmz/coding.hpp"
 
 #include <cstring>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "pmz/fan_wedge.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "pmz/format.hpp"
 
 #include <algorithm>

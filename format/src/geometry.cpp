@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "pmz/geometry.hpp"
 
 #include <utility>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "pmz/huge_pages.hpp"
 
 #if defined(__linux__) && defined(MADV_HUGEPAGE)

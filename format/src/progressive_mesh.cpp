@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "pmz/progressive_mesh.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // ProgressiveMesh::build: once per file (the base mesh), apart from the refinement code so the
 // WebAssembly build compiles it and its sort for size (scripts/web.sh lists the -O3 files).
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "pmz/speed_level.hpp"
 
 #include "pmz/fan_wedge.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "pmz/split_chunk.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "pmz/vertex_choice.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Triangle BVH: binned SAH build, nearest-first closest-point traversal with pruning.
 #include "bvh.hpp"
 

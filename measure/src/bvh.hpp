@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Triangle BVH for closest-point queries (binned SAH, flat node array, triangles copied in
 // leaf order so a leaf reads one contiguous run). Private to the encoder library.
 #pragma once

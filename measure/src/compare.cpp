@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Metro-style surface distance: sample vertices, edges and faces of one mesh, find the nearest
 // point of the other surface through a BVH, accumulate max / mean / rms, both directions.
 #include "pmz/compare.hpp"

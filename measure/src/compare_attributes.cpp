@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Attribute error at corresponding surface points: a sample on ORIGINAL, the closest point on
 // OTHER, the attributes interpolated at both compared (texture space, normal angle, colour).
 #include "compare_attributes.hpp"

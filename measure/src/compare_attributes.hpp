@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Internal: attribute error at corresponding surface points (pmz::AttributeErrors).
 #pragma once
 #include <cstdint>

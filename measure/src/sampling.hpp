@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Internal: what the comparisons share: the seeded sample generator, triangle area, and the
 // fixed-block thread pool (blocks are reduced in block order by the caller, so results do not
 // depend on the thread count).

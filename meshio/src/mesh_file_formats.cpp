@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "pmz/mesh_file_formats.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Every mesh format's reader and writer, one file each, behind mesh_io.cpp's dispatch by
 // extension. A reader parses a whole file's bytes into `out` (started with one face offset, 0)
 // and returns false with "path: ..." in error; mesh_io.cpp checks what every reader returns

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // glTF 2.0 in and out through tinygltf (Debian libtinygltf-dev; JSON by nlohmann-json3-dev).
 // tinygltf parses the JSON, the GLB container and buffers (embedded, data: URIs, or files beside
 // the input); everything it hands back is checked here before use: accessor ranges against their

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Mesh input/output, the dispatch by file extension: each format's reader (mesh_obj.cpp,
 // mesh_off.cpp, mesh_ply.cpp, mesh_stl.cpp, mesh_gltf.cpp) into a raw polygon soup, the checks
 // every reader's output passes before repair_mesh (mesh_repair.cpp) indexes it, and each

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // OBJ (with its MTL material library): the reader into a PolygonSoup (positions, vertex colours,
 // texture coordinates, normals, materials by usemtl) and the writer of an IndexedMesh.
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // OFF, text and binary (Geomview's big-endian layout and OpenMesh's little-endian one): the
 // reader into a PolygonSoup and the text writer.
 #include <bit>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // PLY, ascii and binary either endian: the reader into a PolygonSoup (per-vertex or per-corner
 // attributes, MeshLab's TextureFile materials) and the binary little-endian writer.
 #include <algorithm>

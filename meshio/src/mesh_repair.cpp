@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Polygon soup -> manifold-with-boundary triangle mesh without losing a face.
 //
 // 1. Each face is cleaned (consecutive repeated corners removed; a polygon pinched at a repeated

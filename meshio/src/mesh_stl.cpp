@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // STL, ascii and binary: the reader into a PolygonSoup (positions repeated per facet become one
 // vertex) and the binary writer.
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "pmz/output_file.hpp"
 
 #include <fcntl.h>

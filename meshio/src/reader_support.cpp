@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The format readers' shared parts (reader_support.hpp): file reading, error messages,
 // vertex welding.
 #include "reader_support.hpp"

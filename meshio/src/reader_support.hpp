@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // What the format readers (mesh_obj.cpp, mesh_off.cpp, mesh_ply.cpp, mesh_stl.cpp,
 // mesh_gltf.cpp) share: reading a whole file, scanning text line by line and token by token,
 // the error messages that name a file and line, and appending to a PolygonSoup within the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // What the format writers (mesh_obj.cpp, mesh_off.cpp, mesh_ply.cpp, mesh_stl.cpp) and
 // mesh_io.cpp share: buffered output to a MeshSink and the numeric text lines of OBJ and OFF.
 // Internal to meshio.

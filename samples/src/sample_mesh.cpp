@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The demo's sample mesh: sharp creases (cap rims, a V-groove) next to smooth curved parts
 // (ripples), so both halves of the multi-feature metric have something to do.
 #include "pmz/sample_mesh.hpp"

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Batch encoding against sequential runs (target: 8 assets with -j 2 in at most 0.6x the
 time of 8 sequential runs, docs/benchmarks.md).
 

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """pmz benchmark driver: runs pmz's tools and the peers side by side on the corpus, measures
 error with pmz-compare, and writes a Markdown report and plots (error vs face ratio).
 

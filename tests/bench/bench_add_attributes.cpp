@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bench-add-attributes IN OUT [--colors]: gives a geometry-only mesh attributes like a real
 // asset's, for the textured benchmark (tests/bench/textured.py): texture coordinates from a
 // box projection per chart (faces grouped by their dominant normal axis, smoothed so charts are

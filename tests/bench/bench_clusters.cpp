@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bench-clusters: the node graph of a hierarchical simplification and what it would give a
 // decoder: per level the nodes and splits; the critical path (the longest chain of splits that
 // depend on each other) and a greedy schedule's time on 1, 2, 4 and 8 workers, in splits;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Shared bits of the benchmark harness programs: a wall clock and the one-line JSON report
 // the driver (bench.py) parses from stdout.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bench-meshopt-simplify IN OUT FACES: meshoptimizer's meshopt_simplify to FACES triangles.
 // target_error = 1.0 (100% of the extent) so the error bound never stops it before the face
 // target: the comparison is at equal face counts. Positions are used as read (shared

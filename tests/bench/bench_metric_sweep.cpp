@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bench-metric-sweep [--eps E] [--c0 C] [--wt W] [--mem M] [--bw B] [--ratio R]... MESH...
 // The parameter search of docs/design.md section 2, in process: for each mesh and face ratio
 // (default 0.1 and 0.02), simplify to round(R * F) faces with multifeature (the given

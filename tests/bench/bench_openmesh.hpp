@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // OpenMesh side of the harness programs: the triangle mesh type, its conversion to the flat
 // IndexedMesh that pmz::write_mesh writes (atomically), and their common main().
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bench-openmesh-decimate IN OUT FACES: OpenMesh's Decimater (ModQuadric + ModNormalFlipping,
 // both at their defaults) with decimate_to_faces(0, FACES), the classic half-edge QEM peer.
 // OpenMesh wants MeshIO (bench_openmesh.hpp) before the tools: keep this order.

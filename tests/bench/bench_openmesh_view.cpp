@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bench-openmesh-view MESH [REPEATS [REBUILD_FRACTION]]: the cost of keeping an OpenMesh TriMesh in
 // step with the decoder (pmz::openmesh::MeshView). MESH is read, given OpenMesh's creased normals
 // (halfedge and vertex normals, so the view fills attribute properties too), encoded and decoded;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bench-stream: feeds a .pmz file to the decoder library the way a streaming client does and
 // times it. Two uses:
 //  - a streaming client's interleaving: slices of --slice bytes, refine(--refine) after

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bench-subdivide IN OUT LEVELS: LEVELS uniform Loop subdivisions (OpenMesh's LoopT), used
 // to make the corpus's ~1M-face mesh. LEVELS 0 only converts (e.g. OFF to PLY for Draco).
 // OpenMesh wants MeshIO (bench_openmesh.hpp) before the tools: keep this order.

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Decode speed, side by side: pmz-decode against draco_decoder (PLY out), the
 streaming pattern (bench-stream: 997-byte feeds, refine(5000) after each) and the refinement
 rates of pmz-info --decode (first, and again after coarsening).

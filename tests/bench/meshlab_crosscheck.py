@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Cross-checks pmz-compare against MeshLab's "Hausdorff Distance" filter (meshlabserver,
 headless under xvfb-run) on real meshes against simplified versions of them.
 

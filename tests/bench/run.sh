@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # One entry command for the benchmarks: builds the tools and harness programs, fetches the
 # corpus, runs every available simplifier and codec side by side, writes bench-out/
 # (RESULTS.md, results.json, error_mean.png, error_max.png).

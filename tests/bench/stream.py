@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Streaming benchmark: when does a client on a link of R Mbit/s see a good mesh?
 
 For each mesh and link rate, the time (transfer and decoding overlapped, as a streaming client

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """The textured benchmark: meshes with texture coordinates, normals, colours and
 materials; pmz against Draco (size) and gltfpack (simplification), and pmz's attribute-aware
 simplification against its own geometry-only run.

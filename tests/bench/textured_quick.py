@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 # Usage: textured_quick.py BUILD SET OUT [mesh,mesh,...]   (SET: textured.py OUT/set)
 # Quick harness for two textured figures: per mesh and ratio, gltfpack -si R -noq, pmz-simplify to
 # its face count (b); pmz-simplify at the nominal count, geometry-only at the count reached (c).

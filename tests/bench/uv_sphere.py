@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """A UV sphere as OBJ for the attribute decode-speed target (a textured ~100k-face
 asset against its geometry-only stream): rings x segments, a texture seam at u = 0 / 1, one
 texture coordinate per pole triangle, smooth normals (one per vertex). The same layout as

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Checks a GLB made by scripts/pmz_to_glb.py against the conformance vector it carries.
 
     check_glb_stream.py --decoder pmz-decode --stream vectors/NAME.pmz --expected NAME.expected X.glb

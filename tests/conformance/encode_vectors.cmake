@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # ctest conformance_encode: pmz-encode reproduces every vector of vectors.txt byte for byte
 # from its source mesh. -DENCODE=pmz-encode -DDIR=tests/conformance -DWORK=scratch directory
 file(MAKE_DIRECTORY ${WORK})

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # ctest gltf_example: scripts/pmz_to_glb.py reproduces docs/gltf/torus.glb, and the GLB carries
 # the whole stream: decoded from the GLB's bytes, every level of the vector's .expected file and
 # the full mesh the extension announces (check_glb_stream.py).

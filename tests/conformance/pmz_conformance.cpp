@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pmz-conformance: makes and checks the conformance vectors of tests/conformance (README.md
 // there says how a third-party decoder uses them).
 //

@@ -1,4 +1,5 @@
 #!/bin/bash
+# SPDX-License-Identifier: MIT
 # Regenerates the conformance vectors from scratch: the source meshes, every encoder-made
 # vector with its expected results, and the derived valid and invalid files. Only for a
 # deliberate bitstream change (with the format version bump), or to add a vector.

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """A second .pmz decoder, in Python, written by following the text of spec/format.md sections 2
 to 11 (container, HEAD, BASE, SPLT group tables, the choice scan, wedge symbols and scores, the
 split, the position prediction, the per-vertex state, range coding), checked against the

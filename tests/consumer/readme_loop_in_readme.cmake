@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # The README's embedding loop is the compiled one: the lines between "// README:begin" and
 # "// README:end" in readme_loop.hpp (less their indentation) appear verbatim in README.md.
 file(READ ${LOOP} source)

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # Configures, builds and runs one consumer project (CONSUMER_SOURCE) against the pmz installed
 # in PREFIX. CONFIGURE_ARGS: extra -D options; EXPECT_SHARED: the program must load
 # libpmz_decoder.so (else it must not).

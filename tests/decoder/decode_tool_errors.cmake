@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # pmz-decode (and pmz-info) on bad input: one-line error, non-zero exit, no output file; --salvage writes the
 # last good level of a truncated stream and still exits non-zero.
 set(out ${WORK}/out.obj)

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # The shared decoder library exports the C API and the C++ decoder API, nothing else: every
 # dynamic symbol it defines is a pmz_* C function, pmz::status_name or a member of pmz::Decoder,
 # and every function pmz.h declares and every member decoder.hpp's Decoder declares is there.

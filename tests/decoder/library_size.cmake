@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # Strips a copy of the shared decoder library and fails if it is LIMIT bytes or more.
 execute_process(COMMAND ${STRIP} -o ${OUT} ${LIB} RESULT_VARIABLE rc)
 if(NOT rc EQUAL 0)

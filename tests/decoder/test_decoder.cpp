@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Streaming decoder behaviour on a committed sample (tests/data/sample.pmz: a 128-face bumpy
 // sphere written by pmz-encode; when the bitstream changes, regenerate it with
 // `pmz-encode tests/data/sample.obj -o tests/data/sample.pmz`): prefixes, chunkings, level moves,

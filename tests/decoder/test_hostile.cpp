@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Hostile input: streams crafted byte by byte (no encoder needed) that claim huge counts, bomb
 // the decompressor, or are cut/damaged at every byte. The decoder must refuse with an error
 // and a message, keep a valid mesh, allocate no more than the input can justify, and take

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Split counts at every prefix of the conformance vectors, read from the container alone
 // (spec/format.md sections 3, 4, 8 and 14.1) and not from any expected bytes: a stream cut at
 // the end of a chunk makes available exactly the splits of the SPLT chunks it holds whole (with

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A flat (n x n)-quad grid with a texture seam down column `seam`: the vertices on that column
 // have two wedges (left chart, right chart), the others one. Normals per wedge, RGB colours,
 // and two materials (left and right of the seam), so every attribute kind is present.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Small procedural meshes and a topology summary for the metric and engine tests.
 #pragma once
 #include <array>

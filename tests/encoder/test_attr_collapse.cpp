@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The collapse rule for attribute wedges (encoder/src/attr_collapse.hpp) on a grid with a
 // texture seam, and mesh_after() carrying attributes through a whole simplification.
 #include <gtest/gtest.h>

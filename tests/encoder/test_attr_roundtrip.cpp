@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Attribute wedges through writer and decoder (format 8.0, spec/format.md section 14): the full
 // decode gives every corner its input values (exactly in lossless mode, within half a step
 // quantized) and its face's material; every level is a consistent wedge mesh; coarsening and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Attribute-aware simplification (spec/algorithm.md section 7): material boundaries (and in
 // the strict mode, seams) are discontinuity curves, the attribute term measures what a collapse
 // does to the field and prices a seam in the default mode, and a mesh without attributes (or

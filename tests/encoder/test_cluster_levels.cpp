@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Hierarchical simplification (SimplifyOptions::clusters): every collapse of a level stays in one
 // cell of that level's grid, the collapses of different cells commute, and the hierarchy costs
 // little quality against the whole-mesh engine.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The collapse engine's queue after k collapses: every key it holds as current is the cost of its
 // collapse recomputed from scratch on the mesh as it now is (spec/algorithm.md sections 2 and 5).
 // The engine recomputes only what a collapse touches (terms of the 1-ring, torsion and keys of

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Every level of detail, not only the base and the full mesh:
 //  - each level k of a decode is the simplifier's mesh with exactly the collapses of the splits
 //    not yet applied (the writer reorders splits within a window, spec "Splits": the set of

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Each term of the multi-feature metric against values worked out by hand (spec/algorithm.md).
 #include <gtest/gtest.h>
 

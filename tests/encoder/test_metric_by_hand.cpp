@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The multi-feature cost of a collapse, recomputed in this file from the formulas of
 // spec/algorithm.md section 2 (the paper's eq. 1-3 with pmz's normalisations), in double and with
 // none of the encoder's functions: every directed edge of a cube corner, a bent sheet and a saddle

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // README.md's embedding loop (tests/consumer/cxx/readme_loop.hpp, the same lines verbatim) on
 // the 50k-face sample mesh: fed in small slices or 64 KiB reads it reaches the full mesh, the
 // same mesh as one feed and a full refine.

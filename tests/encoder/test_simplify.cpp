@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The collapse engine: every recorded collapse replays exactly as the contract says, topology
 // is preserved at every step, targets are met, bad input is refused.
 #include <gtest/gtest.h>

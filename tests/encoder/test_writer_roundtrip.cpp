@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Writer + decoder round trip with the real collapse engine: a full decode reproduces the
 // input (faces up to the documented vertex permutation; positions within half a quantization
 // step of the input's, bit-exact with --position-bits 0).

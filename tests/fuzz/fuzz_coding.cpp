@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The coding layer under the decoder: ByteReader (fixed-width reads, LEB128 varints, byte
 // spans), zigzag, the stream reader (raw or zstd), the quantizer and float ordering, the
 // corner-table core (build, split, exact undo), the range coder, the SPLT payload codec and the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Shared by the fuzz targets: mesh invariants that must hold after every decoder call.
 #pragma once
 #include <cstdint>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The container: signature, chunk framing and the HEAD/BASE/SPLT/END payload parsers. Random
 // bytes almost never get past the CRCs, so this target repairs them: the input is a .pmz
 // stream (the signature is prepended when missing) whose chunk CRCs are recomputed before

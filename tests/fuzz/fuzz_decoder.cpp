@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The whole streaming decoder on arbitrary bytes, fed in arbitrary slices, with level moves
 // between slices. Input: [n][n (size, op) byte pairs][stream bytes]; n = data[0] % 16, and
 // n = 0 feeds the stream in one call. Checks, besides ASan/UBSan:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A mesh reader on arbitrary bytes, then the repair pass behind it. Built once per format
 // (PMZ_FUZZ_MESH_EXT names it: fuzz_mesh_obj, _off, _ply, _stl, _gltf). Either the reader refuses
 // with a message, or the repaired mesh holds repair_mesh's promises (fuzz_mesh_check.hpp).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // What repair_mesh promises (meshio/include/pmz/mesh.hpp), checked on its output by the mesh
 // fuzz targets: indices in range, no face repeating a vertex, every directed edge used once
 // (so every undirected edge has at most two faces, opposite), one fan of faces per vertex, the

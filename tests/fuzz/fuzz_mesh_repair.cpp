@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The repair pass on its own: polygon soups built from the bytes, as any reader may hand them
 // over (the PolygonSoup contract in meshio/include/pmz/mesh.hpp: corner indices in range,
 // finite coordinates and values; per-corner attribute lists empty or one entry per corner, each

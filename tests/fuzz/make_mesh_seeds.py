@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Seed corpora for the mesh reader fuzz targets (fuzz_mesh_obj, _off, _ply, _stl, _gltf) and
 the repair pass's (fuzz_mesh_repair).
 

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Seed corpora for the fuzz targets, from real encoded meshes.
 
 usage: make_seeds.py OUT_DIR [PMZ_ENCODE]

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Builds the libFuzzer targets (clang-14, ASan + UBSan) and runs each for SECONDS (default 60).
 #   usage: tests/fuzz/run.sh [SECONDS]
 #   env:   PMZ_FUZZ_BUILD  build directory (default build-fuzz, relative to the repository)

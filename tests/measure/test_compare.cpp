@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pmz::compare on cases with known answers.
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pmz::compare's attribute error at corresponding surface points, on cases with known answers.
 #include <gtest/gtest.h>
 

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Tool behaviour with attributes and bad attribute input (ctest encode_attribute_tools):
 # pmz-encode says which attributes it encoded, pmz-decode and pmz-simplify keep them (and says so when the
 # output format cannot), both report

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Attributes (wedges) through input, repair and output: procedural meshes with known seams (a
 // cube with six charts, a UV sphere), exact round trips through OBJ+MTL, PLY and .glb, binary
 // OFF, refusals of bad attribute data, the Khronos validator on written .glb files, and the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The list of mesh file formats (pmz/mesh_file_formats.hpp) against what meshio's readers and
 // writers do: a format listed as written is written, one listed as read is parsed, and nothing
 // else is; the glTF buffer files a reader would look up are found.

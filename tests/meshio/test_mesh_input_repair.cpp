@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Repair of raw input into a manifold-with-boundary triangle mesh, one test per input case.
 #include <cmath>
 #include <random>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Corrupted input never crashes the readers, and real meshes come through without losing a face.
 #include <bit>
 #include <cmath>

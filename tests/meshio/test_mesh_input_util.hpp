@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // What the mesh input tests share: temporary files and the manifold/face-kept checks.
 #pragma once
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Mesh file input/output: every format, every refusal, atomic and checked writes.
 #include <signal.h>
 #include <sys/resource.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The procedural terrain (samples/include/pmz/terrain.hpp): the PLY it streams is what its
 // header says, reads back as a manifold grid, and the same size and seed give the same bytes.
 #include <gtest/gtest.h>

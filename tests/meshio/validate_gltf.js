@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Validates a glTF file with the Khronos validator; prints "errors N warnings N" and every
 // error, exits 1 on errors. Usage: node validate_gltf.js VALIDATOR_DIR FILE
 const fs = require('fs');

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The OpenMesh adapter: to_mesh turns a TriMesh's standard properties into wedges, encode gives
 // a stream that decodes back to the mesh, and MeshView keeps a TriMesh equal to the decoder's
 // arrays (counts, positions, each face's vertices in order, every corner's attributes) through

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # scripts/check_words.sh on planted lines in a temporary file: each narrating line is flagged
 # (exit 1, "file:line:" named), and lines that only look alike (s32(x), helper_function, -s14,
 # a section reference) pass. The words are assembled from pieces so that this file itself

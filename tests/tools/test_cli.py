@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """The tools' command-line conventions, one check per case:
 `-` for stdin/stdout (pmz-encode, pmz-decode, pmz-compare), outputs through symlinks / onto devices and FIFOs / onto the input,
 temporaries removed on error and on signals, one-line errors with the reason, exit codes

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pmz-view's CPU side against the real decoder: the incrementally synced mirror (indices,
 // positions, smooth normals) equals one built from scratch, the dirty ranges cover every
 // change (a shadow "GPU buffer" patched only with them ends up equal), and the budgeted LOD

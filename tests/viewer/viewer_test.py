@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """pmz-view end-to-end checks under xvfb-run (Mesa's software GL).
 
   viewer_test.py screenshots --view BIN --encode BIN --workdir DIR

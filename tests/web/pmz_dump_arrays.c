@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 /* pmz-dump-arrays: the native decoder's arrays, as the C API gives them, for the web tests
    (web/test/api.test.mjs compares the WebAssembly decoder's views with them bit for bit).
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Decode speed, side by side in one run: the native library (bench-stream: the whole file fed,
 // refined once, process CPU time), pmz-decoder's WebAssembly build in node, and npm draco3d's
 // WebAssembly decoder on the same mesh's .drc (positions and indices out). Each measurement is

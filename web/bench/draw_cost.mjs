@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // What drawing a mesh costs in headless Chromium (Debian's chromium, WebGL2 through
 // SwiftShader on the CPU): the viewer (web/dist/viewer) loads MESH.pmz at full speed, then
 // draws the first F faces of the finished geometry for several F (window.pmzDrawCost:

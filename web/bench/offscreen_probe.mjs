@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Does drawing in a worker keep the page's frames in headless Chromium with SwiftShader? A
 // minimal page (offscreen_probe/) draws a grid of N faces every frame with the viewer's material
 // on the page's thread (page), in a worker on the canvas transferred to it (worker: the page

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Web benchmarks: decoder size and decode speed side by side with npm draco3d, and
 # streaming in headless Chromium over a 2 MB/s link. Needs bash scripts/web.sh (the package),
 # build/bin/pmz-encode, build/bench/bench-stream, draco_encoder and the corpus.

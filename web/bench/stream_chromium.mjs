@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Streaming in headless Chromium over a throttled link: the viewer (web/dist/viewer) loads
 // MESH.pmz from a node HTTP server on 127.0.0.1 paced to RATE bytes/s. Two kinds of frames:
 // the page's (its main thread's requestAnimationFrame: how responsive the page stays, input and

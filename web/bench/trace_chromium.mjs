@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Where the time goes while the viewer streams a mesh in headless Chromium: one streaming run
 // (as stream_chromium.mjs: MESH.pmz paced to RATE bytes/s from 127.0.0.1) under a Chromium
 // trace, summed per process and thread (the page's main thread, its decoding worker, the GPU

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 /** Status names: 'ok' or the error (pmz.h's PMZ_OK ... PMZ_ERR_MEMORY). */
 export type PmzStatus =
   | 'ok'

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pmz-decoder: the pmz streaming decoder compiled to WebAssembly, wrapping its C API
 // (decoder/include/pmz/pmz.h). Push model: feed() slices of a .pmz stream in any size, then
 // refine() / setFaceTarget() move the mesh between the base mesh and what has arrived.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Instantiates pmz_wasm.wasm, the decoder as a standalone module (scripts/web.sh): the whole JS
 // side of it. Returns { HEAPU8, _name per export } like an emscripten module (index.js calls
 // _pmz_decoder_feed, _malloc, ...). Kept short: its bytes count in the size budget.

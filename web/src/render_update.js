@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The change report turned into what a renderer uploads (shared by three.js's PMZStream on the
 // page and worker.js): ranges of render vertices and faces. A render vertex is a position
 // vertex, or with attributes (format 8.0) an attribute wedge as in the native viewer: then the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 import { BufferGeometry, Loader, LoadingManager, MagnificationTextureFilter, Material,
   MeshStandardMaterial, MeshStandardMaterialParameters, MinificationTextureFilter, Texture,
   TextureLoader, Wrapping } from 'three';

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // three.js loader for pmz: a BufferGeometry updated in place as the stream arrives and refines.
 // Only the changed ranges are uploaded (BufferAttribute.addUpdateRange, three r159+). With
 // attributes (format 8.0) a render vertex is an attribute wedge (as in the native viewer): uv,

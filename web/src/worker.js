@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pmz-decoder's Web Worker (module worker, started by PMZLoader with `worker: true`): fetches
 // or receives the stream, feeds and refines the decoder here, off the page's thread, and posts
 // what changed (copies of the new and rewritten ranges) after each time slice of refinement.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The JavaScript API (node): the packed package decodes bit-identically to the native decoder,
 // any byte slicing gives the same mesh, and damaged or hostile streams give error names and
 // one-line errors, never exceptions or hangs.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Attribute arrays of the JavaScript API (format 8.0): texture coordinates, normals, colours,
 // wedges and materials are bit-identical to the native decoder's (pmz-dump-arrays, the C API)
 // for every byte slicing and at coarser levels; the change report covers the wedges; a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The viewer in headless Chromium (Debian's, via puppeteer-core) over a throttled local HTTP
 // stream, drawing in a Web Worker (OffscreenCanvas, the default) and on the page's thread,
 // decoding in a worker of its own (the default) and on the drawing thread: the face count rises

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // scripts/web.sh builds only what changed: run again with no change, it compiles, links and
 // packs nothing (the objects, the wasm, the tarball and the viewer's files keep their mtimes)
 // and says so, one "web: " line per step. (Under scripts/web.sh test both runs find the build

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Shared by the web tests: the packed package installed into an empty folder (the contract:
 // `npm install ./web/dist/pmz-decoder-*.tgz`, then `import ... from 'pmz-decoder'`), the native
 // tools, and the sample streams.

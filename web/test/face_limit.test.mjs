@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // PMZStream.faceLimit (node, three's BufferGeometry without a renderer): following the stream,
 // the geometry shows at most the limit's faces while bytes arrive, each level it shows is a
 // level of the stream (equal to a fresh decoder's at that face count), and once every byte is

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Geomorphs (node, three's BufferGeometry without a renderer): the pmzMorph attribute that
 // PMZStream keeps for geomorphMaterial() holds, for every vertex added by a split while
 // streaming, its parent's position and a birth time; vertices of a full upload start where

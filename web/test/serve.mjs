@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A static server for web/dist/viewer on 127.0.0.1 whose /stream/NAME responses (streams and
 // the textures beside them) are throttled to `bytesPerSecond` (chunks every 10 ms), with
 // Content-Length. streams[NAME]: a file, or {file, bytesPerSecond (Infinity: at once), delayMs

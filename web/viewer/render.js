@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pmz web viewer, the drawing side: the scene, the stream (PMZLoader) and the frame loop. Runs in
 // a Web Worker on an OffscreenCanvas (render_worker.js; the default where workers have WebGL2) or
 // on the page's own canvas (viewer.js's fallback), driven by the same messages either way: the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pmz web viewer: the drawing side (render.js) in a Web Worker, on the page's canvas transferred
 // to it (OffscreenCanvas). The page's thread then never waits for a drawn frame: with software
 // compositing (headless Chromium, SwiftShader) each drawn WebGL frame is read back, and that

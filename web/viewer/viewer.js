@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pmz web viewer: streams a .pmz (?src=URL, the URL box, or a dropped file) into a three.js
 // scene and refines it while the bytes arrive. This is the page's side: input (orbit, LOD
 // slider, geomorphs, open), the overlay and the state for tests. The drawing side (render.js:

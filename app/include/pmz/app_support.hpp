@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // What every pmz program (the command-line tools and pmz-view) does the same way: the
 // exit-code convention, one-line errors ("pmz-encode: out.pmz: cannot write: No space left on
 // device"), CLI11 set-up, `-` for stdin/stdout, safe output files (temporary + rename for regular

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pmz streaming decoder: C++ API.
 //
 // Push model after zstd's ZSTD_decompressStream: feed() any slice of the .pmz byte stream

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 /* pmz streaming decoder: C API (a thin layer over pmz::Decoder). */
 #ifndef PMZ_H
 #define PMZ_H

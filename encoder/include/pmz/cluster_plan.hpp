@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Experimental: the node graph of a hierarchical simplification (SimplifyOptions::clusters), the
 // plan of a stream whose parts decode independently.
 //

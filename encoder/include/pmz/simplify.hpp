@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The collapse engine: the paper's multi-feature metric (or plain QEM) driving half-edge
 // collapses u -> v in a priority queue, recorded as a replayable sequence.
 #pragma once

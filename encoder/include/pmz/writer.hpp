@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Turns a collapse sequence into a .pmz byte stream (spec/format.md).
 #pragma once
 #include <cstdint>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Attribute wedges in the .pmz format (spec/format.md section 14; format 12.0): the HEAD
 // fields, the per-corner wedge state writer and decoder keep in step, and the coding of a
 // corner's wedge reference and a new wedge's values (ATTR chunks). Writer and decoder share it.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Coding of the BASE mesh (spec/format.md section 7): one range-coded stream holding a face
 // traversal (each face after a component's first is attached to an open edge of the faces
 // coded before; its third vertex is new, a neighbour on the front, or an earlier vertex) and

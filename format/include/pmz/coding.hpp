@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Coding primitives shared by the writer and the decoder: CRC-32, LEB128 varints, zigzag.
 #pragma once
 #include <cstddef>

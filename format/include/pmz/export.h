@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 /* PMZ_API marks the declarations the shared decoder library exports (the C++ decoder API and
    the C API): built with -fvisibility=hidden, everything else stays inside it. PMZ_LOCAL keeps
    a part of an exported class (its Impl) inside. */

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Fan wedges (spec/format.md sections 9.4 and 9.5): where a split's two new faces go in v's
 // ring, coded as the wedge's interior vertex count and its rank among the candidates of that
 // count, ordered by a geometric score. The chunk codec (split_chunk.hpp) codes the two symbols

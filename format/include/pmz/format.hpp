@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The .pmz container (spec/format.md): signature, chunk framing, header and quantization.
 // Shared by writer and decoder.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Position of a new vertex (spec/format.md section 9.6), shared by writer and decoder: the
 // prediction from u's ring with a curvature offset, the axis order (two tangent axes, then the
 // normal axis predicted from the tangent plane) and the residual contexts.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Buffers that refinement reads at random (the mesh, coordinates, per-vertex contexts): on Linux,
 // blocks of at least 2 MiB are mapped 2 MiB-aligned, rounded up to whole 2 MiB pages and hinted
 // with MADV_HUGEPAGE, so transparent huge pages back all of them. malloc's own large blocks start

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The progressive-mesh core shared by writer and decoder: a corner table over flat arrays with
 // vertex split and its exact inverse. The writer replays this very code to compute wedge ranks
 // and predictions, so what it writes is what the decoder does (spec/format.md sections 6 and 9.5).

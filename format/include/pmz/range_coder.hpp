@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Adaptive binary range coder (LZMA's, 15-bit probabilities, adaptation shift 2 growing to 6) and
 // the binarization of unsigned integers used by SPLT streams (spec/format.md section 11).
 // Header-only so the per-bit work inlines into the stream loops.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The speed level's models (HEAD level 1, spec/format.md section 9.10): what the default level
 // computes from the mesh for its contexts and prediction, replaced by cheaper models. The wedge
 // rank is the candidate's index (no scores), the position is the centroid prediction on the

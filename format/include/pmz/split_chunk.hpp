@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Coding of one SPLT chunk: groups of vertex splits into two range-coded streams with adaptive
 // context models (spec/format.md sections 8 and 9): connectivity (groups, vertex choice, wedges)
 // and geometry (position residuals). Writer and decoder share this code.

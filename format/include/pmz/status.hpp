@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The outcome of decoding .pmz bytes: what the codec's own stream decoders (format/, e.g.
 // decode_base) return when a caller must tell failures apart, and the decoder's public status
 // (installed with pmz/decoder.hpp, which includes it; status_name is defined in the decoder

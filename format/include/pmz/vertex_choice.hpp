@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Which vertices split (spec/format.md sections 9.1 and 9.2): the vertex choice state the writer
 // and the decoder keep in step (degrees, umbrella sums, the near list, exclusion), the choice
 // contexts, and the scan over a group's candidates. The chunk codec (split_chunk.hpp) codes the

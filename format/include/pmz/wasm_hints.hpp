@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Build hints for the WebAssembly decoder (scripts/web.sh); natively they expand to what the
 // code would say without them, so native code is the same with or without this header.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Metro-style surface distance (Cignoni, Rocchini, Scopigno 1998): dense deterministic sampling
 // of one mesh (vertices, edges, faces), nearest point on the other surface through a BVH,
 // both directions. The measuring stick for every quality figure of the project.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Plain indexed triangle mesh shared by the encoder's stages (flat arrays, no OpenMesh).
 #pragma once
 #include <cstddef>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The mesh file formats meshio reads and writes, as one list: the tools' --format options, their
 // output rule and every --help that names formats go by it. A format is named by its file
 // extension, lower case, without the dot ("obj"). Internal to the build (meshio, tools, viewer):

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Safe output files, the one implementation behind meshio's write_mesh and every tool's output:
 // a hidden temporary beside the target renamed over it when complete (symlinks followed, so a
 // link keeps pointing at its updated target; the target's permissions kept), devices, FIFOs and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pmz for OpenMesh: encode an OpenMesh triangle mesh, and keep one in step with a streaming
 // decoder. Header-only; the `openmesh` component of the installed CMake package:
 //

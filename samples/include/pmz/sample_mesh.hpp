@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A procedural sample mesh for pmz-demo and the tests: no downloaded data needed.
 #pragma once
 #include <cstdint>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A procedural terrain of any size, written as a binary PLY while it is made, so that tests and
 // benchmarks of large meshes need no download and the generator's memory does not grow with the
 // size: a height field on a square grid with fractal relief, sharp ridges, terraces that meet

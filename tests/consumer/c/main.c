@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 /* A C program that links pmz::decoder through the installed CMake package and decodes a real
    .pmz file (argv[1]) through the C API: feed it in small slices, refine, check the mesh, the
    stream info and the change report. */

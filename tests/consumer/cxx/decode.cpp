@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A C++ program that links the installed pmz (static or shared decoder) and decodes a .pmz file
 // (argv[1]) through the README's embedding loop, reading SLICE bytes at a time (argv[2]): it must
 // end at the full mesh, with every index in range and the change report covering the mesh.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The encoder component from the installed package: simplify a small generated grid, write it
 // as .pmz (argv[1]) and check that the installed decoder reads it back to the full mesh.
 #include <cmath>

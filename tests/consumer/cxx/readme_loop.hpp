@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The embedding loop that README.md shows ("Embedding the decoder"), compiled: the lines between
 // the README markers must appear verbatim in README.md (ctest readme_loop_in_readme). read_some
 // returns how many bytes it put into the buffer (0 at the end), upload takes the decoder and

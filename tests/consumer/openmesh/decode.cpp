@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The openmesh component: a .pmz file (argv[1]) read SLICE bytes at a time (argv[2]), a
 // pmz::openmesh::MeshView refined after each slice, then coarsened half way; the TriMesh must
 // equal the decoder's mesh each time (counts, positions, faces' vertices in order, normals).

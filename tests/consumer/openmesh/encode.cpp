@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The openmesh component: a TriMesh (an open, wavy strip with vertex normals and colours from
 // OpenMesh) encoded through pmz::openmesh::encode and written to argv[1].
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // ?mode=page: this page draws the grid every frame; worker: a worker draws it on the canvas
 // transferred to it (OffscreenCanvas) while this page only updates a text overlay; none: nothing
 // draws (the machine's own share of the page's frame gaps). ?faces=N, ?ms=run time; ?busy=0: no

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The probe's drawing worker: the grid drawn on the transferred canvas every animation frame of
 // this worker for ms; posts its frame times on the page's clock.
 import * as THREE from './three.module.js';

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A grid of about `faces` triangles drawn as the viewer draws a stream (MeshStandardMaterial,
 // flat shading, double sided, no MSAA, one pixel per CSS pixel), swaying so each frame differs.
 // Returns draw(t). The scene and grid repeat render.js's (camera, lights; its calibration grid)
