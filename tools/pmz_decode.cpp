@@ -82,16 +82,18 @@ int main(int argc, char** argv) {
   pmz::Decoder d;
   pmz::Status s = d.feed(data.data(), n);
   if (s == pmz::Status::ok && !bytes) s = d.finish();
-  const char* nothing_written = "nothing written (--salvage writes the last good level)";
+  // One line per failure: what is wrong with the stream, and what became of the output.
+  const auto stream_failed = [&](const char* outcome) {
+    app_support::print_error(shown, app_support::stream_error(n, d.error_message()) + outcome);
+    return app_support::kExitFailure;
+  };
+  const char* nothing_written = "; nothing written (--salvage writes the last good level)";
   if (s != pmz::Status::ok) {
     // A damaged stream still has a last good level, but writing it unasked would pass a coarse
     // mesh off as the file's content: only --salvage writes it (and still exits 1).
-    app_support::print_error(shown, app_support::library_message(d.error_message()));
-    if (!salvage) {
-      app_support::print_error(shown, nothing_written);
-      return app_support::kExitFailure;
-    }
-    if (!d.info().base_done) return app_support::kExitFailure;
+    if (!salvage) return stream_failed(nothing_written);
+    if (!d.info().base_done) return stream_failed("; nothing written (no complete level)");
+    stream_failed("; writing the last good level");
   }
   if (!d.info().base_done) {
     app_support::print_error(shown,
@@ -112,14 +114,10 @@ int main(int argc, char** argv) {
   // Wedge and residual symbols are decoded as splits are first applied: damage there shows
   // only now, and is treated like damage found while reading.
   const bool refine_failed = s == pmz::Status::ok && d.status() != pmz::Status::ok;
-  if (d.status() != pmz::Status::ok && d.status() != s)
-    app_support::print_error(shown, app_support::library_message(d.error_message()));
   if (refine_failed) {
     s = d.status();
-    if (!salvage) {
-      app_support::print_error(shown, nothing_written);
-      return app_support::kExitFailure;
-    }
+    if (!salvage) return stream_failed(nothing_written);
+    stream_failed("; writing the last good level");
   }
   // A target the given bytes cannot reach: say what it asked and what was written.
   const bool all_available = d.splits_available() == info.total_splits;

@@ -44,8 +44,7 @@ bool encode(const std::string& input, const std::string& output, const EncodeSet
   app_support::OutputFile out;
   if (!out.open(output, true, error)) return false;
   pmz::IndexedMesh mesh;
-  if (progress) progress->update("reading", 0);
-  if (!tool::read_mesh_input(input, settings.stdin_format, mesh, error)) {
+  if (!tool::read_mesh_input(input, settings.stdin_format, mesh, error, progress)) {
     if (progress) progress->clear();
     return false;
   }

@@ -50,7 +50,7 @@ int main(int argc, char** argv) {
   const bool truncated = s == pmz::Status::truncated;
   const bool damaged = s != pmz::Status::ok && !truncated;
   if (!d.info().header_done) {
-    app_support::print_error(shown, app_support::library_message(d.error_message()));
+    app_support::print_error(shown, app_support::stream_error(data.size(), d.error_message()));
     return app_support::kExitFailure;
   }
   double refine_s = 0, refine_cpu = 0, warm_s = 0, warm_cpu = 0;
@@ -64,7 +64,7 @@ int main(int argc, char** argv) {
     refine_cpu = double(std::clock() - c0) / CLOCKS_PER_SEC;
     // Wedge and residual symbols are decoded as splits are first applied: damage shows now.
     if (d.status() != pmz::Status::ok) {
-      app_support::print_error(shown, app_support::library_message(d.error_message()));
+      app_support::print_error(shown, app_support::stream_error(data.size(), d.error_message()));
       return app_support::kExitFailure;
     }
     // Again with memory already touched and positions computed: the per-frame refinement cost.
@@ -192,7 +192,7 @@ int main(int argc, char** argv) {
     }
   }
   if (damaged) {
-    app_support::print_error(shown, app_support::library_message(d.error_message()));
+    app_support::print_error(shown, app_support::stream_error(data.size(), d.error_message()));
     return app_support::kExitFailure;
   }
   return app_support::kExitOk;

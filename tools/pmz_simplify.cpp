@@ -63,7 +63,9 @@ int main(int argc, char** argv) {
 
   std::string error;
   pmz::IndexedMesh mesh;
-  if (!tool::read_mesh_input(input, format, mesh, error)) {
+  app_support::Progress progress(quiet, force_progress);
+  if (!tool::read_mesh_input(input, format, mesh, error,
+                             progress.enabled() ? &progress : nullptr)) {
     app_support::print_error(error);
     return app_support::kExitFailure;
   }
@@ -74,7 +76,6 @@ int main(int argc, char** argv) {
                          : std::max<uint64_t>(1, uint64_t(std::llround(ratio * double(in_faces))));
   pmz::SimplifyStats stats;
   options.stats = &stats;
-  app_support::Progress progress(quiet, force_progress);
   if (progress.enabled()) options.progress = [&](double f) { progress.update("simplifying", f); };
   const auto t0 = std::chrono::steady_clock::now();
   pmz::CollapseSequence seq;

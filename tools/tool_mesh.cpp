@@ -38,26 +38,40 @@ bool no_external_gltf_buffers(const std::string& format, const std::vector<uint8
 }  // namespace
 
 bool read_mesh_input(const std::string& path, const std::string& stdin_format, IndexedMesh& mesh,
-                     std::string& error) {
-  MeshRepairStats stats;
-  std::string shown = path;
-  bool ok;
-  if (path == "-") {
-    // The readers take a path and go by its extension: stdin goes through a temporary file
-    // named accordingly, and messages say "stdin" instead of its name.
-    shown = "stdin";
-    std::vector<uint8_t> bytes;
-    ScratchFile scratch;
-    ok = app_support::read_input("-", bytes, error) &&
-         no_external_gltf_buffers(stdin_format, bytes, error) &&
-         scratch.create(bytes, app_support::name(), "." + stdin_format, error) &&
-         read_mesh(scratch.path(), mesh, stats, error);
-    if (!ok) replace_all(error, scratch.path(), shown);
-  } else {
-    ok = read_mesh(path, mesh, stats, error);
+                     std::string& error, app_support::Progress* progress) {
+  const bool from_stdin = path == "-";
+  const std::string shown = from_stdin ? "stdin" : path;
+  std::vector<uint8_t> bytes;
+  std::function<void(double)> read_progress;
+  if (progress) {
+    progress->update("reading", 0);
+    read_progress = [progress](double f) { progress->update("reading", f); };
   }
+  // Read here (the bar follows the bytes), parsed from memory. The parsers go by the path's
+  // extension and look for the files it refers to (MTL, glTF buffers) beside it: stdin goes
+  // through a temporary file named accordingly, and messages say "stdin" instead of its name.
+  ScratchFile scratch;
+  PolygonSoup soup;
+  bool ok =
+      app_support::read_input(path, bytes, error, read_progress) &&
+      (!from_stdin || (no_external_gltf_buffers(stdin_format, bytes, error) &&
+                       scratch.create(bytes, app_support::name(), "." + stdin_format, error)));
+  const std::string parsed = from_stdin ? scratch.path() : path;
+  ok =
+      ok && parse_polygon_soup(
+                parsed, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()),
+                soup, error);
+  MeshRepairStats stats;
+  if (ok) {
+    repair_mesh(soup, mesh, stats);
+    if (mesh.face_count() == 0)
+      ok = false, error = parsed + ": no usable faces (all " +
+                          std::to_string(stats.degenerate_faces_dropped) +
+                          " faces are degenerate: fewer than three distinct vertices)";
+  }
+  if (!ok && from_stdin) replace_all(error, scratch.path(), shown);
   const std::string summary = stats.summary();
-  if (ok && !summary.empty()) std::fprintf(stderr, "pmz: %s: %s\n", shown.c_str(), summary.c_str());
+  if (ok && !summary.empty()) app_support::print_error(shown, summary);
   return ok;
 }
 

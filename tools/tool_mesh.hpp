@@ -6,17 +6,19 @@
 #include <string>
 #include <vector>
 
+#include "pmz/app_support.hpp"
 #include "pmz/mesh.hpp"
 #include "pmz/output_file.hpp"
 
 namespace pmz::tool {
 
 // Reads `path` ("-": stdin, parsed as `stdin_format`, any format meshio reads) and repairs it;
-// repairs are reported on stderr ("pmz: FILE: ...") as by pmz::read_mesh. Errors name the file
-// ("stdin" for -). A glTF on stdin has no folder around it: one that names external buffer files
-// is refused (only embedded buffers: a .glb's own or data: URIs).
+// repairs are reported on stderr as one line ("pmz-encode: FILE: triangulated ..."). Errors name
+// the file ("stdin" for -). A glTF on stdin has no folder around it: one that names external
+// buffer files is refused (only embedded buffers: a .glb's own or data: URIs). `progress`, if
+// given, shows stage "reading" by the bytes read of the file's size.
 bool read_mesh_input(const std::string& path, const std::string& stdin_format, IndexedMesh& mesh,
-                     std::string& error);
+                     std::string& error, app_support::Progress* progress = nullptr);
 
 // --format FORMAT, one of the formats meshio reads (`read`), writes (`write`) or either; `help`
 // says what it applies to, and the accepted names are appended to it.

@@ -56,10 +56,10 @@ struct Options {
   double budget_ms = 6;
 };
 
-// "pmz-view: message" on stderr; the exit status of a failed run.
+// "pmz-view: message" on stderr, worded as by every tool; the exit status of a failed run.
 int print_failure(const std::string& message) {
-  std::fprintf(stderr, "pmz-view: %s\n", message.c_str());
-  return 1;
+  pmz::app_support::print_error(message);
+  return pmz::app_support::kExitFailure;
 }
 
 struct Textures {
@@ -254,7 +254,10 @@ int parse(int argc, char** argv, Options& o) {
 class Viewer {
  public:
   explicit Viewer(const Options& o)
-      : o_(o), screenshot_(!o.screenshot.empty()), is_static_(is_mesh_file(o.source)) {}
+      : o_(o),
+        shown_(o.source == "-" ? "stdin" : o.source),
+        screenshot_(!o.screenshot.empty()),
+        is_static_(is_mesh_file(o.source)) {}
   Viewer(const Viewer&) = delete;
   Viewer& operator=(const Viewer&) = delete;
 
@@ -399,7 +402,7 @@ class Viewer {
   // The whole requested prefix first, then exactly that level of detail.
   int screenshot_of_stream() {
     while (!stream_.done()) std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    if (!stream_.error().empty()) return print_failure(o_.source + ": " + stream_.error());
+    if (!stream_.error().empty()) return print_failure(shown_ + ": " + stream_.error());
     {
       std::lock_guard<std::mutex> lock(stream_.mutex);
       pmz::Decoder& decoder = stream_.decoder;
@@ -420,8 +423,9 @@ class Viewer {
   }
 
   std::string no_base_mesh_message() const {
-    return o_.bytes ? "the first " + std::to_string(o_.bytes) + " bytes do not hold the base mesh"
-                    : o_.source + ": the stream ended before its base mesh";
+    return shown_ + ": " +
+           (o_.bytes ? "the first " + std::to_string(o_.bytes) + " bytes do not hold the base mesh"
+                     : "the stream ended before its base mesh");
   }
 
   // The window's frames until it is closed, the stream fails for good, or (with
@@ -531,11 +535,10 @@ class Viewer {
       loop_.error_reported = true;
       stats_.error = stream_.error();
       if (!stats_.base_done || o_.exit_when_complete) {
-        rc = print_failure(o_.source + ": " + stats_.error);
+        rc = print_failure(shown_ + ": " + stats_.error);
         return false;
       }
-      std::fprintf(stderr, "pmz-view: %s: %s (showing what was decoded)\n", o_.source.c_str(),
-                   stats_.error.c_str());
+      pmz::app_support::print_error(shown_, stats_.error + " (showing what was decoded)");
     }
     if (stream_done && stream_.error().empty() && !stats_.base_done) {
       rc = print_failure(no_base_mesh_message());
@@ -597,6 +600,7 @@ class Viewer {
   }
 
   const Options& o_;
+  const std::string shown_;  // the source as messages name it ("stdin" for -), like every tool
   const bool screenshot_, is_static_;
   std::string error_;
   StaticMesh static_mesh_;
@@ -631,6 +635,7 @@ class Viewer {
 }  // namespace
 
 int main(int argc, char** argv) {
+  pmz::app_support::init("pmz-view");
   Options o;
   if (int rc = parse(argc, argv, o); rc >= 0) return rc;
   return Viewer(o).run();

@@ -30,12 +30,12 @@ class FdSource final : public Source {
     while (!stop.load()) {
       pollfd p{fd_, POLLIN, 0};
       int ready = poll(&p, 1, 100);
-      if (ready < 0 && errno != EINTR) return std::string("read failed: ") + std::strerror(errno);
+      if (ready < 0 && errno != EINTR) return std::string("cannot read: ") + std::strerror(errno);
       if (ready <= 0) continue;
       ssize_t n = read(fd_, buffer.data(), buffer.size());
       if (n < 0) {
         if (errno == EINTR || errno == EAGAIN) continue;
-        return std::string("read failed: ") + std::strerror(errno);
+        return std::string("cannot read: ") + std::strerror(errno);
       }
       if (n == 0) break;
       if (!sink(buffer.data(), size_t(n))) break;
@@ -121,13 +121,13 @@ std::unique_ptr<Source> open_source(const std::string& spec, std::string& error)
   if (is_url(spec)) return std::make_unique<UrlSource>(spec);
   int fd = open(spec.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) {
-    error = "cannot open " + spec + ": " + std::strerror(errno);
+    error = spec + ": cannot read: " + std::strerror(errno);
     return nullptr;
   }
   struct stat st {};
   if (fstat(fd, &st) != 0 || S_ISDIR(st.st_mode)) {
-    error = "cannot read " + spec + ": " +
-            (S_ISDIR(st.st_mode) ? "is a directory" : std::strerror(errno));
+    error =
+        spec + ": cannot read: " + (S_ISDIR(st.st_mode) ? "Is a directory" : std::strerror(errno));
     close(fd);
     return nullptr;
   }

@@ -3,6 +3,8 @@
 
 #include <algorithm>
 
+#include "pmz/app_support.hpp"
+
 namespace pmzview {
 
 Stream::~Stream() { stop(); }
@@ -62,7 +64,7 @@ void Stream::run() {
     }
   }
   if (error.empty() && !decode_error.empty())
-    error = "bad stream (" + std::to_string(received_.load()) + " bytes read): " + decode_error;
+    error = pmz::app_support::stream_error(received_.load(), decode_error);
   error_ = error;
   done_ = true;  // publishes error_ (seq_cst store after the write)
 }

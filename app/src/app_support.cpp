@@ -11,6 +11,7 @@
 #include <climits>
 #include <cstring>
 #include <filesystem>
+#include <mutex>
 
 #include "pmz/mesh_file_formats.hpp"
 
@@ -23,6 +24,9 @@ const char* const kExitStatusHelp =
 namespace {
 
 const char* g_name = "pmz";
+// stderr's writers: messages and the bar shown on it (if any), which a message erases first.
+std::mutex g_stderr;
+Progress* g_shown_bar = nullptr;
 extern "C" void remove_temporaries_and_die(int sig) {
   pmz::remove_output_temporaries();
   ::signal(sig, SIG_DFL);
@@ -48,11 +52,13 @@ void init(const char* tool_name) {
 const char* name() { return g_name; }
 
 void print_error(const std::string& text) {
+  std::lock_guard<std::mutex> lock(g_stderr);
+  if (g_shown_bar) g_shown_bar->clear_locked();
   std::fprintf(stderr, "%s: %s\n", g_name, text.c_str());
 }
 
 void print_error(const std::string& file, const std::string& text) {
-  std::fprintf(stderr, "%s: %s: %s\n", g_name, file.c_str(), text.c_str());
+  print_error(file + ": " + text);
 }
 
 std::string library_message(const std::string& message) {
@@ -60,6 +66,10 @@ std::string library_message(const std::string& message) {
 }
 
 const char* version() { return PMZ_APP_VERSION; }
+
+std::string stream_error(uint64_t size, const std::string& decoder_message) {
+  return size == 0 ? "empty file" : library_message(decoder_message);
+}
 
 int parse(CLI::App& app, int argc, char** argv) {
   app.set_version_flag("--version", app.get_name() + " " + version(),
@@ -95,20 +105,26 @@ std::string errno_message(const std::string& path, const char* action, int err) 
   return path + ": " + action + ": " + std::strerror(err);
 }
 
-bool read_input(const std::string& path, std::vector<uint8_t>& out, std::string& error) {
+bool read_input(const std::string& path, std::vector<uint8_t>& out, std::string& error,
+                const std::function<void(double)>& progress) {
   const bool from_stdin = path == "-";
   const std::string shown = from_stdin ? "stdin" : path;
   FILE* f = from_stdin ? stdin : std::fopen(path.c_str(), "rb");
   if (!f) return error = errno_message(shown, "cannot read", errno), false;
-  struct stat st;
+  struct stat st = {};
   if (::fstat(::fileno(f), &st) == 0 && S_ISDIR(st.st_mode)) {
     if (!from_stdin) std::fclose(f);
     return error = shown + ": cannot read: Is a directory", false;
   }
   out.clear();
+  const uint64_t size = S_ISREG(st.st_mode) ? uint64_t(st.st_size) : 0;
+  if (size) out.reserve(size);
   uint8_t buf[1 << 16];
   size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) out.insert(out.end(), buf, buf + n);
+  while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) {
+    out.insert(out.end(), buf, buf + n);
+    if (progress && size) progress(double(out.size()) / double(size));
+  }
   const int err = std::ferror(f) ? (errno ? errno : EIO) : 0;
   if (!from_stdin) std::fclose(f);
   if (err) return error = errno_message(shown, "cannot read", err), false;
@@ -159,8 +175,14 @@ Progress::Progress(bool quiet, bool force) {
   enabled_ = force || (!quiet && tty_);
 }
 
+Progress::~Progress() {
+  std::lock_guard<std::mutex> lock(g_stderr);
+  if (g_shown_bar == this) g_shown_bar = nullptr;
+}
+
 void Progress::update(const char* stage, double fraction) {
   if (!enabled_) return;
+  std::lock_guard<std::mutex> lock(g_stderr);
   const int percent = int(std::min(1.0, std::max(0.0, fraction)) * 100);
   if (percent == last_percent_ && stage == last_stage_) return;
   last_percent_ = percent;
@@ -173,14 +195,21 @@ void Progress::update(const char* stage, double fraction) {
   std::fprintf(stderr, "\r%s: %s [%s] %3d%%", g_name, stage, bar, percent);
   std::fflush(stderr);
   shown_ = true;
+  g_shown_bar = this;
 }
 
 void Progress::clear() {
+  std::lock_guard<std::mutex> lock(g_stderr);
+  clear_locked();
+}
+
+void Progress::clear_locked() {
   if (!shown_) return;
   std::fputs(tty_ ? "\r\033[K" : "\n", stderr);
   shown_ = false;
   last_percent_ = -1;
   last_stage_ = nullptr;
+  if (g_shown_bar == this) g_shown_bar = nullptr;
 }
 
 void add_progress_options(CLI::App& app, bool& quiet, bool& force) {

@@ -2,10 +2,12 @@
 #include "pmz/output_file.hpp"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <cctype>
 #include <cerrno>
 #include <climits>
 #include <cstdlib>
@@ -59,6 +61,28 @@ void release_temp_slot(int slot) {
   g_temps[slot].state.store(1);
   g_temps[slot].path[0] = 0;
   g_temps[slot].state.store(0);
+}
+
+// Removes the temporaries of a target in `dir` ("." + name + ".tmp." + PID + "." + 6 characters)
+// whose process is gone: a writer killed by SIGKILL had no chance to remove its own. One whose
+// PID is alive (or belongs to another user's process) is left: it may still be written.
+void remove_stale_temporaries(const std::filesystem::path& dir, const std::string& prefix) {
+  std::error_code ec;
+  std::filesystem::directory_iterator it(dir.empty() ? std::filesystem::path(".") : dir, ec), end;
+  for (; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
+    const char* digits = name.c_str() + prefix.size();
+    char* after = nullptr;
+    const long pid =
+        std::isdigit(static_cast<unsigned char>(*digits)) ? std::strtol(digits, &after, 10) : 0;
+    if (pid <= 0 || pid > INT_MAX || pid == long(::getpid()) || *after != '.' ||
+        std::strlen(after + 1) != 6)
+      continue;
+    if (::kill(pid_t(pid), 0) == 0 || errno != ESRCH) continue;
+    struct stat st;
+    if (::lstat(it->path().c_str(), &st) == 0 && S_ISREG(st.st_mode)) ::unlink(it->path().c_str());
+  }
 }
 
 }  // namespace
@@ -115,7 +139,10 @@ bool OutputFile::open(const std::string& path, bool binary, std::string& error) 
   // Appended rather than "." + name: GCC 12 warns falsely (-Wrestrict) on literal + string&&.
   std::string temp_name = ".";
   temp_name += target.filename().string();
-  temp_name += ".tmp.XXXXXX";
+  temp_name += ".tmp.";
+  remove_stale_temporaries(dir, temp_name);
+  temp_name += std::to_string(::getpid());
+  temp_name += ".XXXXXX";
   std::string temp = (dir / temp_name).string();
   temp_slot_ = claim_temp_slot(temp);
   char* name_buf = temp_slot_ >= 0 ? g_temps[temp_slot_].path : temp.data();

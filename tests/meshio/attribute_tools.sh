@@ -29,7 +29,7 @@ OBJ
 printf 'newmtl paper\nKd 1 1 1\nmap_Kd paper.png\n' > quad.mtl
 "$encode" quad.obj -o quad.pmz > encode.out 2> encode.err || fail "pmz-encode quad.obj: $(cat encode.err)"
 [ -s quad.pmz ] || fail "no quad.pmz"
-grep -qx "pmz: quad.obj: triangulated 1 polygon into 2 triangles" encode.err ||
+grep -qx "pmz-encode: quad.obj: triangulated 1 polygon into 2 triangles" encode.err ||
   fail "no triangulation line: $(cat encode.err)"
 # Format 8.0 encodes them: the summary line says which.
 grep -q "; attributes: texture coordinates, normals, 1 material, [0-9]* bytes$" encode.out ||

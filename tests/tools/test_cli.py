@@ -369,6 +369,117 @@ def case_exit_codes_and_one_line_errors():
           f"pmz-decode on a truncated file: the error does not name the file: {err_text(r)!r}")
 
 
+def damaged_streams(d):
+    """An empty file, one cut short, one with a bad magic, one with a corrupt chunk."""
+    data = sample_bytes()
+    corrupt = bytearray(data)
+    corrupt[len(data) // 2] ^= 0xFF
+    files = {"empty": b"", "truncated": data[:300], "bad_magic": b"XXXX" + data[4:],
+             "corrupt": bytes(corrupt)}
+    paths = {}
+    for name, content in files.items():
+        paths[name] = os.path.join(d, name + ".pmz")
+        open(paths[name], "wb").write(content)
+    return paths
+
+
+def one_line_reason(name, path, r):
+    """The reason of a one-line error 'name: path: reason', or a failure."""
+    e = err_text(r)
+    check(r.returncode == 1, f"{name} {path}: expected exit 1, got {r.returncode}: {e!r}")
+    check(e.count("\n") == 1 and e.startswith(f"{name}: {path}: "),
+          f"{name} {path}: expected one line '{name}: {path}: reason', got {e!r}")
+    reason = e[len(f"{name}: {path}: "):-1]
+    check("pmz: " not in reason, f"{name} {path}: the library's prefix inside the message: {e!r}")
+    return reason
+
+
+def case_damaged_stream_one_line_every_tool():
+    d = fresh("damaged")
+    view = tool("pmz-view")
+    has_view = os.path.exists(view) and shutil.which("xvfb-run")
+    for kind, path in damaged_streams(d).items():
+        out = os.path.join(d, "out.obj")
+        reason = one_line_reason("pmz-decode", path, run([tool("pmz-decode"), path, "-o", out]))
+        check(not os.path.exists(out), f"pmz-decode wrote {out} for a {kind} stream")
+        nothing = "; nothing written (--salvage writes the last good level)"
+        check(reason.endswith(nothing), f"pmz-decode {kind}: does not say nothing was written: "
+              f"{reason!r}")
+        reason = reason[:-len(nothing)]
+        if kind == "empty":
+            check(reason == "empty file", f"an empty .pmz: expected 'empty file', got {reason!r}")
+        if kind != "truncated":  # pmz-info describes a truncated file (exit 0)
+            got = one_line_reason("pmz-info", path, run([tool("pmz-info"), path]))
+            check(got == reason, f"pmz-info words a {kind} stream otherwise: {got!r} vs {reason!r}")
+        if has_view:
+            got = one_line_reason("pmz-view", path, run(
+                ["xvfb-run", "-a", view, path, "--screenshot", os.path.join(d, "v.png"), "--size",
+                 "64x64"]))
+            check(got == reason, f"pmz-view words a {kind} stream otherwise: {got!r} vs {reason!r}")
+    # Damaged meshes: the same reason from every tool that reads them.
+    meshes = {"empty.obj": "", "truncated.ply": "ply\nformat binary_little_endian 1.0\nelement "
+              "vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n\1\2",
+              "bad_magic.ply": "plx\nformat ascii 1.0\n", "corrupt.obj": "v 0 0 0\nf 1 2 zz\n"}
+    for name, text in meshes.items():
+        path = os.path.join(d, name)
+        open(path, "w").write(text)
+        reasons = {one_line_reason(t, path, run([tool(t)] + args)) for t, args in [
+            ("pmz-encode", [path, "-o", os.path.join(d, "m.pmz")]),
+            ("pmz-simplify", [path, "--ratio", "0.5", "-o", os.path.join(d, "m.obj")]),
+            ("pmz-compare", [SAMPLE_OBJ, path])]}
+        check(len(reasons) == 1, f"{name}: the tools word it differently: {reasons}")
+    left = [f for f in os.listdir(d) if f.startswith(".") or f in ("m.pmz", "m.obj", "out.obj")]
+    check(not left, f"left behind: {left}")
+
+
+def case_stale_temporary_removed():
+    d = fresh("stale")
+    out = os.path.join(d, "out.pmz")
+    # SIGKILL cannot be caught: the temporary stays, named after the dead process.
+    p = subprocess.Popen([tool("pmz-encode"), "-", "--format", "obj", "-o", out],
+                         stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    temps = wait_for_temporary(d, p)
+    if temps is None:
+        p.kill()
+        raise Failed("pmz-encode: no temporary output while reading stdin")
+    p.kill()
+    p.wait(30)
+    check(temps == [f".out.pmz.tmp.{p.pid}." + temps[0][-6:]],
+          f"the temporary does not carry the writer's PID {p.pid}: {temps}")
+    live = f".out.pmz.tmp.{os.getpid()}.abcdef"  # a running process's: still being written
+    other = f".other.pmz.tmp.{p.pid}.abcdef"      # another output's: not this run's to remove
+    for name in (live, other):
+        open(os.path.join(d, name), "w").close()
+    r = run([tool("pmz-encode"), SAMPLE_OBJ, "-o", out])
+    check(r.returncode == 0, f"pmz-encode after a kill: rc={r.returncode} {err_text(r)}")
+    check(sorted(os.listdir(d)) == sorted(["out.pmz", live, other]),
+          f"the dead run's temporary is not removed (or another is): {sorted(os.listdir(d))}")
+
+
+def case_progress_bar_ends_before_messages():
+    d = fresh("progress_messages")
+    quad = os.path.join(d, "quad.obj")
+    # A polygon: reading reports its triangulation on stderr while the bar is shown.
+    with open(quad, "w") as f:
+        f.write("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n")
+    r = run([tool("pmz-encode"), quad, "-o", os.path.join(d, "q.pmz"), "--progress"])
+    e = err_text(r)
+    check(r.returncode == 0, f"pmz-encode --progress: rc={r.returncode} {e!r}")
+    note = [l for l in e.split("\n") if "triangulated" in l]
+    check(note == [f"pmz-encode: {quad}: triangulated 1 polygon into 2 triangles"],
+          f"the repair note is not a line of its own: {e!r}")
+    check("reading [" + "=" * 30 + "] 100%" in e,
+          f"the reading stage does not report its progress: {e!r}")
+    # Reading a larger file reports steps between 0 and 100%.
+    big = os.path.join(d, "big.obj")
+    with open(big, "w") as f:
+        f.write("# padding\n" * 200000 + open(SAMPLE_OBJ).read())
+    r = run([tool("pmz-encode"), big, "-o", os.path.join(d, "b.pmz"), "--progress"])
+    stages = [p.strip() for p in err_text(r).replace("\n", "\r").split("\r") if "reading [" in p]
+    check(r.returncode == 0 and any(not s.endswith((" 0%", "100%")) for s in stages),
+          f"reading a {os.path.getsize(big)}-byte file went from 0 to 100% at once: {stages}")
+
+
 def case_help_shows_defaults():
     r = run([tool("pmz-encode"), "--help"])
     h = r.stdout.decode()

@@ -370,12 +370,13 @@ def test_errors(args):
     env_no_display.pop("DISPLAY", None)
     env_no_display.pop("WAYLAND_DISPLAY", None)
     cases = [
-        ("missing file", [args.view, os.path.join(workdir, "missing.pmz")], None, "cannot open"),
+        ("missing file", [args.view, os.path.join(workdir, "missing.pmz")], None,
+         "missing.pmz: cannot read: No such file or directory"),
         ("directory", [args.view, workdir], None, "directory"),
         ("no display", [args.view, junk], env_no_display, "no display"),
         ("unreachable URL", ["xvfb-run", "-a", args.view, "http://127.0.0.1:9/none.pmz"], None, "fetch failed"),
         ("not a .pmz", ["xvfb-run", "-a", args.view, junk, "--screenshot", os.path.join(workdir, "x.png")], None,
-         "bad stream"),
+         "junk.pmz: bad magic: not a .pmz stream"),
         ("bad --size", [args.view, junk, "--size", "12"], None, "--size"),
         ("bad mesh file", [args.view, bad_obj], None, "references vertex"),
     ]

@@ -9,6 +9,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdint>
 #include <cstdio>
+#include <functional>
 #include <pmz/output_file.hpp>
 #include <string>
 #include <vector>
@@ -26,13 +27,19 @@ extern const char* const kExitStatusHelp;
 void init(const char* tool_name);
 const char* name();
 
-// "tool: text" on stderr, one line.
+// "tool: text" on stderr, one line (after erasing a progress bar that is shown: no message
+// lands on the bar's line).
 void print_error(const std::string& text);
 // "tool: file: text" on stderr, one line.
 void print_error(const std::string& file, const std::string& text);
 
 // A library message without its "pmz: " prefix (the tool's line names the tool and file).
 std::string library_message(const std::string& message);
+
+// Why a .pmz stream of `size` bytes was refused, for "tool: file: reason": "empty file" when it
+// had no bytes at all, else the decoder's message without its "pmz: " prefix. Every tool that
+// reads streams words its errors through this.
+std::string stream_error(uint64_t size, const std::string& decoder_message);
 
 // The project's version ("0.1.0"): every program's --version prints "NAME VERSION".
 const char* version();
@@ -49,8 +56,10 @@ void set_footer(CLI::App& app, const std::string& extra = "");
 // "path: reason" for errno (strerror).
 std::string errno_message(const std::string& path, const char* action, int err);
 
-// Reads a whole file, or stdin for "-". error: "path: cannot read: reason".
-bool read_input(const std::string& path, std::vector<uint8_t>& out, std::string& error);
+// Reads a whole file, or stdin for "-". error: "path: cannot read: reason". `progress`, if set,
+// is told the fraction of a regular file's size read so far.
+bool read_input(const std::string& path, std::vector<uint8_t>& out, std::string& error,
+                const std::function<void(double)>& progress = {});
 
 // True when both name the same existing regular file (same device and inode, through links):
 // writing the output would destroy the input. "-" is never the same file.
@@ -77,15 +86,19 @@ bool write_output(const std::string& path, const void* data, size_t size, std::s
 
 // A progress bar on stderr: "\rpmz-encode: simplifying [=====>     ]  42%". Enabled when
 // stderr is a terminal, unless quiet; `force` enables it anywhere (each bar then ends with a
-// newline instead of being erased).
+// newline instead of being erased). print_error() erases a shown bar before its line; the bar is
+// drawn again at its next update.
 class Progress {
  public:
   Progress(bool quiet, bool force);
+  ~Progress();
   bool enabled() const { return enabled_; }
   void update(const char* stage, double fraction);  // redraws when the percentage changes
   void clear();                                     // erases the bar (or ends its line)
 
  private:
+  friend void print_error(const std::string& text);
+  void clear_locked();  // with stderr's lock held
   bool enabled_ = false, tty_ = false, shown_ = false;
   int last_percent_ = -1;
   const char* last_stage_ = nullptr;

@@ -3,8 +3,10 @@
 // a hidden temporary beside the target renamed over it when complete (symlinks followed, so a
 // link keeps pointing at its updated target; the target's permissions kept), devices, FIFOs and
 // sockets written directly, "-" is stdout. Temporaries not yet committed are registered so that
-// a signal handler can remove them (remove_output_temporaries). Internal to the build: not an
-// installed header.
+// a signal handler can remove them (remove_output_temporaries). A temporary is named
+// ".NAME.tmp.PID.XXXXXX" after the target and the writing process: one left by a process that no
+// longer runs (SIGKILL cannot be caught) is removed when the same target is next opened.
+// Internal to the build: not an installed header.
 #pragma once
 #include <cstdio>
 #include <string>
