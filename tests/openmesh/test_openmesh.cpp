@@ -138,6 +138,27 @@ void expect_matches(const pmz::openmesh::MeshView<Mesh>& view, const pmz::Decode
     }
   }
   ASSERT_EQ(m.n_edges(), edges.size());
+  // OpenMesh's own links agree: next / prev, opposite, faces' and vertices' halfedges, and no
+  // element left deleted.
+  for (auto h : m.halfedges()) {
+    ASSERT_FALSE(m.status(h.edge()).deleted());
+    ASSERT_EQ(m.prev_halfedge_handle(m.next_halfedge_handle(h)), h);
+    ASSERT_EQ(m.to_vertex_handle(h), m.from_vertex_handle(m.next_halfedge_handle(h)));
+    ASSERT_EQ(m.face_handle(h), m.face_handle(m.next_halfedge_handle(h)));
+    ASSERT_NE(m.to_vertex_handle(h), m.to_vertex_handle(m.opposite_halfedge_handle(h)));
+    ASSERT_FALSE(m.is_boundary(h) && m.is_boundary(m.opposite_halfedge_handle(h)));
+  }
+  for (auto f : m.faces()) ASSERT_EQ(m.face_handle(m.halfedge_handle(f)), f);
+  for (auto v : m.vertices()) {
+    ASSERT_FALSE(m.status(v).deleted());
+    if (!m.is_isolated(v)) {
+      ASSERT_EQ(m.from_vertex_handle(m.halfedge_handle(v)), v);
+      // OpenMesh keeps a boundary vertex's halfedge on the boundary.
+      bool boundary = false;
+      for (auto h : m.voh_range(v)) boundary = boundary || m.is_boundary(h);
+      ASSERT_EQ(m.is_boundary(m.halfedge_handle(v)), boundary) << "vertex " << v.idx();
+    }
+  }
   if (d.wedge_count() == 0) {
     EXPECT_FALSE(m.has_halfedge_normals() || m.has_halfedge_texcoords2D() ||
                  m.has_halfedge_colors());

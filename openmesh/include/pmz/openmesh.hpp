@@ -32,11 +32,12 @@
 // Decoding (MeshView): update() brings the owned mesh to the decoder's current level through
 // Decoder::changes() and clears that report (a renderer that uploads the same deltas reads
 // changes() before update()). Vertices are appended or removed at the end; each rewritten face
-// is deleted and added again so that it lands at its own index, and the deleted elements are
-// then garbage-collected. Attributes: halfedge properties get each corner's wedge (exact);
-// vertex properties the vertex's lowest-numbered wedge (one side of a seam); face colours, when
-// asked for, the face's first corner's. Only the texture coordinate set ViewOptions::texcoord_set
-// is kept (OpenMesh has one 2D set); materials are not carried.
+// is deleted and added again so that it lands at its own index, and the holes the deleted
+// elements left are filled as OpenMesh's garbage collection would, touching only them and
+// what moves into them (not the whole mesh). Attributes: halfedge properties get each corner's
+// wedge (exact); vertex properties the vertex's lowest-numbered wedge (one side of a seam); face
+// colours, when asked for, the face's first corner's. Only the texture coordinate set
+// ViewOptions::texcoord_set is kept (OpenMesh has one 2D set); materials are not carried.
 //
 // Cost: see MeshView.
 #pragma once
@@ -272,8 +273,7 @@ struct ViewOptions {
   bool face_colors = false;         // face colours: the first corner's
   uint32_t texcoord_set = 0;        // which of the file's texture coordinate sets
   // An update that deletes and adds more than this fraction of the faces rebuilds the mesh
-  // instead (bunny00's middle level: 1000 splits 6.4 ms incremental, 8.6 ms rebuilt; 10000
-  // splits 21.6 and 12 ms).
+  // instead (measured at the middle level of bunny00: see MeshView).
   double rebuild_fraction = 0.25;
 };
 
@@ -281,13 +281,16 @@ struct ViewOptions {
 // decoder's vertex i and face i (positions(), indices(): face i's vertices in order, starting
 // at its halfedge), with the attributes the file has (see the top of this file).
 //
-// Cost of update(): the faces it deletes and adds, plus one OpenMesh garbage collection, which
-// walks the whole mesh (it compacts the arrays and remaps every handle) and dominates small
-// steps. Measured with bench-openmesh-view (CPU time, median, a shared 2-core machine), at the
-// middle level of bunny00 (37.7k faces): the decoder's refine or coarsen of 1 / 100 / 1000 splits
-// 0.006 / 0.03 / 0.2 ms, update() 3.8 / 4.2 / 6.5 ms, a rebuild 8-9 ms; of bunny00-loop2 (603k
-// faces): 1 / 1000 / 10000 splits 0.09 / 0.7 / 3.5 ms, update() 160-215 / 213 / 244 ms, a
-// rebuild 420-500 ms. Beyond ViewOptions::rebuild_fraction of the faces, update() rebuilds.
+// Cost of update(): about the faces it deletes and adds (OpenMesh's add_face, delete_face and
+// property writes), with no pass over the whole mesh (a larger mesh costs more per face only
+// through the cache). Measured with bench-openmesh-view (CPU time, median of 7, a shared 2-core
+// machine) at the middle level of bunny00 (37.7k faces): for 1 / 10 / 100 / 1000 splits, the
+// decoder's refine or coarsen 0.001 / 0.003 / 0.01 / 0.1 ms, update() 0.003 / 0.02 / 0.18 /
+// 2.3 ms; a rebuild 8.4-8.9 ms. Of bunny00-loop2 (603k faces, median of 5): update() 0.004 /
+// 0.02 / 0.32 / 7.2 ms (10000 splits: 103 ms); a rebuild 460-650 ms. Past
+// ViewOptions::rebuild_fraction of the faces, update() rebuilds (bunny00, 10000 splits: 21 ms
+// incremental, 15 ms rebuilt). A rebuild reserves exactly, so the first updates after one grow
+// OpenMesh's arrays.
 template <class Mesh = TriMesh>
 class MeshView {
  public:
@@ -298,15 +301,9 @@ class MeshView {
   // error()) when OpenMesh refused a face the decoder has (not a manifold mesh there); the mesh
   // then lacks that face.
   bool update() {
-    const Decoder& d = *decoder_;
-    const MeshChanges& ch = d.changes();
     error_.clear();
-    bool ok;
-    if (ch.all || !layout_matches() || !incremental()) {
-      ok = rebuild();
-    } else {
-      ok = true;
-    }
+    const bool ok =
+        decoder_->changes().all || !layout_matches() || !incremental() ? rebuild() : true;
     decoder_->clear_changes();
     return ok && error_.empty();
   }
@@ -341,7 +338,7 @@ class MeshView {
     rebuilt_ = true;
     faces_added_ = 0;
     error_.clear();
-    mesh_.clean();
+    mesh_.clean_keep_reservation();
     request_properties();
     const uint32_t nv = d.vertex_count(), nf = d.face_count();
     mesh_.reserve(nv, size_t(nf) * 3 / 2 + 16, nf);
@@ -472,6 +469,64 @@ class MeshView {
     return detail::color_from_floats<typename Mesh::Color>(decoder_->colors() + size_t(w) * n, n);
   }
 
+  // OpenMesh's garbage collection, restricted to the holes this update made: it walks the whole
+  // mesh, this touches only the holes and the elements moved into them. The same order as
+  // OpenMesh's (the first hole takes the last live element): faces [0, rewritten holes, tail),
+  // edges wherever deleted faces left them; the deleted vertices are the tail from `vertices`.
+  void compact(uint32_t vertices) {
+    // Faces: a face is its halfedge; its three halfedges name it.
+    size_t last = mesh_.n_faces();
+    auto face_deleted = [&](size_t f) { return mesh_.status(FH(int(f))).deleted(); };
+    for (uint32_t f : rewritten_) {
+      while (last > f + 1 && face_deleted(last - 1)) --last;
+      if (last <= f + 1) break;
+      const FH to{int(f)}, from{int(--last)};
+      const HH h = mesh_.halfedge_handle(from);
+      for (HH g = h;;) {
+        mesh_.set_face_handle(g, to);
+        if ((g = mesh_.next_halfedge_handle(g)) == h) break;
+      }
+      mesh_.set_halfedge_handle(to, h);
+      for (size_t k = 0; k < mesh_.n_fprops(); ++k) mesh_._fprop(k).swap(f, last);
+    }
+    size_t faces = mesh_.n_faces();
+    while (faces > 0 && face_deleted(faces - 1)) --faces;
+    // Edges: both halfedges move; everything that names them is renamed.
+    size_t edges = mesh_.n_edges();
+    auto edge_deleted = [&](size_t e) {
+      return mesh_.status(OpenMesh::EdgeHandle(int(e))).deleted();
+    };
+    for (uint32_t e : edge_holes_) {
+      while (edges > e + 1 && edge_deleted(edges - 1)) --edges;
+      if (edges <= e + 1) break;
+      const int from = int(--edges), to = int(e);
+      auto moved = [&](HH h) { return h.idx() / 2 == from ? HH(2 * to + (h.idx() & 1)) : h; };
+      HH next[2], prev[2];
+      for (int j = 0; j < 2; ++j) {
+        const HH old{2 * from + j}, now{2 * to + j};
+        next[j] = moved(mesh_.next_halfedge_handle(old));
+        prev[j] = moved(mesh_.prev_halfedge_handle(old));
+        mesh_.set_vertex_handle(now, mesh_.to_vertex_handle(old));
+        mesh_.set_face_handle(now, mesh_.face_handle(old));
+      }
+      for (int j = 0; j < 2; ++j) {
+        const HH old{2 * from + j}, now{2 * to + j};
+        mesh_.set_next_halfedge_handle(now, next[j]);  // (each also sets the prev link)
+        mesh_.set_next_halfedge_handle(prev[j], now);
+        const FH fh = mesh_.face_handle(now);
+        if (fh.is_valid() && mesh_.halfedge_handle(fh) == old) mesh_.set_halfedge_handle(fh, now);
+        const VH vh = mesh_.to_vertex_handle(HH(2 * to + 1 - j));  // now's start
+        if (mesh_.halfedge_handle(vh) == old) mesh_.set_halfedge_handle(vh, now);
+      }
+      for (size_t k = 0; k < mesh_.n_eprops(); ++k) mesh_._eprop(k).swap(size_t(to), size_t(from));
+      for (size_t k = 0; k < mesh_.n_hprops(); ++k)
+        for (int j = 0; j < 2; ++j) mesh_._hprop(k).swap(size_t(2 * to + j), size_t(2 * from + j));
+    }
+    edges = mesh_.n_edges();
+    while (edges > 0 && edge_deleted(edges - 1)) --edges;
+    mesh_.resize(vertices, edges, faces);
+  }
+
   // The change report applied to the mesh; false when a rebuild is the better (or only) way.
   bool incremental() {
     const Decoder& d = *decoder_;
@@ -493,25 +548,37 @@ class MeshView {
 
     rebuilt_ = false;
     faces_added_ = 0;
-    bool deleted = false;
-    for (uint32_t f : rewritten_) mesh_.delete_face(FH(int(f)), false), deleted = true;
-    for (uint32_t f = f1; f < f0; ++f) mesh_.delete_face(FH(int(f)), false), deleted = true;
+    // Deleted: the rewritten faces, the faces and vertices past the new counts, and the edges
+    // of deleted faces that no face keeps (OpenMesh deletes those with the face).
+    edge_holes_.clear();
+    auto delete_face = [&](uint32_t f) {
+      for (HH h : mesh_.fh_range(FH(int(f)))) edge_holes_.push_back(uint32_t(h.idx() / 2));
+      mesh_.delete_face(FH(int(f)), false);
+    };
+    for (uint32_t f : rewritten_) delete_face(f);
+    for (uint32_t f = f1; f < f0; ++f) delete_face(f);
     for (uint32_t v = v1; v < v0; ++v) {
       if (!mesh_.is_isolated(VH(int(v)))) return false;  // (not what the decoder does)
       mesh_.status(VH(int(v))).set_deleted(true);
-      deleted = true;
     }
+    std::sort(edge_holes_.begin(), edge_holes_.end());
+    edge_holes_.erase(std::unique(edge_holes_.begin(), edge_holes_.end()), edge_holes_.end());
+    edge_holes_.erase(std::remove_if(edge_holes_.begin(), edge_holes_.end(),
+                                     [&](uint32_t e) {
+                                       return !mesh_.status(OpenMesh::EdgeHandle(int(e))).deleted();
+                                     }),
+                      edge_holes_.end());
     const float* p = d.positions();
     for (uint32_t v = vb; v < std::min(v0, v1); ++v) mesh_.set_point(VH(int(v)), point(p + v * 3));
     for (uint32_t v = v0; v < v1; ++v) mesh_.add_vertex(point(p + size_t(v) * 3));
     // New faces land at their indices; the rewritten ones are added in descending order, so
-    // that the garbage collection (which fills the first hole from the last element) moves each
-    // into its own hole.
+    // that compacting (which fills the first hole from the last element) moves each into its
+    // own hole.
     for (uint32_t f = f0; f < f1; ++f)
       if (!add_face(f)) return false;
     for (size_t i = rewritten_.size(); i-- > 0;)
       if (!add_face(rewritten_[i])) return false;
-    if (deleted) mesh_.garbage_collection();
+    compact(v1);
     if (mesh_.n_vertices() != v1 || mesh_.n_faces() != f1) return false;
     for (uint32_t f : rewritten_)
       if (!face_matches(f)) return false;
@@ -550,7 +617,7 @@ class MeshView {
   uint64_t faces_added_ = 0;
   std::vector<uint32_t> wedge_vertices_;  // the decoder's, as of the last update
   std::vector<uint32_t> first_wedge_;     // per vertex: its lowest-numbered wedge (or kNone)
-  std::vector<uint32_t> rewritten_, changed_vertices_;
+  std::vector<uint32_t> rewritten_, changed_vertices_, edge_holes_;
 };
 
 }  // namespace pmz::openmesh
