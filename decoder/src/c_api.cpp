@@ -50,6 +50,8 @@ PMZ_API const uint32_t* pmz_decoder_split_parents(const pmz_decoder* d) {
   return d->dec.split_parents();
 }
 
+PMZ_API uint32_t pmz_version(void) { return PMZ_VERSION_NUMBER; }
+
 PMZ_API const char* pmz_status_name(int status) {
   if (status < PMZ_OK || status > PMZ_ERR_MEMORY) return "unknown";
   return pmz::status_name(pmz::Status(status));

@@ -41,6 +41,8 @@
 
 namespace pmz {
 
+uint32_t version() { return PMZ_VERSION_NUMBER; }
+
 const char* status_name(Status s) {
   switch (s) {
     case Status::ok:

@@ -3,9 +3,11 @@
 
 #include <cstdio>
 #include <cstring>
+#include <string>
 #include <vector>
 
 #include "pmz/coding.hpp"
+#include "pmz/decoder.hpp"
 #include "pmz/format.hpp"
 #include "pmz/pmz.h"
 
@@ -150,4 +152,17 @@ TEST(CApi, ChangeReportCoversEveryDifference) {
   }
   EXPECT_EQ(pmz_decoder_face_count(d), 128u);
   pmz_decoder_destroy(d);
+}
+
+// One version everywhere: the header's macros, the CMake project's version (read from them),
+// and what the C and C++ libraries report at run time.
+TEST(CApi, VersionIsTheHeadersAndTheProjects) {
+  EXPECT_EQ(PMZ_VERSION_NUMBER,
+            PMZ_VERSION_MAJOR * 10000 + PMZ_VERSION_MINOR * 100 + PMZ_VERSION_PATCH);
+  const std::string header = std::to_string(PMZ_VERSION_MAJOR) + "." +
+                             std::to_string(PMZ_VERSION_MINOR) + "." +
+                             std::to_string(PMZ_VERSION_PATCH);
+  EXPECT_EQ(header, PMZ_PROJECT_VERSION);
+  EXPECT_EQ(pmz_version(), uint32_t(PMZ_VERSION_NUMBER));
+  EXPECT_EQ(pmz::version(), pmz_version());
 }

@@ -5,6 +5,7 @@
 // change tracking, bad input.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <random>
@@ -418,6 +419,45 @@ TEST_F(DecoderTest, UnknownChunksAreSkipped) {
   ASSERT_EQ(d.feed(b.data(), b.size()), pmz::Status::ok) << d.error_message();
   d.refine();
   EXPECT_EQ(d.face_count(), 128u);
+}
+
+// What decoder.hpp promises about input: an empty slice may be null; the caller's buffer is not
+// kept (it is overwritten between feeds); after finish() reports truncation, feeding stops and
+// the splits decoded before it can still be applied; bytes after the end marker are ignored;
+// moving a decoder keeps its arrays.
+TEST_F(DecoderTest, InputContract) {
+  pmz::Decoder d;
+  EXPECT_EQ(d.feed(nullptr, 0), pmz::Status::ok);
+  EXPECT_EQ(d.positions(), nullptr);
+  EXPECT_EQ(d.vertex_count(), 0u);
+  std::vector<uint8_t> slice;
+  const size_t cut = file.size() - 5;
+  for (size_t at = 0; at < cut; at += 13) {
+    slice.assign(file.begin() + ptrdiff_t(at), file.begin() + ptrdiff_t(std::min(at + 13, cut)));
+    ASSERT_EQ(d.feed(slice.data(), slice.size()), pmz::Status::ok) << d.error_message();
+    std::fill(slice.begin(), slice.end(), uint8_t(0xAB));
+  }
+  EXPECT_EQ(d.finish(), pmz::Status::truncated);
+  const uint64_t consumed = d.bytes_consumed();
+  EXPECT_EQ(consumed, cut);
+  EXPECT_EQ(d.feed(file.data() + cut, 5), pmz::Status::truncated);
+  EXPECT_EQ(d.bytes_consumed(), consumed);
+  EXPECT_GT(d.refine(), 0u);
+  EXPECT_EQ(d.status(), pmz::Status::truncated);
+  EXPECT_EQ(d.splits_applied(), d.splits_available());
+
+  pmz::Decoder whole;
+  std::vector<uint8_t> padded = file;
+  padded.insert(padded.end(), {1, 2, 3, 4, 5, 6, 7, 8});
+  ASSERT_EQ(whole.feed(padded.data(), padded.size()), pmz::Status::ok) << whole.error_message();
+  EXPECT_EQ(whole.finish(), pmz::Status::ok);
+  EXPECT_TRUE(whole.info().complete);
+  whole.refine();
+  const float* positions = whole.positions();
+  const uint32_t faces = whole.face_count();
+  pmz::Decoder moved = std::move(whole);
+  EXPECT_EQ(moved.positions(), positions);
+  EXPECT_EQ(moved.face_count(), faces);
 }
 
 }  // namespace

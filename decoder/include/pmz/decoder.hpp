@@ -1,15 +1,33 @@
 // SPDX-License-Identifier: MIT
-// pmz streaming decoder: C++ API.
+// pmz streaming decoder: C++ API (the C API, pmz/pmz.h, is a thin layer over it).
 //
 // Push model after zstd's ZSTD_decompressStream: feed() any slice of the .pmz byte stream
 // (one byte or the whole file give the same result); decoded vertex splits become
 // *available*; refine()/coarsen()/set_face_target() move the current mesh between the base
 // mesh and the finest level available without re-reading bytes. The mesh is valid (a
-// consistent indexed triangle mesh) after every call. Each split's wedge and position are
-// decoded when it is first applied, so refine()/set_face_target() can also find damage
-// (status() becomes corrupt; the mesh stays at the split before): check status() after them.
+// consistent indexed triangle mesh) after every call.
 //
-// Depends on the standard library only. Not thread-safe: one thread per Decoder.
+// Errors: an allocation failure in feed() or the level-of-detail calls becomes
+// Status::out_of_memory (only the constructor throws std::bad_alloc); nothing is printed. status()
+// and error_message() report an error until the decoder is destroyed: after one, feeding stops
+// (feed() and finish() return it again) and the mesh stays valid at the level it had (the splits
+// decoded before the error can still be applied). Each split's wedge and position are decoded when
+// it is first applied, so refine(), set_face_target() and set_split_target() can also find damage
+// (corrupt), reach the face limit (limit_exceeded) or run out of memory: check status() after them.
+//
+// Pointers and references returned point into the decoder; never free them. The mesh and
+// attribute arrays, and changes().modified_faces, stay valid until the next call that changes
+// the mesh (feed, refine, coarsen, set_face_target, set_split_target; clear_changes for the
+// change report) or the decoder's destruction; moving a Decoder keeps them valid in the new
+// owner. Arguments are not kept: feed() copies what it needs before returning.
+//
+// Threads: there is no global state. Different decoders may be used from different threads at
+// the same time; one decoder must not be used from two threads at once (const member functions
+// may run together, but not alongside a non-const one). version() and status_name() may be
+// called from any thread.
+//
+// Depends on the standard library only. The version macros (PMZ_VERSION_MAJOR, ...) are in
+// pmz/pmz.h, included here.
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -18,9 +36,13 @@
 #include <vector>
 
 #include "pmz/export.h"
+#include "pmz/pmz.h"
 #include "pmz/status.hpp"
 
 namespace pmz {
+
+// PMZ_VERSION_NUMBER of the library linked at run time (pmz_version() in C). Never fails.
+PMZ_API uint32_t version();
 
 struct DecoderLimits {
   // Hard caps, checked against header counts before any allocation.
@@ -70,33 +92,49 @@ struct MaterialInfo {
 
 class PMZ_API Decoder {
  public:
+  // Waits for the stream's first byte. `limits` cap the stream (checked against the header's
+  // counts before any allocation; beyond them: limit_exceeded). May throw std::bad_alloc (the
+  // C API's pmz_decoder_create returns NULL instead).
   explicit Decoder(const DecoderLimits& limits = {});
   ~Decoder();
+  // A moved-from Decoder may only be destroyed or assigned to.
   Decoder(Decoder&&) noexcept;
   Decoder& operator=(Decoder&&) noexcept;
   Decoder(const Decoder&) = delete;
   Decoder& operator=(const Decoder&) = delete;
 
-  // Consume bytes. Returns ok or the first error; after an error further feeds return the
-  // same error and the mesh stays at the last good level (still usable).
+  // ---- input ----
+  // Consumes the next `size` bytes (data may be null when size is 0). Returns ok or the
+  // stream's first error; after an error further feeds read nothing and return it again.
+  // Bytes after the end marker are ignored. May install the base mesh (the mesh changes).
   Status feed(const void* data, size_t size);
-  // Call at end of input: truncated if the end marker was not seen, else ok (or the error).
+  // Call at end of input: truncated (and kept) if the end marker was not seen, else the
+  // current status. The mesh and the splits decoded so far stay usable.
   Status finish();
   Status status() const;
-  const std::string& error_message() const;  // one line, empty when ok
+  // One line ("pmz: corrupt stream: ... (chunk 3 at byte 1234)"), empty when ok.
+  const std::string& error_message() const;
+  // The header's fields (valid once header_done) and progress; all zero before the header.
   const StreamInfo& info() const;
+  // Bytes fed while the status was ok, including those waiting for the rest of their chunk.
   uint64_t bytes_consumed() const;
 
-  // Level of detail. Each returns the number of splits applied/undone.
+  // ---- level of detail ----
+  // Each returns the number of splits applied / undone (fewer than asked when no more are
+  // available or applied, or when an error stops it).
   uint64_t refine(uint64_t max_splits = UINT64_MAX);   // apply up to N available splits
-  uint64_t coarsen(uint64_t max_splits = UINT64_MAX);  // undo up to N applied splits
-  // Go to the smallest level whose face count >= faces (clamped to what is available).
+  uint64_t coarsen(uint64_t max_splits = UINT64_MAX);  // undo up to N applied, the last first
+  // Go to the smallest level whose face count >= faces (clamped to the base mesh and to what
+  // is available).
   void set_face_target(uint64_t faces);
+  // Go to the level with `splits` splits applied (clamped to those available).
   void set_split_target(uint64_t splits);
   uint64_t splits_applied() const;
-  uint64_t splits_available() const;
+  uint64_t splits_available() const;  // decoded so far: the finest level reachable now
 
-  // Current mesh: float xyz per vertex, three uint32 indices per counter-clockwise face.
+  // ---- the current mesh ----
+  // Float xyz per vertex, three uint32 indices per counter-clockwise face. Before the base
+  // mesh: counts 0 and null arrays.
   uint32_t vertex_count() const;
   uint32_t face_count() const;
   const float* positions() const;
@@ -105,12 +143,12 @@ class PMZ_API Decoder {
   // Valid for all vertices below vertex_count().
   const uint32_t* split_parents() const;
 
-  // Attributes (format 8.0, spec/format.md section 14). A render vertex is an attribute wedge:
-  // one combination of attribute values at one position vertex (a vertex on a texture seam or
-  // normal crease has several). Without attributes in the file (or before BASE): wedge_count()
-  // 0 and nullptr from the array accessors. Arrays hold wedge_count() wedges and face_count()
-  // faces, are valid until the next call that changes the level, and change only where
-  // changes() says.
+  // ---- attributes (format 8.0, spec/format.md section 14) ----
+  // A render vertex is an attribute wedge: one combination of attribute values at one
+  // position vertex (a vertex on a texture seam or normal crease has several). Without
+  // attributes in the file (or before BASE): wedge_count() 0 and nullptr from the array
+  // accessors. Arrays hold wedge_count() wedges and face_count() faces, have the lifetime of
+  // the mesh arrays, and change only where changes() says.
   uint32_t wedge_count() const;
   const uint32_t* wedge_vertices() const;  // wedge -> position vertex index
   const float* wedge_positions() const;    // xyz per wedge: positions()[wedge_vertices()[w]]
@@ -121,13 +159,17 @@ class PMZ_API Decoder {
   uint32_t color_components() const;           // 0, 3 (RGB) or 4 (RGBA)
   const float* colors() const;                 // color_components() per wedge, or nullptr
   // Materials: per face an index into the table (nullptr when the file has no materials; a
-  // file with one material reports 0 for every face).
+  // file with one material reports 0 for every face). The table is read once, with the
+  // header: material() pointers and material_library() stay valid until destruction.
   const uint32_t* face_materials() const;
   uint32_t material_count() const;
   const MaterialInfo* material(uint32_t i) const;  // nullptr for i >= material_count()
   const std::string& material_library() const;     // OBJ mtllib name, or empty
 
+  // ---- changes, for partial uploads ----
+  // What changed since the last clear_changes() (see MeshChanges).
   const MeshChanges& changes() const;
+  // Starts a new change report (after the caller has uploaded the last one).
   void clear_changes();
 
  private:

@@ -37,6 +37,8 @@ int main(int argc, char** argv) {
   for (uint32_t i = 0; ok && i < nf * 3; ++i) ok = idx[i] < nv;
   const char junk[] = "not a pmz stream";
   pmz_decoder* bad = pmz_decoder_create(0, 0);
+  /* The installed header and library are one version. */
+  ok = ok && pmz_version() == PMZ_VERSION_NUMBER;
   ok = ok && pmz_decoder_feed(bad, junk, sizeof junk) == PMZ_ERR_MAGIC &&
        strlen(pmz_decoder_error(bad)) > 0 && strcmp(pmz_status_name(PMZ_ERR_MAGIC), "ok") != 0;
   printf("consumer: %u vertices, %u faces after %llu splits; junk -> %s\n", nv, nf,

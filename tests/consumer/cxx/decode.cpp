@@ -35,6 +35,7 @@ int main(int argc, char** argv) {
               (unsigned long long)uploads, logged.empty() ? "ok" : logged.c_str());
   pmz::Decoder junk;
   const char bytes[] = "not a pmz stream";
+  ok = ok && pmz::version() == PMZ_VERSION_NUMBER;  // the installed header's and library's
   ok = ok && junk.feed(bytes, sizeof bytes) == pmz::Status::bad_magic &&
        !junk.error_message().empty() && pmz::status_name(junk.status()) != nullptr;
   return ok ? 0 : 1;
