@@ -485,9 +485,11 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
   h.curvature = kCurvatureCandidates[best].curvature;
   h.fine_curvature = kCurvatureCandidates[best].fine;
   WriteStats st = splits.stats(best);
-  assemble_file(h, plan, attrs.get(), base_attributes, splits.split_bytes(best), st, out);
+  std::vector<uint8_t> file;
+  assemble_file(h, plan, attrs.get(), base_attributes, splits.split_bytes(best), st, file);
   if (!check_full_decode(seq.mesh, splits.mesh(), plan, error)) return false;
   if (attrs && !attrs->check_full(splits.mesh(), error)) return false;
+  out.swap(file);  // only a checked stream replaces the caller's bytes
   if (stats) *stats = st;
   return true;
 }

@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <string>
 
 #include "pmz/decoder.hpp"
@@ -280,6 +281,29 @@ TEST(Writer, RejectsBadOptionsAndSequences) {
   broken = seq;
   std::swap(broken.collapses[0].vl, broken.collapses[0].vr);  // wrong orientation
   EXPECT_FALSE(pmz::write_pmz(broken, {}, bytes, error));
+}
+
+// writer.hpp: a failed write_pmz leaves the caller's bytes as they were.
+TEST(Writer, FailureLeavesTheOutputAlone) {
+  pmz::CollapseSequence seq;
+  std::string error;
+  ASSERT_TRUE(pmz::simplify(pmz::make_sample_mesh(1000), {}, seq, error)) << error;
+  const std::vector<uint8_t> before = {1, 2, 3};
+  std::vector<uint8_t> bytes = before;
+  pmz::WriteOptions opt;
+  opt.level = 2;
+  EXPECT_FALSE(pmz::write_pmz(seq, opt, bytes, error));
+  EXPECT_EQ(bytes, before);
+  pmz::CollapseSequence broken = seq;
+  broken.mesh.positions[4] = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_FALSE(pmz::write_pmz(broken, {}, bytes, error));
+  EXPECT_EQ(bytes, before);
+  broken = seq;
+  broken.collapses[3].u = broken.collapses[3].v;
+  EXPECT_FALSE(pmz::write_pmz(broken, {}, bytes, error));
+  EXPECT_EQ(bytes, before);
+  EXPECT_TRUE(pmz::write_pmz(seq, {}, bytes, error)) << error;
+  EXPECT_NE(bytes, before);
 }
 
 }  // namespace

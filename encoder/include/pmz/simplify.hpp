@@ -1,6 +1,17 @@
 // SPDX-License-Identifier: MIT
 // The collapse engine: the paper's multi-feature metric (or plain QEM) driving half-edge
 // collapses u -> v in a priority queue, recorded as a replayable sequence.
+//
+// EXPERIMENTAL: the encoder API (this header and pmz/writer.hpp) may change in any release,
+// without a major version; the stable parts of pmz are the decoder's API (pmz/decoder.hpp,
+// pmz/pmz.h) and the .pmz format (spec/format.md).
+//
+// Errors: a function that can fail on its input returns false with one line in `error` (no
+// newline, no program prefix) and leaves its output as it was; the only exception that can
+// escape is std::bad_alloc. Nothing is printed.
+// Threads: no global state. Calls on different data may run in different threads at once;
+// simplify() runs part of its set-up on one extra thread of its own and calls
+// SimplifyOptions::progress on the calling thread.
 #pragma once
 #include <cstdint>
 #include <functional>
@@ -117,7 +128,8 @@ struct SimplifyOptions {
     uint32_t position_bits = 14;
     double phase_ratio = 0.5;
   } clusters;
-  // Progress callback (fraction done 0..1); may be empty.
+  // Progress callback (fraction done 0..1), called on simplify()'s thread during the run; may
+  // be empty.
   std::function<void(double)> progress;
 };
 
@@ -135,13 +147,20 @@ struct CollapseSequence {
   std::vector<Level> levels;
 };
 
-// Runs the engine. Returns false with a one-line message on input it cannot handle.
+// Runs the engine on `input`: finite positions; faces that are edge-manifold, consistently
+// oriented and without a repeated vertex (what read_mesh and repair_mesh give); attributes, if
+// any, consistent with the faces (a wedge per corner). Fills `out` (its mesh is a copy of
+// input) and returns true, or returns false with a one-line message naming the offending face,
+// edge or vertex and leaves `out` unchanged. `input` and `options` are not kept; the
+// SimplifyOptions::stats object, when set, must outlive the call.
 bool simplify(const IndexedMesh& input, const SimplifyOptions& options, CollapseSequence& out,
               std::string& error);
 
 // The mesh after the first k collapses (faces in input ids compacted to the vertices left), with
 // its attributes when seq.mesh has them: the wedges the collapse rule leaves
 // (encoder/src/attr_collapse.hpp), compacted in input order, and the surviving faces' materials.
+// seq: as simplify() made it. k beyond seq.collapses.size() is taken as all of them. Never fails
+// (but for std::bad_alloc).
 IndexedMesh mesh_after(const CollapseSequence& seq, size_t k);
 
 }  // namespace pmz

@@ -1,5 +1,10 @@
 // SPDX-License-Identifier: MIT
 // Turns a collapse sequence into a .pmz byte stream (spec/format.md).
+//
+// EXPERIMENTAL, as pmz/simplify.hpp: the encoder API may change in any release. The streams it
+// writes are the stable .pmz format, which every decoder of the same major version reads.
+// Errors, threads: as pmz/simplify.hpp says (no global state; the functions here use no thread
+// of their own and print nothing).
 #pragma once
 #include <cstdint>
 #include <string>
@@ -37,11 +42,20 @@ struct WriteStats {
   double symbol_bits[kWriteSymbolKinds] = {};
 };
 
+// Writes seq as a .pmz stream into `out` (replacing its contents) and returns true; with
+// `stats` (may be null; not kept) also fills *stats. seq: as simplify() made it, on a mesh with
+// finite positions; options within the ranges stated above (position_bits 0..30, level 0..1,
+// texcoord_bits 0..24, normal_bits 0 or 2..16, color_bits 0..16). Returns false with a one-line
+// message (the options' ranges, "non-finite vertex coordinate", a collapse inconsistent with
+// the mesh, attribute tables beyond the format's limits) and `out` unchanged. Each stream is
+// checked before it is returned: the full decode must give seq.mesh's faces back. The same seq
+// and options give the same bytes on every run.
 bool write_pmz(const CollapseSequence& seq, const WriteOptions& options, std::vector<uint8_t>& out,
                std::string& error, WriteStats* stats = nullptr);
 
 // Vertex and face order of a full decode, relative to seq.mesh: decoded vertex i is input
-// vertex vertex_order[i]. The round-trip tests use it.
+// vertex vertex_order[i]. The round-trip tests use it. Only base_faces and position_bits of
+// the options matter. Empty when the sequence does not replay on its mesh.
 std::vector<uint32_t> decoded_vertex_order(const CollapseSequence& seq,
                                            const WriteOptions& options);
 
