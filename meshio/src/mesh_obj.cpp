@@ -144,10 +144,16 @@ bool read_obj(const std::string& path, std::string_view data, PolygonSoup& out,
           if (!parse_int(part, ids[k]) || ids[k] == 0)
             return fail("face " + std::to_string(face) + " has a malformed index '" +
                         std::string(t) + "'");
+          const int64_t written = ids[k];
           if (ids[k] < 0) ids[k] += int64_t(pools[k]) + 1;
           if (ids[k] <= 0 || ids[k] > int64_t(kMaxVertices)) {
             if (k == 0) {
-              error = range_error(path, face, lines.number, ids[0] - 1, out.vertex_count());
+              // The index as the file writes it (1-based, or negative counting back).
+              error = line_error(path, lines.number,
+                                 "face references vertex " + std::to_string(written) +
+                                     (written < 0 ? ", but only " : ", but the file has ") +
+                                     std::to_string(out.vertex_count()) +
+                                     (written < 0 ? " vertices precede it" : " vertices"));
               return false;
             }
             return fail("face " + std::to_string(face) + " references a " +
@@ -169,7 +175,10 @@ bool read_obj(const std::string& path, std::string_view data, PolygonSoup& out,
   for (uint32_t f = 0; f < out.face_count(); ++f)
     for (uint32_t c = out.face_offsets[f]; c < out.face_offsets[f + 1]; ++c) {
       if (out.corners[c] >= out.vertex_count()) {
-        error = range_error(path, f, face_lines[f], out.corners[c], out.vertex_count());
+        error = line_error(path, face_lines[f],
+                           "face references vertex " + std::to_string(out.corners[c] + 1ull) +
+                               ", but the file has " + std::to_string(out.vertex_count()) +
+                               " vertices");
         return false;
       }
       if ((corner_texcoords[c] != kNoAttribute && corner_texcoords[c] >= texcoords.size() / 2) ||

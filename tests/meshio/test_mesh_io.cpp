@@ -225,10 +225,16 @@ TEST(MeshIO, RefusesNanAndInfCoordinatesNamingTheVertex) {
 
 TEST(MeshIO, RefusesOutOfRangeIndicesNamingTheFace) {
   TempDir dir;
+  // OBJ: the index as the file writes it (1-based or counting back), and its line.
   expect_refused(dir.write("o.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 9\n"),
-                 "face 1 (line 5) references vertex 8, but the file has 3 vertices");
+                 "o.obj: line 5: face references vertex 9, but the file has 3 vertices");
   expect_refused(dir.write("neg.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n"),
-                 "face 0 (line 4) references vertex -1");
+                 "neg.obj: line 4: face references vertex -4, but only 3 vertices precede it");
+  const std::string six = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 2 0 0\nv 2 1 0\n";
+  expect_refused(dir.write("seven.obj", six + "f 1 2 7\n"),
+                 "seven.obj: line 7: face references vertex 7, but the file has 6 vertices");
+  expect_refused(dir.write("back.obj", six + "f 1 2 -9\n"),
+                 "back.obj: line 7: face references vertex -9, but only 6 vertices precede it");
   expect_refused(dir.write("zero.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n"),
                  "face 0 has a malformed index '0'");
   expect_refused(dir.write("o.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 3\n"),
