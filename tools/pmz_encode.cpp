@@ -91,6 +91,22 @@ bool encode(const std::string& input, const std::string& output, const EncodeSet
   return true;
 }
 
+// --out-dir: made with its parents when missing (as mkdir -p); a path that exists but is not a
+// folder is refused. Prints one line on failure.
+bool make_output_folder(const std::string& dir) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(dir, ec)) return true;
+  if (std::filesystem::exists(std::filesystem::symlink_status(dir, ec))) {
+    app_support::print_error(dir, "not a folder");
+    return false;
+  }
+  if (!std::filesystem::create_directories(dir, ec) && !std::filesystem::is_directory(dir)) {
+    app_support::print_error(dir, "cannot create the folder: " + ec.message());
+    return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -110,8 +126,9 @@ int main(int argc, char** argv) {
       ->required()
       ->type_name("MESH...");
   auto* out_opt = app.add_option("-o,--output", output, "output .pmz (- for stdout)");
-  auto* dir_opt = app.add_option("--out-dir", out_dir,
-                                 "write each input's NAME.pmz into this folder (several inputs)");
+  auto* dir_opt = app.add_option(
+      "--out-dir", out_dir,
+      "write each input's NAME.pmz into this folder (several inputs; made if missing)");
   out_opt->excludes(dir_opt);
   app.add_option("-j,--jobs", jobs, "assets encoded at once with --out-dir (default: cores)")
       ->check(CLI::Range(1u, 1024u))
@@ -166,11 +183,6 @@ int main(int argc, char** argv) {
   if (out_opt->count()) {
     outputs.push_back(output);
   } else {
-    std::error_code ec;
-    if (!std::filesystem::is_directory(out_dir, ec)) {
-      app_support::print_error(out_dir, "not a folder");
-      return app_support::kExitFailure;
-    }
     std::set<std::string> seen;
     for (const std::string& in : inputs) {
       outputs.push_back(
@@ -178,6 +190,7 @@ int main(int argc, char** argv) {
       if (!seen.insert(outputs.back()).second)
         return usage("two inputs would both write " + outputs.back());
     }
+    if (!make_output_folder(out_dir)) return app_support::kExitFailure;
   }
 
   if (inputs.size() == 1) {

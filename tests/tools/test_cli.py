@@ -647,6 +647,19 @@ def case_batch_encoding():
     r = run([tool("pmz-encode"), inputs[0], twin, "--out-dir", out])
     check(r.returncode == 2, f"two inputs writing the same output: expected exit 2, got "
           f"{r.returncode}")
+    # --out-dir makes a missing folder with its parents (as mkdir -p), but not on a usage error,
+    # and refuses a path that is not a folder.
+    nested = os.path.join(d, "new", "deeper")
+    r = run([tool("pmz-encode")] + inputs[:2] + ["--out-dir", nested])
+    check(r.returncode == 0 and sorted(os.listdir(nested)) == ["m0.pmz", "m1.pmz"],
+          f"--out-dir with a missing folder: rc={r.returncode} {err_text(r)}")
+    never = os.path.join(d, "never")
+    r = run([tool("pmz-encode"), inputs[0], twin, "--out-dir", never])
+    check(r.returncode == 2 and not os.path.exists(never),
+          f"a usage error made the --out-dir folder: rc={r.returncode}")
+    r = run([tool("pmz-encode")] + inputs[:2] + ["--out-dir", ref])
+    check(r.returncode == 1 and f"pmz-encode: {ref}: not a folder" in err_text(r),
+          f"--out-dir naming a file: rc={r.returncode} {err_text(r)}")
 
 
 
