@@ -18,6 +18,7 @@
 #include "pmz/base_codec.hpp"
 #include "pmz/fan_wedge.hpp"
 #include "pmz/format.hpp"
+#include "pmz/node_table.hpp"
 #include "pmz/progressive_mesh.hpp"
 #include "pmz/speed_level.hpp"
 #include "pmz/split_chunk.hpp"
@@ -88,7 +89,8 @@ struct Decoder::Impl {
     std::vector<uint8_t> pending;  // bytes of an incomplete signature or chunk
     bool signature_done = false;
     uint64_t chunk_index = 0, chunk_offset = 0;
-    uint64_t parse_base = 0;  // stream offset of the buffer parse() is looking at
+    uint64_t chunk_bytes = 0;  // of the chunk being interpreted, header included
+    uint64_t parse_base = 0;   // stream offset of the buffer parse() is looking at
   } input;
 
   // What was decoded, kept to move between levels without re-reading bytes.
@@ -180,6 +182,32 @@ struct Decoder::Impl {
   bool base_geometry = false, attr_awaited = false;
   std::unique_ptr<std::pair<ProgressiveMesh, std::vector<int32_t>>> pending_base;  // its coords
   std::vector<MaterialInfo> materials;
+
+  // A stream in nodes (HEAD flag bit 1, spec/format.md section 15): the table; where the
+  // arriving chunks are (node, its splits and bytes so far) and each node's models, made when
+  // its first chunk arrives and dropped once its splits are decoded; where the first
+  // applications are (the node applied last, its start) and the candidates of the level binned
+  // last.
+  struct Nodes {
+    bool present = false;
+    NodeTable table;
+    std::vector<uint64_t> first_split;  // per node
+    size_t arriving = 0;
+    uint64_t arrived_splits = 0, arrived_bytes = 0;
+    std::vector<std::unique_ptr<SplitModels>> models;  // per node
+    size_t applying = 0;                               // nodes whose first application started
+    uint64_t start_faces = 0;
+    CellBins bins;
+    int64_t bins_level = -1;
+    bool cells = false;  // the node being applied has a cell (its level a grid): its box
+    CellBox box;
+    bool in_cell(const int32_t* coords, uint32_t x) const {
+      return box.contains(coords + size_t(x) * 3);
+    }
+  } nodes;
+  PMZ_COLD Status node_chunk(const uint8_t* p, size_t n);
+  PMZ_COLD Status node_arrived(uint64_t bytes, bool attributes_done);
+  PMZ_COLD bool start_node();
 
   // Error paths and the once-per-file HEAD are cold: kept small, out of the hot code's way
   // (the stripped library has a 200 KB budget).
@@ -379,6 +407,7 @@ size_t Decoder::Impl::parse(const uint8_t* p, size_t n) {
       fail(Status::bad_checksum, "chunk checksum mismatch");
       return n;
     }
+    input.chunk_bytes = f.header_size + size;
     if (chunk(f.type, payload, size) != Status::ok) return n;
     at += f.header_size + size;
     ++input.chunk_index;
@@ -400,9 +429,12 @@ Status Decoder::Impl::chunk(uint8_t type, const uint8_t* p, size_t n) {
   if (type == kChunkSplits) {
     if (stage != Stage::splits) return fail(Status::corrupt, "SPLT before BASE");
     if (attr_awaited) return fail(Status::corrupt, "SPLT before the last SPLT's ATTR");
+    if ((info.flags & kFlagNodes) && !nodes.present)
+      return fail(Status::corrupt, "SPLT before the NODE chunk");
     return split_chunk(p, n);
   }
   if (type == kChunkAttributes && attrs) return attribute_chunk(p, n);
+  if (type == kChunkNodes && (info.flags & kFlagNodes)) return node_chunk(p, n);
   if (type == kChunkEnd) {
     if (stage != Stage::splits || record.splits.size() != info.total_splits || attr_awaited)
       return fail(Status::corrupt, "END before all splits");
@@ -531,18 +563,33 @@ Status Decoder::Impl::attribute_chunk(const uint8_t* p, size_t n) {
   attrs->chunk(p, n);
   attr_awaited = false;
   record.available = record.splits.size();
-  return Status::ok;
+  return nodes.present ? node_arrived(input.chunk_bytes, true) : Status::ok;
 }
 
 Status Decoder::Impl::split_chunk(const uint8_t* p, size_t n) {
   std::string err;
   SplitChunkReader r;
-  if (!frontier.models) {
-    frontier.models = std::make_unique<SplitModels>();
-    frontier.models->speed = info.level == kLevelSpeed;
+  SplitModels* models;
+  uint64_t max_splits = info.total_splits - record.splits.size();
+  if (nodes.present) {  // the chunk's node: models of its own, from the initial state
+    if (nodes.arriving >= nodes.table.nodes.size())
+      return fail(Status::corrupt, "SPLT after every node's splits");
+    std::unique_ptr<SplitModels>& m = nodes.models[nodes.arriving];
+    if (!m) {
+      m = std::make_unique<SplitModels>();
+      m->speed = info.level == kLevelSpeed;
+    }
+    models = m.get();
+    max_splits = nodes.table.nodes[nodes.arriving].splits - nodes.arrived_splits;
+  } else {
+    if (!frontier.models) {
+      frontier.models = std::make_unique<SplitModels>();
+      frontier.models->speed = info.level == kLevelSpeed;
+    }
+    models = frontier.models.get();
   }
-  if (!r.open(p, n, info.total_splits - record.splits.size(), *frontier.models, err))
-    return fail(Status::corrupt, err);
+  if (!r.open(p, n, max_splits, *models, err)) return fail(Status::corrupt, err);
+  if (nodes.present) nodes.arrived_splits += r.split_count();
   const size_t size = record.splits.size() + r.split_count();
   // As refine() grows the mesh buffers: room for every split of the header once the decoded ones
   // are at least 1 / kHeaderTrust of them, instead of doubling (a copy and page faults each).
@@ -555,7 +602,72 @@ Status Decoder::Impl::split_chunk(const uint8_t* p, size_t n) {
     attr_awaited = true;  // available with its ATTR chunk
   else
     record.available = record.splits.size();
+  return nodes.present ? node_arrived(input.chunk_bytes, !attrs) : Status::ok;
+}
+
+Status Decoder::Impl::node_chunk(const uint8_t* p, size_t n) {
+  if (stage != Stage::splits || nodes.present || !record.splits.empty())
+    return fail(Status::corrupt, "NODE chunk not right after BASE");
+  std::string err;
+  if (!read_node_table(p, n, info.total_splits, n / 16 + 1, nodes.table, err))
+    return fail(Status::corrupt, err);
+  nodes.present = true;
+  uint64_t at = 0;
+  for (const NodeEntry& e : nodes.table.nodes) {
+    nodes.first_split.push_back(at);
+    at += e.splits;
+  }
+  nodes.models.resize(nodes.table.nodes.size());
+  info.nodes = nodes.table.nodes.size();
   return Status::ok;
+}
+
+// A chunk of node `arriving` (bytes: its size) arrived; attributes_done: its splits' ATTR chunk
+// too (or there is none). Once the node's splits and their ATTR chunk are all there, its bytes
+// must be the table's.
+Status Decoder::Impl::node_arrived(uint64_t bytes, bool attributes_done) {
+  nodes.arrived_bytes += bytes;
+  const NodeEntry& e = nodes.table.nodes[nodes.arriving];
+  if (nodes.arrived_bytes > e.bytes)
+    return fail(Status::corrupt,
+                "node " + PMZ_DECIMAL(nodes.arriving) + " longer than its table entry");
+  if (!attributes_done || nodes.arrived_splits < e.splits) return Status::ok;
+  if (nodes.arrived_bytes != e.bytes)
+    return fail(Status::corrupt,
+                "node " + PMZ_DECIMAL(nodes.arriving) + " shorter than its table entry");
+  ++nodes.arriving;
+  nodes.arrived_splits = nodes.arrived_bytes = 0;
+  return Status::ok;
+}
+
+// The first application of a node's first split (spec/format.md section 15.4): the node before
+// added the faces the table says; this one starts from the initial models (attributes too, but
+// for the first node, which continues from BASE's), its near list empty, and its candidates its
+// cell's vertices.
+bool Decoder::Impl::start_node() {
+  const size_t k = nodes.applying;
+  if (k > 0) {
+    if (level.mesh.face_count() - nodes.start_faces != nodes.table.nodes[k - 1].faces)
+      return refuse(Status::corrupt,
+                    "node " + PMZ_DECIMAL(k - 1) + " added other faces than its table entry");
+    nodes.models[k - 1].reset();  // its splits are all decoded
+    if (attrs) *attrs->models = AttributeModels{};
+  }
+  const NodeEntry& e = nodes.table.nodes[k];
+  nodes.start_faces = level.mesh.face_count();
+  nodes.cells = nodes.table.levels[e.level].side > 0;
+  nodes.box = CellBox(nodes.table.levels[e.level], e.cell);
+  if (!nodes.cells) {
+    frontier.choice.begin_whole_node();
+  } else {
+    if (nodes.bins_level != int64_t(e.level)) {
+      nodes.bins.build(nodes.table, e.level, record.coords.data(), level.mesh.vertex_count());
+      nodes.bins_level = e.level;
+    }
+    frontier.choice.begin_node(nodes.bins.take(uint32_t(k)));
+  }
+  ++nodes.applying;
+  return true;
 }
 
 // Refuses split `applied` (and everything after it): the mesh stays at the level before.
@@ -591,6 +703,9 @@ bool Decoder::Impl::apply() {
   SplitChunkReader& reader = frontier.lazy.front();
   if (level.applied - frontier.lazy_first ==
       reader.group_end()) {  // a group's first split: start its scan
+    if (nodes.present && nodes.applying < nodes.first_split.size() &&
+        level.applied == nodes.first_split[nodes.applying] && !start_node())
+      return false;
     frontier.group_first = level.applied;
     frontier.choice_ok = reader.begin_group(frontier.choice, level.mesh.vertex_count());
     frontier.find_vertices(scan_at_group_start(), record.splits);
@@ -599,6 +714,13 @@ bool Decoder::Impl::apply() {
     return refuse(Status::corrupt,
                   "split " + PMZ_DECIMAL(level.applied) + ": vertex choice malformed");
   if (!level.mesh.gather_ring(s.v)) return invalid();
+  if (nodes.present && nodes.cells) {  // v's ring within the node's cell (section 15.4)
+    bool inside = nodes.in_cell(record.coords.data(), s.v);
+    for (uint32_t w : level.mesh.ring()) inside = inside && nodes.in_cell(record.coords.data(), w);
+    if (!inside)
+      return refuse(Status::corrupt,
+                    "split " + PMZ_DECIMAL(level.applied) + " reaches outside its node's cell");
+  }
   {  // first application: the wedge symbols, with contexts from v's ring
     const uint32_t k = uint32_t(level.mesh.ring().size());
     // Ring walks cost the valence: bound their total (first applications; re-applying after
@@ -664,6 +786,11 @@ bool Decoder::Impl::apply() {
                     "split " + PMZ_DECIMAL(level.applied) + ": residual streams malformed");
     }
     position_from_residuals(pred, residual, c);
+    if (nodes.present && !nodes.box.contains(c)) {
+      level.mesh.undo_split(s.v, has_l, has_r);
+      return refuse(Status::corrupt,
+                    "split " + PMZ_DECIMAL(level.applied) + ": u outside its node's cell");
+    }
     frontier.grow_box(c);
     for (int k = 0; k < 3; ++k) {
       record.coords.push_back(c[k]);
@@ -697,6 +824,13 @@ bool Decoder::Impl::apply() {
   }
   note_rewritten(level.mesh.sector_faces());
   ++level.applied;
+  // The last node's faces (the others' are checked as the next node starts). The split stands:
+  // the mesh is valid, the stream is not.
+  if (nodes.present && frontier.decoded == info.total_splits &&
+      level.mesh.face_count() - nodes.start_faces != nodes.table.nodes.back().faces) {
+    fail(Status::corrupt, "the last node added other faces than its table entry");
+    return false;
+  }
   return true;
 }
 

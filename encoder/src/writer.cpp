@@ -13,8 +13,10 @@
 
 #include "attr_writer.hpp"
 #include "pmz/base_codec.hpp"
+#include "pmz/cluster_plan.hpp"
 #include "pmz/fan_wedge.hpp"
 #include "pmz/format.hpp"
+#include "pmz/node_table.hpp"
 #include "pmz/progressive_mesh.hpp"
 #include "pmz/speed_level.hpp"
 #include "pmz/split_chunk.hpp"
@@ -72,8 +74,10 @@ void file_quantizer(const IndexedMesh& mesh, uint32_t bits, FileHeader& h, Quant
   quant.init(h.position_bits, h.bbox_min, h.bbox_max);
 }
 
-bool make_plan(const CollapseSequence& seq, const WriteOptions& opt, Plan& plan,
-               std::string& error) {
+// node_splits: with a node table, each node's split count in file order; a node's splits stay
+// together (each node starts a window of its own).
+bool make_plan(const CollapseSequence& seq, const WriteOptions& opt, Plan& plan, std::string& error,
+               const std::vector<uint64_t>& node_splits = {}) {
   const IndexedMesh& mesh = seq.mesh;
   const uint32_t n = mesh.vertex_count();
   const size_t total = seq.collapses.size();
@@ -149,6 +153,8 @@ bool make_plan(const CollapseSequence& seq, const WriteOptions& opt, Plan& plan,
   std::vector<uint32_t> layer(used);
   int32_t window_first = 0, max_layer = -1;
   uint32_t window_start = base_n;
+  size_t next_node = 0;
+  uint64_t node_start = 0;
   for (size_t j = 0; j < used; ++j) {
     const HalfEdgeCollapse& c = seq.collapses[used - 1 - j];
     uint32_t v = gid[c.v];
@@ -159,7 +165,9 @@ bool make_plan(const CollapseSequence& seq, const WriteOptions& opt, Plan& plan,
       return error = "collapse " + std::to_string(used - 1 - j) +
                      " is not a manifold half-edge collapse",
              false;
-    if (pm.vertex_count() > uint64_t(double(window_start) * kWindowGrowth)) {
+    const bool node_starts = next_node < node_splits.size() && j == node_start;
+    if (node_starts) node_start += node_splits[next_node++];
+    if (node_starts || pm.vertex_count() > uint64_t(double(window_start) * kWindowGrowth)) {
       window_first = max_layer + 1;
       window_start = pm.vertex_count();
     }
@@ -269,11 +277,23 @@ class SplitCoder {
     return true;
   }
 
+  // A stream with a node table (nodes: its levels and nodes, split counts set; the groups
+  // of make_plan never straddle two nodes).
+  void set_nodes(const NodeTable* nodes) {
+    nodes_ = nodes;
+    uint64_t at = 0;
+    for (const NodeEntry& n : nodes->nodes) {
+      node_first_.push_back(at);
+      at += n.splits;
+    }
+  }
+
   // Every stream group in order: the whole group, in a chunk of its own if it does not fit the
   // current one; a group over kMaxGroupPiece in pieces of that size.
   bool code_groups(std::string& error) {
     uint32_t at = 0;
     for (uint32_t group : plan_.group_sizes) {
+      while (nodes_ && node_ < nodes_->nodes.size() && at == node_first_[node_]) start_node();
       for (uint32_t left = group; left;) {
         if (!chunk_[0].empty() && chunk_[0].size() + left > chunk_limit_) flush();
         const uint32_t n = std::min(left, kMaxGroupPiece);
@@ -284,8 +304,13 @@ class SplitCoder {
       }
     }
     flush();
+    if (nodes_) end_node();
     return true;
   }
+
+  // With a node table: per node, its bytes in candidate k's split bytes and the faces it adds.
+  uint64_t node_bytes(size_t k, size_t node) const { return node_bytes_[k][node]; }
+  uint64_t node_faces(size_t node) const { return node_faces_[node]; }
 
   // The candidate with the fewest split bytes (the first of equals).
   size_t best() const {
@@ -315,6 +340,54 @@ class SplitCoder {
     return true;
   }
 
+  // The end of a node's bytes (after flush()), then the next node: its own models, its cell's
+  // candidates, chunks from kFirstChunkSplits again (spec/format.md section 15.4).
+  void end_node() {
+    for (size_t k = 0; k < candidates_; ++k) {
+      const uint64_t start = node_start_bytes_[k];
+      node_bytes_[k].push_back(trial_[k].size() - start);
+      node_start_bytes_[k] = trial_[k].size();
+    }
+    node_faces_.push_back(pm_.face_count() - node_start_faces_);
+    node_start_faces_ = pm_.face_count();
+  }
+  void start_node() {
+    flush();
+    if (node_ > 0) end_node();
+    for (size_t k = 0; k < candidates_; ++k) {
+      node_start_bytes_[k] = trial_[k].size();
+      if (node_ > 0) {
+        models_[k] = std::make_unique<SplitModels>();
+        models_[k]->speed = speed_;
+      }
+    }
+    if (attrs_ && node_ > 0) attrs_->reset_models();
+    node_start_faces_ = pm_.face_count();
+    const NodeEntry& n = nodes_->nodes[node_];
+    whole_ = nodes_->levels[n.level].side == 0;
+    box_ = CellBox(nodes_->levels[n.level], n.cell);
+    if (whole_) {
+      choice_.begin_whole_node();
+    } else {
+      if (int64_t(n.level) != bins_level_) {
+        bins_.build(*nodes_, n.level, coords_.data(), pm_.vertex_count());
+        bins_level_ = n.level;
+      }
+      choice_.begin_node(bins_.take(uint32_t(node_)));
+    }
+    chunk_limit_ = kFirstChunkSplits;
+    ++node_;
+  }
+  // With a node table: v, its ring and u lie in the node's cell (spec/format.md section 15.4).
+  bool in_node(uint32_t v, uint32_t u) const {
+    if (!nodes_ || whole_) return true;
+    auto in = [&](uint32_t x) { return box_.contains(&coords_[size_t(x) * 3]); };
+    if (!in(v) || !in(u)) return false;
+    for (uint32_t w : pm_.ring())
+      if (!in(w)) return false;
+    return true;
+  }
+
   // One split: applied to the replay, its wedge and rank symbols, its attributes, and its
   // position residuals once per candidate.
   bool code_split(uint32_t collapse, std::string& error) {
@@ -326,6 +399,10 @@ class SplitCoder {
     if (!pm_.gather_ring(v) || !find_ranks(pm_, vl, vr, rl, rr) ||
         plan_.decoded_id[c.u] != pm_.vertex_count())
       return error = "internal: reordered split does not replay", false;
+    if (!in_node(v, pm_.vertex_count()))
+      return error =
+                 "a split reaches outside its node's cell (levels made at other position bits?)",
+             false;
     SplitSymbols code;
     code.v = v;
     code.wedge_context = wedge_context(uint32_t(pm_.ring().size()), pm_.ring_closed());
@@ -409,17 +486,32 @@ class SplitCoder {
   std::vector<uint32_t> chunk_choice_, vs_;
   std::vector<uint8_t> payload_, chunk_attributes_;
   uint32_t chunk_limit_ = kFirstChunkSplits;
+  // With a node table: the next node, each node's first split, the level binned last, the
+  // current node's grid and cell, per candidate where the node's bytes start and each node's
+  // size, and the faces each node adds.
+  const NodeTable* nodes_ = nullptr;
+  size_t node_ = 0;
+  std::vector<uint64_t> node_first_;
+  CellBins bins_;
+  int64_t bins_level_ = -1;
+  bool whole_ = true;  // the current node holds every vertex; else its cell's box
+  CellBox box_;
+  uint64_t node_start_bytes_[kMaxCandidates] = {};
+  std::vector<uint64_t> node_bytes_[kMaxCandidates];
+  uint64_t node_start_faces_ = 0;
+  std::vector<uint64_t> node_faces_;
 };
 
 // The file: signature, HEAD (with the attribute header), BASE (the stream alone: its counts are
 // HEAD's) and its ATTR chunk, the chosen candidate's split chunks, END.
 void assemble_file(FileHeader& h, const Plan& plan, const AttributeWriter* attrs,
-                   const std::vector<uint8_t>& base_attributes,
+                   const std::vector<uint8_t>& base_attributes, const NodeTable* nodes,
                    const std::vector<uint8_t>& split_bytes, WriteStats& st,
                    std::vector<uint8_t>& out) {
   out.assign(kSignature, kSignature + 8);
   std::vector<uint8_t> head;
   if (attrs) h.flags |= kFlagAttributes;
+  if (nodes) h.flags |= kFlagNodes;
   write_head_payload(head, h);
   if (attrs) {
     AttributeHeader a = attrs->header();
@@ -435,6 +527,13 @@ void assemble_file(FileHeader& h, const Plan& plan, const AttributeWriter* attrs
     st.attribute_bytes += out.size() - before;
   }
   st.base_bytes = out.size() - st.header_bytes;
+  if (nodes) {
+    std::vector<uint8_t> table;
+    write_node_table(table, *nodes);
+    const size_t before = out.size();
+    append_chunk(out, kChunkNodes, table);
+    st.node_table_bytes = out.size() - before;
+  }
   out.insert(out.end(), split_bytes.begin(), split_bytes.end());
   append_chunk(out, kChunkEnd, {});
 }
@@ -464,11 +563,69 @@ bool check_full_decode(const IndexedMesh& mesh, const ProgressiveMesh& pm, const
 
 }  // namespace
 
-bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector<uint8_t>& out,
+// The node table of a sequence made in levels of cells (SimplifyOptions::clusters): its grids,
+// and per node of `plan` its level, cell, split count, sphere and error (the largest |u - v| of
+// its collapses, raised to its descendants' so that a parent's bound covers its children's).
+// Faces and bytes are filled once the splits are coded.
+NodeTable node_table_of(const CollapseSequence& seq, const ClusterPlan& plan) {
+  NodeTable t;
+  for (const CollapseSequence::Level& l : seq.levels) {
+    NodeGrid g;
+    g.side = l.grid.side;
+    std::copy(l.grid.origin, l.grid.origin + 3, g.origin);
+    t.levels.push_back(g);
+  }
+  const std::vector<float>& p = seq.mesh.positions;
+  for (const ClusterNode& c : plan.nodes) {
+    NodeEntry n;
+    n.level = c.level;
+    if (t.levels[c.level].side > 0) std::copy(c.cell, c.cell + 3, n.cell);
+    n.splits = c.count;
+    std::copy(c.center, c.center + 3, n.center);
+    n.radius = c.radius;
+    for (uint64_t i = 0; i < c.count; ++i) {
+      const HalfEdgeCollapse& h = seq.collapses[plan.collapses[c.first + i]];
+      double d2 = 0;
+      for (int a = 0; a < 3; ++a) {
+        const double d = double(p[size_t(h.u) * 3 + a]) - p[size_t(h.v) * 3 + a];
+        d2 += d * d;
+      }
+      n.error = std::max(n.error, float(std::sqrt(d2)));
+    }
+    t.nodes.push_back(n);
+  }
+  for (size_t k = plan.nodes.size(); k-- > 0;)
+    for (uint32_t q : plan.nodes[k].parents)
+      t.nodes[q].error = std::max(t.nodes[q].error, t.nodes[k].error);
+  return t;
+}
+
+// A sequence made in levels of cells: its node table, the collapses node by node and each
+// node's split count (nodes stays null for a sequence without levels).
+bool in_nodes(const CollapseSequence& seq, const WriteOptions& opt,
+              std::unique_ptr<NodeTable>& nodes, CollapseSequence& by_node,
+              std::vector<uint64_t>& node_splits, std::string& error) {
+  if (seq.levels.empty()) return true;
+  if (opt.base_faces) return error = "a base face count cannot be set with clusters", false;
+  const ClusterPlan plan = plan_clusters(seq, opt.position_bits);
+  nodes = std::make_unique<NodeTable>(node_table_of(seq, plan));
+  by_node = node_ordered(seq, plan);
+  for (const NodeEntry& n : nodes->nodes) node_splits.push_back(n.splits);
+  return true;
+}
+
+bool write_pmz(const CollapseSequence& seq_in, const WriteOptions& opt, std::vector<uint8_t>& out,
                std::string& error, WriteStats* stats) {
-  if (!check_write_input(seq, opt, error)) return false;
+  if (!check_write_input(seq_in, opt, error)) return false;
+  // A sequence made in levels of cells is written node by node with a node table
+  // (spec/format.md section 15).
+  std::unique_ptr<NodeTable> nodes;
+  CollapseSequence by_node;
+  std::vector<uint64_t> node_splits;
+  if (!in_nodes(seq_in, opt, nodes, by_node, node_splits, error)) return false;
+  const CollapseSequence& seq = nodes ? by_node : seq_in;
   Plan plan;
-  if (!make_plan(seq, opt, plan, error)) return false;
+  if (!make_plan(seq, opt, plan, error, node_splits)) return false;
   FileHeader h;
   std::vector<int32_t> coords;
   begin_header(seq.mesh, plan, opt, h, coords);
@@ -480,13 +637,20 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
   }
   std::vector<uint8_t> base_attributes;
   SplitCoder splits(seq, opt, plan, coords, attrs.get());
+  if (nodes) splits.set_nodes(nodes.get());
   if (!splits.start(h, base_attributes, error) || !splits.code_groups(error)) return false;
   const size_t best = splits.best();
+  if (nodes)
+    for (size_t k = 0; k < nodes->nodes.size(); ++k) {
+      nodes->nodes[k].bytes = splits.node_bytes(best, k);
+      nodes->nodes[k].faces = splits.node_faces(k);
+    }
   h.curvature = kCurvatureCandidates[best].curvature;
   h.fine_curvature = kCurvatureCandidates[best].fine;
   WriteStats st = splits.stats(best);
   std::vector<uint8_t> file;
-  assemble_file(h, plan, attrs.get(), base_attributes, splits.split_bytes(best), st, file);
+  assemble_file(h, plan, attrs.get(), base_attributes, nodes.get(), splits.split_bytes(best), st,
+                file);
   if (!check_full_decode(seq.mesh, splits.mesh(), plan, error)) return false;
   if (attrs && !attrs->check_full(splits.mesh(), error)) return false;
   out.swap(file);  // only a checked stream replaces the caller's bytes
@@ -496,9 +660,14 @@ bool write_pmz(const CollapseSequence& seq, const WriteOptions& opt, std::vector
 
 std::vector<uint32_t> decoded_vertex_order(const CollapseSequence& seq,
                                            const WriteOptions& options) {
+  std::unique_ptr<NodeTable> nodes;
+  CollapseSequence by_node;
+  std::vector<uint64_t> node_splits;
   Plan plan;
   std::string error;
-  if (!make_plan(seq, options, plan, error)) return {};
+  if (!in_nodes(seq, options, nodes, by_node, node_splits, error) ||
+      !make_plan(nodes ? by_node : seq, options, plan, error, node_splits))
+    return {};
   return plan.input_of;
 }
 

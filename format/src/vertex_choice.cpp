@@ -40,6 +40,8 @@ inline uint64_t l1(int64_t x, int64_t y, int64_t z) {
   excluded_ = 0;
   near_.clear();
   noted_.clear();
+  cells_ = false;
+  cell_.clear();
   bits_.assign((size_t(base.vertex_count()) + 63) / 64, 0);
 }
 
@@ -127,6 +129,7 @@ PMZ_SMALL_IN_WASM void VertexChoice::grow(size_t k) {
   make_room(mark_, 1);
   make_room(sums_, 1);
   make_room(key_, 1);
+  make_room(cell_, 1);
   // start_group's bitmap for the vertex count after this split (it must not allocate then: the
   // group's state has begun to change).
   const size_t words = (degree_.size() + 64) / 64;
@@ -249,6 +252,7 @@ void VertexChoice::applied(const ProgressiveMesh& pm, const int32_t* coords, boo
   noted_.insert(noted_.end(), ring.begin(), ring.end());
   noted_.push_back(v);
   noted_.push_back(u);
+  if (cells_) cell_.push_back(u);
 }
 
 bool choice_bits(VertexChoice& choice, const ProgressiveMesh& mesh, uint32_t limit,

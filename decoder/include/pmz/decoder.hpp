@@ -65,6 +65,7 @@ struct StreamInfo {
   uint64_t full_vertices = 0, full_faces = 0;
   uint64_t total_splits = 0;
   float bbox_min[3] = {0, 0, 0}, bbox_max[3] = {0, 0, 0};
+  uint64_t nodes = 0;  // independently decodable parts (spec/format.md section 15); 0: none
 };
 
 // What changed in the mesh buffers since the last clear_changes(), for uploading deltas.

@@ -33,7 +33,8 @@ inline constexpr int kWriteSymbolKinds = 7;
 
 struct WriteStats {
   uint64_t header_bytes = 0, base_bytes = 0, split_bytes = 0;
-  uint64_t attribute_bytes = 0;  // the ATTR chunks (within base_bytes and split_bytes)
+  uint64_t attribute_bytes = 0;   // the ATTR chunks (within base_bytes and split_bytes)
+  uint64_t node_table_bytes = 0;  // the NODE chunk (streams written in nodes)
   // Coded size of the SPLT streams over all splits: groups, vertex choice and wedges
   // (connectivity); position residuals (geometry).
   uint64_t connectivity_bits = 0, geometry_bits = 0;

@@ -58,7 +58,8 @@ enum SymbolKind : int {
   kSymbolKinds
 };
 
-inline constexpr uint32_t kKnownFlags = 1;  // HEAD flags: bit 0 attributes (attribute_codec.hpp)
+inline constexpr uint32_t kKnownFlags =
+    3;  // HEAD flags: bit 0 attributes (attribute_codec.hpp), bit 1 nodes (node_table.hpp)
 
 // HEAD (spec/format.md section 4). full_vertices is not stored: base_vertices + total_splits.
 struct FileHeader {

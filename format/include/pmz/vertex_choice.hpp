@@ -96,7 +96,7 @@ class VertexChoice {
   // file (0-based, in stream order); limit: the vertex count at the group's start.
   void begin_scan(bool near, uint32_t limit, uint32_t size) {
     near_scan_ = near;
-    n_ = near ? near_.size() : limit;
+    n_ = near ? near_.size() : cells_ ? cell_.size() : limit;
     i_ = 0;
     size_ = size;
     found_ = 0;
@@ -117,10 +117,10 @@ class VertexChoice {
     if (upto > size_) upto = size_;
     // The scan's state in locals (f's stores could alias the members), written back on exit.
     const uint64_t n = n_;
-    const uint32_t* const list = near_.data();
+    const uint32_t* const list = near_scan_ ? near_.data() : cell_.data();
     const uint32_t* const mark = mark_.data();  // exclude() writes marks, never resizes
     const uint32_t excluded = excluded_;
-    const bool near = near_scan_;
+    const bool near = near_scan_, listed = near_scan_ || cells_;
     const uint8_t* const key = key_.data();
     uint64_t i = i_;
     uint32_t found = found_;
@@ -136,7 +136,7 @@ class VertexChoice {
         break;
       }
       const uint64_t at = i++;
-      const uint32_t w = near ? list[at] : uint32_t(at);
+      const uint32_t w = listed ? list[at] : uint32_t(at);
       if (mark[w] == excluded) continue;
       if (n - at < lo) {
         const uint64_t m = size_ - found;
@@ -164,6 +164,20 @@ class VertexChoice {
     found_ = found;
     return result;
   }
+  // A node of a stream with a node table starts (spec/format.md section 15.4): its groups' `near`
+  // lists come from its own splits only, and the other groups scan `cell` (the vertices of its
+  // cell, ascending) and the vertices its splits add, instead of every vertex.
+  void begin_node(std::vector<uint32_t>&& cell) {
+    cells_ = true;
+    cell_ = std::move(cell);
+    noted_.clear();
+  }
+  // The node that holds every vertex (a level without cells): scans as without a node table.
+  void begin_whole_node() {
+    cells_ = false;
+    cell_.clear();
+    noted_.clear();
+  }
   // Writer: whether every vertex of vs is in the near list (vs ascending).
   bool covers(std::span<const uint32_t> vs) const;
   // Writer: whether no vertex of vs is in the closed one-ring (in mesh) of another.
@@ -173,7 +187,8 @@ class VertexChoice {
   void reserve(size_t k) {
     if (noted_.capacity() - noted_.size() < k + 2 || degree_.capacity() == degree_.size() ||
         mark_.capacity() == mark_.size() || sums_.capacity() == sums_.size() ||
-        key_.capacity() == key_.size() || bits_.size() * 64 <= degree_.size())
+        key_.capacity() == key_.size() || bits_.size() * 64 <= degree_.size() ||
+        cell_.capacity() == cell_.size())
       grow(k);
   }
   // Decoder: room for n vertices in the per-vertex arrays at once (refine() knows how many it
@@ -247,6 +262,8 @@ class VertexChoice {
   // The scan: near or all vertices, candidates n_, next candidate i_, the group's size and
   // splits found; with a mesh, the vertices found.
   bool near_scan_ = false;
+  bool cells_ = false;          // within a node of a cell: candidates from cell_
+  std::vector<uint32_t> cell_;  // its cell's vertices, then the vertices its splits added
   uint64_t n_ = 0, i_ = 0;
   uint32_t size_ = 0, found_ = 0;
   std::vector<uint32_t> chosen_;

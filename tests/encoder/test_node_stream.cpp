@@ -1,0 +1,308 @@
+// SPDX-License-Identifier: MIT
+// Streams in nodes (spec/format.md section 15): a sequence simplified in levels of cells is
+// written node by node behind a node table; the decoder gives back the input, whatever the
+// slicing, and refuses a table that does not match the nodes' bytes, faces or cells.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "pmz/coding.hpp"
+#include "pmz/decoder.hpp"
+#include "pmz/format.hpp"
+#include "pmz/node_table.hpp"
+#include "pmz/simplify.hpp"
+#include "pmz/writer.hpp"
+#include "simplify_test_meshes.hpp"
+
+namespace {
+
+using pmz::IndexedMesh;
+
+IndexedMesh bumpy_sphere(int levels) {
+  IndexedMesh m = pmz_test::icosphere(levels);
+  for (size_t i = 0; i < m.positions.size(); i += 3) {
+    float* p = &m.positions[i];
+    const double r =
+        1 + 0.08 * std::sin(5 * p[0]) * std::cos(4 * p[1]) + 0.03 * std::sin(17 * p[2] + 3 * p[0]);
+    for (int a = 0; a < 3; ++a) p[a] = float(p[a] * r);
+  }
+  return m;
+}
+
+pmz::CollapseSequence clustered(const IndexedMesh& mesh, uint32_t cell_vertices) {
+  pmz::SimplifyOptions o;
+  o.clusters.vertices = cell_vertices;
+  o.clusters.position_bits = 14;
+  pmz::CollapseSequence seq;
+  std::string error;
+  EXPECT_TRUE(pmz::simplify(mesh, o, seq, error)) << error;
+  return seq;
+}
+
+std::vector<uint8_t> write(const pmz::CollapseSequence& seq) {
+  std::vector<uint8_t> bytes;
+  std::string error;
+  EXPECT_TRUE(pmz::write_pmz(seq, pmz::WriteOptions{}, bytes, error)) << error;
+  return bytes;
+}
+
+struct Decoded {
+  pmz::Status status;
+  std::string message;
+  uint64_t nodes = 0, splits = 0;
+  std::vector<uint32_t> indices;
+  std::vector<float> positions;
+};
+
+Decoded decode(const std::vector<uint8_t>& bytes, size_t slice = 0) {
+  pmz::Decoder d;
+  if (slice == 0) slice = bytes.size();
+  for (size_t at = 0; at < bytes.size(); at += slice)
+    d.feed(bytes.data() + at, std::min(slice, bytes.size() - at));
+  d.finish();
+  Decoded out;
+  out.splits = d.refine();
+  out.status = d.status();
+  out.message = d.error_message();
+  out.nodes = d.info().nodes;
+  out.indices.assign(d.indices(), d.indices() + size_t(d.face_count()) * 3);
+  out.positions.assign(d.positions(), d.positions() + size_t(d.vertex_count()) * 3);
+  return out;
+}
+
+// The input's faces in decoded vertex ids, each rotated to start at its smallest id, sorted.
+std::vector<std::array<uint32_t, 3>> face_set(const uint32_t* indices, size_t faces,
+                                              const std::vector<uint32_t>* rename = nullptr) {
+  std::vector<std::array<uint32_t, 3>> out;
+  for (size_t f = 0; f < faces; ++f) {
+    std::array<uint32_t, 3> t = {indices[f * 3], indices[f * 3 + 1], indices[f * 3 + 2]};
+    if (rename)
+      for (uint32_t& x : t) x = (*rename)[x];
+    while (t[0] > t[1] || t[0] > t[2]) t = {t[1], t[2], t[0]};
+    out.push_back(t);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// The NODE chunk of a stream: where it starts, its size with the header, and its table.
+struct NodeChunk {
+  size_t at = 0, size = 0;
+  pmz::NodeTable table;
+};
+
+NodeChunk find_node_chunk(const std::vector<uint8_t>& bytes, uint64_t total_splits) {
+  NodeChunk out;
+  size_t at = 8;
+  while (at < bytes.size()) {
+    pmz::ChunkFrame f;
+    EXPECT_EQ(pmz::parse_chunk_frame(bytes.data() + at, bytes.size() - at, f),
+              pmz::FrameStatus::ok);
+    const size_t size = f.header_size + size_t(f.payload_size);
+    if (f.type == pmz::kChunkNodes) {
+      std::string error;
+      out.at = at;
+      out.size = size;
+      EXPECT_TRUE(pmz::read_node_table(bytes.data() + at + f.header_size, size_t(f.payload_size),
+                                       total_splits, 1u << 20, out.table, error))
+          << error;
+      return out;
+    }
+    at += size;
+  }
+  ADD_FAILURE() << "no NODE chunk";
+  return out;
+}
+
+// The stream with its NODE chunk replaced by `table`'s.
+std::vector<uint8_t> with_table(const std::vector<uint8_t>& bytes, const NodeChunk& c,
+                                const pmz::NodeTable& table) {
+  std::vector<uint8_t> payload, chunk;
+  pmz::write_node_table(payload, table);
+  pmz::append_chunk(chunk, pmz::kChunkNodes, payload);
+  std::vector<uint8_t> out(bytes.begin(), bytes.begin() + ptrdiff_t(c.at));
+  out.insert(out.end(), chunk.begin(), chunk.end());
+  out.insert(out.end(), bytes.begin() + ptrdiff_t(c.at + c.size), bytes.end());
+  return out;
+}
+
+class NodeStream : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    mesh_ = new IndexedMesh(bumpy_sphere(5));
+    seq_ = new pmz::CollapseSequence(clustered(*mesh_, 200));
+    bytes_ = new std::vector<uint8_t>(write(*seq_));
+  }
+  static void TearDownTestSuite() {
+    delete bytes_;
+    delete seq_;
+    delete mesh_;
+  }
+  static IndexedMesh* mesh_;
+  static pmz::CollapseSequence* seq_;
+  static std::vector<uint8_t>* bytes_;
+};
+IndexedMesh* NodeStream::mesh_ = nullptr;
+pmz::CollapseSequence* NodeStream::seq_ = nullptr;
+std::vector<uint8_t>* NodeStream::bytes_ = nullptr;
+
+TEST_F(NodeStream, DecodesToTheInputMeshInEverySlicing) {
+  const Decoded whole = decode(*bytes_);
+  ASSERT_EQ(whole.status, pmz::Status::ok) << whole.message;
+  EXPECT_GT(whole.nodes, 8u);  // levels of cells, not one node
+  EXPECT_EQ(whole.splits, seq_->collapses.size());
+  // The decoded faces are the input's, vertex for vertex.
+  const std::vector<uint32_t> order = pmz::decoded_vertex_order(*seq_, pmz::WriteOptions{});
+  ASSERT_EQ(order.size(), mesh_->vertex_count());
+  EXPECT_EQ(face_set(whole.indices.data(), whole.indices.size() / 3, &order),
+            face_set(mesh_->indices.data(), mesh_->face_count()));
+  for (size_t slice : {1, 7, 997}) {
+    const Decoded sliced = decode(*bytes_, slice);
+    EXPECT_EQ(sliced.status, pmz::Status::ok) << slice;
+    EXPECT_EQ(sliced.indices, whole.indices) << slice;
+    EXPECT_EQ(sliced.positions, whole.positions) << slice;
+  }
+}
+
+TEST_F(NodeStream, TheTableMatchesTheNodesAndEveryPrefixOfNodesIsAMesh) {
+  const uint64_t total = seq_->collapses.size();
+  const NodeChunk c = find_node_chunk(*bytes_, total);
+  const pmz::NodeTable& t = c.table;
+  ASSERT_GT(t.levels.size(), 2u);
+  EXPECT_EQ(t.levels.back().side, 0);  // the last level is the whole mesh
+  uint64_t bytes = 0;
+  for (const pmz::NodeEntry& n : t.nodes) bytes += n.bytes;
+  // The nodes' bytes are everything between the NODE chunk and END (an empty chunk: 6 bytes).
+  EXPECT_EQ(c.at + c.size + bytes + 6, bytes_->size());
+  // Parents come first, and a parent's error bound covers its children's.
+  const pmz::NodeIndex index(t);
+  for (uint32_t k = 0; k < t.nodes.size(); ++k)
+    for (uint32_t p : index.parents(k)) {
+      EXPECT_LT(p, k);
+      EXPECT_GE(t.nodes[p].error, t.nodes[k].error);
+    }
+  // Refined node by node, the faces grow by each node's count; coarsened to the base and
+  // refined again, the mesh is the same.
+  pmz::Decoder d;
+  ASSERT_EQ(d.feed(bytes_->data(), bytes_->size()), pmz::Status::ok);
+  for (const pmz::NodeEntry& n : t.nodes) {
+    const uint32_t faces = d.face_count();
+    ASSERT_EQ(d.refine(n.splits), n.splits);
+    EXPECT_EQ(d.face_count(), faces + n.faces);
+  }
+  const std::vector<uint32_t> full(d.indices(), d.indices() + size_t(d.face_count()) * 3);
+  d.coarsen(total);
+  EXPECT_EQ(d.splits_applied(), 0u);
+  d.refine();
+  EXPECT_EQ(std::vector<uint32_t>(d.indices(), d.indices() + size_t(d.face_count()) * 3), full);
+  EXPECT_EQ(d.status(), pmz::Status::ok);
+}
+
+// A table that disagrees with the nodes is refused as corrupt, and the splits before the
+// disagreement stay applied.
+TEST_F(NodeStream, ATableThatDisagreesWithTheNodesIsRefused) {
+  const uint64_t total = seq_->collapses.size();
+  const NodeChunk c = find_node_chunk(*bytes_, total);
+  const size_t last = c.table.nodes.size() - 1;
+  auto expect_refused = [&](const pmz::NodeTable& t, const std::string& why) {
+    const Decoded d = decode(with_table(*bytes_, c, t));
+    EXPECT_EQ(d.status, pmz::Status::corrupt) << why;
+    EXPECT_NE(d.message.find(why), std::string::npos) << d.message;
+    EXPECT_LT(d.splits, total) << why;
+  };
+  {
+    pmz::NodeTable t = c.table;
+    t.nodes[1].bytes += 1;
+    expect_refused(t, "shorter than its table entry");
+  }
+  {
+    pmz::NodeTable t = c.table;
+    t.nodes[1].bytes -= 1;
+    expect_refused(t, "longer than its table entry");
+  }
+  {
+    pmz::NodeTable t = c.table;
+    t.nodes[1].faces -= 1;
+    expect_refused(t, "added other faces");
+  }
+  {
+    pmz::NodeTable t = c.table;
+    t.nodes[last].faces -= 1;
+    expect_refused(t, "added other faces");
+  }
+  {  // a leaf node given another cell (one without a node): its splits find no vertex there
+    pmz::NodeTable t = c.table;
+    t.nodes[last].cell[0] += 1000;
+    expect_refused(t, "split ");
+  }
+  {  // the split counts moved between two nodes
+    pmz::NodeTable t = c.table;
+    t.nodes[1].splits -= 1;
+    t.nodes[2].splits += 1;
+    const Decoded d = decode(with_table(*bytes_, c, t));
+    EXPECT_EQ(d.status, pmz::Status::corrupt);
+  }
+}
+
+TEST(NodeTable, ReadBackAndRefusedWhenMalformed) {
+  pmz::NodeTable t;
+  t.levels = {{4, {-3, 0, 5}}, {8, {-1, 2, 7}}, {0, {0, 0, 0}}};
+  auto node = [](uint32_t level, int64_t x, int64_t y, int64_t z, uint64_t splits) {
+    pmz::NodeEntry n;
+    n.level = level;
+    n.cell[0] = x, n.cell[1] = y, n.cell[2] = z;
+    n.splits = splits;
+    n.faces = splits * 2;
+    n.bytes = 10 + splits;
+    n.center[0] = 1.5f;
+    n.radius = 2;
+    n.error = 0.25f;
+    return n;
+  };
+  t.nodes = {node(2, 0, 0, 0, 5), node(1, 0, 0, 0, 3), node(1, -1, 0, 0, 2), node(0, 0, 0, 0, 4)};
+  std::vector<uint8_t> payload;
+  pmz::write_node_table(payload, t);
+  pmz::NodeTable back;
+  std::string error;
+  ASSERT_TRUE(pmz::read_node_table(payload.data(), payload.size(), 14, 100, back, error)) << error;
+  ASSERT_EQ(back.nodes.size(), 4u);
+  EXPECT_EQ(back.levels[1].origin[0], -1);
+  EXPECT_EQ(back.nodes[2].cell[0], -1);
+  EXPECT_EQ(back.nodes[3].bytes, 14u);
+  EXPECT_EQ(pmz::NodeIndex(back).parents(3), (std::vector<uint32_t>{0, 1, 2}));
+  // Every prefix is refused, and so is a table whose counts do not add up to HEAD's.
+  for (size_t n = 0; n < payload.size(); ++n)
+    EXPECT_FALSE(pmz::read_node_table(payload.data(), n, 14, 100, back, error)) << n;
+  EXPECT_FALSE(pmz::read_node_table(payload.data(), payload.size(), 15, 100, back, error));
+  EXPECT_FALSE(pmz::read_node_table(payload.data(), payload.size(), 13, 100, back, error));
+  auto refused = [&](pmz::NodeTable bad, const std::string& why) {
+    std::vector<uint8_t> p;
+    pmz::write_node_table(p, bad);
+    EXPECT_FALSE(pmz::read_node_table(p.data(), p.size(), 14, 100, back, error)) << why;
+    EXPECT_NE(error.find(why), std::string::npos) << error;
+  };
+  pmz::NodeTable bad = t;
+  std::swap(bad.nodes[0], bad.nodes[3]);  // a leaf before its parents
+  refused(bad, "before one of its parents");
+  bad = t;
+  bad.nodes[2].cell[0] = 0;  // two nodes in one cell
+  refused(bad, "two nodes");
+  bad = t;
+  bad.levels[1].side = 2;  // cells smaller than the level below's
+  refused(bad, "smaller");
+  bad = t;
+  bad.levels[0].side = 0;  // a level without cells that is not the last
+  refused(bad, "without cells");
+  bad = t;
+  bad.nodes[1].error = NAN;
+  refused(bad, "finite");
+  bad = t;
+  bad.nodes[3].faces = 9;
+  refused(bad, "two per split");
+}
+
+}  // namespace
