@@ -195,7 +195,11 @@ struct Decoder::Impl {
     size_t arriving = 0;
     uint64_t arrived_splits = 0, arrived_bytes = 0;
     std::vector<std::unique_ptr<SplitModels>> models;  // per node
-    size_t applying = 0;                               // nodes whose first application started
+    // The models the first node left (its split and attribute models): every later node's
+    // start.
+    std::unique_ptr<SplitModels> first_models;
+    std::unique_ptr<AttributeModels> first_attribute_models;
+    size_t applying = 0;  // nodes whose first application started
     uint64_t start_faces = 0;
     CellBins bins;
     int64_t bins_level = -1;
@@ -571,7 +575,7 @@ Status Decoder::Impl::split_chunk(const uint8_t* p, size_t n) {
   SplitChunkReader r;
   SplitModels* models;
   uint64_t max_splits = info.total_splits - record.splits.size();
-  if (nodes.present) {  // the chunk's node: models of its own, from the initial state
+  if (nodes.present) {  // the chunk's node: models of its own (section 15.4)
     if (nodes.arriving >= nodes.table.nodes.size())
       return fail(Status::corrupt, "SPLT after every node's splits");
     std::unique_ptr<SplitModels>& m = nodes.models[nodes.arriving];
@@ -641,8 +645,8 @@ Status Decoder::Impl::node_arrived(uint64_t bytes, bool attributes_done) {
 }
 
 // The first application of a node's first split (spec/format.md section 15.4): the node before
-// added the faces the table says; this one starts from the initial models (attributes too, but
-// for the first node, which continues from BASE's), its near list empty, and its candidates its
+// added the faces the table says; this one starts from the models the first node left (but for
+// its group model, its own from the initial state), its near list empty, and its candidates its
 // cell's vertices.
 bool Decoder::Impl::start_node() {
   const size_t k = nodes.applying;
@@ -650,8 +654,13 @@ bool Decoder::Impl::start_node() {
     if (level.mesh.face_count() - nodes.start_faces != nodes.table.nodes[k - 1].faces)
       return refuse(Status::corrupt,
                     "node " + PMZ_DECIMAL(k - 1) + " added other faces than its table entry");
+    if (k == 1) {
+      nodes.first_models = std::move(nodes.models[0]);
+      if (attrs) nodes.first_attribute_models = std::make_unique<AttributeModels>(*attrs->models);
+    }
     nodes.models[k - 1].reset();  // its splits are all decoded
-    if (attrs) *attrs->models = AttributeModels{};
+    nodes.models[k]->inherit(*nodes.first_models);
+    if (attrs) *attrs->models = *nodes.first_attribute_models;
   }
   const NodeEntry& e = nodes.table.nodes[k];
   nodes.start_faces = level.mesh.face_count();

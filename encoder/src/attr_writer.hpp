@@ -34,8 +34,10 @@ class AttributeWriter {
   // After the last split: the decoded wedges and materials are the input's, corner by corner.
   bool check_full(const ProgressiveMesh& pm, std::string& error) const;
   uint32_t wedge_count() const { return state_.wedge_count; }
-  // A node other than the first starts (spec/format.md section 15.4): models as at the start.
-  void reset_models() { models_ = AttributeModels{}; }
+  // Streams in nodes (spec/format.md section 15.4): the models the first node left, and a
+  // later node's start from them.
+  const AttributeModels& models() const { return models_; }
+  void restart_models(const AttributeModels& first) { models_ = first; }
 
  private:
   using Face = std::array<uint32_t, 3>;

@@ -340,8 +340,9 @@ class SplitCoder {
     return true;
   }
 
-  // The end of a node's bytes (after flush()), then the next node: its own models, its cell's
-  // candidates, chunks from kFirstChunkSplits again (spec/format.md section 15.4).
+  // The end of a node's bytes (after flush()), then the next node: models from the first
+  // node's, its cell's candidates, chunks from kFirstChunkSplits again (spec/format.md
+  // section 15.4).
   void end_node() {
     for (size_t k = 0; k < candidates_; ++k) {
       const uint64_t start = node_start_bytes_[k];
@@ -354,14 +355,18 @@ class SplitCoder {
   void start_node() {
     flush();
     if (node_ > 0) end_node();
+    if (node_ == 1) {  // the first node's models: where every later node's start
+      for (size_t k = 0; k < candidates_; ++k) first_models_[k] = std::move(models_[k]);
+      if (attrs_) first_attribute_models_ = attrs_->models();
+    }
     for (size_t k = 0; k < candidates_; ++k) {
       node_start_bytes_[k] = trial_[k].size();
       if (node_ > 0) {
         models_[k] = std::make_unique<SplitModels>();
-        models_[k]->speed = speed_;
+        models_[k]->inherit(*first_models_[k]);
       }
     }
-    if (attrs_ && node_ > 0) attrs_->reset_models();
+    if (attrs_ && node_ > 0) attrs_->restart_models(first_attribute_models_);
     node_start_faces_ = pm_.face_count();
     const NodeEntry& n = nodes_->nodes[node_];
     whole_ = nodes_->levels[n.level].side == 0;
@@ -375,7 +380,7 @@ class SplitCoder {
       }
       choice_.begin_node(bins_.take(uint32_t(node_)));
     }
-    chunk_limit_ = kFirstChunkSplits;
+    chunk_limit_ = node_ == 0 ? kFirstChunkSplits : kMaxChunkSplits;
     ++node_;
   }
   // With a node table: v, its ring and u lie in the node's cell (spec/format.md section 15.4).
@@ -500,6 +505,8 @@ class SplitCoder {
   std::vector<uint64_t> node_bytes_[kMaxCandidates];
   uint64_t node_start_faces_ = 0;
   std::vector<uint64_t> node_faces_;
+  std::unique_ptr<SplitModels> first_models_[kMaxCandidates];
+  AttributeModels first_attribute_models_;
 };
 
 // The file: signature, HEAD (with the attribute header), BASE (the stream alone: its counts are

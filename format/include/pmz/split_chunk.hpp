@@ -58,6 +58,16 @@ struct SplitModels {
   UIntModel mix_normal[kMixNormalContexts];
   // The speed level (spec/format.md section 9.10): each residual with its residual model alone.
   bool speed = false;
+  // A node after the first of a stream in nodes (spec/format.md section 15.4) starts its
+  // split symbols from the models the first node left (`first`); its group table's models
+  // (groups, near: decoded as its chunks arrive) are its own.
+  void inherit(const SplitModels& first) {
+    const UIntModel own_groups = groups;
+    const Prob own_near = near;
+    *this = first;
+    groups = own_groups;
+    near = own_near;
+  }
   UIntModel& mix(int slot, uint32_t context) {
     return slot < 2 ? mix_tangent[slot][context] : mix_normal[context];
   }
