@@ -575,7 +575,7 @@ Status Decoder::Impl::split_chunk(const uint8_t* p, size_t n) {
   SplitChunkReader r;
   SplitModels* models;
   uint64_t max_splits = info.total_splits - record.splits.size();
-  if (nodes.present) {  // the chunk's node: models of its own (section 15.4)
+  if (nodes.present) {  // the chunk's node: models of its own (spec/format.md section 15.4)
     if (nodes.arriving >= nodes.table.nodes.size())
       return fail(Status::corrupt, "SPLT after every node's splits");
     std::unique_ptr<SplitModels>& m = nodes.models[nodes.arriving];
@@ -723,7 +723,8 @@ bool Decoder::Impl::apply() {
     return refuse(Status::corrupt,
                   "split " + PMZ_DECIMAL(level.applied) + ": vertex choice malformed");
   if (!level.mesh.gather_ring(s.v)) return invalid();
-  if (nodes.present && nodes.cells) {  // v's ring within the node's cell (section 15.4)
+  if (nodes.present &&
+      nodes.cells) {  // v's ring within the node's cell (spec/format.md section 15.4)
     bool inside = nodes.in_cell(record.coords.data(), s.v);
     for (uint32_t w : level.mesh.ring()) inside = inside && nodes.in_cell(record.coords.data(), w);
     if (!inside)

@@ -55,7 +55,8 @@ struct NodeEntry {
   uint64_t bytes = 0;           // its chunks (SPLT, and ATTR with attributes), headers included
   float center[3] = {0, 0, 0};  // a sphere holding the vertices its splits move or add
   float radius = 0;
-  float error = 0;  // geometric error its splits remove, in model units (section 15.2)
+  float error =
+      0;  // geometric error its splits remove, in model units (spec/format.md section 15.2)
 };
 
 struct NodeTable {
@@ -63,17 +64,17 @@ struct NodeTable {
   std::vector<NodeEntry> nodes;  // in file order
 };
 
-// Appends the NODE payload (section 15.1).
+// Appends the NODE payload (spec/format.md section 15.1).
 void write_node_table(std::vector<uint8_t>& out, const NodeTable& t);
 
-// Parses and checks a NODE payload against HEAD's counts (section 15.1): false with a one-line
-// reason for a malformed or inconsistent table (a node before one of its parents, a cell twice,
-// split counts that do not sum to total_splits, ...). max_nodes bounds the node count.
+// Parses and checks a NODE payload against HEAD's counts (spec/format.md section 15.1): false with
+// a one-line reason for a malformed or inconsistent table (a node before one of its parents, a cell
+// twice, split counts that do not sum to total_splits, ...). max_nodes bounds the node count.
 bool read_node_table(const uint8_t* p, size_t size, uint64_t total_splits, uint64_t max_nodes,
                      NodeTable& t, std::string& error);
 
-// The nodes of coarser levels whose cells overlap node k's (its parents, section 15.3), in
-// ascending order; `index` as made by NodeIndex.
+// The nodes of coarser levels whose cells overlap node k's (its parents, spec/format.md
+// section 15.3), in ascending order; `index` as made by NodeIndex.
 class NodeIndex {
  public:
   explicit NodeIndex(const NodeTable& t);
@@ -90,10 +91,10 @@ class NodeIndex {
   std::vector<Key> sorted_;  // by (level, cell)
 };
 
-// The candidates of a node (section 15.4): the vertices below `count` whose coordinates lie in
-// its cell, ascending. Binned once per level (the nodes of a level follow one another in file
-// order): build() puts every vertex in the bin of its level's node, if any; take() hands a
-// node's bin over.
+// The candidates of a node (spec/format.md section 15.4): the vertices below `count` whose
+// coordinates lie in its cell, ascending. Binned once per level (the nodes of a level follow one
+// another in file order): build() puts every vertex in the bin of its level's node, if any; take()
+// hands a node's bin over.
 class CellBins {
  public:
   void build(const NodeTable& t, uint32_t level, const int32_t* coords, uint32_t count);
