@@ -89,7 +89,7 @@ def self_test():
             "// `spec/algorithm.md` (section 6 there)", "// spec/format.md sections 3, 4, 8 and 11",
             "// the counts of spec/format.md\n// section 12.", "# docs/design.md section 4",
             "// (spec/format.md section 9.6, 21 models per slot)"]
-    bad = ["// spec section 9.2", "// (section 4)", "// spec/format.md section 15",
+    bad = ["// spec section 9.2", "// (section 4)", "// spec/format.md section 16",
            "// spec/format.md section 9.17", "// spec/format.md sections 9.1 and 99",
            "// docs/none.md section 1", "// Section 2 of the spec", "// see §4"]
     failed = 0

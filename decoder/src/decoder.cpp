@@ -153,13 +153,23 @@ struct Decoder::Impl {
     // Continues the scan of the group being found (lazy.front()'s) until `upto` of its vertices
     // are known (within what the lag allows: the caller applied enough of its splits), into
     // splits[].v; a failure leaves the splits without a vertex, refused when reached.
+    // A group the front chunk's end cuts: its vertices are found ahead, those of splits in
+    // chunks yet to come kept in `ahead` until their chunk arrives.
     void find_vertices(uint32_t upto, BigVector<Split>& splits) {
       if (!choice_ok) return;
       const uint32_t before = choice.found();
       group_vs.clear();
       choice_ok = lazy.front().find(choice, nullptr, upto, group_vs);
-      for (size_t i = 0; i < group_vs.size(); ++i) splits[group_first + before + i].v = group_vs[i];
+      for (size_t i = 0; i < group_vs.size(); ++i) {
+        const uint64_t at = group_first + before + i;
+        if (at < splits.size())
+          splits[at].v = group_vs[i];
+        else
+          ahead.push_back(group_vs[i]);
+      }
     }
+    std::vector<uint32_t> ahead;  // (at most kChoiceLag + 1)
+    OpenGroup open;               // the group the last chunk arrived cuts
   } frontier;
   static constexpr uint64_t kRingWorkPerSplit = 64, kRingWorkSlack = 1u << 22;
 
@@ -433,8 +443,6 @@ Status Decoder::Impl::chunk(uint8_t type, const uint8_t* p, size_t n) {
   if (type == kChunkSplits) {
     if (stage != Stage::splits) return fail(Status::corrupt, "SPLT before BASE");
     if (attr_awaited) return fail(Status::corrupt, "SPLT before the last SPLT's ATTR");
-    if ((info.flags & kFlagNodes) && !nodes.present)
-      return fail(Status::corrupt, "SPLT before the NODE chunk");
     return split_chunk(p, n);
   }
   if (type == kChunkAttributes && attrs) return attribute_chunk(p, n);
@@ -442,6 +450,8 @@ Status Decoder::Impl::chunk(uint8_t type, const uint8_t* p, size_t n) {
   if (type == kChunkEnd) {
     if (stage != Stage::splits || record.splits.size() != info.total_splits || attr_awaited)
       return fail(Status::corrupt, "END before all splits");
+    if ((info.flags & kFlagNodes) && !nodes.present)
+      return fail(Status::corrupt, "END in a stream with nodes but no NODE chunk");
     info.complete = true;
     stage = Stage::complete;
     return Status::ok;
@@ -567,6 +577,10 @@ Status Decoder::Impl::attribute_chunk(const uint8_t* p, size_t n) {
   attrs->chunk(p, n);
   attr_awaited = false;
   record.available = record.splits.size();
+  if (info.flags & kFlagNodes && !nodes.present) {  // the first node's, before the table
+    nodes.arrived_bytes += input.chunk_bytes;
+    return Status::ok;
+  }
   return nodes.present ? node_arrived(input.chunk_bytes, true) : Status::ok;
 }
 
@@ -592,7 +606,8 @@ Status Decoder::Impl::split_chunk(const uint8_t* p, size_t n) {
     }
     models = frontier.models.get();
   }
-  if (!r.open(p, n, max_splits, *models, err)) return fail(Status::corrupt, err);
+  if (!r.open(p, n, max_splits, *models, err, frontier.open)) return fail(Status::corrupt, err);
+  frontier.open = r.open_group();
   if (nodes.present) nodes.arrived_splits += r.split_count();
   const size_t size = record.splits.size() + r.split_count();
   // As refine() grows the mesh buffers: room for every split of the header once the decoded ones
@@ -600,28 +615,50 @@ Status Decoder::Impl::split_chunk(const uint8_t* p, size_t n) {
   if (size > record.splits.capacity() && info.total_splits <= kHeaderTrust * size) {
     record.splits.reserve(info.total_splits);
   }
+  const size_t first = record.splits.size();
   record.splits.resize(size, {kNoCorner, kNoRank, kNoRank});
+  // Vertices a group this chunk continues found ahead (spec/format.md section 8).
+  const size_t known = std::min(frontier.ahead.size(), size - first);
+  for (size_t i = 0; i < known; ++i) record.splits[first + i].v = frontier.ahead[i];
+  frontier.ahead.erase(frontier.ahead.begin(), frontier.ahead.begin() + ptrdiff_t(known));
   frontier.lazy.push_back(std::move(r));
   if (attrs)
     attr_awaited = true;  // available with its ATTR chunk
   else
     record.available = record.splits.size();
+  if (info.flags & kFlagNodes && !nodes.present) {  // the first node's, before the table
+    nodes.arrived_bytes += input.chunk_bytes;
+    return Status::ok;
+  }
   return nodes.present ? node_arrived(input.chunk_bytes, !attrs) : Status::ok;
 }
 
 Status Decoder::Impl::node_chunk(const uint8_t* p, size_t n) {
-  if (stage != Stage::splits || nodes.present || !record.splits.empty())
-    return fail(Status::corrupt, "NODE chunk not right after BASE");
+  if (stage != Stage::splits || nodes.present || attr_awaited)
+    return fail(Status::corrupt, "NODE chunk out of place");
   std::string err;
   if (!read_node_table(p, n, info.total_splits, n / 16 + 1, nodes.table, err))
     return fail(Status::corrupt, err);
+  // The chunks before it are the first node's, all of them (spec/format.md section 15.1).
+  const NodeEntry& first = nodes.table.nodes[0];
+  if (record.splits.size() != first.splits || nodes.arrived_bytes != first.bytes ||
+      frontier.open.size)
+    return fail(Status::corrupt, "NODE chunk not right after the first node's chunks");
+  if (nodes.table.nodes.size() < 2) return fail(Status::corrupt, "NODE: a single node");
+  if (nodes.table.levels[first.level].side != 0)
+    return fail(Status::corrupt, "NODE: the first node has a cell");
   nodes.present = true;
+  nodes.arriving = 1;
+  nodes.arrived_bytes = 0;
+  nodes.applying = 1;  // the first node decodes as a stream without nodes: nothing to start
+  nodes.start_faces = info.base_faces;
   uint64_t at = 0;
   for (const NodeEntry& e : nodes.table.nodes) {
     nodes.first_split.push_back(at);
     at += e.splits;
   }
   nodes.models.resize(nodes.table.nodes.size());
+  nodes.models[0] = std::move(frontier.models);  // (its readers keep pointing at it)
   info.nodes = nodes.table.nodes.size();
   return Status::ok;
 }
@@ -685,6 +722,7 @@ bool Decoder::Impl::refuse(Status s, const std::string& what) {
   record.splits.resize(level.applied);
   record.available = level.applied;
   frontier.lazy.clear();
+  frontier.ahead.clear();
   if (attrs) attrs->lazy.clear();
   return false;
 }

@@ -30,10 +30,13 @@ static_assert(kWriteSymbolKinds == kSymbolKinds, "WriteStats::symbol_bits has a 
 namespace {
 
 constexpr double kWindowGrowth = 1.5;  // a window grows the vertex count by at most 50%
-constexpr uint32_t kFirstChunkSplits = 256, kMaxChunkSplits = 16384;
-// A group larger than this is cut (the rest starts a group in the next chunk, whose vertices
-// are then chosen among all vertices: slow to decode, spec "Vertex choice").
-constexpr uint32_t kMaxGroupPiece = 4 * kMaxChunkSplits;
+// Chunk sizes: a decoder uses a chunk's splits once the whole chunk is there, so a chunk's
+// bytes are the lag between what arrived and what shows. The first chunk holds
+// kFirstChunkSplits (a first view after a few hundred bytes); then each about the larger of
+// kLagBytes and kLagShare of the stream so far (estimated from the last chunk's bytes per
+// split), within kMaxChunkSplits. Groups continue across chunks (spec/format.md section 8).
+constexpr uint32_t kFirstChunkSplits = 48, kMinChunkSplits = 16, kMaxChunkSplits = 65536;
+constexpr double kLagBytes = 1536, kLagShare = 0.025;
 // HEAD (curvature, fine_curvature) pairs the writer tries (eighths; spec/format.md section 13):
 // those best on some corpus mesh out of a wider set (plus no offset at all).
 struct Curvatures {
@@ -288,20 +291,14 @@ class SplitCoder {
     }
   }
 
-  // Every stream group in order: the whole group, in a chunk of its own if it does not fit the
-  // current one; a group over kMaxGroupPiece in pieces of that size.
+  // Every stream group in order; a chunk ends once it holds chunk_limit_ splits, inside a
+  // group or not.
   bool code_groups(std::string& error) {
     uint32_t at = 0;
     for (uint32_t group : plan_.group_sizes) {
       while (nodes_ && node_ < nodes_->nodes.size() && at == node_first_[node_]) start_node();
-      for (uint32_t left = group; left;) {
-        if (!chunk_[0].empty() && chunk_[0].size() + left > chunk_limit_) flush();
-        const uint32_t n = std::min(left, kMaxGroupPiece);
-        if (!code_group_piece(at, n, error)) return false;
-        at += n;
-        left -= n;
-        if (chunk_[0].size() >= chunk_limit_) flush();
-      }
+      if (!code_group(at, group, error)) return false;
+      at += group;
     }
     flush();
     if (nodes_) end_node();
@@ -325,8 +322,8 @@ class SplitCoder {
   const ProgressiveMesh& mesh() const { return pm_; }
 
  private:
-  // The choice bits of n splits from final position `at`, then each split.
-  bool code_group_piece(uint32_t at, uint32_t n, std::string& error) {
+  // The choice bits of the group of n splits from final position `at`, then each split.
+  bool code_group(uint32_t at, uint32_t n, std::string& error) {
     vs_.clear();
     for (uint32_t i = at; i < at + n; ++i)
       vs_.push_back(plan_.decoded_id[seq_.collapses[plan_.order[i]].v]);
@@ -335,8 +332,10 @@ class SplitCoder {
     if (!choice_bits(choice_, pm_, pm_.vertex_count(), vs_, chunk_choice_, near))
       return error = "internal: a group's split vertices are adjacent", false;
     chunk_groups_.push_back({n, near});
-    for (uint32_t i = at; i < at + n; ++i)
+    for (uint32_t i = at; i < at + n; ++i) {
       if (!code_split(plan_.order[i], error)) return false;
+      if (chunk_[0].size() >= chunk_limit_) flush();
+    }
     return true;
   }
 
@@ -380,7 +379,6 @@ class SplitCoder {
       }
       choice_.begin_node(bins_.take(uint32_t(node_)));
     }
-    chunk_limit_ = node_ == 0 ? kFirstChunkSplits : kMaxChunkSplits;
     ++node_;
   }
   // With a node table: v, its ring and u lie in the node's cell (spec/format.md section 15.4).
@@ -443,16 +441,21 @@ class SplitCoder {
     return true;
   }
 
-  // Ends the current chunk: its SPLT chunk (and ATTR chunk) per candidate; the next may hold
-  // twice as many splits, up to kMaxChunkSplits.
+  // Ends the current chunk: its SPLT chunk (and ATTR chunk) per candidate; a group it cuts
+  // continues in the next (open_, and its choice bits not coded yet). Then the next chunk's
+  // size (see kLagBytes).
   void flush() {
-    if (chunk_groups_.empty()) return;
+    if (chunk_[0].empty()) return;
+    OpenGroup next;
+    size_t used = 0;
     for (size_t k = 0; k < candidates_; ++k) {
       payload_.clear();
       uint64_t sizes[kSplitStreamCount];
+      OpenGroup open = open_;
       encode_split_chunk(chunk_groups_, chunk_choice_, chunk_[k].data(), chunk_[k].size(),
                          *models_[k], payload_, sizes,
-                         opt_.symbol_stats ? trial_st_[k].symbol_bits : nullptr);
+                         opt_.symbol_stats ? trial_st_[k].symbol_bits : nullptr, &open, &used);
+      next = open;
       trial_st_[k].connectivity_bits += sizes[kStreamConnectivity] * 8;
       trial_st_[k].geometry_bits += sizes[kStreamGeometry] * 8;
       const size_t before = trial_[k].size();
@@ -464,11 +467,17 @@ class SplitCoder {
         trial_st_[k].attribute_bytes += trial_[k].size() - at_attributes;
       }
       trial_st_[k].split_bytes += trial_[k].size() - before;
+      if (k == 0) {
+        const double per_split = double(trial_[k].size() - before) / double(chunk_[k].size());
+        const double target = std::max(kLagBytes, kLagShare * double(trial_[k].size()));
+        chunk_limit_ = uint32_t(
+            std::clamp(target / per_split, double(kMinChunkSplits), double(kMaxChunkSplits)));
+      }
       chunk_[k].clear();
     }
+    open_ = next;
     chunk_groups_.clear();
-    chunk_choice_.clear();
-    chunk_limit_ = std::min(chunk_limit_ * 2, kMaxChunkSplits);
+    chunk_choice_.erase(chunk_choice_.begin(), chunk_choice_.begin() + ptrdiff_t(used));
   }
 
   const CollapseSequence& seq_;
@@ -491,6 +500,7 @@ class SplitCoder {
   std::vector<uint32_t> chunk_choice_, vs_;
   std::vector<uint8_t> payload_, chunk_attributes_;
   uint32_t chunk_limit_ = kFirstChunkSplits;
+  OpenGroup open_;  // the group the last chunk cut
   // With a node table: the next node, each node's first split, the level binned last, the
   // current node's grid and cell, per candidate where the node's bytes start and each node's
   // size, and the faces each node adds.
@@ -534,6 +544,10 @@ void assemble_file(FileHeader& h, const Plan& plan, const AttributeWriter* attrs
     st.attribute_bytes += out.size() - before;
   }
   st.base_bytes = out.size() - st.header_bytes;
+  // With nodes, the NODE chunk follows the first node's chunks (the first node decodes without
+  // it, so a reader in file order refines from the first bytes on).
+  const size_t first = nodes ? size_t(nodes->nodes[0].bytes) : 0;
+  out.insert(out.end(), split_bytes.begin(), split_bytes.begin() + ptrdiff_t(first));
   if (nodes) {
     std::vector<uint8_t> table;
     write_node_table(table, *nodes);
@@ -541,7 +555,7 @@ void assemble_file(FileHeader& h, const Plan& plan, const AttributeWriter* attrs
     append_chunk(out, kChunkNodes, table);
     st.node_table_bytes = out.size() - before;
   }
-  out.insert(out.end(), split_bytes.begin(), split_bytes.end());
+  out.insert(out.end(), split_bytes.begin() + ptrdiff_t(first), split_bytes.end());
   append_chunk(out, kChunkEnd, {});
 }
 
@@ -615,6 +629,9 @@ bool in_nodes(const CollapseSequence& seq, const WriteOptions& opt,
   if (seq.levels.empty()) return true;
   if (opt.base_faces) return error = "a base face count cannot be set with clusters", false;
   const ClusterPlan plan = plan_clusters(seq, opt.position_bits);
+  // One node, or a first node with a cell (no collapse on the whole mesh): a stream without a
+  // node table (spec/format.md section 15.1 wants the first node on the whole mesh).
+  if (plan.nodes.size() < 2 || seq.levels[plan.nodes[0].level].grid.side != 0) return true;
   nodes = std::make_unique<NodeTable>(node_table_of(seq, plan));
   by_node = node_ordered(seq, plan);
   for (const NodeEntry& n : nodes->nodes) node_splits.push_back(n.splits);

@@ -11,8 +11,8 @@ namespace pmz {
 
 void encode_split_chunk(const std::vector<GroupCode>& groups, const std::vector<uint32_t>& choice,
                         const SplitSymbols* splits, size_t count, SplitModels& models,
-                        std::vector<uint8_t>& payload, uint64_t* stream_bytes,
-                        double* symbol_bits) {
+                        std::vector<uint8_t>& payload, uint64_t* stream_bytes, double* symbol_bits,
+                        OpenGroup* open, size_t* choice_used) {
   SplitModels* m = &models;
   std::vector<uint8_t> conn, geom;
   {
@@ -39,10 +39,20 @@ void encode_split_chunk(const std::vector<GroupCode>& groups, const std::vector<
     // Then each group in the decoder's order of reads (the schedule, spec/format.md section 9.3):
     // its choice bits up to its scan_at_group_start()-th vertex, then per split j the wedge symbols
     // and the choice bits up to the group's scan_after_split(j)-th vertex (those the decoder
-    // finds once split j is applied); the residuals in their own stream.
+    // finds once split j is applied); the residuals in their own stream. A group the chunk's end
+    // cuts continues in the next chunk with its next split (its choice bits run ahead in this
+    // chunk's stream as they would in one chunk).
+    struct Part {
+      uint32_t size, done, found;
+    };
+    std::vector<Part> parts;
+    if (open && open->size) parts.push_back({open->size, open->done, open->found});
+    for (const GroupCode& g : groups) parts.push_back({g.size, 0, 0});
+    if (open) *open = {};
     size_t bit = 0, at = 0;
-    for (const GroupCode& g : groups) {
-      uint32_t found = 0;
+    for (const Part& g : parts) {
+      uint32_t found = g.found;
+      const uint32_t cap = uint32_t(std::min<uint64_t>(g.size, g.done + (count - at)));
       auto choose = [&](uint32_t upto) {
         ca.to(kSymbolChoice);
         for (upto = std::min(upto, g.size); found < upto && bit < choice.size(); ++bit) {
@@ -50,8 +60,8 @@ void encode_split_chunk(const std::vector<GroupCode>& groups, const std::vector<
           found += choice[bit] & 1;
         }
       };
-      choose(scan_at_group_start());
-      for (uint32_t j = 0; j < g.size && at < count; ++j) {
+      if (!g.done) choose(scan_at_group_start());
+      for (uint32_t j = g.done; j < cap && at < count; ++j) {
         const SplitSymbols& s = splits[at++];
         ca.to(kSymbolWedgeCount);
         encode_small(cn, m->wedge_count[s.wedge_context], s.wedge_count);
@@ -68,11 +78,13 @@ void encode_split_chunk(const std::vector<GroupCode>& groups, const std::vector<
                               m->mix(a, s.mix_context[a]), zigzag_encode(s.residual[a]));
         }
       }
+      if (cap < g.size && open) *open = {g.size, cap, found};
     }
     ca.to(-1);
     ga.to(-1);
     cn.finish();
     ge.finish();
+    if (choice_used) *choice_used = bit;
   }
   put_varint(payload, count);
   put_varint(payload, conn.size());
@@ -95,7 +107,8 @@ bool split_chunk_stream_sizes(const uint8_t* p, size_t size, uint64_t& count,
 }
 
 PMZ_SMALL_IN_WASM bool SplitChunkReader::open(const uint8_t* p, size_t size, uint64_t max_splits,
-                                              SplitModels& models, std::string& error) {
+                                              SplitModels& models, std::string& error,
+                                              const OpenGroup& carried) {
   ByteReader r(p, size);
   const uint64_t count = r.varint();
   if (!r.ok || count == 0 || count > max_splits) return error = "SPLT counts", false;
@@ -117,7 +130,15 @@ PMZ_SMALL_IN_WASM bool SplitChunkReader::open(const uint8_t* p, size_t size, uin
   const UIntModel size_model = m.groups;
   const Prob near_model = m.near;
   const RangeState start = gr.state();
-  uint64_t groups = 0, done = 0;
+  // A group the chunk before cut: its remaining splits come first.
+  const uint64_t carry = carried.size ? carried.size - carried.done : 0;
+  if (carry > max_splits) return error = "SPLT counts", false;
+  carried_ = carry > 0;
+  carry_ = carry;
+  group_size_carried_ = carried.size;
+  group_end_ = carry;
+  group_size_ = carried.size;
+  uint64_t groups = 0, done = std::min(carry, count);
   bool ok = true;
   for (int pass = 0; pass < 2 && ok; ++pass) {
     if (pass == 1) {
@@ -126,11 +147,14 @@ PMZ_SMALL_IN_WASM bool SplitChunkReader::open(const uint8_t* p, size_t size, uin
       gr.set_state(start);
       groups_.clear();
       groups_.reserve(groups);
-      groups = done = 0;
+      groups = 0;
+      done = std::min(carry, count);
     }
-    while (ok && done < count) {  // each group adds at least one split: at most count groups
+    // Each group adds at least one split: at most count groups. The last may pass the chunk's
+    // end (it continues in the next chunk), not max_splits.
+    while (ok && done < count) {
       uint32_t g;
-      ok = decode_uint(gr, m.groups, g) && uint64_t(g) + 1 <= count - done;
+      ok = decode_uint(gr, m.groups, g) && uint64_t(g) + 1 <= max_splits - done;
       if (!ok) break;
       RangeState st = gr.state();
       const bool near = st.bit(m.near) != 0;
@@ -140,7 +164,7 @@ PMZ_SMALL_IN_WASM bool SplitChunkReader::open(const uint8_t* p, size_t size, uin
       done += g + 1;
       ++groups;
     }
-    ok = ok && done == count && gr.ok;
+    ok = ok && gr.ok;
   }
   if (!ok) return error = "SPLT groups malformed", false;
   geo_dec_ = std::make_unique<RangeDecoder>(r.p, r.remaining());
@@ -183,6 +207,17 @@ bool SplitChunkReader::begin_group(VertexChoice& choice, uint32_t limit) {
   group_end_ += g.size;
   group_size_ = g.size;
   return true;
+}
+
+OpenGroup SplitChunkReader::open_group() const {
+  uint64_t end = carry_;
+  uint32_t size = group_size_carried_;
+  for (const GroupCode& g : groups_) {
+    end += g.size;
+    size = g.size;
+  }
+  if (end <= count_) return {};
+  return {size, uint32_t(size - (end - count_)), 0};
 }
 
 bool SplitChunkReader::find(VertexChoice& choice, const ProgressiveMesh* mesh, uint32_t upto,

@@ -1235,12 +1235,15 @@ TEST(Hostile, AttributeFieldsOutOfRangeAreCorrupt) {
     EXPECT_EQ(d.feed(b.data(), b.size()), pmz::Status::corrupt) << c.what;
     EXPECT_NE(d.error_message().find("attributes"), std::string::npos) << d.error_message();
   }
-  // An unknown flag bit beside the attributes' is corrupt too.
-  Bytes b = file;
-  b[8 + f.header_size + 2] = 3;  // flags varint (one byte)
-  fix_crc(b, 8);
-  pmz::Decoder d;
-  EXPECT_EQ(d.feed(b.data(), b.size()), pmz::Status::corrupt);
+  // An unknown flag bit beside the attributes' is corrupt too, and so is the nodes' flag in a
+  // stream that has no NODE chunk (at its END).
+  for (const uint8_t flags : {5, 3}) {
+    Bytes b = file;
+    b[8 + f.header_size + 2] = flags;  // flags varint (one byte)
+    fix_crc(b, 8);
+    pmz::Decoder d;
+    EXPECT_EQ(d.feed(b.data(), b.size()), pmz::Status::corrupt) << int(flags);
+  }
 }
 
 // ATTR chunks only where spec/format.md section 14.1 puts them: dropped, doubled or moved ones are

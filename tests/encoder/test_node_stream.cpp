@@ -176,8 +176,11 @@ TEST_F(NodeStream, TheTableMatchesTheNodesAndEveryPrefixOfNodesIsAMesh) {
   EXPECT_EQ(t.levels.back().side, 0);  // the last level is the whole mesh
   uint64_t bytes = 0;
   for (const pmz::NodeEntry& n : t.nodes) bytes += n.bytes;
-  // The nodes' bytes are everything between the NODE chunk and END (an empty chunk: 6 bytes).
-  EXPECT_EQ(c.at + c.size + bytes + 6, bytes_->size());
+  // The first node's chunks, the NODE chunk, the other nodes' chunks, END (an empty chunk: 6
+  // bytes): the nodes' bytes are everything after BASE but the NODE chunk and END.
+  const size_t base_end = c.at - size_t(t.nodes[0].bytes);
+  EXPECT_EQ(base_end + c.size + bytes + 6, bytes_->size());
+  EXPECT_EQ(t.levels[t.nodes[0].level].side, 0);  // the first node is on the whole mesh
   // Parents come first, and a parent's error bound covers its children's.
   const pmz::NodeIndex index(t);
   for (uint32_t k = 0; k < t.nodes.size(); ++k)
@@ -245,6 +248,46 @@ TEST_F(NodeStream, ATableThatDisagreesWithTheNodesIsRefused) {
     t.nodes[2].splits += 1;
     const Decoded d = decode(with_table(*bytes_, c, t));
     EXPECT_EQ(d.status, pmz::Status::corrupt);
+  }
+}
+
+// A reader in file order shows every split whose chunk arrived: the bytes that arrived but do
+// not show yet (the SPLT and ATTR chunks not complete) stay within the larger of 2 KB and 3% of
+// the bytes so far, and the first splits show after a few hundred bytes.
+TEST(StreamingLag, ChunksStayWithinTheLagBound) {
+  for (const bool nodes : {false, true}) {
+    const IndexedMesh mesh = bumpy_sphere(6);
+    pmz::CollapseSequence seq;
+    if (nodes) {
+      seq = clustered(mesh, 400);
+    } else {
+      std::string error;
+      ASSERT_TRUE(pmz::simplify(mesh, pmz::SimplifyOptions{}, seq, error)) << error;
+    }
+    const std::vector<uint8_t> bytes = write(seq);
+    size_t at = 8, shown = 0, first = 0, chunks = 0;
+    while (at < bytes.size()) {
+      pmz::ChunkFrame f;
+      ASSERT_EQ(pmz::parse_chunk_frame(bytes.data() + at, bytes.size() - at, f),
+                pmz::FrameStatus::ok);
+      const size_t end = at + f.header_size + size_t(f.payload_size);
+      // A SPLT chunk shows with its ATTR chunk (none here); HEAD, BASE and NODE carry no split.
+      if (f.type == pmz::kChunkSplits) {
+        const size_t lag = end - 1 - std::max(shown, at);
+        EXPECT_LE(double(lag), std::max(2048.0, 0.03 * double(end - 1))) << "chunk at " << at;
+        if (!first) first = end;
+        shown = end;
+        ++chunks;
+      } else if (f.type != pmz::kChunkEnd) {
+        shown = end;  // (nothing in it waits to show)
+      }
+      at = end;
+    }
+    EXPECT_LE(first, 600u) << nodes;
+    EXPECT_GT(chunks, 10u) << nodes;
+    const Decoded d = decode(bytes);
+    EXPECT_EQ(d.status, pmz::Status::ok) << d.message;
+    EXPECT_EQ(d.splits, seq.collapses.size());
   }
 }
 

@@ -88,16 +88,27 @@ struct GroupCode {
 inline constexpr uint32_t scan_at_group_start() { return kChoiceLag + 1; }
 inline constexpr uint32_t scan_after_split(uint32_t j) { return j + 2 + kChoiceLag; }
 
+// A group that a chunk's end cuts (spec/format.md section 8): it continues in the next chunk.
+// size: the group's split count (0: no group is cut); done: its splits in the chunks before the
+// next; found (writer): its vertices whose choice bits the chunks before hold.
+struct OpenGroup {
+  uint32_t size = 0, done = 0, found = 0;
+};
+
 // Appends the SPLT payload for the given groups (sizes sum to count) and choice bits (the
 // concatenation of choice_bits() of the groups), every symbol in the order the decoder reads it;
 // models: the file's models (updated). stream_bytes[k] receives the coded size of stream k
 // (optional); symbol_bits[kind] (optional, SymbolKind) has the code length of the chunk's
 // symbols of each kind added (RangeEncoder::position differences; the writer's accounting,
-// pmz-encode --symbol-stats).
+// pmz-encode --symbol-stats). open (optional): in, the group the chunk before cut (its splits
+// first, its remaining choice bits first in `choice`); out, the group this chunk cuts (the
+// last of `groups` when count ends inside it). choice_used (optional): the choice bits coded
+// (the rest belong to the group cut).
 void encode_split_chunk(const std::vector<GroupCode>& groups, const std::vector<uint32_t>& choice,
                         const SplitSymbols* splits, size_t count, SplitModels& models,
                         std::vector<uint8_t>& payload, uint64_t* stream_bytes = nullptr,
-                        double* symbol_bits = nullptr);
+                        double* symbol_bits = nullptr, OpenGroup* open = nullptr,
+                        size_t* choice_used = nullptr);
 
 // Decoder side of one SPLT chunk. open() copies the payload, decodes the groups (sizes summing
 // to the split count, at most max_splits) and validates them. models (the file's, see
@@ -109,8 +120,15 @@ void encode_split_chunk(const std::vector<GroupCode>& groups, const std::vector<
 class SplitChunkReader {
  public:
   // Once per chunk: cold (optimized for size; the decoder library has a size budget).
+  // carried: the group the chunk before cut (its open_group()); max_splits also bounds the
+  // splits of a group this chunk cuts.
   [[gnu::cold]] bool open(const uint8_t* p, size_t size, uint64_t max_splits, SplitModels& models,
-                          std::string& error);
+                          std::string& error, const OpenGroup& carried = {});
+  // The group this chunk cuts (size 0: none), for the next chunk's open().
+  OpenGroup open_group() const;
+  // Whether the chunk's first splits continue a group the chunk before cut (its scan goes on,
+  // from this chunk's stream once the chunk before is done: no begin_group() for it).
+  bool continues() const { return carried_; }
   // The vertex choice, group by group. group_end(): the chunk's splits up to the end of the
   // group begun last (0 before the first). begin_group() starts the next group (after every
   // split of the one before was applied; choice.start_group() is called), limit the vertex
@@ -146,7 +164,10 @@ class SplitChunkReader {
   std::vector<GroupCode> groups_;
   size_t next_group_ = 0, largest_ = 0;
   uint64_t group_end_ = 0;
-  uint32_t group_size_ = 0;  // of the group begun last
+  uint32_t group_size_ = 0;  // of the group begun last (or continued)
+  bool carried_ = false;
+  uint64_t carry_ = 0;               // the carried group's splits in this chunk and after
+  uint32_t group_size_carried_ = 0;  // its size
   static uint32_t vertex_count(
       const ProgressiveMesh& mesh);                   // (ProgressiveMesh is incomplete here)
   std::unique_ptr<RangeDecoder> conn_dec_, geo_dec_;  // connectivity and geometry streams
