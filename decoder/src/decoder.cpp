@@ -241,6 +241,9 @@ struct Decoder::Impl {
   PMZ_COLD Status install_base(ProgressiveMesh&& m, std::vector<int32_t>&& coords);
   bool apply();
   PMZ_COLD bool refuse(Status s, const std::string& what);
+  PMZ_COLD bool refuse_split(const char* what) {  // corrupt at split `applied`
+    return refuse(Status::corrupt, "split " + PMZ_DECIMAL(level.applied) + " " + what);
+  }
   void undo();
   // Up to max_splits splits, stopping once the mesh has face_target faces / before it would
   // have fewer than face_floor.
@@ -765,9 +768,7 @@ bool Decoder::Impl::apply() {
       nodes.cells) {  // v's ring within the node's cell (spec/format.md section 15.4)
     bool inside = nodes.in_cell(record.coords.data(), s.v);
     for (uint32_t w : level.mesh.ring()) inside = inside && nodes.in_cell(record.coords.data(), w);
-    if (!inside)
-      return refuse(Status::corrupt,
-                    "split " + PMZ_DECIMAL(level.applied) + " reaches outside its node's cell");
+    if (!inside) return refuse_split("reaches outside its node's cell");
   }
   {  // first application: the wedge symbols, with contexts from v's ring
     const uint32_t k = uint32_t(level.mesh.ring().size());
@@ -836,8 +837,7 @@ bool Decoder::Impl::apply() {
     position_from_residuals(pred, residual, c);
     if (nodes.present && !nodes.box.contains(c)) {
       level.mesh.undo_split(s.v, has_l, has_r);
-      return refuse(Status::corrupt,
-                    "split " + PMZ_DECIMAL(level.applied) + ": u outside its node's cell");
+      return refuse_split("has u outside its node's cell");
     }
     frontier.grow_box(c);
     for (int k = 0; k < 3; ++k) {
