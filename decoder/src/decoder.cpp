@@ -210,7 +210,7 @@ struct Decoder::Impl {
     std::unique_ptr<SplitModels> first_models;
     std::unique_ptr<AttributeModels> first_attribute_models;
     size_t applying = 0;  // nodes whose first application started
-    uint64_t start_faces = 0;
+    uint64_t start_faces = 0, start_wedges = 0;
     CellBins bins;
     int64_t bins_level = -1;
     bool cells = false;  // the node being applied has a cell (its level a grid): its box
@@ -222,6 +222,12 @@ struct Decoder::Impl {
   PMZ_COLD Status node_chunk(const uint8_t* p, size_t n);
   PMZ_COLD Status node_arrived(uint64_t bytes, bool attributes_done);
   PMZ_COLD bool start_node();
+  // The faces and wedges node k (the one applied last) added are its table entry's.
+  bool node_counts_match(size_t k) const {
+    const NodeEntry& e = nodes.table.nodes[k];
+    return level.mesh.face_count() - nodes.start_faces == e.faces &&
+           (!attrs || attrs->state.wedge_count - nodes.start_wedges == e.wedges);
+  }
 
   // Error paths and the once-per-file HEAD are cold: kept small, out of the hot code's way
   // (the stripped library has a 200 KB budget).
@@ -640,7 +646,7 @@ Status Decoder::Impl::node_chunk(const uint8_t* p, size_t n) {
   if (stage != Stage::splits || nodes.present || attr_awaited)
     return fail(Status::corrupt, "NODE chunk out of place");
   std::string err;
-  if (!read_node_table(p, n, info.total_splits, n / 16 + 1, nodes.table, err))
+  if (!read_node_table(p, n, info.total_splits, n / 16 + 1, attrs != nullptr, nodes.table, err))
     return fail(Status::corrupt, err);
   // The chunks before it are the first node's, all of them (spec/format.md section 15.1).
   const NodeEntry& first = nodes.table.nodes[0];
@@ -655,6 +661,7 @@ Status Decoder::Impl::node_chunk(const uint8_t* p, size_t n) {
   nodes.arrived_bytes = 0;
   nodes.applying = 1;  // the first node decodes as a stream without nodes: nothing to start
   nodes.start_faces = info.base_faces;
+  nodes.start_wedges = attrs ? attrs->state.head.base_wedges : 0;
   uint64_t at = 0;
   for (const NodeEntry& e : nodes.table.nodes) {
     nodes.first_split.push_back(at);
@@ -691,9 +698,9 @@ Status Decoder::Impl::node_arrived(uint64_t bytes, bool attributes_done) {
 bool Decoder::Impl::start_node() {
   const size_t k = nodes.applying;
   if (k > 0) {
-    if (level.mesh.face_count() - nodes.start_faces != nodes.table.nodes[k - 1].faces)
-      return refuse(Status::corrupt,
-                    "node " + PMZ_DECIMAL(k - 1) + " added other faces than its table entry");
+    if (!node_counts_match(k - 1))
+      return refuse(Status::corrupt, "node " + PMZ_DECIMAL(k - 1) +
+                                         " added other faces or wedges than its table entry");
     if (k == 1) {
       nodes.first_models = std::move(nodes.models[0]);
       if (attrs) nodes.first_attribute_models = std::make_unique<AttributeModels>(*attrs->models);
@@ -704,6 +711,7 @@ bool Decoder::Impl::start_node() {
   }
   const NodeEntry& e = nodes.table.nodes[k];
   nodes.start_faces = level.mesh.face_count();
+  nodes.start_wedges = attrs ? attrs->state.wedge_count : 0;
   nodes.cells = nodes.table.levels[e.level].side > 0;
   nodes.box = CellBox(nodes.table.levels[e.level], e.cell);
   if (!nodes.cells) {
@@ -875,8 +883,8 @@ bool Decoder::Impl::apply() {
   // The last node's faces (the others' are checked as the next node starts). The split stands:
   // the mesh is valid, the stream is not.
   if (nodes.present && frontier.decoded == info.total_splits &&
-      level.mesh.face_count() - nodes.start_faces != nodes.table.nodes.back().faces) {
-    fail(Status::corrupt, "the last node added other faces than its table entry");
+      !node_counts_match(nodes.table.nodes.size() - 1)) {
+    fail(Status::corrupt, "the last node added other faces or wedges than its table entry");
     return false;
   }
   return true;

@@ -308,6 +308,7 @@ class SplitCoder {
   // With a node table: per node, its bytes in candidate k's split bytes and the faces it adds.
   uint64_t node_bytes(size_t k, size_t node) const { return node_bytes_[k][node]; }
   uint64_t node_faces(size_t node) const { return node_faces_[node]; }
+  uint64_t node_wedges(size_t node) const { return node_wedges_[node]; }
 
   // The candidate with the fewest split bytes (the first of equals).
   size_t best() const {
@@ -350,6 +351,9 @@ class SplitCoder {
     }
     node_faces_.push_back(pm_.face_count() - node_start_faces_);
     node_start_faces_ = pm_.face_count();
+    const uint32_t wedges = attrs_ ? attrs_->wedge_count() : 0;
+    node_wedges_.push_back(wedges - node_start_wedges_);
+    node_start_wedges_ = wedges;
   }
   void start_node() {
     flush();
@@ -367,6 +371,7 @@ class SplitCoder {
     }
     if (attrs_ && node_ > 0) attrs_->restart_models(first_attribute_models_);
     node_start_faces_ = pm_.face_count();
+    node_start_wedges_ = attrs_ ? attrs_->wedge_count() : 0;
     const NodeEntry& n = nodes_->nodes[node_];
     whole_ = nodes_->levels[n.level].side == 0;
     box_ = CellBox(nodes_->levels[n.level], n.cell);
@@ -513,8 +518,8 @@ class SplitCoder {
   CellBox box_;
   uint64_t node_start_bytes_[kMaxCandidates] = {};
   std::vector<uint64_t> node_bytes_[kMaxCandidates];
-  uint64_t node_start_faces_ = 0;
-  std::vector<uint64_t> node_faces_;
+  uint64_t node_start_faces_ = 0, node_start_wedges_ = 0;
+  std::vector<uint64_t> node_faces_, node_wedges_;
   std::unique_ptr<SplitModels> first_models_[kMaxCandidates];
   AttributeModels first_attribute_models_;
 };
@@ -633,6 +638,7 @@ bool in_nodes(const CollapseSequence& seq, const WriteOptions& opt,
   // node table (spec/format.md section 15.1 wants the first node on the whole mesh).
   if (plan.nodes.size() < 2 || seq.levels[plan.nodes[0].level].grid.side != 0) return true;
   nodes = std::make_unique<NodeTable>(node_table_of(seq, plan));
+  nodes->attributes = !seq.mesh.attributes.empty();
   by_node = node_ordered(seq, plan);
   for (const NodeEntry& n : nodes->nodes) node_splits.push_back(n.splits);
   return true;
@@ -668,6 +674,7 @@ bool write_pmz(const CollapseSequence& seq_in, const WriteOptions& opt, std::vec
     for (size_t k = 0; k < nodes->nodes.size(); ++k) {
       nodes->nodes[k].bytes = splits.node_bytes(best, k);
       nodes->nodes[k].faces = splits.node_faces(k);
+      nodes->nodes[k].wedges = splits.node_wedges(k);
     }
   h.curvature = kCurvatureCandidates[best].curvature;
   h.fine_curvature = kCurvatureCandidates[best].fine;

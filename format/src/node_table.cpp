@@ -50,6 +50,7 @@ void write_node_table(std::vector<uint8_t>& out, const NodeTable& t) {
       for (int a = 0; a < 3; ++a) put_varint(out, zigzag64(n.cell[a]));
     put_varint(out, n.splits);
     put_varint(out, n.faces);
+    if (t.attributes) put_varint(out, n.wedges);
     put_varint(out, n.bytes);
     for (int a = 0; a < 3; ++a) put_f32le(out, n.center[a]);
     put_f32le(out, n.radius);
@@ -58,9 +59,10 @@ void write_node_table(std::vector<uint8_t>& out, const NodeTable& t) {
 }
 
 bool read_node_table(const uint8_t* p, size_t size, uint64_t total_splits, uint64_t max_nodes,
-                     NodeTable& t, std::string& error) {
+                     bool attributes, NodeTable& t, std::string& error) {
   ByteReader r(p, size);
   t = {};
+  t.attributes = attributes;
   const uint64_t level_count = r.varint();
   if (!r.ok || level_count == 0 || level_count > kMaxNodeLevels)
     return error = "NODE: level count not in 1..32", false;
@@ -100,6 +102,7 @@ bool read_node_table(const uint8_t* p, size_t size, uint64_t total_splits, uint6
       }
     n.splits = r.varint();
     n.faces = r.varint();
+    if (attributes) n.wedges = r.varint();
     n.bytes = r.varint();
     for (int a = 0; a < 3; ++a) n.center[a] = r.f32le();
     n.radius = r.f32le();

@@ -16,6 +16,7 @@
 #include "pmz/node_table.hpp"
 #include "pmz/simplify.hpp"
 #include "pmz/writer.hpp"
+#include "seamed_grid.hpp"
 #include "simplify_test_meshes.hpp"
 
 namespace {
@@ -108,7 +109,7 @@ NodeChunk find_node_chunk(const std::vector<uint8_t>& bytes, uint64_t total_spli
       out.at = at;
       out.size = size;
       EXPECT_TRUE(pmz::read_node_table(bytes.data() + at + f.header_size, size_t(f.payload_size),
-                                       total_splits, 1u << 20, out.table, error))
+                                       total_splits, 1u << 20, false, out.table, error))
           << error;
       return out;
     }
@@ -251,6 +252,50 @@ TEST_F(NodeStream, ATableThatDisagreesWithTheNodesIsRefused) {
   }
 }
 
+// With attributes every node states the wedges it adds, and the decoder holds it to them.
+TEST(NodeStreamAttributes, WedgesPerNodeAreChecked) {
+  const IndexedMesh mesh = pmz_test::seamed_grid(60, 23);
+  const pmz::CollapseSequence seq = clustered(mesh, 150);
+  const std::vector<uint8_t> bytes = write(seq);
+  const Decoded whole = decode(bytes);
+  ASSERT_EQ(whole.status, pmz::Status::ok) << whole.message;
+  EXPECT_GT(whole.nodes, 4u);
+  EXPECT_EQ(whole.splits, seq.collapses.size());
+  // The table, read with the attribute fields: the wedges it states add up to the full count.
+  NodeChunk c;
+  size_t at = 8;
+  while (at < bytes.size() && !c.size) {
+    pmz::ChunkFrame f;
+    ASSERT_EQ(pmz::parse_chunk_frame(bytes.data() + at, bytes.size() - at, f),
+              pmz::FrameStatus::ok);
+    if (f.type == pmz::kChunkNodes) {
+      std::string error;
+      ASSERT_TRUE(pmz::read_node_table(bytes.data() + at + f.header_size, size_t(f.payload_size),
+                                       seq.collapses.size(), 1u << 20, true, c.table, error))
+          << error;
+      c.at = at;
+      c.size = f.header_size + size_t(f.payload_size);
+    }
+    at += f.header_size + size_t(f.payload_size);
+  }
+  ASSERT_TRUE(c.size);
+  pmz::Decoder d;
+  ASSERT_EQ(d.feed(bytes.data(), bytes.size()), pmz::Status::ok);
+  const uint32_t base_wedges = [&] {
+    d.refine(0);
+    return d.wedge_count();
+  }();
+  uint64_t wedges = 0;
+  for (const pmz::NodeEntry& n : c.table.nodes) wedges += n.wedges;
+  d.refine();
+  EXPECT_EQ(base_wedges + wedges, d.wedge_count());
+  pmz::NodeTable t = c.table;
+  t.nodes[1].wedges += 1;
+  const Decoded bad = decode(with_table(bytes, c, t));
+  EXPECT_EQ(bad.status, pmz::Status::corrupt);
+  EXPECT_NE(bad.message.find("faces or wedges"), std::string::npos) << bad.message;
+}
+
 // A reader in file order shows every split whose chunk arrived: the bytes that arrived but do
 // not show yet (the SPLT and ATTR chunks not complete) stay within the larger of 2 KB and 3% of
 // the bytes so far, and the first splits show after a few hundred bytes.
@@ -311,7 +356,8 @@ TEST(NodeTable, ReadBackAndRefusedWhenMalformed) {
   pmz::write_node_table(payload, t);
   pmz::NodeTable back;
   std::string error;
-  ASSERT_TRUE(pmz::read_node_table(payload.data(), payload.size(), 14, 100, back, error)) << error;
+  ASSERT_TRUE(pmz::read_node_table(payload.data(), payload.size(), 14, 100, false, back, error))
+      << error;
   ASSERT_EQ(back.nodes.size(), 4u);
   EXPECT_EQ(back.levels[1].origin[0], -1);
   EXPECT_EQ(back.nodes[2].cell[0], -1);
@@ -319,13 +365,13 @@ TEST(NodeTable, ReadBackAndRefusedWhenMalformed) {
   EXPECT_EQ(pmz::NodeIndex(back).parents(3), (std::vector<uint32_t>{0, 1, 2}));
   // Every prefix is refused, and so is a table whose counts do not add up to HEAD's.
   for (size_t n = 0; n < payload.size(); ++n)
-    EXPECT_FALSE(pmz::read_node_table(payload.data(), n, 14, 100, back, error)) << n;
-  EXPECT_FALSE(pmz::read_node_table(payload.data(), payload.size(), 15, 100, back, error));
-  EXPECT_FALSE(pmz::read_node_table(payload.data(), payload.size(), 13, 100, back, error));
+    EXPECT_FALSE(pmz::read_node_table(payload.data(), n, 14, 100, false, back, error)) << n;
+  EXPECT_FALSE(pmz::read_node_table(payload.data(), payload.size(), 15, 100, false, back, error));
+  EXPECT_FALSE(pmz::read_node_table(payload.data(), payload.size(), 13, 100, false, back, error));
   auto refused = [&](pmz::NodeTable bad, const std::string& why) {
     std::vector<uint8_t> p;
     pmz::write_node_table(p, bad);
-    EXPECT_FALSE(pmz::read_node_table(p.data(), p.size(), 14, 100, back, error)) << why;
+    EXPECT_FALSE(pmz::read_node_table(p.data(), p.size(), 14, 100, false, back, error)) << why;
     EXPECT_NE(error.find(why), std::string::npos) << error;
   };
   pmz::NodeTable bad = t;

@@ -52,6 +52,7 @@ struct NodeEntry {
   int64_t cell[3] = {0, 0, 0};  // 0 on a level whose side is 0
   uint64_t splits = 0;          // vertex splits (>= 1)
   uint64_t faces = 0;           // faces its splits add
+  uint64_t wedges = 0;          // attribute wedges its splits add (streams with attributes)
   uint64_t bytes = 0;           // its chunks (SPLT, and ATTR with attributes), headers included
   float center[3] = {0, 0, 0};  // a sphere holding the vertices its splits move or add
   float radius = 0;
@@ -60,6 +61,7 @@ struct NodeEntry {
 };
 
 struct NodeTable {
+  bool attributes = false;       // the stream's (HEAD flag bit 0): nodes state their wedges
   std::vector<NodeGrid> levels;  // finest first; only the last may have side 0
   std::vector<NodeEntry> nodes;  // in file order
 };
@@ -71,7 +73,7 @@ void write_node_table(std::vector<uint8_t>& out, const NodeTable& t);
 // a one-line reason for a malformed or inconsistent table (a node before one of its parents, a cell
 // twice, split counts that do not sum to total_splits, ...). max_nodes bounds the node count.
 bool read_node_table(const uint8_t* p, size_t size, uint64_t total_splits, uint64_t max_nodes,
-                     NodeTable& t, std::string& error);
+                     bool attributes, NodeTable& t, std::string& error);
 
 // The nodes of coarser levels whose cells overlap node k's (its parents, spec/format.md
 // section 15.3), in ascending order; `index` as made by NodeIndex.
