@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: MIT
 // The coding layer under the decoder: ByteReader (fixed-width reads, LEB128 varints, byte
 // spans), zigzag, the stream reader (raw or zstd), the quantizer and float ordering, the
-// corner-table core (build, split, exact undo), the range coder, the SPLT payload codec and the
-// BASE codec.
+// corner-table core (build, split, exact undo), the range coder, the SPLT payload codec, the
+// BASE codec and the node table.
 // data[0] picks the part; the rest is its input.
 
 #include <algorithm>
@@ -17,6 +17,7 @@
 #include "pmz/coding.hpp"
 #include "pmz/fan_wedge.hpp"
 #include "pmz/format.hpp"
+#include "pmz/node_table.hpp"
 #include "pmz/progressive_mesh.hpp"
 #include "pmz/range_coder.hpp"
 #include "pmz/split_chunk.hpp"
@@ -411,13 +412,63 @@ void fuzz_base(const uint8_t* data, size_t size) {
   PMZ_FUZZ_CHECK(want == got);
 }
 
+// A NODE payload (spec/format.md section 15.1) after a u32 split total and a flags byte (bit 0:
+// attributes): a table accepted is consistent (split counts sum to the total, every node after
+// its parents), writes back to bytes that read as the same table, and bins vertices (coordinates
+// from the payload's bytes) into its cells without going out of bounds.
+void fuzz_node_table(const uint8_t* data, size_t size) {
+  if (size < 5) return;
+  uint32_t total;
+  std::memcpy(&total, data, 4);
+  const bool attributes = data[4] & 1;
+  pmz::NodeTable t;
+  std::string error;
+  if (!pmz::read_node_table(data + 5, size - 5, total, 4096, attributes, t, error)) {
+    PMZ_FUZZ_CHECK(!error.empty());
+    return;
+  }
+  uint64_t splits = 0;
+  const pmz::NodeIndex index(t);
+  for (uint32_t k = 0; k < t.nodes.size(); ++k) {
+    splits += t.nodes[k].splits;
+    for (uint32_t p : index.parents(k)) PMZ_FUZZ_CHECK(p < k);
+  }
+  PMZ_FUZZ_CHECK(splits == total);
+  std::vector<uint8_t> again;
+  pmz::write_node_table(again, t);
+  pmz::NodeTable back;
+  PMZ_FUZZ_CHECK(
+      pmz::read_node_table(again.data(), again.size(), total, 4096, attributes, back, error));
+  PMZ_FUZZ_CHECK(back.nodes.size() == t.nodes.size() && back.levels.size() == t.levels.size());
+  for (size_t k = 0; k < t.nodes.size(); ++k)
+    PMZ_FUZZ_CHECK(back.nodes[k].splits == t.nodes[k].splits &&
+                   back.nodes[k].cell[0] == t.nodes[k].cell[0] &&
+                   back.nodes[k].bytes == t.nodes[k].bytes);
+  std::vector<int32_t> coords((size - 5) / 4 * 3 / 3 * 3);
+  for (size_t i = 0; i + 4 <= size - 5 && i / 4 < coords.size(); i += 4)
+    std::memcpy(&coords[i / 4], data + 5 + i, 4);
+  const uint32_t count = uint32_t(coords.size() / 3);
+  pmz::CellBins bins;
+  for (uint32_t level = 0; level < t.levels.size(); ++level) {
+    bins.build(t, level, coords.data(), count);
+    for (uint32_t k = 0; k < t.nodes.size(); ++k) {
+      if (t.nodes[k].level != level) continue;
+      const pmz::CellBox box(t.levels[level], t.nodes[k].cell);
+      for (uint32_t v : bins.take(k)) {
+        PMZ_FUZZ_CHECK(v < count);
+        PMZ_FUZZ_CHECK(box.contains(&coords[size_t(v) * 3]));
+      }
+    }
+  }
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size < 1) return 0;
   const uint8_t* p = data + 1;
   const size_t n = size - 1;
-  switch (data[0] % 8) {
+  switch (data[0] % 9) {
     case 0:
       fuzz_reader(p, n);
       break;
@@ -441,6 +492,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       break;
     case 7:
       fuzz_base(p, n);
+      break;
+    case 8:
+      fuzz_node_table(p, n);
       break;
   }
   return 0;

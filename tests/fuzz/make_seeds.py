@@ -107,10 +107,12 @@ def main():
             'sphere': sphere(6, 8, 0.2),
             'grid': grid(5),
             'two': merge(sphere(3, 5), shifted),
+            'nodes': sphere(24, 32, 0.2),
         }
         settings = {'q14': ['--position-bits', '14'], 'lossless': ['--position-bits', '0'],
                     'q4': ['--position-bits', '4'],
-                    'speed': ['--level', '1'], 'speed-lossless': ['--level', '1', '--position-bits', '0']}
+                    'speed': ['--level', '1'], 'speed-lossless': ['--level', '1', '--position-bits', '0'],
+                    'cells': ['--cluster-vertices', '64']}
         with tempfile.TemporaryDirectory() as tmp:
             for name, mesh in meshes.items():
                 off = os.path.join(tmp, name + '.off')
@@ -150,7 +152,10 @@ def main():
             size, j = varint(data, at + 1)
             payload = data[j + 4:j + 4 + size]
             if kind == 1:  # HEAD: version (2 bytes), varint flags, 3 bytes, varint base counts
-                _, k = varint(payload, 2)
+                node_flags, k = varint(payload, 2)
+                _, t = varint(payload, k + 4)  # (after position bits, curvatures, level)
+                _, t = varint(payload, t)
+                node_total, _ = varint(payload, t)
                 k += 3
                 _, e = varint(payload, k)
                 _, e = varint(payload, e)
@@ -159,6 +164,9 @@ def main():
                 put('coding', '%s-BASE-%d' % (name, at), b'\x07' + counts + payload)
             elif kind == 3:
                 put('coding', '%s-SPLT-%d' % (name, at), b'\x06\xff\xfb\x00' + payload)
+            elif kind == 6:  # NODE: part 8, after HEAD's split total (u32) and flags byte
+                put('coding', '%s-NODE-%d' % (name, at),
+                    b'\x08' + struct.pack('<I', node_total) + bytes([node_flags & 1]) + payload)
             at = j + 4 + size
     # fuzz_coding, other parts: a few hand-made inputs.
     put('coding', 'reader', b'\x00\x10' + bytes(range(16)) + b'\x81\x80\x01\xff\xff\xff\xff\x0f' * 4)
