@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
 """A second .pmz decoder, in Python, written by following the text of spec/format.md sections 2
-to 11 (container, HEAD, BASE, SPLT group tables, the choice scan, wedge symbols and scores, the
-split, the position prediction, the per-vertex state, range coding), checked against the
+to 11 (container, HEAD, BASE, SPLT group tables and groups continued across chunks, the choice
+scan, wedge symbols and scores, the split, the position prediction, the per-vertex state, range
+coding), 14 (attributes) and the draft section 15 (nodes), checked against the
 conformance vectors: for every .expected, the stream status after feeding the whole file, the
 status and split count after applying every split, and every level's vertex count, face count
 and SHA-256 must be the expected ones. Slow (pure Python) but small vectors take seconds.
@@ -754,7 +755,7 @@ class BaseMesh:  # the base mesh's faces and edges, for the base ATTR (14.4)
 
 class Chunk:
     """One SPLT chunk (spec/format.md section 8): its split count, its two range decoders, the
-    groups that start in it, its ATTR decoder (section 14.5) and its node (section 15)."""
+    groups that start in it, its ATTR decoder (14.5) and its node (15)."""
 
     def __init__(self, count, conn, geom, groups, node):
         self.count, self.conn, self.geom, self.groups, self.node = count, conn, geom, groups, node
@@ -853,13 +854,13 @@ def level0(data):
         return "truncated", None, None, [], None
     at, head, base, splits, done, first = 8, None, None, 0, False, True
     geometry, awaited = None, False  # with attributes: BASE awaiting its ATTR; SPLT awaiting its
-    group_models = [(UIntModel(), Model())]  # the stream's, then per node (sections 8, 15.4)
-    carry = 0  # the splits of the last group that the chunks so far did not hold (section 8)
-    table = None  # the NODE chunk's (section 15)
+    group_models = [(UIntModel(), Model())]  # the stream's, then per node (8; 15.4)
+    carry = 0  # the splits of the last group that the chunks so far did not hold (8)
+    table = None  # the NODE chunk's (15.1)
     node, node_splits, node_bytes = 0, 0, 0  # the node of the arriving chunks, what it has
     chunks = []
 
-    def arrived(size, attributes_done):  # section 15.2: a chunk of the node `node` arrived
+    def arrived(size, attributes_done):  # 15.2: a chunk of the node `node` arrived
         nonlocal node, node_splits, node_bytes
         node_bytes += size
         if table is None:
@@ -924,7 +925,7 @@ def level0(data):
                     raise Refused("corrupt")
                 awaited = head["attr"] is not None
                 count, q = varint(payload, 0)
-                if table is not None:  # section 15.2: the splits still missing are the node's
+                if table is not None:  # 15.2: the splits still missing are the node's
                     if node >= len(table["nodes"]):
                         raise Refused("corrupt")
                     missing = table["nodes"][node]["splits"] - node_splits
@@ -940,7 +941,7 @@ def level0(data):
                 if conn_size > len(payload) - q or count > 64 * len(payload):
                     raise Refused("corrupt")
                 # The group table (spec/format.md section 8): the groups that start here.
-                rc, total, groups = RangeDecoder(payload[q : q + conn_size]), min(carry, count), []
+                rc, total, groups = RangeDecoder(payload[q : q + conn_size]), carry, []
                 while total < count:
                     group = rc.uint(group_size) + 1
                     if group > missing - total:
@@ -1369,7 +1370,7 @@ class Splits:
                             st["vs"].append(w)
 
                 # The choice bits are read from the stream of the chunk that holds the split
-                # they follow (section 8: a group may continue in the next chunks).
+                # they follow (spec/format.md section 8: a group may continue in the next chunks).
                 scan_until(9, chunk_of[applied].conn)
                 for j in range(size):
                     if applied >= len(chunk_of):
