@@ -3,7 +3,7 @@
 """A second .pmz decoder, in Python, written by following the text of spec/format.md sections 2
 to 11 (container, HEAD, BASE, SPLT group tables and groups continued across chunks, the choice
 scan, wedge symbols and scores, the split, the position prediction, the per-vertex state, range
-coding), 14 (attributes) and the draft section 15 (nodes), checked against the
+coding), 14 (attributes) and 15 (nodes, draft), checked against the
 conformance vectors: for every .expected, the stream status after feeding the whole file, the
 status and split count after applying every split, and every level's vertex count, face count
 and SHA-256 must be the expected ones. Slow (pure Python) but small vectors take seconds.
