@@ -1,14 +1,16 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
 """A second .pmz decoder, in Python, written by following the text of spec/format.md sections 2
-to 11 (container, HEAD, BASE, SPLT group tables, the choice scan, wedge symbols and scores, the
-split, the position prediction, the per-vertex state, range coding), checked against the
+to 11 (container, HEAD, BASE, SPLT group tables and groups continued across chunks, the choice
+scan, wedge symbols and scores, the split, the position prediction, the per-vertex state, range
+coding), 14 (attributes) and 15 (nodes, draft), checked against the
 conformance vectors: for every .expected, the stream status after feeding the whole file, the
 status and split count after applying every split, and every level's vertex count, face count
 and SHA-256 must be the expected ones. Slow (pure Python) but small vectors take seconds.
 
     python3 tests/conformance/spec_decoder.py tests/conformance [MAX_SPLITS]
 """
+import copy
 import hashlib
 import math
 import struct
@@ -209,7 +211,7 @@ def read_head(p):  # spec/format.md section 4
         raise Refused("corrupt")
     if h["major"] != 12:
         raise Refused("bad_version")
-    if (h["flags"] & ~1 or h["position_bits"] > 30 or h["curvature"] > 8
+    if (h["flags"] & ~3 or h["position_bits"] > 30 or h["curvature"] > 8
             or h["fine_curvature"] > 8 or h["level"] > 1):
         raise Refused("corrupt")
     for a in range(3):
@@ -453,6 +455,10 @@ def octahedral(n, bits):  # 14.2's quantization of a direction
 class Attributes:
     """spec/format.md section 14: a-wedges per corner (aw), their vertices (wv) and values (val),
     materials."""
+
+    # The models and the state of the stream (Appendix A; 14.3 and 14.5) a node starts from.
+    MODELS = ("reference", "escape", "tex", "tex_fan", "normal", "normal_fan", "color", "material",
+              "material_escape", "simple", "last_simple", "normal_score")
 
     def __init__(self, a):
         self.a, self.aw, self.wv, self.val, self.mat, self.W = a, [], [], [], [], 0
@@ -747,17 +753,127 @@ class BaseMesh:  # the base mesh's faces and edges, for the base ATTR (14.4)
         self.E = {(self.F[h], self.F[nxt(h)]): h for h in range(len(self.F))}
 
 
+class Chunk:
+    """One SPLT chunk (spec/format.md section 8): its split count, its two range decoders, the
+    groups that start in it, its ATTR decoder (14.5) and its node (15)."""
+
+    def __init__(self, count, conn, geom, groups, node):
+        self.count, self.conn, self.geom, self.groups, self.node = count, conn, geom, groups, node
+        self.attr = None
+
+
+def zvarint(b, at):  # spec/format.md section 15.1: a zigzag-coded signed 64-bit value
+    v, at = varint(b, at)
+    return (v >> 1) ^ -(v & 1), at
+
+
+def cell_index(level, x, a):  # spec/format.md section 15.1
+    side, origin = level
+    return (x - origin[a]) // side
+
+
+def read_nodes(p, total_splits, attributes):
+    """The NODE chunk's table (spec/format.md section 15.1): levels [(side, origin)] and nodes
+    [{level, cell, splits, faces, wedges (with attributes), bytes}]."""
+    level_count, at = varint(p, 0)
+    if not 1 <= level_count <= 32:
+        raise Refused("corrupt")
+    levels = []
+    for l in range(level_count):
+        side, at = varint(p, at)
+        origin = []
+        for _ in range(3):
+            o, at = zvarint(p, at)
+            origin.append(o)
+        if side > 1 << 32 or any(abs(o) > 1 << 32 for o in origin):
+            raise Refused("corrupt")
+        if side == 0 and l != level_count - 1:
+            raise Refused("corrupt")
+        if l > 0 and side > 0 and side < levels[-1][0]:
+            raise Refused("corrupt")
+        levels.append((side, origin))
+    node_count, at = varint(p, at)
+    if not 1 <= node_count <= total_splits:
+        raise Refused("corrupt")
+    nodes, cells = [], {}
+    for _ in range(node_count):
+        n = {}
+        n["level"], at = varint(p, at)
+        if n["level"] >= level_count:
+            raise Refused("corrupt")
+        lv = levels[n["level"]]
+        cell = []
+        if lv[0] > 0:
+            for a in range(3):
+                x, at = zvarint(p, at)
+                if not cell_index(lv, -(1 << 31), a) <= x <= cell_index(lv, (1 << 31) - 1, a):
+                    raise Refused("corrupt")
+                cell.append(x)
+        n["cell"] = tuple(cell)
+        for name in ("splits", "faces", "wedges", "bytes") if attributes else \
+                ("splits", "faces", "bytes"):
+            n[name], at = varint(p, at)
+        if at + 20 > len(p):
+            raise Refused("corrupt")
+        floats = struct.unpack_from("<5f", p, at)
+        at += 20
+        if n["splits"] < 1 or n["faces"] > 2 * n["splits"] or n["bytes"] < 1:
+            raise Refused("corrupt")
+        if not all(math.isfinite(x) for x in floats) or floats[3] < 0 or floats[4] < 0:
+            raise Refused("corrupt")
+        if (n["level"], n["cell"]) in cells:
+            raise Refused("corrupt")
+        cells[(n["level"], n["cell"])] = len(nodes)
+        nodes.append(n)
+    if sum(n["splits"] for n in nodes) != total_splits:
+        raise Refused("corrupt")
+    for k, n in enumerate(nodes):  # 15.3: every parent before the node
+        side, origin = levels[n["level"]]
+        for m in range(n["level"] + 1, level_count):
+            if levels[m][0] == 0:
+                parents = [cells.get((m, ()))]
+            else:  # the cells of level m holding a coordinate of n's cell, per axis
+                spans = []
+                for a in range(3):
+                    lo = origin[a] + n["cell"][a] * side
+                    spans.append(range(cell_index(levels[m], lo, a),
+                                       cell_index(levels[m], lo + side - 1, a) + 1))
+                parents = [cells.get((m, (x, y, z))) for x in spans[0] for y in spans[1]
+                           for z in spans[2]]
+            if any(q is not None and q > k for q in parents):
+                raise Refused("corrupt")
+    return {"levels": levels, "nodes": nodes}
+
+
 def level0(data):
-    """(stream status, HEAD, level-0 mesh, SPLT chunks) for the whole input
-    (spec/format.md sections 3, 4, 7, 8); HEAD and the mesh are None when not decoded."""
+    """(stream status, HEAD, level-0 mesh, SPLT chunks, node table) for the whole input
+    (spec/format.md sections 3, 4, 7, 8, 15); HEAD and the mesh are None when not decoded, the
+    node table None without a NODE chunk."""
     if data[:8] != SIGNATURE[: len(data[:8])]:
-        return "bad_magic", None, None, []
+        return "bad_magic", None, None, [], None
     if len(data) < 8:
-        return "truncated", None, None, []
+        return "truncated", None, None, [], None
     at, head, base, splits, done, first = 8, None, None, 0, False, True
     geometry, awaited = None, False  # with attributes: BASE awaiting its ATTR; SPLT awaiting its
-    group_size, group_near = UIntModel(), Model()  # once per stream (spec/format.md section 8)
-    chunks = []  # per SPLT chunk: connectivity and geometry decoders, group table
+    group_models = [(UIntModel(), Model())]  # the stream's, then per node (8; 15.4)
+    carry = 0  # the splits of the last group that the chunks so far did not hold (8)
+    table = None  # the NODE chunk's (15.1)
+    node, node_splits, node_bytes = 0, 0, 0  # the node of the arriving chunks, what it has
+    chunks = []
+
+    def arrived(size, attributes_done):  # 15.2: a chunk of the node `node` arrived
+        nonlocal node, node_splits, node_bytes
+        node_bytes += size
+        if table is None:
+            return
+        n = table["nodes"][node]
+        if node_bytes > n["bytes"]:
+            raise Refused("corrupt")
+        if attributes_done and node_splits == n["splits"]:
+            if node_bytes != n["bytes"]:
+                raise Refused("corrupt")
+            node, node_splits, node_bytes = node + 1, 0, 0
+
     try:
         while at < len(data) and not done:
             if first and data[at : at + 4] == b"HEAD":
@@ -772,6 +888,7 @@ def level0(data):
                 raise Refused("bad_checksum")
             if first and typ != 1:
                 raise Refused("corrupt")
+            chunk_bytes = p + 4 + size - at
             if typ == 1:
                 if head is not None:
                     raise Refused("corrupt")
@@ -790,42 +907,70 @@ def level0(data):
                     attrs.base(BaseMesh(geometry), RangeDecoder(payload))
                     base = geometry + (attrs,)
                 elif awaited:
-                    chunks[-1] = chunks[-1][:3] + (RangeDecoder(payload),)
+                    chunks[-1].attr = RangeDecoder(payload)
                     awaited = False
+                    arrived(chunk_bytes, True)
                 else:
                     raise Refused("corrupt")
+            elif typ == 6 and head["flags"] & 2:  # spec/format.md section 15.1
+                if table is not None or awaited:
+                    raise Refused("corrupt")
+                t = read_nodes(payload, head["total_splits"], bool(head["flags"] & 1))
+                n0 = t["nodes"][0]
+                if (n0["splits"] != splits or n0["bytes"] != node_bytes or carry
+                        or len(t["nodes"]) < 2 or t["levels"][n0["level"]][0] > 0):
+                    raise Refused("corrupt")
+                table, node, node_splits, node_bytes = t, 1, 0, 0
             elif typ == 3:
                 if base is None or awaited:
                     raise Refused("corrupt")
                 awaited = head["attr"] is not None
                 count, q = varint(payload, 0)
-                if count == 0 or count > head["total_splits"] - splits:
+                if table is not None:  # 15.2: the splits still missing are the node's
+                    if node >= len(table["nodes"]):
+                        raise Refused("corrupt")
+                    missing = table["nodes"][node]["splits"] - node_splits
+                    while len(group_models) <= node:
+                        group_models.append((UIntModel(), Model()))
+                    group_size, group_near = group_models[node]
+                else:
+                    missing = head["total_splits"] - splits
+                    group_size, group_near = group_models[0]
+                if count == 0 or count > missing:
                     raise Refused("corrupt")
                 conn_size, q = varint(payload, q)
                 if conn_size > len(payload) - q or count > 64 * len(payload):
                     raise Refused("corrupt")
-                # The group table (spec/format.md section 8), with the stream's two group models.
-                rc, total, groups = RangeDecoder(payload[q : q + conn_size]), 0, []
+                # The group table (spec/format.md section 8): the groups that start here.
+                rc, total, groups = RangeDecoder(payload[q : q + conn_size]), carry, []
                 while total < count:
                     group = rc.uint(group_size) + 1
-                    if group > count - total:
+                    if group > missing - total:
                         raise Refused("corrupt")
                     groups.append((group, rc.bit(group_near)))
                     total += group
                 if rc.past:
                     raise Refused("corrupt")
-                chunks.append((rc, RangeDecoder(payload[q + conn_size :]), groups, None))
+                carry = total - count
+                chunks.append(Chunk(count, rc, RangeDecoder(payload[q + conn_size :]), groups,
+                                    node))
                 splits += count
+                node_splits += count
+                arrived(chunk_bytes, not awaited)
             elif typ == 4:
-                if base is None or splits != head["total_splits"] or awaited:
+                if base is None or splits != head["total_splits"] or awaited or carry:
+                    raise Refused("corrupt")
+                if head["flags"] & 2 and table is None:
                     raise Refused("corrupt")
                 done = True
             first = False
             at = p + 4 + size
     except Refused as e:
-        return str(e), head, base, [ch for ch in chunks if head.get("attr") is None or ch[3]]
-    return ("ok" if done else "truncated"), head, base, [
-        ch for ch in chunks if head.get("attr") is None or ch[3]]
+        status = str(e)
+    else:
+        status = "ok" if done else "truncated"
+    attr = head is not None and head["attr"] is not None
+    return status, head, base, [ch for ch in chunks if not attr or ch.attr], table
 
 
 def bitlen(x):
@@ -846,8 +991,8 @@ class Splits:
     """spec/format.md section 9 on the mesh of spec/format.md section 6: vertices c, faces F,
     directed edges E."""
 
-    def __init__(self, head, base, chunks):
-        self.head = head
+    def __init__(self, head, base, chunks, nodes=None):
+        self.head, self.nodes = head, nodes
         self.c = [tuple(x) for x in base[0]]
         self.F = list(base[1])
         self.E = {(self.F[h], self.F[nxt(h)]): h for h in range(len(self.F))}
@@ -949,6 +1094,8 @@ class Splits:
         if fan is None or len(fan[0]) < 2:
             raise Refused("corrupt")
         ring, corners, closed = fan
+        if self.cell and not all(self.in_cell(self.c[x]) for x in [v] + ring):
+            raise Refused("corrupt")  # 15.4: confinement
         k, m = len(ring), len(corners)
         count = decode_small(conn, self.wedge_count[2 * min(k, 8) + closed])
         if count > (k - 2 if closed else k - 1):
@@ -1043,6 +1190,8 @@ class Splits:
             self.c.append(tuple(s32(pred0[a] + r[a]) for a in range(3)))
         else:
             self.position(v, cv, ring, R, k, pred0, geom)
+        if self.cell and not self.in_cell(self.c[u]):
+            raise Refused("corrupt")  # 15.4: confinement
         if self.attrs:  # 14.5
             nf = len(self.F) // 3
             new_faces = list(range(nf - (vl is not None) - (vr is not None), nf))
@@ -1136,50 +1285,118 @@ class Splits:
             self.SD[x] = add(add(self.SD[x], self.spoke(x, v), -1), self.spoke(x, u))
             self.SL[x] = (self.SL[x] - l1(self.spoke(x, v)) + l1(self.spoke(x, u))) % M32
 
+    SPLIT_MODELS = ("choice", "wedge_count", "rank_nonzero", "rank_minus_one", "residual", "mix")
+
+    def models(self):
+        """The split models and, with attributes, the attribute models and state that a node
+        after the first starts from (spec/format.md section 15.4)."""
+        own = {name: getattr(self, name) for name in self.SPLIT_MODELS}
+        if self.attrs:
+            own.update({"attr " + name: getattr(self.attrs, name) for name in Attributes.MODELS})
+        return copy.deepcopy(own)
+
+    def set_models(self, models):
+        for name, value in copy.deepcopy(models).items():
+            if name.startswith("attr "):
+                setattr(self.attrs, name[5:], value)
+            else:
+                setattr(self, name, value)
+
+    def start_node(self, k):
+        """spec/format.md section 15.4: the first application of node k's first split (k >= 1)."""
+        table = self.nodes
+        if not self.node_counts_match(k - 1):  # 15.2
+            raise Refused("corrupt")
+        if k == 1:
+            self.first_models = self.models()
+        self.set_models(self.first_models)
+        self.noted = []
+        self.node_faces, self.node_vertices = len(self.F) // 3, len(self.c)
+        self.node_wedges = self.attrs.W if self.attrs else 0
+        n = table["nodes"][k]
+        self.cell = None
+        if table["levels"][n["level"]][0] > 0:
+            self.cell = (table["levels"][n["level"]], n["cell"])
+            self.cell_list = [x for x in range(len(self.c)) if self.in_cell(self.c[x])]
+
+    def node_counts_match(self, k):
+        """spec/format.md section 15.2: node k added the faces (and a-wedges) its entry says."""
+        n = self.nodes["nodes"][k]
+        return len(self.F) // 3 - self.node_faces == n["faces"] and \
+            (not self.attrs or self.attrs.W - self.node_wedges == n["wedges"])
+
+    def in_cell(self, c):
+        level, cell = self.cell
+        return all(cell_index(level, c[a], a) == cell[a] for a in range(3))
+
     def run(self, levels, hashes):
-        """Applies every split (9.2, 9.3); hashes[L] for each L in levels; returns (status,
-        splits applied)."""
+        """Applies every split (9.2, 9.3; 8 for groups continued across chunks; 15 for nodes);
+        hashes[L] for each L in levels; returns (status, splits applied)."""
         applied = 0
         if 0 in levels:
             hashes[0] = self.hash()
+        chunk_of = [ch for ch in self.chunks for _ in range(ch.count)]  # per available split
+        groups = [g for ch in self.chunks for g in ch.groups]
+        node_first, at = [], 0  # per node, its first split (15.2)
+        for n in self.nodes["nodes"] if self.nodes else []:
+            node_first.append(at)
+            at += n["splits"]
+        self.cell, self.node_faces = None, len(self.F) // 3
+        self.node_wedges = self.attrs.W if self.attrs else 0
         try:
-            for conn, geom, groups, attr_rc in self.chunks:
-                for size, near in groups:
-                    previous, self.noted = self.noted, []
-                    nv = len(self.c)
-                    cand = sorted(set(previous)) if near else list(range(nv))
-                    st = {"i": 0, "vs": [], "excluded": set(), "stop": False}
+            for size, near in groups:
+                if applied >= len(chunk_of):
+                    break
+                if applied in node_first[1:]:
+                    self.start_node(node_first.index(applied))
+                previous, self.noted = self.noted, []
+                nv = len(self.c)
+                if near:
+                    cand = sorted(set(previous))
+                elif self.cell:  # 15.4: the node's cell list
+                    cand = self.cell_list + list(range(self.node_vertices, nv))
+                else:
+                    cand = list(range(nv))
+                st = {"i": 0, "vs": [], "excluded": set(), "stop": False}
 
-                    def scan_until(target):
-                        while len(st["vs"]) < min(target, size) and not st["stop"]:
-                            if st["i"] == len(cand):
-                                st["stop"] = True
-                                return
-                            w = cand[st["i"]]
-                            rem = len(cand) - st["i"]
-                            st["i"] += 1
-                            if w in st["excluded"]:
-                                continue
-                            gap = min(bitlen(rem // (size - len(st["vs"]))), 20)
-                            cx = ((gap * 2 + near) * 9 + min(self.degree[w], 8)) * 3 + self.klass(w)
-                            b = conn.bit(self.choice[cx])
-                            if conn.past:
-                                st["stop"] = True
-                                return
-                            if b:
-                                st["vs"].append(w)
+                def scan_until(target, conn):
+                    while len(st["vs"]) < min(target, size) and not st["stop"]:
+                        if st["i"] == len(cand):
+                            st["stop"] = True
+                            return
+                        w = cand[st["i"]]
+                        rem = len(cand) - st["i"]
+                        st["i"] += 1
+                        if w in st["excluded"]:
+                            continue
+                        gap = min(bitlen(rem // (size - len(st["vs"]))), 20)
+                        cx = ((gap * 2 + near) * 9 + min(self.degree[w], 8)) * 3 + self.klass(w)
+                        b = conn.bit(self.choice[cx])
+                        if conn.past:
+                            st["stop"] = True
+                            return
+                        if b:
+                            st["vs"].append(w)
 
-                    scan_until(9)
-                    for j in range(size):
-                        if j >= len(st["vs"]):
-                            raise Refused("corrupt")
-                        v = st["vs"][j]
-                        ring = self.apply(v, conn, geom, attr_rc)
-                        st["excluded"].update([v] + ring)
-                        applied += 1
-                        if applied in levels:
-                            hashes[applied] = self.hash()
-                        scan_until(j + 10)
+                # The choice bits are read from the stream of the chunk that holds the split
+                # they follow (spec/format.md section 8: a group may continue in the next chunks).
+                scan_until(9, chunk_of[applied].conn)
+                for j in range(size):
+                    if applied >= len(chunk_of):
+                        break
+                    if j >= len(st["vs"]):
+                        raise Refused("corrupt")
+                    ch = chunk_of[applied]
+                    v = st["vs"][j]
+                    ring = self.apply(v, ch.conn, ch.geom, ch.attr)
+                    st["excluded"].update([v] + ring)
+                    applied += 1
+                    if applied in levels:
+                        hashes[applied] = self.hash()
+                    if self.nodes and applied == self.head["total_splits"] and \
+                            not self.node_counts_match(len(self.nodes["nodes"]) - 1):
+                        raise Refused("corrupt")  # 15.2: the last node's faces and a-wedges
+                    scan_until(j + 10, ch.conn)
         except Refused as e:
             return str(e), applied
         return "ok", applied
@@ -1204,15 +1421,15 @@ def main():
             if w and w[0] == "level":
                 levels.append(int(w[1]))
                 want["level " + w[1]] = (int(w[3]), int(w[5]), w[7])
-        status, head, base, chunks = level0(exp.with_suffix(".pmz").read_bytes())
+        status, head, base, chunks, nodes = level0(exp.with_suffix(".pmz").read_bytes())
         got = {"stream": status}
         if base is not None:
-            total = sum(g[0] for ch in chunks for g in ch[2])
+            total = sum(ch.count for ch in chunks)
             if total > limit:
                 skipped += 1
                 continue
             hashes = {}
-            split_status, applied = Splits(head, base, chunks).run(set(levels), hashes)
+            split_status, applied = Splits(head, base, chunks, nodes).run(set(levels), hashes)
             got["refined"] = f"{status if status != 'ok' else split_status} {applied}"
             for level, h in hashes.items():
                 got[f"level {level}"] = h

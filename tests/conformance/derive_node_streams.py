@@ -1,0 +1,122 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
+"""Derives edge-case streams from a valid stream in nodes (spec/format.md section 15) by
+editing its NODE chunk or its chunk order; the reference decoder gives each its .expected
+(pmz-conformance expect) and spec_decoder.py must agree with it.
+
+    python3 tests/conformance/derive_node_streams.py NODES.pmz OUT_DIR
+"""
+import copy
+import struct
+import sys
+import zlib
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import spec_decoder as sd  # noqa: E402
+
+
+def put_varint(v):
+    out = bytearray()
+    while True:
+        low, v = v & 0x7F, v >> 7
+        out.append(low | (0x80 if v else 0))
+        if not v:
+            return bytes(out)
+
+
+def put_zvarint(v):
+    return put_varint(-2 * v - 1 if v < 0 else 2 * v)
+
+
+def chunk(typ, payload):
+    head = bytes([typ]) + put_varint(len(payload))
+    return head + struct.pack("<I", zlib.crc32(head + payload)) + payload
+
+
+def chunks(data):
+    at, out = 8, []
+    while at < len(data):
+        typ = data[at]
+        size, p = sd.varint(data, at + 1)
+        out.append((typ, data[p + 4 : p + 4 + size]))
+        at = p + 4 + size
+        if typ == 4:
+            return out
+    return out
+
+
+def read_table(p):  # the fields of spec/format.md section 15.1, the floats kept as bytes
+    count, at = sd.varint(p, 0)
+    levels, nodes = [], []
+    for _ in range(count):
+        side, at = sd.varint(p, at)
+        origin = []
+        for _ in range(3):
+            o, at = sd.zvarint(p, at)
+            origin.append(o)
+        levels.append((side, origin))
+    count, at = sd.varint(p, at)
+    for _ in range(count):
+        n = {"cell": []}
+        n["level"], at = sd.varint(p, at)
+        for _ in range(3 if levels[n["level"]][0] else 0):
+            x, at = sd.zvarint(p, at)
+            n["cell"].append(x)
+        for name in ("splits", "faces", "bytes"):
+            n[name], at = sd.varint(p, at)
+        n["floats"], at = p[at : at + 20], at + 20
+        nodes.append(n)
+    return levels, nodes
+
+
+def write_table(levels, nodes):
+    out = put_varint(len(levels))
+    for side, origin in levels:
+        out += put_varint(side) + b"".join(put_zvarint(o) for o in origin)
+    out += put_varint(len(nodes))
+    for n in nodes:
+        out += put_varint(n["level"]) + b"".join(put_zvarint(x) for x in n["cell"])
+        out += put_varint(n["splits"]) + put_varint(n["faces"]) + put_varint(n["bytes"])
+        out += n["floats"]
+    return out
+
+
+def main():
+    src, out = Path(sys.argv[1]), Path(sys.argv[2])
+    data = src.read_bytes()
+    cs = chunks(data)
+    at = next(i for i, (typ, _) in enumerate(cs) if typ == 6)
+    levels, nodes = read_table(cs[at][1])
+    made = {}
+
+    def table(edit):
+        n = copy.deepcopy(nodes)
+        edit(n)
+        return cs[:at] + [(6, write_table(levels, n))] + cs[at + 1 :]
+
+    made["node-missing"] = cs[:at] + cs[at + 1 :]
+    made["node-twice"] = cs[: at + 2] + [cs[at]] + cs[at + 2 :]
+    made["node-late"] = cs[:at] + [cs[at + 1], cs[at]] + cs[at + 2 :]
+    made["node-bytes-long"] = table(lambda n: n[1].update(bytes=n[1]["bytes"] + 1))
+    made["node-bytes-short"] = table(lambda n: n[1].update(bytes=n[1]["bytes"] - 1))
+    made["node-faces-first"] = table(lambda n: n[0].update(faces=n[0]["faces"] - 1))
+    made["node-faces"] = table(lambda n: n[2].update(faces=n[2]["faces"] - 1))
+    made["node-faces-last"] = table(lambda n: n[-1].update(faces=n[-1]["faces"] - 1))
+    made["node-cell-moved"] = table(lambda n: n[3]["cell"].__setitem__(0, n[3]["cell"][0] + 1))
+    made["node-child-first"] = table(lambda n: n.insert(1, n.pop()))
+    # Flag bit 1 cleared: the NODE chunk is of unknown type and the later nodes' chunks decode
+    # as one stream (their groups, coded for models of their own, then span several chunks).
+    head = bytearray(cs[0][1])
+    head[2] &= 0xFD
+    made["node-flag-cleared"] = [(1, bytes(head))] + cs[1:]
+    made["node-truncated"] = cs[: at + 3]
+    out.mkdir(parents=True, exist_ok=True)
+    for name, parts in made.items():
+        end = [chunk(typ, p) for typ, p in parts]
+        (out / f"{src.stem}-{name}.pmz").write_bytes(data[:8] + b"".join(end))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
