@@ -46,7 +46,11 @@ def chunks(data):
     return out
 
 
-def read_table(p):  # the fields of spec/format.md section 15.1, the floats kept as bytes
+def fields(attributes):  # a node's varints after its cell (spec/format.md section 15.1)
+    return ("splits", "faces", "wedges", "bytes") if attributes else ("splits", "faces", "bytes")
+
+
+def read_table(p, attributes):  # the fields of spec/format.md section 15.1, floats as bytes
     count, at = sd.varint(p, 0)
     levels, nodes = [], []
     for _ in range(count):
@@ -63,21 +67,21 @@ def read_table(p):  # the fields of spec/format.md section 15.1, the floats kept
         for _ in range(3 if levels[n["level"]][0] else 0):
             x, at = sd.zvarint(p, at)
             n["cell"].append(x)
-        for name in ("splits", "faces", "bytes"):
+        for name in fields(attributes):
             n[name], at = sd.varint(p, at)
         n["floats"], at = p[at : at + 20], at + 20
         nodes.append(n)
     return levels, nodes
 
 
-def write_table(levels, nodes):
+def write_table(levels, nodes, attributes):
     out = put_varint(len(levels))
     for side, origin in levels:
         out += put_varint(side) + b"".join(put_zvarint(o) for o in origin)
     out += put_varint(len(nodes))
     for n in nodes:
         out += put_varint(n["level"]) + b"".join(put_zvarint(x) for x in n["cell"])
-        out += put_varint(n["splits"]) + put_varint(n["faces"]) + put_varint(n["bytes"])
+        out += b"".join(put_varint(n[name]) for name in fields(attributes))
         out += n["floats"]
     return out
 
@@ -87,13 +91,14 @@ def main():
     data = src.read_bytes()
     cs = chunks(data)
     at = next(i for i, (typ, _) in enumerate(cs) if typ == 6)
-    levels, nodes = read_table(cs[at][1])
+    attributes = bool(cs[0][1][2] & 1)  # HEAD flags (a one-byte varint)
+    levels, nodes = read_table(cs[at][1], attributes)
     made = {}
 
     def table(edit):
         n = copy.deepcopy(nodes)
         edit(n)
-        return cs[:at] + [(6, write_table(levels, n))] + cs[at + 1 :]
+        return cs[:at] + [(6, write_table(levels, n, attributes))] + cs[at + 1 :]
 
     made["node-missing"] = cs[:at] + cs[at + 1 :]
     made["node-twice"] = cs[: at + 2] + [cs[at]] + cs[at + 2 :]
