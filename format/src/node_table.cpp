@@ -28,8 +28,9 @@ void overlap(const NodeGrid& fine, const int64_t cell[3], const NodeGrid& coarse
       continue;
     }
     // The fine cell's coordinates, clamped to 32 bits (no vertex lies outside them).
-    const int64_t c0 = std::max<int64_t>(fine.origin[a] + cell[a] * fine.side, INT32_MIN);
-    const int64_t c1 = std::min<int64_t>(c0 + fine.side - 1, INT32_MAX);
+    const int64_t start = fine.origin[a] + cell[a] * fine.side;
+    const int64_t c0 = std::max<int64_t>(start, INT32_MIN);
+    const int64_t c1 = std::min<int64_t>(start + fine.side - 1, INT32_MAX);
     lo[a] = coarse.index(int32_t(c0), a);
     hi[a] = coarse.index(int32_t(std::max(c0, c1)), a);
   }
