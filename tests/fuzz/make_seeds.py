@@ -151,15 +151,14 @@ def main():
             kind = data[at]
             size, j = varint(data, at + 1)
             payload = data[j + 4:j + 4 + size]
-            if kind == 1:  # HEAD: version (2 bytes), varint flags, 3 bytes, varint base counts
+            if kind == 1:  # HEAD: version (2 bytes), varint flags, 4 bytes (position bits,
+                # curvatures, level), varint base counts, varint total splits (section 4)
                 node_flags, k = varint(payload, 2)
-                _, t = varint(payload, k + 4)  # (after position bits, curvatures, level)
-                _, t = varint(payload, t)
-                node_total, _ = varint(payload, t)
-                k += 3
+                k += 4
                 _, e = varint(payload, k)
                 _, e = varint(payload, e)
                 counts = payload[k:e]
+                node_total, _ = varint(payload, e)
             elif kind == 2:
                 put('coding', '%s-BASE-%d' % (name, at), b'\x07' + counts + payload)
             elif kind == 3:
