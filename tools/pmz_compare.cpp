@@ -39,7 +39,11 @@ int main(int argc, char** argv) {
       "When both meshes carry texture coordinates, normals or colours, also their error at\n"
       "corresponding points: for samples on ORIGINAL, the closest point of OTHER, the values\n"
       "interpolated at both compared (texture coordinates: |delta uv| of set 0 in texture\n"
-      "units; normals: angle in degrees; colours: |delta rgb(a)|, channels 0..1).",
+      "units; normals: angle in degrees; colours: |delta rgb(a)|, channels 0..1).\n"
+      "Texture coordinates at a texture seam of OTHER: the smallest |delta uv| over the charts\n"
+      "meeting at the closest face's corners (the closest face, and each face across the seam\n"
+      "at its point closest to the sample), so a seam moved by quantization is not read as the\n"
+      "jump between the charts.",
       "pmz-compare"};
   std::string original_path, other_path, format;
   pmz::CompareOptions options;

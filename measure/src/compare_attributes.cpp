@@ -4,7 +4,9 @@
 #include "compare_attributes.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstring>
 #include <vector>
 
 #include "sampling.hpp"
@@ -62,13 +64,95 @@ void closest_barycentric(const double p[3], const float* fa, const float* fb, co
 struct Field {
   const std::vector<float>* values = nullptr;
   uint32_t stride = 0, components = 0;
+  const float* at(const IndexedMesh& m, size_t corner) const {
+    return values->data() + size_t(m.attributes.corner_wedges[corner]) * stride;
+  }
   void interpolate(const IndexedMesh& m, uint32_t f, const double w[3], double* out) const {
     for (uint32_t i = 0; i < components; ++i) out[i] = 0;
     for (int k = 0; k < 3; ++k) {
-      const float* v =
-          values->data() + size_t(m.attributes.corner_wedges[size_t(f) * 3 + k]) * stride;
+      const float* v = at(m, size_t(f) * 3 + k);
       for (uint32_t i = 0; i < components; ++i) out[i] += w[k] * v[i];
     }
+  }
+  bool same(const IndexedMesh& m, size_t c, size_t d) const {
+    const float *a = at(m, c), *b = at(m, d);
+    for (uint32_t i = 0; i < components; ++i)
+      if (!(a[i] == b[i])) return false;
+    return true;
+  }
+};
+
+double distance(const double* a, const double* b, uint32_t components) {
+  double d2 = 0;
+  for (uint32_t i = 0; i < components; ++i) d2 += (a[i] - b[i]) * (a[i] - b[i]);
+  return std::sqrt(d2);
+}
+
+// The texture seams of a mesh: at a seam one position carries several texture coordinates
+// (one per chart meeting there). Corners are grouped by position value, so a format that
+// splits seam vertices into copies gives the same seams.
+struct Seams {
+  std::vector<uint32_t> position_of;  // vertex -> position
+  std::vector<uint32_t> first;        // position -> its corners: corners[first[p], first[p + 1])
+  std::vector<uint32_t> corners;
+  std::vector<uint8_t> face_on_seam;  // a corner of the face is on a seam
+
+  void build(const IndexedMesh& m, const Field& uv) {
+    const uint32_t nv = m.vertex_count();
+    auto key = [&](uint32_t v) {
+      std::array<uint32_t, 3> bits;
+      for (int k = 0; k < 3; ++k) {
+        const float x = m.positions[size_t(v) * 3 + k] + 0.0f;  // -0 as +0
+        std::memcpy(&bits[k], &x, 4);
+      }
+      return bits;
+    };
+    std::vector<uint32_t> order(nv);
+    for (uint32_t v = 0; v < nv; ++v) order[v] = v;
+    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
+    position_of.assign(nv, 0);
+    uint32_t positions = 0;
+    for (uint32_t i = 0; i < nv; ++i) {
+      if (i > 0 && key(order[i]) != key(order[i - 1])) ++positions;
+      position_of[order[i]] = positions;
+    }
+    if (nv) ++positions;
+    first.assign(size_t(positions) + 1, 0);
+    for (uint32_t v : m.indices) ++first[position_of[v] + 1];
+    for (uint32_t p = 0; p < positions; ++p) first[p + 1] += first[p];
+    corners.resize(m.indices.size());
+    std::vector<uint32_t> next(first.begin(), first.end() - 1);
+    for (uint32_t c = 0; c < m.indices.size(); ++c) corners[next[position_of[m.indices[c]]]++] = c;
+    face_on_seam.assign(m.face_count(), 0);
+    for (uint32_t p = 0; p < positions; ++p) {
+      bool seam = false;
+      for (uint32_t i = first[p] + 1; i < first[p + 1] && !seam; ++i)
+        seam = !uv.same(m, corners[first[p]], corners[i]);
+      for (uint32_t i = first[p]; i < first[p + 1] && seam; ++i) face_on_seam[corners[i] / 3] = 1;
+    }
+  }
+
+  // The smallest texture error at sample p (texture coordinates `want`) over the faces across
+  // a seam from face g (another chart's coordinates at one of g's corners), each at its point
+  // closest to p; `best` when none is smaller.
+  double across(const IndexedMesh& m, const Field& uv, uint32_t g, const double p[3],
+                const double* want, double best) const {
+    if (!face_on_seam[g]) return best;
+    const float* pos = m.positions.data();
+    const uint32_t* idx = m.indices.data();
+    for (uint32_t k = 0; k < 3; ++k) {
+      const uint32_t c = g * 3 + k, at = position_of[idx[c]];
+      for (uint32_t i = first[at]; i < first[at + 1]; ++i) {
+        const uint32_t h = corners[i] / 3;
+        if (h == g || uv.same(m, c, corners[i])) continue;
+        double w[3], v[4];
+        closest_barycentric(p, pos + size_t(idx[h * 3]) * 3, pos + size_t(idx[h * 3 + 1]) * 3,
+                            pos + size_t(idx[h * 3 + 2]) * 3, w);
+        uv.interpolate(m, h, w, v);
+        best = std::min(best, distance(want, v, uv.components));
+      }
+    }
+    return best;
   }
 };
 
@@ -117,6 +201,8 @@ void compare_attributes(const IndexedMesh& original, const IndexedMesh& other,
     any = true;
   }
   if (!any) return;
+  Seams seams;
+  if (fa[kTexcoord].values) seams.build(other, fb[kTexcoord]);
 
   const float* pos = original.positions.data();
   const uint32_t* idx = original.indices.data();
@@ -158,9 +244,8 @@ void compare_attributes(const IndexedMesh& original, const IndexedMesh& other,
             if (!(la > 0) || !(lb > 0)) continue;
             e = std::acos(std::clamp(dot3(va, vb) / (la * lb), -1.0, 1.0)) * kDegreesPerRadian;
           } else {
-            double d2 = 0;
-            for (uint32_t i = 0; i < fa[k].components; ++i) d2 += (va[i] - vb[i]) * (va[i] - vb[i]);
-            e = std::sqrt(d2);
+            e = distance(va, vb, fa[k].components);
+            if (k == kTexcoord) e = seams.across(other, fb[k], g, p, va, e);
           }
           acc.sum[k] += e, acc.sum2[k] += e * e, acc.max[k] = std::max(acc.max[k], e), ++acc.n[k];
         }

@@ -38,12 +38,19 @@ struct DistanceStats {
 // Attribute error at corresponding surface points: for area-proportional samples on ORIGINAL,
 // the closest point of OTHER; the attribute interpolated there (from OTHER's corners) against
 // the sample's own. mean and rms over the samples, max the largest.
+// Texture coordinates are several-valued along a texture seam (one value per chart meeting
+// there), and a seam moved a little (quantized positions, say) puts the closest point of
+// samples near it on the other chart. So where the closest face of OTHER has a corner on a
+// seam, the faces across the seam at that corner are candidates too, each at its point closest
+// to the sample, and the smallest |delta uv| counts: a difference that one of OTHER's charts
+// does not explain is still measured (up to the jump in texture space across the seam).
 struct AttributeErrorStats {
   double max = 0, mean = 0, rms = 0;
   uint64_t samples = 0;  // 0: not measured (a mesh lacks the attribute)
 };
 struct AttributeErrors {
-  AttributeErrorStats texcoord;  // |delta (u, v)| of texture coordinate set 0, texture units
+  AttributeErrorStats texcoord;  // |delta (u, v)| of texture coordinate set 0, texture units,
+                                 // the smallest over the charts at a seam (above)
   AttributeErrorStats normal;    // angle between the interpolated normals, degrees
   AttributeErrorStats color;     // |delta| of the colour (RGB or RGBA, channels 0..1)
 };
