@@ -829,6 +829,11 @@ uint64_t Decoder::Impl::coarsen(uint64_t max_splits, uint64_t face_floor) {
                          // kept as a guard
     fail(Status::out_of_memory, "allocation failed while coarsening");
   }
+  // The undone splits lowered face_begin: faces listed before then may now be at or above it
+  // (rewritten again from there on, or removed). MeshChanges lists only faces below it.
+  if (n > 0)
+    std::erase_if(level.changes.modified_faces,
+                  [&](uint32_t f) { return f >= level.changes.face_begin; });
   return n;
 }
 
