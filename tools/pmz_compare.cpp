@@ -40,10 +40,11 @@ int main(int argc, char** argv) {
       "corresponding points: for samples on ORIGINAL, the closest point of OTHER, the values\n"
       "interpolated at both compared (texture coordinates: |delta uv| of set 0 in texture\n"
       "units; normals: angle in degrees; colours: |delta rgb(a)|, channels 0..1).\n"
-      "Texture coordinates at a texture seam of OTHER: the smallest |delta uv| over the charts\n"
-      "meeting at the closest face's corners (the closest face, and each face across the seam\n"
-      "at its point closest to the sample), so a seam moved by quantization is not read as the\n"
-      "jump between the charts.",
+      "Texture coordinates are compared on the sample's own chart: the smallest |delta uv|\n"
+      "over the closest face of OTHER, the closest face of OTHER's part of the sample's chart\n"
+      "(the OTHER chart lying mostly over it), and at both the faces across a texture seam at\n"
+      "their corners; so a seam moved by quantization, or a sheet of another chart passing\n"
+      "close by, is not read as the jump between charts.",
       "pmz-compare"};
   std::string original_path, other_path, format;
   pmz::CompareOptions options;

@@ -122,6 +122,37 @@ TEST(CompareAttributes, AShiftedChartAtAMovedSeamIsMeasured) {
   EXPECT_NEAR(e.texcoord.mean, 0.05 * area[1] / (area[0] + area[1]), 0.002);
 }
 
+// Two sheets that cross (a surface that passes through itself), each its own chart: the unit
+// square at z = lift (u, v = x, y) and a 5 x 5 square tilted through it along x = 0.5 (u, v =
+// x + 0.5, y + 0.5). Lifting the flat one by 1e-3 puts the tilted sheet nearest to its samples
+// within about 2e-3 of the crossing; its own chart, 1e-3 away, is the one compared: no error,
+// not the 0.7 between the charts.
+TEST(CompareAttributes, ACrossingSheetOfAnotherChartIsNotTheCorrespondent) {
+  auto sheets = [](float lift) {
+    pmz::IndexedMesh m = square(4);
+    const pmz::IndexedMesh tilted = square(5, 0.5f);
+    const uint32_t nv = m.vertex_count(), nw = m.attributes.wedge_count();
+    for (size_t i = 0; i < m.positions.size(); i += 3) m.positions[i + 2] = lift;
+    for (size_t i = 0; i < tilted.positions.size(); i += 3) {
+      const float x = tilted.positions[i];
+      m.positions.insert(m.positions.end(), {x, tilted.positions[i + 1], 0.5f * (x - 0.5f)});
+    }
+    pmz::MeshAttributes& a = m.attributes;
+    const pmz::MeshAttributes& b = tilted.attributes;
+    for (uint32_t i = 0; i < tilted.indices.size(); ++i)
+      m.indices.push_back(nv + tilted.indices[i]),
+          a.corner_wedges.push_back(nw + b.corner_wedges[i]);
+    for (uint32_t v : b.wedge_vertices) a.wedge_vertices.push_back(nv + v);
+    a.texcoords[0].insert(a.texcoords[0].end(), b.texcoords[0].begin(), b.texcoords[0].end());
+    a.normals.insert(a.normals.end(), b.normals.begin(), b.normals.end());
+    a.colors.insert(a.colors.end(), b.colors.begin(), b.colors.end());
+    return m;
+  };
+  const pmz::AttributeErrors e = measure(sheets(0), sheets(1e-3f));
+  EXPECT_GT(e.texcoord.samples, 10000u);
+  EXPECT_LT(e.texcoord.max, 1e-6);
+}
+
 // Attributes only one mesh has are not measured.
 TEST(CompareAttributes, MissingAttributesAreNotMeasured) {
   pmz::IndexedMesh bare = square(2);
