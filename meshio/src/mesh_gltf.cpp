@@ -18,6 +18,7 @@
 #include <sstream>
 
 #include "mesh_formats.hpp"
+#include "pmz/progressive_glb.hpp"
 #include "reader_support.hpp"
 
 namespace pmz {
@@ -545,24 +546,67 @@ bool read_gltf(const std::string& path, std::string_view data, PolygonSoup& out,
   return reader.run(error);
 }
 
-bool write_glb(const IndexedMesh& mesh, std::string& bytes, std::string& error) {
+namespace {
+
+// The image of a texture file: PNG and JPEG (glTF's core image types) by their signature.
+std::string image_mime_type(const std::string& data) {
+  if (data.starts_with("\x89PNG\r\n\x1a\n")) return "image/png";
+  if (data.starts_with("\xff\xd8\xff")) return "image/jpeg";
+  return "";
+}
+
+// Texture names made relative by backslashes (OBJ from Windows) read as folders.
+std::filesystem::path texture_path(const std::string& dir, std::string name) {
+  std::replace(name.begin(), name.end(), '\\', '/');
+  return std::filesystem::path(dir) / name;
+}
+
+// Adds the PMZ_progressive_mesh extension (docs/gltf-binding.md) to every primitive, the
+// stream as the buffer's last view.
+void add_stream(tinygltf::Model& model, const GlbStream& stream) {
+  std::vector<unsigned char>& buffer = model.buffers[0].data;
+  buffer.resize((buffer.size() + 3) & ~size_t(3));
+  tinygltf::BufferView bv;
+  bv.buffer = 0, bv.byteOffset = buffer.size(), bv.byteLength = stream.bytes.size();
+  buffer.insert(buffer.end(), stream.bytes.begin(), stream.bytes.end());
+  model.bufferViews.push_back(bv);
+  using tinygltf::Value;
+  auto vec3 = [](const float* v) {
+    return Value(Value::Array{Value(double(v[0])), Value(double(v[1])), Value(double(v[2]))});
+  };
+  Value::Object bounds{{"min", vec3(stream.bbox_min)}, {"max", vec3(stream.bbox_max)}};
+  Value::Object ext{{"bufferView", Value(int(model.bufferViews.size() - 1))},
+                    {"version", Value(stream.version)},
+                    {"fullVertexCount", Value(int(stream.full_vertices))},
+                    {"fullFaceCount", Value(int(stream.full_faces))},
+                    {"fullBounds", Value(bounds)}};
+  for (tinygltf::Primitive& prim : model.meshes[0].primitives)
+    prim.extensions[kProgressiveExtension] = Value(ext);
+  model.extensionsUsed.push_back(kProgressiveExtension);
+}
+
+// The model of write_glb's layout; with `textures`, texture files found relative to
+// textures->dir are embedded.
+bool build_model(const IndexedMesh& mesh, GlbTextures* textures, tinygltf::Model& model,
+                 std::string& error) {
   const MeshAttributes& a = mesh.attributes;
   if (mesh.face_count() == 0) {
     error = "no faces to write";
     return false;
   }
+  model = {};
   const bool wedges = a.has_wedges();
   const uint32_t nv = wedges ? a.wedge_count() : mesh.vertex_count();
   auto vertex_of = [&](uint32_t v) { return wedges ? a.wedge_vertices[v] : v; };
-  tinygltf::Model model;
   model.asset.version = "2.0";
   model.asset.generator = "pmz";
   model.buffers.resize(1);
   std::vector<unsigned char>& buffer = model.buffers[0].data;
-  // One buffer view per accessor, 4-byte aligned (every component here is 4 bytes).
+  // One buffer view per accessor, 4-byte aligned (every component here is 4 bytes; embedded
+  // images between them have any length).
   auto add_accessor = [&](const std::vector<float>* floats, const std::vector<uint32_t>* ints,
                           int type, int target) {
-    size_t offset = buffer.size();
+    size_t offset = (buffer.size() + 3) & ~size_t(3);
     const void* src = floats ? static_cast<const void*>(floats->data()) : ints->data();
     size_t size = (floats ? floats->size() : ints->size()) * 4;
     buffer.resize(offset + size);
@@ -626,6 +670,22 @@ bool write_glb(const IndexedMesh& mesh, std::string& bytes, std::string& error) 
     auto texture = [&](const std::string& file) {
       tinygltf::Image image;
       image.uri = uri_encode(file);
+      std::string data, why;
+      if (textures && !read_file(texture_path(textures->dir, file).string(), data, why)) {
+        textures->not_embedded.push_back(why);
+      } else if (textures && image_mime_type(data).empty()) {
+        textures->not_embedded.push_back(file + ": not a PNG or JPEG image");
+      } else if (textures) {  // the image's bytes in the buffer, after the mesh's
+        std::vector<unsigned char>& buffer = model.buffers[0].data;
+        buffer.resize((buffer.size() + 3) & ~size_t(3));
+        tinygltf::BufferView bv;
+        bv.buffer = 0, bv.byteOffset = buffer.size(), bv.byteLength = data.size();
+        buffer.insert(buffer.end(), data.begin(), data.end());
+        model.bufferViews.push_back(bv);
+        image.uri.clear();
+        image.bufferView = int(model.bufferViews.size() - 1);
+        image.mimeType = image_mime_type(data);
+      }
       model.images.push_back(image);
       tinygltf::Texture t;
       t.source = int(model.images.size() - 1);
@@ -664,6 +724,10 @@ bool write_glb(const IndexedMesh& mesh, std::string& bytes, std::string& error) 
   scene.nodes.push_back(0);
   model.scenes.push_back(scene);
   model.defaultScene = 0;
+  return true;
+}
+
+bool serialise_glb(const tinygltf::Model& model, std::string& bytes, std::string& error) {
   std::ostringstream stream;
   tinygltf::TinyGLTF writer;
   bool written = false;
@@ -679,6 +743,21 @@ bool write_glb(const IndexedMesh& mesh, std::string& bytes, std::string& error) 
   }
   bytes = stream.str();
   return true;
+}
+
+}  // namespace
+
+bool write_glb(const IndexedMesh& mesh, std::string& bytes, std::string& error) {
+  tinygltf::Model model;
+  return build_model(mesh, nullptr, model, error) && serialise_glb(model, bytes, error);
+}
+
+bool write_progressive_glb(const IndexedMesh& base, const GlbStream& stream, GlbTextures& textures,
+                           std::string& bytes, std::string& error) {
+  tinygltf::Model model;
+  if (!build_model(base, &textures, model, error)) return false;
+  add_stream(model, stream);
+  return serialise_glb(model, bytes, error);
 }
 
 }  // namespace pmz
