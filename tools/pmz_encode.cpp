@@ -38,16 +38,21 @@ struct EncodeSettings {
   bool glb = false;          // every output a GLB (docs/gltf-binding.md)
 };
 
-bool glb_output(const std::string& output, const EncodeSettings& settings) {
-  std::string ext = std::filesystem::path(output).extension().string();
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return std::tolower(c); });
-  return settings.glb || ext == ".glb";
+  return ext;
+}
+
+bool glb_output(const std::string& output, const EncodeSettings& settings) {
+  return settings.glb || lower_extension(output) == ".glb";
 }
 
 // The stream in a binary glTF: its base mesh, decoded from the stream itself (the binding
-// wants the stream's level 0 exactly), as the primitive; texture files beside the input are
-// embedded. Texture files that cannot be embedded are named on stderr and stay URIs.
+// wants the stream's level 0 exactly), as the primitive; a glTF input's own images and texture
+// files beside the input are embedded. Textures that cannot be embedded are named on stderr and
+// stay URIs.
 bool wrap_in_glb(const std::vector<uint8_t>& stream, const std::string& input, std::string& glb,
                  std::string& error) {
   pmz::Decoder decoder;
@@ -63,6 +68,9 @@ bool wrap_in_glb(const std::vector<uint8_t>& stream, const std::string& input, s
   std::copy(info.bbox_max, info.bbox_max + 3, s.bbox_max);
   pmz::GlbTextures textures;
   textures.dir = input == "-" ? "." : std::filesystem::path(input).parent_path().string();
+  const std::string ext = lower_extension(input);
+  if ((ext == ".gltf" || ext == ".glb") && !pmz::read_gltf_images(input, textures.images, error))
+    return false;
   if (!pmz::write_progressive_glb(pmz::tool::decoded_mesh(decoder), s, textures, glb, error))
     return false;
   for (const std::string& why : textures.not_embedded)

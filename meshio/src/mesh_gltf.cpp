@@ -519,11 +519,9 @@ std::string utf8_name(const std::string& s) {
 
 }  // namespace
 
-bool read_gltf(const std::string& path, std::string_view data, PolygonSoup& out,
-               std::string& error) {
-  tinygltf::TinyGLTF loader;
-  loader.SetImageLoader(no_image_loading, nullptr);
-  tinygltf::Model model;
+// Parses .gltf or .glb bytes (external buffers beside `path`) with the loader's image callback.
+static bool load_model(const std::string& path, std::string_view data, tinygltf::TinyGLTF& loader,
+                       tinygltf::Model& model, std::string& error) {
   std::string err, warn;
   const std::string base_dir = std::filesystem::path(path).parent_path().string();
   const auto* bytes = reinterpret_cast<const unsigned char*>(data.data());
@@ -542,6 +540,15 @@ bool read_gltf(const std::string& path, std::string_view data, PolygonSoup& out,
     error = path + ": " + first;
     return false;
   }
+  return true;
+}
+
+bool read_gltf(const std::string& path, std::string_view data, PolygonSoup& out,
+               std::string& error) {
+  tinygltf::TinyGLTF loader;
+  loader.SetImageLoader(no_image_loading, nullptr);
+  tinygltf::Model model;
+  if (!load_model(path, data, loader, model, error)) return false;
   Reader reader(path, model, out);
   return reader.run(error);
 }
@@ -559,6 +566,19 @@ std::string image_mime_type(const std::string& data) {
 std::filesystem::path texture_path(const std::string& dir, std::string name) {
   std::replace(name.begin(), name.end(), '\\', '/');
   return std::filesystem::path(dir) / name;
+}
+
+// The image of a texture name: a glTF input's own or the file, PNG or JPEG; false with a line
+// saying why in t.not_embedded.
+bool texture_image(GlbTextures& t, const std::string& name, std::string& data) {
+  std::string why;
+  if (auto it = t.images.find(name); it != t.images.end())
+    data = it->second;
+  else if (!read_file(texture_path(t.dir, name).string(), data, why))
+    return t.not_embedded.push_back(why), false;
+  if (!image_mime_type(data).empty()) return true;
+  t.not_embedded.push_back(name + ": not a PNG or JPEG image");
+  return false;
 }
 
 // Adds the PMZ_progressive_mesh extension (docs/gltf-binding.md) to every primitive, the
@@ -660,7 +680,9 @@ bool build_model(const IndexedMesh& mesh, GlbTextures* textures, tinygltf::Model
         &values, nullptr, a.color_components == 4 ? TINYGLTF_TYPE_VEC4 : TINYGLTF_TYPE_VEC3,
         TINYGLTF_TARGET_ARRAY_BUFFER);
   }
-  // Materials, their textures and images (URIs only: pmz carries no pixels).
+  // Materials, their textures and images (URIs, or with `textures` the images embedded), one
+  // texture per file name.
+  std::map<std::string, int> texture_of;
   for (const Material& m : a.materials) {
     tinygltf::Material gm;
     gm.name = utf8_name(m.name);
@@ -668,14 +690,12 @@ bool build_model(const IndexedMesh& mesh, GlbTextures* textures, tinygltf::Model
     for (double& c : gm.pbrMetallicRoughness.baseColorFactor) c = std::clamp(c, 0.0, 1.0);
     gm.pbrMetallicRoughness.metallicFactor = 0;  // OBJ / PLY materials are not metallic
     auto texture = [&](const std::string& file) {
+      if (auto it = texture_of.find(file); it != texture_of.end()) return it->second;
       tinygltf::Image image;
       image.uri = uri_encode(file);
-      std::string data, why;
-      if (textures && !read_file(texture_path(textures->dir, file).string(), data, why)) {
-        textures->not_embedded.push_back(why);
-      } else if (textures && image_mime_type(data).empty()) {
-        textures->not_embedded.push_back(file + ": not a PNG or JPEG image");
-      } else if (textures) {  // the image's bytes in the buffer, after the mesh's
+      std::string data;
+      if (textures && texture_image(*textures, file, data)) {
+        // The image's bytes in the buffer, after the mesh's; named as the material names it.
         std::vector<unsigned char>& buffer = model.buffers[0].data;
         buffer.resize((buffer.size() + 3) & ~size_t(3));
         tinygltf::BufferView bv;
@@ -683,6 +703,7 @@ bool build_model(const IndexedMesh& mesh, GlbTextures* textures, tinygltf::Model
         buffer.insert(buffer.end(), data.begin(), data.end());
         model.bufferViews.push_back(bv);
         image.uri.clear();
+        image.name = utf8_name(file);
         image.bufferView = int(model.bufferViews.size() - 1);
         image.mimeType = image_mime_type(data);
       }
@@ -690,7 +711,7 @@ bool build_model(const IndexedMesh& mesh, GlbTextures* textures, tinygltf::Model
       tinygltf::Texture t;
       t.source = int(model.images.size() - 1);
       model.textures.push_back(t);
-      return int(model.textures.size() - 1);
+      return texture_of[file] = int(model.textures.size() - 1);
     };
     if (!m.base_color_texture.empty())
       gm.pbrMetallicRoughness.baseColorTexture.index = texture(m.base_color_texture);
@@ -746,6 +767,27 @@ bool serialise_glb(const tinygltf::Model& model, std::string& bytes, std::string
 }
 
 }  // namespace
+
+bool read_gltf_images(const std::string& path, std::map<std::string, std::string>& images,
+                      std::string& error) {
+  std::string data;
+  if (!read_file(path, data, error)) return false;
+  tinygltf::TinyGLTF loader;
+  // The image's bytes as the file has them (the loader is given them undecoded).
+  loader.SetImageLoader(
+      [](tinygltf::Image* image, const int, std::string*, std::string*, int, int,
+         const unsigned char* bytes, int size, void*) {
+        image->image.assign(bytes, bytes + size);
+        return true;
+      },
+      nullptr);
+  tinygltf::Model model;
+  if (!load_model(path, data, loader, model, error)) return false;
+  for (const tinygltf::Image& im : model.images)
+    if (!im.name.empty() && !im.image.empty() && (im.uri.empty() || im.uri.starts_with("data:")))
+      images.emplace(im.name, std::string(im.image.begin(), im.image.end()));
+  return true;
+}
 
 bool write_glb(const IndexedMesh& mesh, std::string& bytes, std::string& error) {
   tinygltf::Model model;

@@ -8,7 +8,8 @@ The GLB's PMZ_progressive_mesh buffer view holds the very bytes pmz-encode write
 same input, as the buffer's last view; the extension's fields agree with the stream's HEAD and
 with the full mesh pmz-decode makes of the embedded stream; the primitives hold the stream's base
 mesh (its triangles, as position triples); materials keep their names and textures (files found
-beside the input embedded; a missing one is kept as a URI and named on stderr). With the Khronos
+beside the input embedded, and a glTF input's own images; a missing one is kept as a URI and
+named on stderr). With the Khronos
 validator (scripts/install_gltf_validator.sh): 0 errors. One line per failure, exit 1.
 """
 import json
@@ -183,6 +184,17 @@ def main():
         g, _ = glb_parts(open(plain, "rb").read())
         check(len(g["meshes"][0]["primitives"]) == 1 and not g.get("materials"),
               "a plain mesh's GLB is not one primitive without materials")
+    # A glTF input's own images, with no file beside it: embedded again, byte for byte.
+    again = os.path.join(work, "again")
+    os.makedirs(again)
+    shutil.copy(glb, again)
+    out = os.path.join(again, "again.glb")
+    r = run([encode, os.path.join(again, "seamed.glb"), "-o", out, "--quiet"])
+    if check(r.returncode == 0 and "not embedded" not in r.stderr,
+             f"pmz-encode of a GLB: {r.stderr.strip()}"):
+        g, b = glb_parts(open(out, "rb").read())
+        check(sorted(view_bytes(g, b, im["bufferView"]) for im in g.get("images", []) if "bufferView" in im)
+              == sorted(textures.values()), "a GLB input's images are not embedded again")
     # A texture file that is missing: named on stderr, kept as a URI.
     os.remove(os.path.join(work, "metal_n.png"))
     missing = os.path.join(work, "missing-texture.glb")
