@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "pmz/attribute_codec.hpp"
 #include "pmz/coding.hpp"
 #include "pmz/decoder.hpp"
 #include "pmz/format.hpp"
@@ -249,6 +250,7 @@ struct Arrays {
   std::vector<uint32_t> indices, wedge_indices, materials, wedge_vertices;
   std::vector<std::vector<float>> texcoords;
   std::vector<float> normals, colors;
+  bool operator==(const Arrays&) const = default;
 };
 Arrays arrays(const pmz::Decoder& d) {
   Arrays a;
@@ -610,6 +612,44 @@ TEST_F(DecoderTest, InputContract) {
   pmz::Decoder moved = std::move(whole);
   EXPECT_EQ(moved.positions(), positions);
   EXPECT_EQ(moved.face_count(), faces);
+}
+
+// Counting what each ATTR symbol costs (Decoder::count_attribute_bits, for pmz-info) changes no
+// decoded result, and the counts add up to the ATTR chunks' payloads but for the range coder's
+// start and end (a few bytes per chunk).
+TEST(AttributeBits, CountingChangesNothingAndAddsUp) {
+  const std::vector<uint8_t> file = load(PMZ_SOURCE_DIR "/tests/conformance/vectors/seamed-q.pmz");
+  ASSERT_FALSE(file.empty());
+  pmz::Decoder plain, counted;
+  pmz::AttributeBits b;
+  counted.count_attribute_bits(&b);
+  ASSERT_EQ(plain.feed(file.data(), file.size()), pmz::Status::ok);
+  for (size_t at = 0; at < file.size(); at += 7)
+    ASSERT_EQ(counted.feed(file.data() + at, std::min<size_t>(7, file.size() - at)),
+              pmz::Status::ok);
+  ASSERT_EQ(plain.finish(), pmz::Status::ok);
+  ASSERT_EQ(counted.finish(), pmz::Status::ok);
+  for (uint64_t target : {uint64_t(40), ~uint64_t(0), uint64_t(100), ~uint64_t(0)}) {
+    plain.set_split_target(target);
+    counted.set_split_target(target);
+    ASSERT_GT(plain.wedge_count(), 0u);
+    EXPECT_TRUE(arrays(plain) == arrays(counted)) << "at " << target << " splits";
+  }
+  ASSERT_EQ(counted.splits_applied(), counted.info().total_splits);
+
+  double bits = 0;
+  for (double kind : b.bits) {
+    EXPECT_GT(kind, 0);
+    bits += kind;
+  }
+  uint64_t payload = 0, chunks = 0;
+  for (size_t at : chunk_offsets(file))
+    if (const pmz::ChunkFrame f = frame_at(file, at); f.type == pmz::kChunkAttributes)
+      payload += f.payload_size, ++chunks;
+  ASSERT_EQ(chunks, 2u);  // the base's and the one SPLT chunk's
+  const double bytes = bits / 8;
+  EXPECT_LE(bytes, double(payload) + 1) << payload << " bytes of ATTR payload";
+  EXPECT_GE(bytes, double(payload) - 4 * double(chunks)) << payload << " bytes of ATTR payload";
 }
 
 }  // namespace
