@@ -149,9 +149,10 @@ def main():
             kind = data[at]
             size, j = varint(data, at + 1)
             payload = data[j + 4:j + 4 + size]
-            if kind == 1:  # HEAD: version (2 bytes), varint flags, 3 bytes, varint base counts
+            if kind == 1:  # HEAD: version (2 bytes), varint flags, 4 bytes (position bits,
+                # curvatures, level), varint base counts (spec/format.md section 4)
                 _, k = varint(payload, 2)
-                k += 3
+                k += 4
                 _, e = varint(payload, k)
                 _, e = varint(payload, e)
                 counts = payload[k:e]
