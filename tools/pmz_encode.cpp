@@ -38,15 +38,8 @@ struct EncodeSettings {
   bool glb = false;          // every output a GLB (docs/gltf-binding.md)
 };
 
-std::string lower_extension(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return std::tolower(c); });
-  return ext;
-}
-
 bool glb_output(const std::string& output, const EncodeSettings& settings) {
-  return settings.glb || lower_extension(output) == ".glb";
+  return settings.glb || app_support::extension(output) == "glb";
 }
 
 // The stream in a binary glTF: its base mesh, decoded from the stream itself (the binding
@@ -68,8 +61,8 @@ bool wrap_in_glb(const std::vector<uint8_t>& stream, const std::string& input, s
   std::copy(info.bbox_max, info.bbox_max + 3, s.bbox_max);
   pmz::GlbTextures textures;
   textures.dir = input == "-" ? "." : std::filesystem::path(input).parent_path().string();
-  const std::string ext = lower_extension(input);
-  if ((ext == ".gltf" || ext == ".glb") && !pmz::read_gltf_images(input, textures.images, error))
+  const std::string ext = app_support::extension(input);
+  if ((ext == "gltf" || ext == "glb") && !pmz::read_gltf_images(input, textures.images, error))
     return false;
   if (!pmz::write_progressive_glb(pmz::tool::decoded_mesh(decoder), s, textures, glb, error))
     return false;
