@@ -39,7 +39,12 @@ int main(int argc, char** argv) {
       "When both meshes carry texture coordinates, normals or colours, also their error at\n"
       "corresponding points: for samples on ORIGINAL, the closest point of OTHER, the values\n"
       "interpolated at both compared (texture coordinates: |delta uv| of set 0 in texture\n"
-      "units; normals: angle in degrees; colours: |delta rgb(a)|, channels 0..1).",
+      "units; normals: angle in degrees; colours: |delta rgb(a)|, channels 0..1).\n"
+      "Texture coordinates are compared on the sample's own chart: the smallest |delta uv|\n"
+      "over the closest face of OTHER, the closest face of OTHER's part of the sample's chart\n"
+      "(the OTHER chart lying mostly over it), and at both the faces across a texture seam at\n"
+      "their corners; so a seam moved by quantization, or a sheet of another chart passing\n"
+      "close by, is not read as the jump between charts.",
       "pmz-compare"};
   std::string original_path, other_path, format;
   pmz::CompareOptions options;

@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: MIT
 // pmz-encode: simplify meshes and write each as a progressive .pmz stream. One input with -o
 // (a file, or - for stdout), or many with --out-dir encoded by -j worker threads (one line per
-// asset; a failing asset does not stop the others).
+// asset; a failing asset does not stop the others). A .glb output (or --glb) carries the stream in
+// a binary glTF as docs/gltf-binding.md says: the base mesh as an ordinary primitive, materials
+// and their texture files kept.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
@@ -13,9 +15,12 @@
 #include <string>
 #include <thread>
 
+#include "decoded_mesh.hpp"
 #include "pmz/app_support.hpp"
+#include "pmz/decoder.hpp"
 #include "pmz/format.hpp"
 #include "pmz/mesh.hpp"
+#include "pmz/progressive_glb.hpp"
 #include "pmz/simplify.hpp"
 #include "pmz/writer.hpp"
 #include "tool_mesh.hpp"
@@ -30,7 +35,41 @@ struct EncodeSettings {
   pmz::SimplifyOptions simplify;  // metric, attribute mode, parameters (no target: all the way)
   pmz::WriteOptions write;
   std::string stdin_format;  // extension for a mesh read from stdin
+  bool glb = false;          // every output a GLB (docs/gltf-binding.md)
 };
+
+bool glb_output(const std::string& output, const EncodeSettings& settings) {
+  return settings.glb || app_support::extension(output) == "glb";
+}
+
+// The stream in a binary glTF: its base mesh, decoded from the stream itself (the binding
+// wants the stream's level 0 exactly), as the primitive; a glTF input's own images and texture
+// files beside the input are embedded. Textures that cannot be embedded are named on stderr and
+// stay URIs.
+bool wrap_in_glb(const std::vector<uint8_t>& stream, const std::string& input, std::string& glb,
+                 std::string& error) {
+  pmz::Decoder decoder;
+  decoder.feed(stream.data(), stream.size());
+  if (decoder.finish() != pmz::Status::ok || !decoder.info().base_done)
+    return error = "the written stream does not decode: " + decoder.error_message(), false;
+  const pmz::StreamInfo& info = decoder.info();
+  pmz::GlbStream s;
+  s.bytes = {reinterpret_cast<const char*>(stream.data()), stream.size()};
+  s.version = std::to_string(info.version_major) + "." + std::to_string(info.version_minor);
+  s.full_vertices = info.full_vertices, s.full_faces = info.full_faces;
+  std::copy(info.bbox_min, info.bbox_min + 3, s.bbox_min);
+  std::copy(info.bbox_max, info.bbox_max + 3, s.bbox_max);
+  pmz::GlbTextures textures;
+  textures.dir = input == "-" ? "." : std::filesystem::path(input).parent_path().string();
+  const std::string ext = app_support::extension(input);
+  if ((ext == "gltf" || ext == "glb") && !pmz::read_gltf_images(input, textures.images, error))
+    return false;
+  if (!pmz::write_progressive_glb(pmz::tool::decoded_mesh(decoder), s, textures, glb, error))
+    return false;
+  for (const std::string& why : textures.not_embedded)
+    app_support::print_error(input, "texture not embedded (kept as a URI): " + why);
+  return true;
+}
 
 // Encodes one asset; on success `line` is its summary line, else `error` is one line naming
 // the file.
@@ -56,9 +95,15 @@ bool encode(const std::string& input, const std::string& output, const EncodeSet
   bool ok = pmz::simplify(mesh, sopt, seq, error);
   if (ok && progress) progress->update("writing", 1);
   ok = ok && pmz::write_pmz(seq, settings.write, bytes, error, &st);
+  std::string glb;
+  const bool as_glb = glb_output(output, settings);
+  ok = ok && (!as_glb || wrap_in_glb(bytes, input, glb, error));
   if (progress) progress->clear();
   if (!ok) return error = (input == "-" ? "stdin" : input) + ": " + error, false;
-  out.write(bytes.data(), bytes.size());
+  if (as_glb)
+    out.write(glb.data(), glb.size());
+  else
+    out.write(bytes.data(), bytes.size());
   if (!out.commit(error)) return false;
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const double nv = seq.mesh.vertex_count();
@@ -71,6 +116,7 @@ bool encode(const std::string& input, const std::string& output, const EncodeSet
                 seq.mesh.vertex_count(), bytes.size(), bytes.size() * 8.0 / nv,
                 st.connectivity_bits / splits, st.geometry_bits / splits, secs);
   line = buf;
+  if (as_glb) line += "; in a GLB of " + std::to_string(glb.size()) + " bytes";
   if (!seq.mesh.attributes.empty()) {
     std::snprintf(buf, sizeof buf, "; attributes: %s, %llu bytes",
                   seq.mesh.attributes.describe().c_str(), (unsigned long long)st.attribute_bytes);
@@ -125,11 +171,17 @@ int main(int argc, char** argv) {
                  tool::mesh_files_help("input meshes", false, "- reads one from stdin"))
       ->required()
       ->type_name("MESH...");
-  auto* out_opt = app.add_option("-o,--output", output, "output .pmz (- for stdout)");
+  auto* out_opt = app.add_option("-o,--output", output,
+                                 "output .pmz, or .glb (glTF with the stream; - for stdout)");
   auto* dir_opt = app.add_option(
       "--out-dir", out_dir,
-      "write each input's NAME.pmz into this folder (several inputs; made if missing)");
+      "write each input's NAME.pmz (NAME.glb with --glb) into this folder (several inputs; made if "
+      "missing)");
   out_opt->excludes(dir_opt);
+  app.add_flag("--glb", settings.glb,
+               "write binary glTF: the base mesh as a primitive, the stream in the "
+               "PMZ_progressive_mesh extension, materials and textures kept (docs/gltf-binding.md; "
+               "implied by -o NAME.glb)");
   app.add_option("-j,--jobs", jobs, "assets encoded at once with --out-dir (default: cores)")
       ->check(CLI::Range(1u, 1024u))
       ->capture_default_str();
@@ -186,7 +238,8 @@ int main(int argc, char** argv) {
     std::set<std::string> seen;
     for (const std::string& in : inputs) {
       outputs.push_back(
-          (std::filesystem::path(out_dir) / std::filesystem::path(in).stem()).string() + ".pmz");
+          (std::filesystem::path(out_dir) / std::filesystem::path(in).stem()).string() +
+          (settings.glb ? ".glb" : ".pmz"));
       if (!seen.insert(outputs.back()).second)
         return usage("two inputs would both write " + outputs.back());
     }

@@ -103,6 +103,7 @@ bool AttributeStream::first_apply(const ProgressiveMesh& pm, const int32_t* coor
   const size_t assigned_before = assigned.size();
   RangeDecoder& dec = *lazy.front();
   RangeState rc = dec.state();
+  models->cost.resume(rc);  // where counting symbol costs resumes (when it is on)
   bool ok = true;
   if (!h.materials.empty()) {
     state.face_material.resize(fn, h.materials.size() > 1 ? kPendingWedge : 0);

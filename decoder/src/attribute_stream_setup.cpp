@@ -28,6 +28,7 @@ bool AttributeStream::base(const uint8_t* p, size_t n, const ProgressiveMesh& pm
     state.face_material.assign(fn, h.materials.size() > 1 ? kPendingWedge : 0);
   RangeDecoder dec(p, n);
   RangeState rc = dec.state();
+  models->cost.resume(rc);  // where counting symbol costs resumes (when it is on)
   state.wedge_vertex.reserve(h.base_wedges);
   state.values.reserve(size_t(h.base_wedges) * state.stride);
   for (uint32_t f = 0; f < fn; ++f) {
@@ -38,6 +39,7 @@ bool AttributeStream::base(const uint8_t* p, size_t n, const ProgressiveMesh& pm
       if (state.wedge_count > h.base_wedges ||
           !decode_corner_wedge(rc, *models, pm, coords, state, f * 3 + k))
         return error = "ATTR: base corner " + PMZ_DECIMAL(f * 3 + k) + " wedge malformed", false;
+    models->cost.charge(rc, AttributeCost::kWedges);  // the face's reference symbols
   }
   if (!rc.ok || state.wedge_count != h.base_wedges)
     return error = "ATTR: base wedges do not match HEAD", false;

@@ -189,6 +189,7 @@ struct Decoder::Impl {
   // attr_awaited: the last SPLT chunk's ATTR chunk has not arrived (its splits are not
   // available yet).
   std::unique_ptr<AttributeStream> attrs;
+  double* attribute_bits = nullptr;  // Decoder::count_attribute_bits()
   bool base_geometry = false, attr_awaited = false;
   std::unique_ptr<std::pair<ProgressiveMesh, std::vector<int32_t>>> pending_base;  // its coords
   std::vector<MaterialInfo> materials;
@@ -498,6 +499,7 @@ Status Decoder::Impl::head(const uint8_t* p, size_t n) {
     attrs = std::make_unique<AttributeStream>();
     if (!attrs->head(p + fixed, n - fixed, h.full_faces, err))
       return fail(Status::corrupt, "HEAD attributes: " + err);
+    attrs->models->cost.bits = attribute_bits;
     for (const FileMaterial& m : attrs->state.head.materials) {
       MaterialInfo& out = materials.emplace_back();
       out.name = m.name;
@@ -1019,6 +1021,11 @@ uint64_t Decoder::Impl::coarsen(uint64_t max_splits, uint64_t face_floor) {
                          // kept as a guard
     fail(Status::out_of_memory, "allocation failed while coarsening");
   }
+  // The undone splits lowered face_begin: faces listed before then may now be at or above it
+  // (rewritten again from there on, or removed). MeshChanges lists only faces below it.
+  if (n > 0)
+    std::erase_if(level.changes.modified_faces,
+                  [&](uint32_t f) { return f >= level.changes.face_begin; });
   return n;
 }
 
@@ -1104,6 +1111,17 @@ const MaterialInfo* Decoder::material(uint32_t i) const {
 const std::string& Decoder::material_library() const {
   static const std::string kNone;
   return impl_->attrs ? impl_->attrs->state.head.material_library : kNone;
+}
+
+// The public kinds are the codec's, in the same order.
+static_assert(int(AttributeBits::texcoords) == AttributeCost::kTexcoords &&
+              int(AttributeBits::normals) == AttributeCost::kNormals &&
+              int(AttributeBits::colors) == AttributeCost::kColors &&
+              int(AttributeBits::materials) == AttributeCost::kMaterials &&
+              int(AttributeBits::wedges) == AttributeCost::kWedges &&
+              int(AttributeBits::kinds) == AttributeCost::kKinds);
+void Decoder::count_attribute_bits(AttributeBits* into) {
+  impl_->attribute_bits = into ? into->bits : nullptr;
 }
 
 }  // namespace pmz

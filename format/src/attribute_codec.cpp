@@ -34,6 +34,13 @@ bool read_string(ByteReader& r, std::string& s) {
   return decode_small(rc, m, x);
 }
 
+// The kind of a wedge's value component i (spec/format.md section 14.2's order).
+AttributeCost::Kind component_kind(const AttributeHeader& h, uint32_t i) {
+  if (i < 2 * h.texcoord_sets) return AttributeCost::kTexcoords;
+  return i < 2 * h.texcoord_sets + h.normal_components() ? AttributeCost::kNormals
+                                                         : AttributeCost::kColors;
+}
+
 // Up to two candidate wedges of corner c (spec/format.md section 14.3): the wedges of c's vertex in
 // the faces across c's two edges at that vertex (first the edge to next(c)), when assigned,
 // distinct.
@@ -435,6 +442,11 @@ PMZ_SMALL bool read_attribute_header(ByteReader& r, AttributeHeader& a, std::str
   return true;
 }
 
+void AttributeCost::add(const RangeState& rc, Kind k) {
+  bits[k] += 8.0 * double(rc.p - at) + std::log2(double(range) / double(rc.range));
+  resume(rc);
+}
+
 void AttributeQuantizer::init(const AttributeHeader& a) {
   for (uint32_t t = 0; t < a.texcoord_sets; ++t) {
     const float lo[3] = {a.texcoord_min[t][0], a.texcoord_min[t][1], 0},
@@ -530,9 +542,12 @@ PMZ_SMALL bool decode_new_wedge(RangeState& rc, AttributeModels& m, const Progre
   if (s.wedge_count >= s.head.full_wedges) return false;  // more wedges than HEAD announced
   int32_t pred[kMaxTexcoordSets * 2 + 7], value[kMaxTexcoordSets * 2 + 7];
   const PredictionKind kind = predict(pm, coords, s, c, cand, n, m.normal_score, pred);
+  m.cost.charge(rc, AttributeCost::kWedges);  // the reference symbols before the values
   uint32_t z = 0;
   for (uint32_t i = 0; i < s.stride; ++i) {
     if (!read_uint(rc, residual_model(m, s.head, i, kind, z), z)) return false;
+    if (m.cost.counting()) [[unlikely]]  // (the kind worked out only when counting)
+      m.cost.add(rc, component_kind(s.head, i));
     value[i] = int32_t(uint32_t(pred[i]) + uint32_t(zigzag_decode(z)));
   }
   score_normal(m, s.head, kind, value);
@@ -653,6 +668,7 @@ bool decode_split_wedges(RangeState& rc, AttributeModels& m, const ProgressiveMe
     else if (!decode_new_wedge(rc, m, pm, coords, s, c, nullptr, 0))
       return false;
   }
+  m.cost.charge(rc, AttributeCost::kWedges);  // the reference symbols after the last values
   return rc.ok;
 }
 
@@ -676,6 +692,7 @@ bool decode_face_material(RangeState& rc, AttributeModels& m, const ProgressiveM
   } else if (!read_uint(rc, m.material_escape, material) || material >= s.head.materials.size()) {
     return false;
   }
+  m.cost.charge(rc, AttributeCost::kMaterials);
   s.face_material[f] = material;
   return true;
 }

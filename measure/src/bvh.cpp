@@ -230,11 +230,14 @@ void TriangleBvh::build(const float* positions, const uint32_t* indices, size_t 
                   &triangles_[i * 9 + j * 3]);
 }
 
-double TriangleBvh::closest_distance2(const double p[3], uint32_t& hint) const {
+// The nearest-first traversal; accept(t) says which triangles count.
+template <class Accept>
+double TriangleBvh::closest(const double p[3], uint32_t& hint, Accept&& accept) const {
   double best = std::numeric_limits<double>::infinity();
   const size_t tri_count = triangle_count();
   if (tri_count == 0) return best;
   auto test = [&](uint32_t t) {
+    if (!accept(t)) return;
     const float* v = &triangles_[size_t(t) * 9];
     double d = point_triangle_distance2(p, v, v + 3, v + 6);
     if (d < best) best = d, hint = t;
@@ -263,6 +266,15 @@ double TriangleBvh::closest_distance2(const double p[3], uint32_t& hint) const {
     if (near.dist2 < best) stack[sp++] = near;
   }
   return best;
+}
+
+double TriangleBvh::closest_distance2(const double p[3], uint32_t& hint) const {
+  return closest(p, hint, [](uint32_t) { return true; });
+}
+
+double TriangleBvh::closest_distance2(const double p[3], uint32_t& hint, const uint32_t* labels,
+                                      uint32_t want) const {
+  return closest(p, hint, [&](uint32_t t) { return labels[faces_[t]] == want; });
 }
 
 }  // namespace pmz

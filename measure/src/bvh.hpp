@@ -17,6 +17,10 @@ class TriangleBvh {
   // order) whose distance seeds the search bound; it is updated to the nearest triangle, so
   // passing the previous result for spatially coherent queries prunes most of the tree.
   double closest_distance2(const double p[3], uint32_t& hint) const;
+  // The same over the triangles whose input face f has labels[f] == want (infinity when none
+  // has); hint names one of those, or none.
+  double closest_distance2(const double p[3], uint32_t& hint, const uint32_t* labels,
+                           uint32_t want) const;
 
   size_t triangle_count() const { return triangles_.size() / 9; }
   // A triangle in leaf order (as closest_distance2's hint names it): its 9 coordinates, and
@@ -31,6 +35,8 @@ class TriangleBvh {
     float hi[3];
     uint32_t count;  // triangles in a leaf; 0 for an interior node
   };
+  template <class Accept>
+  double closest(const double p[3], uint32_t& hint, Accept&& accept) const;
   std::vector<Node> nodes_;
   std::vector<float> triangles_;  // 9 floats per triangle, in leaf order
   std::vector<uint32_t> faces_;   // input face of each triangle, in leaf order

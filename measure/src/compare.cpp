@@ -191,8 +191,8 @@ bool compare(const IndexedMesh& original, const IndexedMesh& other, const Compar
 
   result.forward = one_direction(original, to_other, samples, options.seed, options.threads);
   if (options.attributes)
-    compare_attributes(original, other, to_other, samples, options.seed ^ 0x61747472ull,
-                       options.threads, result.attributes);
+    compare_attributes(original, other, to_other, options.both_directions ? &to_original : nullptr,
+                       samples, options.seed ^ 0x61747472ull, options.threads, result.attributes);
   if (options.both_directions) {
     result.backward =
         one_direction(other, to_original, samples, options.seed ^ 0x5bd1e995ull, options.threads);

@@ -18,6 +18,7 @@
 #include <sstream>
 
 #include "mesh_formats.hpp"
+#include "pmz/progressive_glb.hpp"
 #include "reader_support.hpp"
 
 namespace pmz {
@@ -518,11 +519,9 @@ std::string utf8_name(const std::string& s) {
 
 }  // namespace
 
-bool read_gltf(const std::string& path, std::string_view data, PolygonSoup& out,
-               std::string& error) {
-  tinygltf::TinyGLTF loader;
-  loader.SetImageLoader(no_image_loading, nullptr);
-  tinygltf::Model model;
+// Parses .gltf or .glb bytes (external buffers beside `path`) with the loader's image callback.
+static bool load_model(const std::string& path, std::string_view data, tinygltf::TinyGLTF& loader,
+                       tinygltf::Model& model, std::string& error) {
   std::string err, warn;
   const std::string base_dir = std::filesystem::path(path).parent_path().string();
   const auto* bytes = reinterpret_cast<const unsigned char*>(data.data());
@@ -541,28 +540,93 @@ bool read_gltf(const std::string& path, std::string_view data, PolygonSoup& out,
     error = path + ": " + first;
     return false;
   }
+  return true;
+}
+
+bool read_gltf(const std::string& path, std::string_view data, PolygonSoup& out,
+               std::string& error) {
+  tinygltf::TinyGLTF loader;
+  loader.SetImageLoader(no_image_loading, nullptr);
+  tinygltf::Model model;
+  if (!load_model(path, data, loader, model, error)) return false;
   Reader reader(path, model, out);
   return reader.run(error);
 }
 
-bool write_glb(const IndexedMesh& mesh, std::string& bytes, std::string& error) {
+namespace {
+
+// The image of a texture file: PNG and JPEG (glTF's core image types) by their signature.
+std::string image_mime_type(const std::string& data) {
+  if (data.starts_with("\x89PNG\r\n\x1a\n")) return "image/png";
+  if (data.starts_with("\xff\xd8\xff")) return "image/jpeg";
+  return "";
+}
+
+// Texture names made relative by backslashes (OBJ from Windows) read as folders.
+std::filesystem::path texture_path(const std::string& dir, std::string name) {
+  std::replace(name.begin(), name.end(), '\\', '/');
+  return std::filesystem::path(dir) / name;
+}
+
+// The image of a texture name: a glTF input's own or the file, PNG or JPEG; false with a line
+// saying why in t.not_embedded.
+bool texture_image(GlbTextures& t, const std::string& name, std::string& data) {
+  std::string why;
+  if (auto it = t.images.find(name); it != t.images.end())
+    data = it->second;
+  else if (!read_file(texture_path(t.dir, name).string(), data, why))
+    return t.not_embedded.push_back(why), false;
+  if (!image_mime_type(data).empty()) return true;
+  t.not_embedded.push_back(name + ": not a PNG or JPEG image");
+  return false;
+}
+
+// Adds the PMZ_progressive_mesh extension (docs/gltf-binding.md) to every primitive, the
+// stream as the buffer's last view.
+void add_stream(tinygltf::Model& model, const GlbStream& stream) {
+  std::vector<unsigned char>& buffer = model.buffers[0].data;
+  buffer.resize((buffer.size() + 3) & ~size_t(3));
+  tinygltf::BufferView bv;
+  bv.buffer = 0, bv.byteOffset = buffer.size(), bv.byteLength = stream.bytes.size();
+  buffer.insert(buffer.end(), stream.bytes.begin(), stream.bytes.end());
+  model.bufferViews.push_back(bv);
+  using tinygltf::Value;
+  auto vec3 = [](const float* v) {
+    return Value(Value::Array{Value(double(v[0])), Value(double(v[1])), Value(double(v[2]))});
+  };
+  Value::Object bounds{{"min", vec3(stream.bbox_min)}, {"max", vec3(stream.bbox_max)}};
+  Value::Object ext{{"bufferView", Value(int(model.bufferViews.size() - 1))},
+                    {"version", Value(stream.version)},
+                    {"fullVertexCount", Value(int(stream.full_vertices))},
+                    {"fullFaceCount", Value(int(stream.full_faces))},
+                    {"fullBounds", Value(bounds)}};
+  for (tinygltf::Primitive& prim : model.meshes[0].primitives)
+    prim.extensions[kProgressiveExtension] = Value(ext);
+  model.extensionsUsed.push_back(kProgressiveExtension);
+}
+
+// The model of write_glb's layout; with `textures`, texture files found relative to
+// textures->dir are embedded.
+bool build_model(const IndexedMesh& mesh, GlbTextures* textures, tinygltf::Model& model,
+                 std::string& error) {
   const MeshAttributes& a = mesh.attributes;
   if (mesh.face_count() == 0) {
     error = "no faces to write";
     return false;
   }
+  model = {};
   const bool wedges = a.has_wedges();
   const uint32_t nv = wedges ? a.wedge_count() : mesh.vertex_count();
   auto vertex_of = [&](uint32_t v) { return wedges ? a.wedge_vertices[v] : v; };
-  tinygltf::Model model;
   model.asset.version = "2.0";
   model.asset.generator = "pmz";
   model.buffers.resize(1);
   std::vector<unsigned char>& buffer = model.buffers[0].data;
-  // One buffer view per accessor, 4-byte aligned (every component here is 4 bytes).
+  // One buffer view per accessor, 4-byte aligned (every component here is 4 bytes; embedded
+  // images between them have any length).
   auto add_accessor = [&](const std::vector<float>* floats, const std::vector<uint32_t>* ints,
                           int type, int target) {
-    size_t offset = buffer.size();
+    size_t offset = (buffer.size() + 3) & ~size_t(3);
     const void* src = floats ? static_cast<const void*>(floats->data()) : ints->data();
     size_t size = (floats ? floats->size() : ints->size()) * 4;
     buffer.resize(offset + size);
@@ -616,7 +680,9 @@ bool write_glb(const IndexedMesh& mesh, std::string& bytes, std::string& error) 
         &values, nullptr, a.color_components == 4 ? TINYGLTF_TYPE_VEC4 : TINYGLTF_TYPE_VEC3,
         TINYGLTF_TARGET_ARRAY_BUFFER);
   }
-  // Materials, their textures and images (URIs only: pmz carries no pixels).
+  // Materials, their textures and images (URIs, or with `textures` the images embedded), one
+  // texture per file name.
+  std::map<std::string, int> texture_of;
   for (const Material& m : a.materials) {
     tinygltf::Material gm;
     gm.name = utf8_name(m.name);
@@ -624,13 +690,28 @@ bool write_glb(const IndexedMesh& mesh, std::string& bytes, std::string& error) 
     for (double& c : gm.pbrMetallicRoughness.baseColorFactor) c = std::clamp(c, 0.0, 1.0);
     gm.pbrMetallicRoughness.metallicFactor = 0;  // OBJ / PLY materials are not metallic
     auto texture = [&](const std::string& file) {
+      if (auto it = texture_of.find(file); it != texture_of.end()) return it->second;
       tinygltf::Image image;
       image.uri = uri_encode(file);
+      std::string data;
+      if (textures && texture_image(*textures, file, data)) {
+        // The image's bytes in the buffer, after the mesh's; named as the material names it.
+        std::vector<unsigned char>& buffer = model.buffers[0].data;
+        buffer.resize((buffer.size() + 3) & ~size_t(3));
+        tinygltf::BufferView bv;
+        bv.buffer = 0, bv.byteOffset = buffer.size(), bv.byteLength = data.size();
+        buffer.insert(buffer.end(), data.begin(), data.end());
+        model.bufferViews.push_back(bv);
+        image.uri.clear();
+        image.name = utf8_name(file);
+        image.bufferView = int(model.bufferViews.size() - 1);
+        image.mimeType = image_mime_type(data);
+      }
       model.images.push_back(image);
       tinygltf::Texture t;
       t.source = int(model.images.size() - 1);
       model.textures.push_back(t);
-      return int(model.textures.size() - 1);
+      return texture_of[file] = int(model.textures.size() - 1);
     };
     if (!m.base_color_texture.empty())
       gm.pbrMetallicRoughness.baseColorTexture.index = texture(m.base_color_texture);
@@ -664,6 +745,10 @@ bool write_glb(const IndexedMesh& mesh, std::string& bytes, std::string& error) 
   scene.nodes.push_back(0);
   model.scenes.push_back(scene);
   model.defaultScene = 0;
+  return true;
+}
+
+bool serialise_glb(const tinygltf::Model& model, std::string& bytes, std::string& error) {
   std::ostringstream stream;
   tinygltf::TinyGLTF writer;
   bool written = false;
@@ -679,6 +764,42 @@ bool write_glb(const IndexedMesh& mesh, std::string& bytes, std::string& error) 
   }
   bytes = stream.str();
   return true;
+}
+
+}  // namespace
+
+bool read_gltf_images(const std::string& path, std::map<std::string, std::string>& images,
+                      std::string& error) {
+  std::string data;
+  if (!read_file(path, data, error)) return false;
+  tinygltf::TinyGLTF loader;
+  // The image's bytes as the file has them (the loader is given them undecoded).
+  loader.SetImageLoader(
+      [](tinygltf::Image* image, const int, std::string*, std::string*, int, int,
+         const unsigned char* bytes, int size, void*) {
+        image->image.assign(bytes, bytes + size);
+        return true;
+      },
+      nullptr);
+  tinygltf::Model model;
+  if (!load_model(path, data, loader, model, error)) return false;
+  for (const tinygltf::Image& im : model.images)
+    if (!im.name.empty() && !im.image.empty() && (im.uri.empty() || im.uri.starts_with("data:")))
+      images.emplace(im.name, std::string(im.image.begin(), im.image.end()));
+  return true;
+}
+
+bool write_glb(const IndexedMesh& mesh, std::string& bytes, std::string& error) {
+  tinygltf::Model model;
+  return build_model(mesh, nullptr, model, error) && serialise_glb(model, bytes, error);
+}
+
+bool write_progressive_glb(const IndexedMesh& base, const GlbStream& stream, GlbTextures& textures,
+                           std::string& bytes, std::string& error) {
+  tinygltf::Model model;
+  if (!build_model(base, &textures, model, error)) return false;
+  add_stream(model, stream);
+  return serialise_glb(model, bytes, error);
 }
 
 }  // namespace pmz

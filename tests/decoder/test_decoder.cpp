@@ -2,24 +2,26 @@
 // Streaming decoder behaviour on a committed sample (tests/data/sample.pmz: a 128-face bumpy
 // sphere written by pmz-encode; when the bitstream changes, regenerate it with
 // `pmz-encode tests/data/sample.obj -o tests/data/sample.pmz`): prefixes, chunkings, level moves,
-// change tracking, bad input.
+// change tracking (also on conformance vectors), bad input.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <random>
+#include <string>
 #include <vector>
 
+#include "pmz/attribute_codec.hpp"
 #include "pmz/coding.hpp"
 #include "pmz/decoder.hpp"
 #include "pmz/format.hpp"
 
 namespace {
 
-std::vector<uint8_t> load_sample() {
+std::vector<uint8_t> load(const std::string& path) {
   std::vector<uint8_t> out;
-  FILE* f = std::fopen(PMZ_SOURCE_DIR "/tests/data/sample.pmz", "rb");
+  FILE* f = std::fopen(path.c_str(), "rb");
   if (!f) return out;
   uint8_t buf[4096];
   size_t n;
@@ -88,7 +90,7 @@ pmz::FileHeader head_of(const std::vector<uint8_t>& file) {
 class DecoderTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    file = load_sample();
+    file = load(PMZ_SOURCE_DIR "/tests/data/sample.pmz");
     ASSERT_GT(file.size(), 100u) << "tests/data/sample.pmz missing";
   }
   std::vector<uint8_t> file;
@@ -228,6 +230,158 @@ TEST_F(DecoderTest, ChangesDescribeEveryDifference) {
     for (uint32_t v = 0; v < c.vertex_begin * 3; ++v)
       ASSERT_EQ(after.positions[v], before.positions[v]);
   }
+}
+
+// The change report (pmz::MeshChanges) against its contract in pmz/decoder.hpp, on the sample
+// and conformance vectors (attributes, materials, boundaries, the speed level), through random
+// sequences of refine, coarsen, set_face_target and set_split_target with the report cleared
+// only now and then, so that it spans several level moves: every listed face lies below
+// face_begin, the ranges lie within the counts, and everything the report leaves out (faces
+// below face_begin not listed, vertices below vertex_begin, wedges below wedge_begin) is as it
+// was when the report was last cleared.
+template <class T>
+std::vector<T> copy(const T* p, size_t n) {
+  return p ? std::vector<T>(p, p + n) : std::vector<T>();
+}
+
+// Everything the report speaks for, per face, vertex and wedge.
+struct Arrays {
+  std::vector<float> positions;
+  std::vector<uint32_t> indices, wedge_indices, materials, wedge_vertices;
+  std::vector<std::vector<float>> texcoords;
+  std::vector<float> normals, colors;
+  bool operator==(const Arrays&) const = default;
+};
+Arrays arrays(const pmz::Decoder& d) {
+  Arrays a;
+  const size_t v = d.vertex_count(), f = d.face_count(), w = d.wedge_count();
+  a.positions = copy(d.positions(), v * 3);
+  a.indices = copy(d.indices(), f * 3);
+  a.wedge_indices = copy(d.wedge_indices(), w ? f * 3 : 0);
+  a.materials = copy(d.face_materials(), f);
+  a.wedge_vertices = copy(d.wedge_vertices(), w);
+  for (uint32_t s = 0; s < d.texcoord_set_count(); ++s)
+    a.texcoords.push_back(copy(d.texcoords(s), w * 2));
+  a.normals = copy(d.normals(), w * 3);
+  a.colors = copy(d.colors(), w * d.color_components());
+  return a;
+}
+
+template <class T>
+bool same(const std::vector<T>& a, const std::vector<T>& b, size_t i, size_t n) {
+  return std::equal(a.begin() + ptrdiff_t(i * n), a.begin() + ptrdiff_t(i * n + n),
+                    b.begin() + ptrdiff_t(i * n));
+}
+
+// The report against the arrays as they were at the last clear_changes() (a report that says
+// `all`, as one whose list outgrew the mesh does, asks for everything and is not checked).
+void expect_contract(const pmz::Decoder& d, const Arrays& before, const std::string& where,
+                     uint64_t& checked) {
+  SCOPED_TRACE(where);
+  const pmz::MeshChanges& c = d.changes();
+  if (c.all) {
+    ASSERT_TRUE(c.modified_faces.empty());
+    return;
+  }
+  ++checked;
+  ASSERT_LE(c.face_begin, d.face_count());
+  ASSERT_LE(c.vertex_begin, d.vertex_count());
+  ASSERT_LE(c.wedge_begin, d.wedge_count());
+  const Arrays now = arrays(d);
+  // face_begin never passes a face the report's calls removed.
+  ASSERT_LE(c.face_begin, before.indices.size() / 3);
+  ASSERT_LE(c.vertex_begin, before.positions.size() / 3);
+  ASSERT_LE(c.wedge_begin, before.wedge_vertices.size());
+  std::vector<char> listed(c.face_begin, 0);
+  for (uint32_t f : c.modified_faces) {
+    ASSERT_LT(f, c.face_begin) << "a listed face is not below face_begin (face count "
+                               << d.face_count() << ")";
+    listed[f] = 1;
+  }
+  for (uint32_t f = 0; f < c.face_begin; ++f) {
+    if (listed[f]) continue;
+    ASSERT_TRUE(same(now.indices, before.indices, f, 3)) << "face " << f << " not listed";
+    if (!now.wedge_indices.empty()) {
+      ASSERT_TRUE(same(now.wedge_indices, before.wedge_indices, f, 3)) << "face " << f;
+    }
+    if (!now.materials.empty()) {
+      ASSERT_EQ(now.materials[f], before.materials[f]) << "face " << f;
+    }
+  }
+  for (uint32_t v = 0; v < c.vertex_begin; ++v)
+    ASSERT_TRUE(same(now.positions, before.positions, v, 3)) << "vertex " << v;
+  const uint32_t cn = d.color_components();
+  for (uint32_t w = 0; w < c.wedge_begin; ++w) {
+    ASSERT_EQ(now.wedge_vertices[w], before.wedge_vertices[w]) << "wedge " << w;
+    for (size_t s = 0; s < now.texcoords.size(); ++s) {
+      ASSERT_TRUE(same(now.texcoords[s], before.texcoords[s], w, 2)) << "wedge " << w;
+    }
+    if (!now.normals.empty()) {
+      ASSERT_TRUE(same(now.normals, before.normals, w, 3)) << "wedge " << w;
+    }
+    if (cn) {
+      ASSERT_TRUE(same(now.colors, before.colors, w, cn)) << "wedge " << w;
+    }
+  }
+}
+
+void walk(const std::string& name, unsigned seed) {
+  SCOPED_TRACE(name);
+  const std::vector<uint8_t> bytes = load(PMZ_SOURCE_DIR "/tests/" + name);
+  ASSERT_FALSE(bytes.empty()) << "cannot read tests/" << name;
+  pmz::Decoder d;
+  ASSERT_EQ(d.feed(bytes.data(), bytes.size()), pmz::Status::ok) << d.error_message();
+  ASSERT_EQ(d.finish(), pmz::Status::ok);
+  const uint64_t total = d.splits_available(), full = d.info().full_faces;
+  ASSERT_GT(total, 20u);
+  d.set_split_target(total / 2);
+  d.clear_changes();
+  Arrays before = arrays(d);
+  std::mt19937 rng(seed);
+  uint64_t coarsened_reports = 0, checked = 0;
+  bool coarsened = false;
+  for (int step = 0; step < 400; ++step) {
+    const uint32_t op = rng() % 8;
+    const uint64_t n = rng() % 2 ? rng() % 8 : rng() % (total / 4 + 1);
+    std::string what;
+    if (op < 3) {
+      what = "refine " + std::to_string(n);
+      d.refine(n);
+    } else if (op < 6) {
+      what = "coarsen " + std::to_string(n);
+      coarsened = coarsened || d.coarsen(n) > 0;
+    } else if (op == 6) {
+      const uint64_t faces = rng() % (full + 1);
+      what = "face target " + std::to_string(faces);
+      const uint64_t applied = d.splits_applied();
+      d.set_face_target(faces);
+      coarsened = coarsened || d.splits_applied() < applied;
+    } else {
+      const uint64_t splits = rng() % (total + 1);
+      what = "split target " + std::to_string(splits);
+      coarsened = coarsened || splits < d.splits_applied();
+      d.set_split_target(splits);
+    }
+    expect_contract(d, before, "step " + std::to_string(step) + ": " + what, checked);
+    if (::testing::Test::HasFatalFailure()) return;
+    if (rng() % 4 == 0) {  // the report spans several calls until it is cleared
+      coarsened_reports += coarsened;
+      coarsened = false;
+      d.clear_changes();
+      before = arrays(d);
+    }
+  }
+  EXPECT_GT(coarsened_reports, 10u);
+  EXPECT_GT(checked, 200u);
+}
+
+TEST(ChangeReport, MeetsItsContractThroughLevelMoves) {
+  walk("data/sample.pmz", 1);
+  walk("conformance/vectors/seamed-q.pmz", 2);  // a-wedges, two materials
+  walk("conformance/vectors/seamed-coarse.pmz", 3);
+  walk("conformance/vectors/torus-q14.pmz", 4);
+  walk("conformance/vectors/terrain-base.pmz", 5);  // boundaries
+  walk("conformance/vectors/seamed-speed.pmz", 6);  // the speed level
 }
 
 TEST_F(DecoderTest, RejectsWrongMagicAndVersion) {
@@ -458,6 +612,44 @@ TEST_F(DecoderTest, InputContract) {
   pmz::Decoder moved = std::move(whole);
   EXPECT_EQ(moved.positions(), positions);
   EXPECT_EQ(moved.face_count(), faces);
+}
+
+// Counting what each ATTR symbol costs (Decoder::count_attribute_bits, for pmz-info) changes no
+// decoded result, and the counts add up to the ATTR chunks' payloads but for the range coder's
+// start and end (a few bytes per chunk).
+TEST(AttributeBits, CountingChangesNothingAndAddsUp) {
+  const std::vector<uint8_t> file = load(PMZ_SOURCE_DIR "/tests/conformance/vectors/seamed-q.pmz");
+  ASSERT_FALSE(file.empty());
+  pmz::Decoder plain, counted;
+  pmz::AttributeBits b;
+  counted.count_attribute_bits(&b);
+  ASSERT_EQ(plain.feed(file.data(), file.size()), pmz::Status::ok);
+  for (size_t at = 0; at < file.size(); at += 7)
+    ASSERT_EQ(counted.feed(file.data() + at, std::min<size_t>(7, file.size() - at)),
+              pmz::Status::ok);
+  ASSERT_EQ(plain.finish(), pmz::Status::ok);
+  ASSERT_EQ(counted.finish(), pmz::Status::ok);
+  for (uint64_t target : {uint64_t(40), ~uint64_t(0), uint64_t(100), ~uint64_t(0)}) {
+    plain.set_split_target(target);
+    counted.set_split_target(target);
+    ASSERT_GT(plain.wedge_count(), 0u);
+    EXPECT_TRUE(arrays(plain) == arrays(counted)) << "at " << target << " splits";
+  }
+  ASSERT_EQ(counted.splits_applied(), counted.info().total_splits);
+
+  double bits = 0;
+  for (double kind : b.bits) {
+    EXPECT_GT(kind, 0);
+    bits += kind;
+  }
+  uint64_t payload = 0, chunks = 0;
+  for (size_t at : chunk_offsets(file))
+    if (const pmz::ChunkFrame f = frame_at(file, at); f.type == pmz::kChunkAttributes)
+      payload += f.payload_size, ++chunks;
+  ASSERT_EQ(chunks, 2u);  // the base's and the one SPLT chunk's
+  const double bytes = bits / 8;
+  EXPECT_LE(bytes, double(payload) + 1) << payload << " bytes of ATTR payload";
+  EXPECT_GE(bytes, double(payload) - 4 * double(chunks)) << payload << " bytes of ATTR payload";
 }
 
 }  // namespace

@@ -306,11 +306,11 @@ TEST(AttrRoundTrip, ChangesCoverWedges) {
     ASSERT_FALSE(c.all);
     EXPECT_EQ(c.wedge_begin, std::min(wedges, d.wedge_count()));
     EXPECT_EQ(c.face_begin, std::min<uint32_t>(before.wedge_indices.size() / 3, d.face_count()));
-    // (After coarsening the list may name faces at or above face_begin, even removed ones:
-    // a renderer skips those, as the viewer's mirror does.)
     std::vector<char> listed(c.face_begin, 0);
-    for (uint32_t f : c.modified_faces)
-      if (f < c.face_begin) listed[f] = 1;
+    for (uint32_t f : c.modified_faces) {
+      ASSERT_LT(f, c.face_begin) << "listed face at or above face_begin";
+      listed[f] = 1;
+    }
     for (uint32_t f = 0; f < c.face_begin; ++f) {
       const bool same = std::equal(d.wedge_indices() + f * 3, d.wedge_indices() + f * 3 + 3,
                                    before.wedge_indices.begin() + f * 3);

@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "../encoder/seamed_grid.hpp"
 #include "pmz/compare.hpp"
 
 namespace {
@@ -76,6 +77,80 @@ TEST(CompareAttributes, InterpolationErrorOfAQuadraticField) {
   const pmz::AttributeErrors e = measure(fine, coarse);
   EXPECT_NEAR(e.texcoord.mean, 1.0 / 6.0 - 1.0 / (6.0 * n * n), 2e-3);
   EXPECT_NEAR(e.texcoord.max, 0.25, 2e-3);
+}
+
+// The seamed grid (16 x 16, seam at column 7: u jumps by about 0.5 there) with the seam's
+// vertices moved by 0.002 in x, as quantizing positions moves them: samples of the right chart
+// within 0.002 of the seam now find the left chart's faces nearest. The faces across the seam
+// count too, so the error stays that of the moved geometry (below 0.4 * 0.002 in u), not the
+// jump.
+pmz::IndexedMesh moved_seam() {
+  pmz::IndexedMesh m = pmz_test::seamed_grid(16, 7);
+  for (uint32_t j = 0; j <= 16; ++j)
+    m.positions[size_t(pmz_test::grid_vertex(16, 7, j)) * 3] += 0.002f;
+  return m;
+}
+
+TEST(CompareAttributes, AMovedSeamIsNotAChartJump) {
+  const pmz::AttributeErrors e = measure(pmz_test::seamed_grid(16, 7), moved_seam());
+  EXPECT_GT(e.texcoord.samples, 10000u);
+  EXPECT_LT(e.texcoord.max, 0.002);
+  EXPECT_LT(e.texcoord.mean, 1e-3);
+}
+
+// A real error at the same moved seam is still measured: u + 0.05 on every corner of the right
+// chart gives 0.05 on that chart (the left chart's values across the seam, 0.5 away, do not
+// hide it) and none on the left, so the mean is 0.05 times the right chart's share of the area.
+TEST(CompareAttributes, AShiftedChartAtAMovedSeamIsMeasured) {
+  const pmz::IndexedMesh original = pmz_test::seamed_grid(16, 7);
+  pmz::IndexedMesh shifted = moved_seam();
+  std::vector<float>& uv = shifted.attributes.texcoords[0];
+  for (size_t w = 0; w < uv.size(); w += 2)
+    if (uv[w] > 0.5f) uv[w] += 0.05f;  // the right chart: u >= 0.55
+  double area[2] = {0, 0};
+  for (uint32_t f = 0; f < original.face_count(); ++f) {
+    const float* p[3];
+    for (int k = 0; k < 3; ++k) p[k] = &original.positions[size_t(original.indices[f * 3 + k]) * 3];
+    double a[3], b[3];
+    for (int k = 0; k < 3; ++k) a[k] = p[1][k] - p[0][k], b[k] = p[2][k] - p[0][k];
+    const double x = a[1] * b[2] - a[2] * b[1], y = a[2] * b[0] - a[0] * b[2],
+                 z = a[0] * b[1] - a[1] * b[0];
+    area[original.attributes.face_materials[f]] += 0.5 * std::sqrt(x * x + y * y + z * z);
+  }
+  const pmz::AttributeErrors e = measure(original, shifted);
+  EXPECT_NEAR(e.texcoord.max, 0.05, 0.002);
+  EXPECT_NEAR(e.texcoord.mean, 0.05 * area[1] / (area[0] + area[1]), 0.002);
+}
+
+// Two sheets that cross (a surface that passes through itself), each its own chart: the unit
+// square at z = lift (u, v = x, y) and a 5 x 5 square tilted through it along x = 0.5 (u, v =
+// x + 0.5, y + 0.5). Lifting the flat one by 1e-3 puts the tilted sheet nearest to its samples
+// within about 2e-3 of the crossing; its own chart, 1e-3 away, is the one compared: no error,
+// not the 0.7 between the charts.
+TEST(CompareAttributes, ACrossingSheetOfAnotherChartIsNotTheCorrespondent) {
+  auto sheets = [](float lift) {
+    pmz::IndexedMesh m = square(4);
+    const pmz::IndexedMesh tilted = square(5, 0.5f);
+    const uint32_t nv = m.vertex_count(), nw = m.attributes.wedge_count();
+    for (size_t i = 0; i < m.positions.size(); i += 3) m.positions[i + 2] = lift;
+    for (size_t i = 0; i < tilted.positions.size(); i += 3) {
+      const float x = tilted.positions[i];
+      m.positions.insert(m.positions.end(), {x, tilted.positions[i + 1], 0.5f * (x - 0.5f)});
+    }
+    pmz::MeshAttributes& a = m.attributes;
+    const pmz::MeshAttributes& b = tilted.attributes;
+    for (uint32_t i = 0; i < tilted.indices.size(); ++i)
+      m.indices.push_back(nv + tilted.indices[i]),
+          a.corner_wedges.push_back(nw + b.corner_wedges[i]);
+    for (uint32_t v : b.wedge_vertices) a.wedge_vertices.push_back(nv + v);
+    a.texcoords[0].insert(a.texcoords[0].end(), b.texcoords[0].begin(), b.texcoords[0].end());
+    a.normals.insert(a.normals.end(), b.normals.begin(), b.normals.end());
+    a.colors.insert(a.colors.end(), b.colors.begin(), b.colors.end());
+    return m;
+  };
+  const pmz::AttributeErrors e = measure(sheets(0), sheets(1e-3f));
+  EXPECT_GT(e.texcoord.samples, 10000u);
+  EXPECT_LT(e.texcoord.max, 1e-6);
 }
 
 // Attributes only one mesh has are not measured.

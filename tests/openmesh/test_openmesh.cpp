@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: MIT
 // The OpenMesh adapter: to_mesh turns a TriMesh's standard properties into wedges, encode gives
 // a stream that decodes back to the mesh, and MeshView keeps a TriMesh equal to the decoder's
-// arrays (counts, positions, each face's vertices in order, every corner's attributes) through
-// refining, coarsening, face targets and streaming, updating incrementally.
+// arrays (counts, positions, each face's vertices in order, every corner's attributes, each
+// face's material as its texture index) through refining, coarsening, face targets and
+// streaming, updating incrementally.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -10,6 +11,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <map>
 #include <set>
 
@@ -138,6 +141,11 @@ void expect_matches(const pmz::openmesh::MeshView<Mesh>& view, const pmz::Decode
     }
   }
   ASSERT_EQ(m.n_edges(), edges.size());
+  // Materials: each face's texture index.
+  const uint32_t* materials = d.face_materials();
+  ASSERT_EQ(m.has_face_texture_index(), materials != nullptr);
+  for (uint32_t f = 0; materials && f < d.face_count(); ++f)
+    ASSERT_EQ(m.texture_index(OpenMesh::FaceHandle(int(f))), int(materials[f])) << "face " << f;
   // OpenMesh's own links agree: next / prev, opposite, faces' and vertices' halfedges, and no
   // element left deleted.
   for (auto h : m.halfedges()) {
@@ -207,8 +215,8 @@ void expect_matches(const pmz::openmesh::MeshView<Mesh>& view, const pmz::Decode
 
 // The full decode against the encoded TriMesh (lossless): positions, faces and every corner's
 // normal, texture coordinates and colour.
-void expect_original(const TriMesh& decoded, const TriMesh& in,
-                     const std::vector<uint32_t>& order) {
+void expect_original(const TriMesh& decoded, const TriMesh& in, const std::vector<uint32_t>& order,
+                     bool wedges = true) {
   ASSERT_EQ(decoded.n_vertices(), in.n_vertices());
   ASSERT_EQ(decoded.n_faces(), in.n_faces());
   for (auto v : decoded.vertices())
@@ -230,6 +238,10 @@ void expect_original(const TriMesh& decoded, const TriMesh& in,
     for (auto v : decoded.fv_range(f)) t[k++] = int(order[v.idx()]);
     const auto it = faces.find(key(t));
     ASSERT_NE(it, faces.end()) << "decoded face " << f.idx();
+    if (in.has_face_texture_index()) {
+      ASSERT_EQ(decoded.texture_index(f), in.texture_index(it->second)) << "face " << f.idx();
+    }
+    if (!wedges) continue;
     for (auto h : decoded.fh_range(f)) {
       const int want = int(order[decoded.to_vertex_handle(h).idx()]);
       auto g = in.halfedge_handle(it->second);
@@ -510,6 +522,135 @@ TEST(OpenMeshView, CorpusMeshWithHoles) {
     view.coarsen(uint64_t(1) << i);
     expect_matches(view, d, "coarsen " + std::to_string(1 << i));
   }
+}
+
+// Two materials as face texture indices (with "TextureMapping", as OpenMesh's OBJ reader sets
+// them): the stream carries them as materials, and the view gives every face the decoded
+// material as its texture index at every level, and the texture file names back.
+TEST(OpenMeshView, MaterialsAsFaceTextureIndices) {
+  for (const bool wedges : {true, false}) {
+    SCOPED_TRACE(wedges ? "with attributes" : "materials only");
+    TriMesh in = from_indexed(pmz::make_sample_mesh(6000));
+    if (wedges) add_attributes(in);
+    in.request_face_texture_index();
+    for (auto f : in.faces()) {  // the faces right of x = 0 are metal, the others paint
+      float cx = 0;
+      for (auto v : in.fv_range(f)) cx += in.point(v)[0] / 3;
+      in.set_texture_index(f, cx > 0 ? 1 : 0);
+    }
+    OpenMesh::MPropHandleT<std::map<int, std::string>> mapping;
+    in.add_property(mapping, "TextureMapping");
+    in.property(mapping) = {{0, "paint.png"}, {1, "metal.png"}};
+
+    pmz::IndexedMesh indexed;
+    std::string error;
+    ASSERT_TRUE(pmz::openmesh::to_mesh(in, indexed, error)) << error;
+    const pmz::MeshAttributes& a = indexed.attributes;
+    ASSERT_EQ(a.materials.size(), 2u);
+    EXPECT_EQ(a.materials[0].name, "texture0");
+    EXPECT_EQ(a.materials[1].base_color_texture, "metal.png");
+    ASSERT_EQ(a.face_materials.size(), in.n_faces());
+    for (auto f : in.faces())
+      ASSERT_EQ(a.face_materials[size_t(f.idx())], uint32_t(in.texture_index(f)));
+
+    const Stream s = encode(in);
+    pmz::Decoder d;
+    ASSERT_EQ(d.feed(s.bytes.data(), s.bytes.size()), pmz::Status::ok) << d.error_message();
+    ASSERT_EQ(d.material_count(), 2u);
+    EXPECT_EQ(d.material(0)->base_color_texture, "paint.png");
+    pmz::openmesh::MeshView<> view(d);
+    ASSERT_TRUE(view.update());
+    expect_matches(view, d, "base");
+    ASSERT_TRUE(view.mesh().has_face_texture_index());
+    std::set<int> seen;
+    for (auto f : view.mesh().faces()) seen.insert(view.mesh().texture_index(f));
+    EXPECT_EQ(seen, (std::set<int>{0, 1}));
+    OpenMesh::MPropHandleT<std::map<int, std::string>> out;
+    ASSERT_TRUE(view.mesh().get_property_handle(out, "TextureMapping"));
+    EXPECT_EQ(view.mesh().property(out), in.property(mapping));
+
+    const uint64_t total = d.info().total_splits;
+    view.refine(total / 2);
+    expect_matches(view, d, "refine to the middle");
+    for (uint64_t step : {1u, 7u, 100u}) {  // incremental: the change report's faces
+      view.refine(step);
+      expect_matches(view, d, "refine " + std::to_string(step));
+      EXPECT_FALSE(view.last_rebuilt());
+    }
+    for (uint64_t step : {1u, 3u, 60u}) {
+      view.coarsen(step);
+      expect_matches(view, d, "coarsen " + std::to_string(step));
+      EXPECT_FALSE(view.last_rebuilt());
+    }
+    for (uint64_t faces : {d.info().full_faces / 4, d.info().full_faces * 3 / 5, uint64_t(50),
+                           d.info().full_faces}) {
+      view.set_face_target(faces);
+      expect_matches(view, d, "face target " + std::to_string(faces));
+    }
+    // Several calls between updates (coarsening < 0, refining > 0), then the full mesh: the
+    // input's materials.
+    for (const auto& calls : {std::vector<int>{-400, 150, -9}, std::vector<int>{30, -200, 250}}) {
+      for (int n : calls) n < 0 ? d.coarsen(uint64_t(-n)) : d.refine(uint64_t(n));
+      ASSERT_TRUE(view.update());
+      expect_matches(view, d, "several calls, one update");
+    }
+    view.refine();
+    expect_matches(view, d, "full");
+    expect_original(view.mesh(), in, s.order, wedges);
+  }
+}
+
+// A stream with materials from an OBJ file (the seamed-q conformance vector: two materials
+// with map_Kd textures): texture indices and "TextureMapping" through level moves.
+TEST(OpenMeshView, MaterialsOfAStreamFromObj) {
+  std::ifstream file(PMZ_SOURCE_DIR "/tests/conformance/vectors/seamed-q.pmz", std::ios::binary);
+  const std::vector<uint8_t> bytes{std::istreambuf_iterator<char>(file), {}};
+  ASSERT_FALSE(bytes.empty());
+  pmz::Decoder d;
+  ASSERT_EQ(d.feed(bytes.data(), bytes.size()), pmz::Status::ok) << d.error_message();
+  ASSERT_EQ(d.material_count(), 2u);
+  pmz::openmesh::MeshView<> view(d);
+  ASSERT_TRUE(view.update());
+  expect_matches(view, d, "base");
+  OpenMesh::MPropHandleT<std::map<int, std::string>> mapping;
+  ASSERT_TRUE(view.mesh().get_property_handle(mapping, "TextureMapping"));
+  EXPECT_EQ(view.mesh().property(mapping),
+            (std::map<int, std::string>{{0, "paint.png"}, {1, "metal.png"}}));
+  for (uint64_t step : {1u, 20u, 200u}) {
+    view.refine(step);
+    expect_matches(view, d, "refine " + std::to_string(step));
+  }
+  view.coarsen(50);
+  expect_matches(view, d, "coarsen 50");
+  view.set_face_target(d.info().full_faces);
+  expect_matches(view, d, "full");
+  view.set_face_target(d.info().full_faces / 3);
+  expect_matches(view, d, "a third");
+  pmz::openmesh::ViewOptions no_materials;
+  no_materials.materials = false;
+  pmz::openmesh::MeshView<> plain(d, no_materials);
+  ASSERT_TRUE(plain.update());
+  EXPECT_FALSE(plain.mesh().has_face_texture_index());
+}
+
+TEST(OpenMeshToMesh, TextureIndicesOutOfRangeOrLeftOut) {
+  TriMesh m = grid(2);
+  m.request_face_texture_index();
+  for (auto f : m.faces()) m.set_texture_index(f, 4);
+  pmz::IndexedMesh out;
+  std::string error;
+  ASSERT_TRUE(pmz::openmesh::to_mesh(m, out, error)) << error;
+  EXPECT_EQ(out.attributes.materials.size(), 5u);  // indices 0..4, one used
+  EXPECT_EQ(out.attributes.face_materials, std::vector<uint32_t>(8, 4));
+  pmz::openmesh::ConvertOptions none;
+  none.materials = false;
+  ASSERT_TRUE(pmz::openmesh::to_mesh(m, out, error, none)) << error;
+  EXPECT_TRUE(out.attributes.empty());
+  m.set_texture_index(OpenMesh::FaceHandle(3), -1);
+  EXPECT_FALSE(pmz::openmesh::to_mesh(m, out, error));
+  EXPECT_EQ(error, "pmz::openmesh::to_mesh: face 3 has texture index -1, outside 0..65535");
+  m.set_texture_index(OpenMesh::FaceHandle(3), 65536);
+  EXPECT_FALSE(pmz::openmesh::to_mesh(m, out, error));
 }
 
 }  // namespace

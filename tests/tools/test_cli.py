@@ -22,6 +22,7 @@ import stat
 import subprocess
 import sys
 import time
+import zlib
 
 BIN, SAMPLE_OBJ, SAMPLE_PMZ, WORK = (os.path.abspath(a) for a in sys.argv[1:5])
 ONLY = sys.argv[5:]
@@ -564,6 +565,122 @@ def case_info_describes_truncated_file():
               j["splits_available"] <= whole["splits"] and
               (cut > 300 or j["splits_available"] < whole["splits"]),
               f"pmz-info --json on {cut} bytes: {j}")
+
+
+def case_info_decode_of_truncated_file():
+    d = fresh("info_trunc_decode")
+    data = sample_bytes()
+    path = os.path.join(d, "cut.pmz")
+    open(path, "wb").write(data[:len(data) - 3])
+    r = run([tool("pmz-info"), path, "--decode"])
+    check(r.returncode == 0 and "truncated" in r.stdout.decode() and
+          "full refinement" in r.stdout.decode(),
+          f"pmz-info --decode on a truncated file: rc={r.returncode} {err_text(r)!r}")
+
+
+SEAMED = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "conformance")
+
+
+def attribute_bytes_add_up(j, what):
+    a = j.get("attributes")
+    check(a is not None and j.get("attribute_bytes_counted") is True,
+          f"pmz-info --json {what}: no attributes counted: {j}")
+    total = sum(e["bytes"] for e in a.values())
+    check(total == j["attribute_bytes"] and j["other_bytes"] >= j["attribute_bytes"] > 0,
+          f"{what}: the entries' bytes add up to {total}, not attribute_bytes: {j}")
+    # Every symbol is counted: what is left is the chunk headers and the coder's start and end.
+    check(0 < a["framing"]["bytes"] <= 16 * j["attribute_chunks"],
+          f"{what}: {a['framing']['bytes']} bytes of framing in {j['attribute_chunks']} ATTR "
+          f"chunks: {a}")
+    return a
+
+
+def case_info_attribute_kinds():
+    # seamed-coarse: texture coordinates, normals, colours (6, 4 and 3 bits) and 2 materials.
+    path = os.path.join(SEAMED, "vectors", "seamed-coarse.pmz")
+    j = info_json(path)
+    a = attribute_bytes_add_up(j, "seamed-coarse.pmz")
+    want = {"texcoords": ("texture coordinates", 6), "normals": ("normals", 4),
+            "colors": ("colours", 3)}
+    for key, (name, bits) in want.items():
+        check(key in a and a[key]["name"] == name and a[key]["bits"] == bits and
+              a[key]["bytes"] > 0, f"seamed-coarse.pmz: {key} should be {name}, {bits} bits, "
+              f"some bytes: {a}")
+    check(a["materials"]["count"] == 2 and a["materials"]["bytes"] > 0 and a["wedges"]["bytes"] > 0,
+          f"seamed-coarse.pmz: materials or wedge references: {a}")
+    r = run([tool("pmz-info"), path])
+    o = r.stdout.decode()
+    for line in ("texture coordinates  1 set, 6 bits", "normals              octahedral, 4 bits",
+                 "colours              RGB, 3 bits", f"attributes {j['attribute_bytes']} bytes"):
+        check(line in o, f"pmz-info seamed-coarse.pmz does not say {line!r}: {o}")
+    # --decode times another decoder: the counts are the same.
+    r = run([tool("pmz-info"), "--json", "--decode", path])
+    check(r.returncode == 0 and json.loads(r.stdout)["attributes"] == a,
+          f"pmz-info --decode counts otherwise: {r.stdout!r}")
+
+
+def case_info_texcoords_only():
+    d = fresh("info_texcoords")
+    obj = os.path.join(d, "uv.obj")
+    with open(os.path.join(SEAMED, "meshes", "seamed.obj")) as src, open(obj, "w") as out:
+        for line in src:
+            w = line.split()
+            if not w or w[0] in ("vn", "mtllib", "usemtl"):
+                continue
+            if w[0] == "v":
+                line = " ".join(w[:4]) + "\n"  # without the colour
+            elif w[0] == "f":
+                line = "f " + " ".join("/".join(c.split("/")[:2]) for c in w[1:]) + "\n"
+            out.write(line)
+    pmz = os.path.join(d, "uv.pmz")
+    r = run([tool("pmz-encode"), obj, "-o", pmz])
+    check(r.returncode == 0, f"pmz-encode {obj}: rc={r.returncode} {err_text(r)}")
+    j = info_json(pmz)
+    a = attribute_bytes_add_up(j, "texture coordinates only")
+    check(sorted(a) == ["framing", "texcoords", "wedges"] and a["texcoords"]["bits"] == 12 and
+          a["texcoords"]["bytes"] > 0, f"texture coordinates only: {a}")
+    o = run([tool("pmz-info"), pmz]).stdout.decode()
+    check("texture coordinates" in o and "normals" not in o and "colours" not in o,
+          f"pmz-info on texture coordinates only: {o}")
+    # Cut before the first ATTR chunk: the kinds HEAD declares are still named.
+    data = open(pmz, "rb").read()
+    cut = os.path.join(d, "cut.pmz")
+    open(cut, "wb").write(data[:j["header_bytes"] + 2])
+    o = run([tool("pmz-info"), cut]).stdout.decode()
+    check("texture coordinates  1 set, 12 bits" in o and "none in the file" in o,
+          f"pmz-info on a file cut before ATTR: {o}")
+
+
+def case_info_attribute_damage():
+    # The last ATTR chunk's second half set to 0xFF, its CRC made right: the framing reads, the
+    # symbols do not. Counting the attribute bytes applies the splits, which finds it.
+    d = fresh("info_attr_damage")
+    b = bytearray(open(os.path.join(SEAMED, "vectors", "seamed-q.pmz"), "rb").read())
+
+    def varint(p):
+        v = s = 0
+        while True:
+            v |= (b[p] & 0x7F) << s
+            s += 7
+            p += 1
+            if b[p - 1] < 0x80:
+                return v, p
+    at, last = 8, None
+    while b[at] != 4:  # up to END
+        size, q = varint(at + 1)
+        if b[at] == 5:
+            last = (at, q, size)
+        at = q + 4 + size
+    at, q, size = last
+    p = q + 4
+    b[p + size // 2:p + size] = b"\xff" * (size - size // 2)
+    b[q:q + 4] = zlib.crc32(bytes(b[at:q]) + bytes(b[p:p + size])).to_bytes(4, "little")
+    path = os.path.join(d, "damaged.pmz")
+    open(path, "wb").write(b)
+    r = run([tool("pmz-info"), path])
+    e = err_text(r)
+    check(r.returncode == 1 and r.stdout == b"" and "attributes malformed" in e and
+          e.count("\n") == 1, f"pmz-info on damaged attributes: rc={r.returncode} {e!r}")
 
 
 def case_unreachable_decode_target_warns():

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 import { BufferGeometry, Loader, LoadingManager, MagnificationTextureFilter, Material,
-  MeshStandardMaterial, MeshStandardMaterialParameters, MinificationTextureFilter, Texture,
-  TextureLoader, Wrapping } from 'three';
+  MeshStandardMaterial, MeshStandardMaterialParameters, MinificationTextureFilter, Object3D,
+  Texture, TextureLoader, Wrapping } from 'three';
 import { Decoder, DecoderOptions, PmzMaterial, PmzStatus, StreamInfo } from './index.js';
 
 export interface PMZOptions extends DecoderOptions {
@@ -18,6 +18,9 @@ export interface PMZOptions extends DecoderOptions {
   /** PMZWorkerStream: bytes of the worker's ranges one update() applies (default 8 MiB; at
    * least one update). */
   maxUpdateBytes?: number;
+  /** Texture coordinates as glTF's, v down the image (1 - v of the stream's); PMZGLTFPlugin
+   * sets it. */
+  flipV?: boolean;
 }
 
 /** A copy of the decoder's current mesh. */
@@ -151,4 +154,25 @@ export declare class PMZLoader extends Loader<BufferGeometry> {
     source: string | URL | Response | ReadableStream<Uint8Array> | Blob,
     onUpdate?: (stream: PMZStream | PMZWorkerStream) => void,
   ): Promise<(PMZStream | PMZWorkerStream) & { done: Promise<PmzStatus> }>;
+}
+
+/** The part of GLTFLoader's GLTFParser the plugin uses. */
+export interface PMZGLTFParser {
+  json: any;
+  associations: Map<object, { meshes?: number; primitives?: number }>;
+  getDependency(type: 'bufferView', index: number): Promise<ArrayBuffer>;
+}
+
+/** GLTFLoader plugin for PMZ_progressive_mesh (docs/gltf-binding.md):
+ * `gltfLoader.register((parser) => new PMZGLTFPlugin(parser, options))`. Each mesh that carries
+ * the extension shows its glTF base, then takes the stream's geometry, which refines in place
+ * (`mesh.userData.pmzStream`); with several materials its primitives become one mesh with a
+ * material array. The loaded glTF's `userData.pmzStreams` lists the streams and
+ * `userData.pmzReady` resolves once each shows its base (or has failed, the base kept). */
+export declare class PMZGLTFPlugin {
+  constructor(parser: PMZGLTFParser, options?: PMZOptions);
+  readonly name: 'PMZ_progressive_mesh';
+  readonly streams: (PMZStream | PMZWorkerStream)[];
+  readonly ready: Promise<(PMZStream | PMZWorkerStream)[]>;
+  afterRoot(result: { scenes: Object3D[]; userData: Record<string, unknown> }): Promise<unknown> | null;
 }

@@ -77,9 +77,10 @@ function allocateGeometry(g, info, vertices, faces, caps, spec) {
 // page, copies posted by the worker). The update ranges of all updates applied in one frame
 // are merged.
 class GeometryMirror {
-  constructor(geomorph) {
+  // flipV: texture coordinates as glTF's (v down the image: 1 - v of the stream's).
+  constructor(geomorph, flipV = false) {
     this.geometry = new BufferGeometry();
-    this.spec = { geomorph, layout: null, groups: false, faceMaterials: new Uint32Array(0) };
+    this.spec = { geomorph, flipV, layout: null, groups: false, faceMaterials: new Uint32Array(0) };
     this.caps = { vertices: 0, faces: 0 };
     this.faces = 0;
     this.clock = typeof performance === 'object' ? performance : Date;
@@ -105,7 +106,12 @@ class GeometryMirror {
       }
       const vb = u.vertexBegin, fb = u.faceBegin;
       g.getAttribute('position').array.set(u.positions, 3 * vb);
-      for (const [name, size] of spec.layout) g.getAttribute(name).array.set(u.attributes[name], size * vb);
+      for (const [name, size] of spec.layout) {
+        const a = g.getAttribute(name).array;
+        a.set(u.attributes[name], size * vb);
+        if (spec.flipV && size === 2)
+          for (let i = 2 * vb + 1, end = 2 * u.count; i < end; i += 2) a[i] = 1 - a[i];
+      }
       const index = g.getIndex().array;
       index.set(u.indices, 3 * fb);
       if (spec.groups && u.faceMaterials) spec.faceMaterials.set(u.faceMaterials, fb);
@@ -196,7 +202,7 @@ class GeometryMirror {
 export class PMZStream {
   constructor(decoder, options = {}) {
     this.decoder = decoder;
-    this._mirror = new GeometryMirror(options.geomorph ?? false);
+    this._mirror = new GeometryMirror(options.geomorph ?? false, options.flipV ?? false);
     this.geometry = this._mirror.geometry;
     this.geomorph = options.geomorph ?? false;
     this.frameBudgetMs = options.frameBudgetMs ?? 8;
@@ -312,7 +318,7 @@ export class PMZStream {
 // animation frame applies what arrived since the last one (budgetMs is not needed here).
 export class PMZWorkerStream {
   constructor(options = {}) {
-    this._mirror = new GeometryMirror(options.geomorph ?? false);
+    this._mirror = new GeometryMirror(options.geomorph ?? false, options.flipV ?? false);
     this.geometry = this._mirror.geometry;
     this.geomorph = options.geomorph ?? false;
     this.faceTarget = null;
@@ -625,5 +631,96 @@ export class PMZLoader extends Loader {
       return workerDone ? workerDone : status;
     })();
     return s;
+  }
+}
+
+// GLTFLoader plugin for PMZ_progressive_mesh (docs/gltf-binding.md, draft):
+//   loader.register((parser) => new PMZGLTFPlugin(parser, options));
+// GLTFLoader builds each primitive's base mesh as usual; once the scene is built, the stream in
+// the extension's buffer view goes through PMZLoader.stream() (options: PMZLoader's, worker
+// included) and the base's three.js meshes take the stream's geometry, which refines in place.
+// One stream per glTF mesh, shared by the nodes that use it. With several materials the mesh's
+// primitives (one per material) become one three.js mesh whose material array follows the
+// stream's material table (glTF material k is the stream's material k). Each mesh's
+// userData.pmzStream is its stream; the plugin's `streams` (the loaded glTF's
+// userData.pmzStreams) lists them all (GLTFLoader's onLoad comes once they exist), and `ready`
+// (userData.pmzReady) resolves once each shows its base or has failed (a stream the decoder
+// refuses leaves the glTF base in place).
+export class PMZGLTFPlugin {
+  constructor(parser, options = {}) {
+    this.name = 'PMZ_progressive_mesh';
+    this.parser = parser;
+    this.options = options;
+    this.streams = [];
+    this.ready = Promise.resolve([]);
+  }
+
+  afterRoot(result) {
+    const parser = this.parser, json = parser.json;
+    if (!(json.extensionsUsed || []).includes(this.name)) return null;
+    // The primitives' three.js meshes, by glTF mesh and by parent (one instance of the mesh).
+    const meshes = new Map();
+    for (const scene of result.scenes) {
+      scene.traverse((object) => {
+        const a = object.isMesh ? parser.associations.get(object) : null;
+        if (!a || a.meshes === undefined || a.primitives === undefined) return;
+        const ext = json.meshes[a.meshes].primitives[a.primitives].extensions?.[this.name];
+        if (!ext) return;  // (a version the decoder does not read fails it: the base stays)
+        if (!meshes.has(a.meshes)) meshes.set(a.meshes, { ext, instances: new Map() });
+        const instances = meshes.get(a.meshes).instances;
+        const key = object.parent && object.parent.isGroup &&
+          parser.associations.get(object.parent)?.meshes === a.meshes ? object.parent : object;
+        if (!instances.has(key)) instances.set(key, []);
+        instances.get(key).push({ object, primitive: a.primitives });
+      });
+    }
+    const loader = new PMZLoader(undefined, { ...this.options, flipV: true });
+    const started = [...meshes].map(async ([meshIndex, { ext, instances }]) => {
+      const view = await parser.getDependency('bufferView', ext.bufferView);
+      // Every glTF material: the stream's table (a material may have no base faces, so no
+      // primitive of its own).
+      const materials = await Promise.all((json.materials || []).map((_, k) => parser.getDependency('material', k)));
+      let shown = false, resolveShown;
+      const baseShown = new Promise((resolve) => { resolveShown = resolve; });
+      const stream = await loader.stream(new Blob([view]), (s) => {
+        if (shown || !s.geometry.getIndex()) return;
+        shown = true;
+        for (const parts of instances.values()) this._attach(s, meshIndex, parts, materials);
+        resolveShown(s);
+      });
+      const settle = () => resolveShown(stream);
+      stream.done.then(settle, settle);
+      this.streams.push(stream);
+      return { baseShown };  // (not the promise itself: onLoad waits for the streams only)
+    });
+    this.ready = Promise.all(started).then((all) => Promise.all(all.map((x) => x.baseShown)));
+    Object.assign(result.userData, { pmzStreams: this.streams, pmzReady: this.ready });
+    return Promise.all(started);
+  }
+
+  // One instance of the mesh: its first primitive's three.js mesh takes the stream's geometry
+  // (with several materials: one per glTF material, the primitives' own where they have one,
+  // as GLTFLoader adapted them, else GLTFLoader's material adapted the same way: vertex colours,
+  // flat shading without normals); the other primitives' meshes leave the scene.
+  _attach(stream, meshIndex, parts, materials) {
+    const prims = this.parser.json.meshes[meshIndex].primitives;
+    parts.sort((a, b) => a.primitive - b.primitive);
+    const [first, ...rest] = parts;
+    if (stream.materials().length > 1) {
+      const g = stream.geometry;
+      const own = new Map(parts.map((p) => [prims[p.primitive].material, p.object.material]));
+      first.object.material = materials.map((m, k) => {
+        if (own.has(k)) return own.get(k);
+        const colors = !!g.getAttribute('color'), flat = !g.getAttribute('normal');
+        if (!colors && !flat) return m;
+        const copy = m.clone();
+        if (colors) copy.vertexColors = true;
+        if (flat) copy.flatShading = true;
+        return copy;
+      });
+    }
+    first.object.geometry = stream.geometry;
+    first.object.userData.pmzStream = stream;
+    for (const p of rest) p.object.removeFromParent();
   }
 }

@@ -6,18 +6,17 @@
 // and the final level both show the object, in the canvas and in screenshots of the page, and
 // differ.
 import assert from 'node:assert/strict';
-import { mkdtempSync, readFileSync, rmSync, statSync, writeFileSync } from 'node:fs';
+import { mkdtempSync, readFileSync, statSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import path from 'node:path';
 import { after, before, test } from 'node:test';
-import puppeteer from 'puppeteer-core';
 
 import { CHECKER_BLUE, CHECKER_RED, demoPmz, encodeNative, importPackage, nativeArrays, nativeDecode,
   webDir, writeTexturedTorus, writeTiledPlane } from './common.mjs';
-import { CHROMIUM_ARGS, serveViewer } from './serve.mjs';
+import { launchChromium, serveViewer } from './serve.mjs';
 
 const RATE = 10 * 1024;  // bytes per second: the 80 KB sample takes about 8 s (frames are slow on a loaded machine)
-let server, browser, profile;
+let server, browser;
 
 let textured;  // the seamed textured torus (red / blue checkerboard) as .pmz, checker.png beside it
 // The sample's first TRUNCATED_BYTES bytes (`head -c`): a truncated stream whose last good level
@@ -44,14 +43,11 @@ before(async () => {
     'truncated.pmz': { file: truncated, bytesPerSecond: Infinity },
     'tiled.pmz': tiled, 'tiles.png': path.join(work, 'tiles.png'),
     'late.pmz': lateStream, 'late.png': { file: path.join(late, 'checker.png'), delayMs: LATE_MS } }, RATE);
-  profile = mkdtempSync(path.join(tmpdir(), 'pmz-chromium-'));
-  browser = await puppeteer.launch({ executablePath: process.env.PMZ_CHROMIUM || '/usr/bin/chromium',
-    headless: true, args: [...CHROMIUM_ARGS, `--user-data-dir=${profile}`] });
+  browser = await launchChromium();
 });
 after(async () => {
-  if (browser) await browser.close();
+  if (browser) await browser.closeAndClean();
   if (server) server.close();
-  if (profile) rmSync(profile, { recursive: true, force: true });
 });
 
 // Share of pixels that differ between two pmzSnapshot()s.

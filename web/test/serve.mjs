@@ -3,9 +3,11 @@
 // the textures beside them) are throttled to `bytesPerSecond` (chunks every 10 ms), with
 // Content-Length. streams[NAME]: a file, or {file, bytesPerSecond (Infinity: at once), delayMs
 // (before the response starts)}; server.requests[NAME]: when each request came (Date.now()).
-import { createReadStream, readFileSync, statSync } from 'node:fs';
+import { createReadStream, mkdtempSync, readFileSync, rmSync, statSync } from 'node:fs';
 import http from 'node:http';
+import { tmpdir } from 'node:os';
 import path from 'node:path';
+import puppeteer from 'puppeteer-core';
 
 const TYPES = { '.html': 'text/html', '.js': 'text/javascript', '.mjs': 'text/javascript',
   '.wasm': 'application/wasm', '.json': 'application/json', '.png': 'image/png' };
@@ -58,3 +60,16 @@ export function serveViewer(viewerDir, streams, bytesPerSecond) {
 export const CHROMIUM_ARGS = ['--headless', '--no-sandbox', '--disable-gpu', '--use-gl=swiftshader',
   '--enable-unsafe-swiftshader', '--disable-background-networking', '--disable-component-update',
   '--disable-sync', '--no-first-run'];
+
+// Headless Chromium (Debian's, or PMZ_CHROMIUM) with a fresh profile; close() ends it and
+// removes the profile.
+export async function launchChromium() {
+  const profile = mkdtempSync(path.join(tmpdir(), 'pmz-chromium-'));
+  const browser = await puppeteer.launch({ executablePath: process.env.PMZ_CHROMIUM || '/usr/bin/chromium',
+    headless: true, args: [...CHROMIUM_ARGS, `--user-data-dir=${profile}`] });
+  browser.closeAndClean = async () => {
+    await browser.close();
+    rmSync(profile, { recursive: true, force: true });
+  };
+  return browser;
+}

@@ -91,6 +91,13 @@ struct MaterialInfo {
   float base_color[4] = {1, 1, 1, 1};
 };
 
+// What the ATTR chunks' symbols cost, in bits, per attribute kind (Decoder::count_attribute_bits).
+struct AttributeBits {
+  // wedges: which wedge each corner takes (seams, creases), shared by the kinds.
+  enum Kind { texcoords, normals, colors, materials, wedges, kinds };
+  double bits[kinds] = {};
+};
+
 class PMZ_API Decoder {
  public:
   // Waits for the stream's first byte. `limits` cap the stream (checked against the header's
@@ -166,6 +173,15 @@ class PMZ_API Decoder {
   uint32_t material_count() const;
   const MaterialInfo* material(uint32_t i) const;  // nullptr for i >= material_count()
   const std::string& material_library() const;     // OBJ mtllib name, or empty
+
+  // ---- analysis (pmz-info) ----
+  // Off unless count_attribute_bits() is called before the first feed(): then the decoder adds
+  // what each ATTR symbol costs to into->bits as it decodes the symbol (the base ATTR chunk's in
+  // feed(), a split's when the split is first applied), by the kind it codes; *into must outlive
+  // that decoding. A symbol's cost is how far it narrowed the range decoder's interval (8 bits
+  // per byte taken in, plus log2 of the range before over the range after); a chunk's costs add
+  // up to its bytes but for the coder's start and end. Counting changes no decoded result.
+  void count_attribute_bits(AttributeBits* into);
 
   // ---- changes, for partial uploads ----
   // What changed since the last clear_changes() (see MeshChanges).

@@ -74,8 +74,41 @@ struct AttributeQuantizer {
   float dequantize_color(int32_t q) const;
 };
 
+// What the ATTR symbols cost, in bits, per kind (for analysis: pmz-info), summed into bits[]
+// while decoding when bits is set (null, the default: a test per symbol). A symbol's cost is
+// how far it narrowed the range decoder's interval: 8 bits per byte taken in, plus log2 of the
+// range before over the range after (its -log2 p, with the coder's rounding). A chunk's costs
+// add up to its bytes but for the coder's start and end. The values of a new a-wedge count as
+// their kinds, the face materials as kMaterials, and every other symbol (the reference, escape
+// and simple symbols of spec/format.md sections 14.3 and 14.5: which a-wedge each corner
+// takes) as kWedges. The WebAssembly decoder leaves the counting out (its size budget).
+struct AttributeCost {
+  enum Kind { kTexcoords, kNormals, kColors, kMaterials, kWedges, kKinds };
+  double* bits = nullptr;  // kKinds sums (the decoder's caller's: pmz::AttributeBits)
+  const uint8_t* at;       // the decoder's state after the last symbol counted
+  uint32_t range;
+#if defined(__wasm__)
+  static constexpr bool kCounts = false;
+#else
+  static constexpr bool kCounts = true;
+#endif
+  bool counting() const { return kCounts && bits; }
+  // Where decoding resumes (a chunk's start, or its next split), rc the decoder's state.
+  void resume(const RangeState& rc) {
+    if (kCounts) at = rc.p, range = rc.range;
+  }
+  // The bits since the last symbol counted (or resume()) to k, when counting.
+  void charge(const RangeState& rc, Kind k) {
+    if (counting()) [[unlikely]]
+      add(rc, k);
+  }
+  void add(const RangeState& rc, Kind k);  // out of line: the call sites stay small
+};
+
 // Context models of the ATTR streams, created once per file (carried across chunks).
 struct AttributeModels {
+  AttributeCost cost;  // symbol costs, counted only when cost.bits is set (first: the shortest
+                       // address at the decoder's call sites)
   SmallModel reference[2][3];    // [u corner][candidates]
   UIntModel escape;              // an existing wedge that is no candidate: wedges - 1 - id
   UIntModel texcoord[2];         // [component], without a face-map prediction

@@ -38,12 +38,23 @@ struct DistanceStats {
 // Attribute error at corresponding surface points: for area-proportional samples on ORIGINAL,
 // the closest point of OTHER; the attribute interpolated there (from OTHER's corners) against
 // the sample's own. mean and rms over the samples, max the largest.
+// Texture coordinates are compared on the sample's own chart (charts: faces joined across
+// edges whose ends agree in position and texture coordinates). Along a texture seam they are
+// several-valued, and a seam moved a little (quantized positions, say) puts the closest point
+// of samples next to it on the other chart; where two sheets touch or cross, the closest point
+// can lie on another sheet. So the texture error is the smallest |delta uv| over: the closest
+// face of OTHER; the closest of the faces of OTHER that stand for the sample's chart (each
+// chart of OTHER stands for the ORIGINAL chart under most of its area); and, at each of the
+// two, the faces across a seam at its corners, each at its point closest to the sample. A
+// difference that the sample's chart in OTHER does not explain is still measured (up to the
+// jump in texture space to another chart's values there): a shifted chart reads as its shift.
 struct AttributeErrorStats {
   double max = 0, mean = 0, rms = 0;
   uint64_t samples = 0;  // 0: not measured (a mesh lacks the attribute)
 };
 struct AttributeErrors {
-  AttributeErrorStats texcoord;  // |delta (u, v)| of texture coordinate set 0, texture units
+  AttributeErrorStats texcoord;  // |delta (u, v)| of texture coordinate set 0, texture units,
+                                 // on the sample's own chart (above)
   AttributeErrorStats normal;    // angle between the interpolated normals, degrees
   AttributeErrorStats color;     // |delta| of the colour (RGB or RGBA, channels 0..1)
 };

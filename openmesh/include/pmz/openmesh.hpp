@@ -27,7 +27,12 @@
 // from the halfedge property (per corner: seams and creases kept), else the vertex property,
 // else (colours only) the face property; ConvertOptions picks another source or none. Corners
 // of one vertex with equal values share a wedge (pmz/mesh.hpp). Integer colours are scaled by
-// their type's maximum to [0, 1].
+// their type's maximum to [0, 1]. Materials: with face texture indices
+// (request_face_texture_index), each face's index is its material; material i is named
+// "texture<i>" (as pmz names a PLY file's texnumber textures) and its base colour texture is
+// entry i of the mesh property "TextureMapping" (std::map<int, std::string>, index -> file
+// name, as OpenMesh's importer sets it for its readers) when there is one. Indices run
+// 0..65535; the table holds index 0 up to the highest used or mapped one.
 //
 // Decoding (MeshView): update() brings the owned mesh to the decoder's current level through
 // Decoder::changes() and clears that report (a renderer that uploads the same deltas reads
@@ -37,7 +42,10 @@
 // what moves into them (not the whole mesh). Attributes: halfedge properties get each corner's
 // wedge (exact); vertex properties the vertex's lowest-numbered wedge (one side of a seam); face
 // colours, when asked for, the face's first corner's. Only the texture coordinate set
-// ViewOptions::texcoord_set is kept (OpenMesh has one 2D set); materials are not carried.
+// ViewOptions::texcoord_set is kept (OpenMesh has one 2D set). A stream with materials gives
+// each face its material as face texture index, and the materials' base colour textures as the
+// mesh property "TextureMapping" (std::map<int, std::string>: index -> file name), so that the
+// two round-trip through encode.
 //
 // Cost: see MeshView.
 #pragma once
@@ -53,6 +61,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -72,6 +81,9 @@ using TriMesh = OpenMesh::TriMesh_ArrayKernelT<>;
 namespace detail {
 
 inline constexpr uint32_t kNone = 0xFFFFFFFFu;
+inline constexpr int64_t kMaterials = 65536;  // a stream's material table holds at most these
+inline constexpr const char* kTextureMapping = "TextureMapping";
+using TextureMapping = OpenMesh::MPropHandleT<std::map<int, std::string>>;
 
 template <class Color>
 constexpr uint32_t color_size() {
@@ -116,6 +128,7 @@ struct ConvertOptions {
   Source normals = Source::automatic;
   Source texcoords = Source::automatic;
   Source colors = Source::automatic;
+  bool materials = true;  // face texture indices, when the mesh has them, as materials
 };
 
 namespace detail {
@@ -142,11 +155,42 @@ inline bool resolve(Source wanted, bool has_h, bool has_v, bool has_f, bool face
   return true;
 }
 
+// The faces' texture indices as materials (see the top of this file). False with a one-line
+// message for an index pmz cannot carry.
+template <class Mesh>
+bool texture_materials(const Mesh& mesh, MeshAttributes& a, std::string& error) {
+  int64_t top = -1;
+  a.face_materials.reserve(mesh.n_faces());
+  for (auto f : mesh.faces()) {
+    const int64_t t = int64_t(mesh.texture_index(f));
+    if (t < 0 || t >= kMaterials) {
+      error = "pmz::openmesh::to_mesh: face " + std::to_string(f.idx()) + " has texture index " +
+              std::to_string(t) + ", outside 0.." + std::to_string(kMaterials - 1);
+      return false;
+    }
+    a.face_materials.push_back(uint32_t(t));
+    top = std::max(top, t);
+  }
+  TextureMapping mapping;
+  const bool mapped = mesh.get_property_handle(mapping, kTextureMapping);
+  if (mapped)
+    for (const auto& [id, file] : mesh.property(mapping))
+      if (id >= 0 && id < kMaterials) top = std::max(top, int64_t(id));
+  a.materials.resize(size_t(top + 1));
+  for (size_t i = 0; i < a.materials.size(); ++i)
+    a.materials[i].name = "texture" + std::to_string(i);
+  if (mapped)
+    for (const auto& [id, file] : mesh.property(mapping))
+      if (id >= 0 && id < kMaterials) a.materials[size_t(id)].base_color_texture = file;
+  return true;
+}
+
 }  // namespace detail
 
 // The mesh as pmz's encoder takes it: vertices in handle order (deleted ones skipped), faces in
-// handle order with their corners in face-halfedge order, and the attributes (see the top of
-// this file). False with a one-line message when an explicitly requested property is missing.
+// handle order with their corners in face-halfedge order, and the attributes and materials (see
+// the top of this file). False with a one-line message when an explicitly requested property is
+// missing or a texture index is out of range.
 template <class Mesh>
 bool to_mesh(const Mesh& mesh, IndexedMesh& out, std::string& error,
              const ConvertOptions& options = {}) {
@@ -165,6 +209,9 @@ bool to_mesh(const Mesh& mesh, IndexedMesh& out, std::string& error,
     error = "pmz::openmesh::to_mesh: more than 2^32 vertices or corners";
     return false;
   }
+  if (options.materials && mesh.has_face_texture_index() &&
+      !detail::texture_materials(mesh, out.attributes, error))
+    return false;
   using Color = typename Mesh::Color;
   const uint32_t color_n = cs == Source::none ? 0 : std::min(detail::color_size<Color>(), 4u);
 
@@ -271,6 +318,7 @@ struct ViewOptions {
   bool vertex_attributes = true;    // vertex normals, texcoords2D, colours: lowest wedge's
   bool halfedge_attributes = true;  // halfedge normals, texcoords2D, colours: per corner
   bool face_colors = false;         // face colours: the first corner's
+  bool materials = true;            // face texture indices and "TextureMapping"
   uint32_t texcoord_set = 0;        // which of the file's texture coordinate sets
   // An update that deletes and adds more than this fraction of the faces rebuilds the mesh
   // instead (measured at the middle level of bunny00: see MeshView).
@@ -368,7 +416,8 @@ class MeshView {
 
   // The properties this decoder's attributes fill, as requested on the mesh.
   struct Layout {
-    bool normals = false, texcoords = false, colors = false;
+    bool normals = false, texcoords = false, colors = false, materials = false;
+    bool wedges() const { return normals || texcoords || colors; }
     bool operator==(const Layout&) const = default;
   };
   Layout wanted() const {
@@ -377,6 +426,7 @@ class MeshView {
     l.normals = d.normals() != nullptr;
     l.texcoords = d.texcoords(options_.texcoord_set) != nullptr;
     l.colors = d.colors() != nullptr && d.color_components() >= 3;
+    l.materials = d.face_materials() != nullptr && options_.materials;
     return l;
   }
   bool layout_matches() const { return built_ && wanted() == layout_; }
@@ -402,8 +452,25 @@ class MeshView {
       if (h) mesh_.request_halfedge_colors();
       if (options_.face_colors) mesh_.request_face_colors();
     }
+    if (l.materials && !layout_.materials) {
+      mesh_.request_face_texture_index();
+      texture_mapping();
+    }
     layout_ = l;
-    attributes_ = l.normals || l.texcoords || l.colors;
+    attributes_ = l.wedges() || l.materials;
+  }
+  // The materials' base colour textures as "TextureMapping" (the table is the stream's, read
+  // with its header: written once). Added only when some material has one.
+  void texture_mapping() {
+    const Decoder& d = *decoder_;
+    detail::TextureMapping mapping;
+    for (uint32_t i = 0; i < d.material_count(); ++i) {
+      const std::string& file = d.material(i)->base_color_texture;
+      if (file.empty()) continue;
+      if (!mapping.is_valid() && !mesh_.get_property_handle(mapping, detail::kTextureMapping))
+        mesh_.add_property(mapping, detail::kTextureMapping);
+      mesh_.property(mapping)[int(i)] = file;
+    }
   }
 
   // Adds the decoder's face f as the mesh's next face, its halfedge at the first corner.
@@ -433,8 +500,11 @@ class MeshView {
 
   void face_attributes(uint32_t f) {
     const Decoder& d = *decoder_;
-    const uint32_t* wedges = d.wedge_indices() + size_t(f) * 3;
     const FH fh{int(f)};
+    if (layout_.materials)
+      mesh_.set_texture_index(fh, typename Mesh::TextureIndex(d.face_materials()[f]));
+    if (!layout_.wedges()) return;
+    const uint32_t* wedges = d.wedge_indices() + size_t(f) * 3;
     if (options_.halfedge_attributes) {
       HH h = mesh_.halfedge_handle(fh);
       for (int k = 0; k < 3; ++k, h = mesh_.next_halfedge_handle(h)) {

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 // The openmesh component: a .pmz file (argv[1]) read SLICE bytes at a time (argv[2]), a
 // pmz::openmesh::MeshView refined after each slice, then coarsened half way; the TriMesh must
-// equal the decoder's mesh each time (counts, positions, faces' vertices in order, normals).
+// equal the decoder's mesh each time (counts, positions, faces' vertices in order, normals,
+// materials as face texture indices).
 #include <cstdio>
 #include <cstdlib>
 #include <pmz/openmesh.hpp>
@@ -14,7 +15,10 @@ static bool same(const pmz::openmesh::MeshView<>& view, const pmz::Decoder& d) {
   for (auto v : m.vertices())
     for (int k = 0; k < 3; ++k)
       if (m.point(v)[k] != d.positions()[v.idx() * 3 + k]) return false;
+  const uint32_t* materials = d.face_materials();
+  if (materials && !m.has_face_texture_index()) return false;
   for (auto f : m.faces()) {
+    if (materials && m.texture_index(f) != int(materials[f.idx()])) return false;
     int k = 0;
     for (auto h : m.fh_range(f)) {
       const int corner = f.idx() * 3 + k++;
@@ -46,7 +50,8 @@ int main(int argc, char** argv) {
   const size_t full = view.mesh().n_faces();
   view.set_face_target(full / 2);
   ok = ok && same(view, decoder) && view.mesh().n_faces() < full;
-  std::printf("openmesh consumer: %zu faces, %zu at half (%s)\n", full, view.mesh().n_faces(),
+  std::printf("openmesh consumer: %zu faces, %zu at half, %u materials (%s)\n", full,
+              view.mesh().n_faces(), decoder.material_count(),
               ok                     ? "ok"
               : view.error().empty() ? "mismatch"
                                      : view.error().c_str());
