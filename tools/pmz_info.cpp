@@ -21,6 +21,7 @@
 #include "pmz/coding.hpp"
 #include "pmz/decoder.hpp"
 #include "pmz/format.hpp"
+#include "pmz/node_table.hpp"
 #include "pmz/split_chunk.hpp"
 
 namespace app_support = pmz::app_support;
@@ -179,6 +180,7 @@ int main(int argc, char** argv) {
   // the bytes end inside a chunk.
   uint64_t head = 8, base = 0, splits = 0, other = 0, chunks = 0, unfinished = 0;
   uint64_t attr_bytes = 0, attr_chunks = 0;  // ATTR chunks, also in `other`
+  uint64_t node_table_bytes = 0;             // the NODE chunk, also in `other`
   pmz::AttributeHeader attr_head;
   bool attributes = false;
   uint64_t stream_bytes[pmz::kSplitStreamCount] = {};
@@ -202,9 +204,12 @@ int main(int argc, char** argv) {
       attr_bytes += total;
       ++attr_chunks;
       other += total;
-    } else if (f.type == pmz::kChunkBase)
+    } else if (f.type == pmz::kChunkBase) {
       base += total;
-    else if (f.type == pmz::kChunkSplits) {
+    } else if (f.type == pmz::kChunkNodes && (d.info().flags & pmz::kFlagNodes)) {
+      node_table_bytes += total;
+      other += total;
+    } else if (f.type == pmz::kChunkSplits) {
       splits += total;
       ++chunks;
       uint64_t count = 0, sizes[pmz::kSplitStreamCount] = {};
@@ -239,6 +244,7 @@ int main(int argc, char** argv) {
         "\"fine_curvature\":%u,"
         "\"base_vertices\":%llu,\"base_faces\":%llu,\"full_vertices\":%llu,\"full_faces\":%llu,"
         "\"splits\":%llu,\"splits_available\":%llu,\"base_complete\":%s,\"split_chunks\":%llu,"
+        "\"nodes\":%llu,\"node_table_bytes\":%llu,"
         "\"header_bytes\":%llu,\"base_bytes\":%llu,\"split_bytes\":%llu,\"other_bytes\":%llu,"
         "\"unfinished_chunk_bytes\":%llu,\"bits_per_vertex\":%.4f,"
         "\"connectivity_bits_per_split\":%.4f,\"geometry_bits_per_split\":%.4f,",
@@ -247,9 +253,9 @@ int main(int argc, char** argv) {
         (unsigned long long)i.base_vertices, (unsigned long long)i.base_faces,
         (unsigned long long)i.full_vertices, (unsigned long long)i.full_faces,
         (unsigned long long)i.total_splits, (unsigned long long)available,
-        i.base_done ? "true" : "false", (unsigned long long)chunks, (unsigned long long)head,
-        (unsigned long long)base, (unsigned long long)splits, (unsigned long long)other,
-        (unsigned long long)unfinished,
+        i.base_done ? "true" : "false", (unsigned long long)chunks, (unsigned long long)i.nodes,
+        (unsigned long long)node_table_bytes, (unsigned long long)head, (unsigned long long)base,
+        (unsigned long long)splits, (unsigned long long)other, (unsigned long long)unfinished,
         data.size() * 8.0 / double(std::max<uint64_t>(1, i.full_vertices)), conn, geom);
     if (timed)
       std::printf(
@@ -288,6 +294,11 @@ int main(int argc, char** argv) {
     std::printf("  full      %llu vertices, %llu faces, %llu splits in %llu chunks\n",
                 (unsigned long long)i.full_vertices, (unsigned long long)i.full_faces,
                 (unsigned long long)i.total_splits, (unsigned long long)chunks);
+    if (i.nodes)
+      std::printf(
+          "  nodes     %llu, decodable independently once their parents are (table %llu "
+          "bytes)\n",
+          (unsigned long long)i.nodes, (unsigned long long)node_table_bytes);
     if (truncated || damaged)
       std::printf(
           "  %-9s %llu of %llu splits available (%.1f%%)%s\n", state, (unsigned long long)available,

@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
 """Derives edge-case streams from a valid stream in nodes (spec/format.md section 15) by
-editing its NODE chunk or its chunk order; the reference decoder gives each its .expected
-(pmz-conformance expect) and spec_decoder.py must agree with it.
+editing its NODE chunk or its chunk order: OUT_DIR/node-*.pmz. regenerate.sh runs it on
+vectors/seamed-nodes.pmz and has the reference decoder write each one's .expected.
 
     python3 tests/conformance/derive_node_streams.py NODES.pmz OUT_DIR
 """
@@ -100,26 +100,36 @@ def main():
         edit(n)
         return cs[:at] + [(6, write_table(levels, n, attributes))] + cs[at + 1 :]
 
-    made["node-missing"] = cs[:at] + cs[at + 1 :]
-    made["node-twice"] = cs[: at + 2] + [cs[at]] + cs[at + 2 :]
-    made["node-late"] = cs[:at] + [cs[at + 1], cs[at]] + cs[at + 2 :]
-    made["node-bytes-long"] = table(lambda n: n[1].update(bytes=n[1]["bytes"] + 1))
-    made["node-bytes-short"] = table(lambda n: n[1].update(bytes=n[1]["bytes"] - 1))
-    made["node-faces-first"] = table(lambda n: n[0].update(faces=n[0]["faces"] - 1))
-    made["node-faces"] = table(lambda n: n[2].update(faces=n[2]["faces"] - 1))
-    made["node-faces-last"] = table(lambda n: n[-1].update(faces=n[-1]["faces"] - 1))
-    made["node-cell-moved"] = table(lambda n: n[3]["cell"].__setitem__(0, n[3]["cell"][0] + 1))
-    made["node-child-first"] = table(lambda n: n.insert(1, n.pop()))
+    made["node-missing"] = cs[:at] + cs[at + 1 :], "no NODE chunk although HEAD flag bit 1"
+    made["node-twice"] = cs[: at + 2] + [cs[at]] + cs[at + 2 :], "a second NODE chunk"
+    made["node-late"] = cs[:at] + [cs[at + 1], cs[at]] + cs[at + 2 :], \
+        "NODE after a chunk of node 1"
+    made["node-bytes-long"] = table(lambda n: n[1].update(bytes=n[1]["bytes"] + 1)), \
+        "node 1's bytes one more than its chunks"
+    made["node-bytes-short"] = table(lambda n: n[1].update(bytes=n[1]["bytes"] - 1)), \
+        "node 1's bytes one less than its chunks"
+    made["node-faces-first"] = table(lambda n: n[0].update(faces=n[0]["faces"] - 1)), \
+        "node 0's faces one less than its splits add"
+    made["node-faces"] = table(lambda n: n[2].update(faces=n[2]["faces"] - 1)), \
+        "node 2's faces one less than its splits add"
+    made["node-faces-last"] = table(lambda n: n[-1].update(faces=n[-1]["faces"] - 1)), \
+        "the last node's faces one less than its splits add"
+    made["node-cell-moved"] = table(
+        lambda n: n[3]["cell"].__setitem__(0, n[3]["cell"][0] + 1)), "node 3's cell moved"
+    made["node-child-first"] = table(lambda n: n.insert(1, n.pop())), \
+        "the last node moved before its parents"
     # Flag bit 1 cleared: the NODE chunk is of unknown type and the later nodes' chunks decode
     # as one stream (their groups, coded for models of their own, then span several chunks).
     head = bytearray(cs[0][1])
     head[2] &= 0xFD
-    made["node-flag-cleared"] = [(1, bytes(head))] + cs[1:]
-    made["node-truncated"] = cs[: at + 3]
+    made["node-flag-cleared"] = [(1, bytes(head))] + cs[1:], \
+        "HEAD flag bit 1 cleared: NODE is an unknown chunk"
+    made["node-truncated"] = cs[: at + 3], "cut after node 2's first chunk"
     out.mkdir(parents=True, exist_ok=True)
-    for name, parts in made.items():
+    for name, (parts, what) in made.items():
         end = [chunk(typ, p) for typ, p in parts]
-        (out / f"{src.stem}-{name}.pmz").write_bytes(data[:8] + b"".join(end))
+        (out / f"{name}.pmz").write_bytes(data[:8] + b"".join(end))
+        print(name, what)
     return 0
 
 

@@ -209,7 +209,7 @@ def read_head(p):  # spec/format.md section 4
     if any(h[n] >= 1 << 32 for n in ("flags", "base_vertices", "base_faces", "total_splits",
                                      "full_faces")):
         raise Refused("corrupt")
-    if h["major"] != 12:
+    if h["major"] != 13:
         raise Refused("bad_version")
     if (h["flags"] & ~3 or h["position_bits"] > 30 or h["curvature"] > 8
             or h["fine_curvature"] > 8 or h["level"] > 1):

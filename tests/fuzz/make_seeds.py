@@ -151,8 +151,9 @@ def main():
             kind = data[at]
             size, j = varint(data, at + 1)
             payload = data[j + 4:j + 4 + size]
-            if kind == 1:  # HEAD: version (2 bytes), varint flags, 4 bytes (position bits,
-                # curvatures, level), varint base counts, varint total splits (section 4)
+            # HEAD: version (2 bytes), varint flags, 4 bytes (position bits, curvatures, level),
+            # varint base counts, varint total splits (spec/format.md section 4)
+            if kind == 1:
                 node_flags, k = varint(payload, 2)
                 k += 4
                 _, e = varint(payload, k)

@@ -619,6 +619,33 @@ def case_info_attribute_kinds():
           f"pmz-info --decode counts otherwise: {r.stdout!r}")
 
 
+def case_info_nodes():
+    # A stream in nodes: their count and the NODE chunk's size; a stream without, 0.
+    path = os.path.join(SEAMED, "vectors", "terrain-nodes.pmz")
+    j = info_json(path)
+    data = open(path, "rb").read()
+    at, table = 8, 0
+    while at < len(data):  # chunk framing: type, varint size, CRC, payload
+        size, shift, p = 0, 0, at + 1
+        while True:
+            size |= (data[p] & 0x7F) << shift
+            shift += 7
+            p += 1
+            if data[p - 1] < 0x80:
+                break
+        if data[at] == 6:
+            table = p + 4 + size - at
+        at = p + 4 + size
+    check(j["nodes"] == 16 and j["node_table_bytes"] == table > 0,
+          f"terrain-nodes.pmz: nodes {j['nodes']}, table {j['node_table_bytes']} (NODE: {table})")
+    o = run([tool("pmz-info"), path]).stdout.decode()
+    check(f"nodes     16, decodable independently once their parents are (table {table} bytes)"
+          in o, f"pmz-info terrain-nodes.pmz: {o}")
+    j = info_json(SAMPLE_PMZ)
+    check(j["nodes"] == 0 and j["node_table_bytes"] == 0 and "nodes " not in
+          run([tool("pmz-info"), SAMPLE_PMZ]).stdout.decode(), f"sample.pmz: {j}")
+
+
 def case_info_texcoords_only():
     d = fresh("info_texcoords")
     obj = os.path.join(d, "uv.obj")
