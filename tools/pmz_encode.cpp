@@ -32,7 +32,8 @@ namespace app_support = pmz::app_support;
 namespace tool = pmz::tool;
 
 struct EncodeSettings {
-  pmz::SimplifyOptions simplify;  // metric, attribute mode, parameters (no target: all the way)
+  pmz::SimplifyOptions simplify;   // metric, attribute mode, parameters (no target: all the way)
+  tool::SimplifierCli simplifier;  // (its cell size, settled per mesh)
   pmz::WriteOptions write;
   std::string stdin_format;  // extension for a mesh read from stdin
   bool glb = false;          // every output a GLB (docs/gltf-binding.md)
@@ -88,6 +89,7 @@ bool encode(const std::string& input, const std::string& output, const EncodeSet
     return false;
   }
   pmz::SimplifyOptions sopt = settings.simplify;
+  settings.simplifier.apply_clusters(sopt, mesh.vertex_count());
   if (progress) sopt.progress = [&](double f) { progress->update("simplifying", f); };
   pmz::CollapseSequence seq;
   std::vector<uint8_t> bytes;
@@ -166,7 +168,7 @@ int main(int argc, char** argv) {
   unsigned jobs = std::max(1u, std::thread::hardware_concurrency());
   bool quiet = false, force_progress = false;
   EncodeSettings settings;
-  tool::SimplifierCli simplifier;
+  tool::SimplifierCli& simplifier = settings.simplifier;
   app.add_option("inputs", inputs,
                  tool::mesh_files_help("input meshes", false, "- reads one from stdin"))
       ->required()

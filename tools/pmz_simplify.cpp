@@ -70,6 +70,7 @@ int main(int argc, char** argv) {
     return app_support::kExitFailure;
   }
   tool::warn_if_attributes_lost(output, output_format, mesh);
+  simplifier.apply_clusters(options, mesh.vertex_count());
   const uint64_t in_faces = mesh.face_count();
   options.target_faces =
       faces_opt->count() ? faces

@@ -133,24 +133,23 @@ bool read_node_table(const uint8_t* p, size_t size, uint64_t total_splits, uint6
   return true;
 }
 
+bool NodeIndex::less(const Key& a, const Key& b) {
+  return std::tie(a.level, a.cell[0], a.cell[1], a.cell[2], a.node) <
+         std::tie(b.level, b.cell[0], b.cell[1], b.cell[2], b.node);
+}
+
 NodeIndex::NodeIndex(const NodeTable& t) : t_(t) {
   sorted_.reserve(t.nodes.size());
   for (uint32_t k = 0; k < t.nodes.size(); ++k) {
     const NodeEntry& n = t.nodes[k];
     sorted_.push_back({n.level, {n.cell[0], n.cell[1], n.cell[2]}, k});
   }
-  std::sort(sorted_.begin(), sorted_.end(), [](const Key& a, const Key& b) {
-    return std::tie(a.level, a.cell[0], a.cell[1], a.cell[2], a.node) <
-           std::tie(b.level, b.cell[0], b.cell[1], b.cell[2], b.node);
-  });
+  std::sort(sorted_.begin(), sorted_.end(), less);
 }
 
 int64_t NodeIndex::find(uint32_t level, const int64_t cell[3]) const {
   const Key want{level, {cell[0], cell[1], cell[2]}, 0};
-  auto it = std::lower_bound(sorted_.begin(), sorted_.end(), want, [](const Key& a, const Key& b) {
-    return std::tie(a.level, a.cell[0], a.cell[1], a.cell[2], a.node) <
-           std::tie(b.level, b.cell[0], b.cell[1], b.cell[2], b.node);
-  });
+  auto it = std::lower_bound(sorted_.begin(), sorted_.end(), want, less);
   if (it == sorted_.end() || it->level != level || it->cell[0] != cell[0] ||
       it->cell[1] != cell[1] || it->cell[2] != cell[2])
     return -1;
@@ -175,29 +174,17 @@ std::vector<uint32_t> NodeIndex::parents(uint32_t k) const {
 }
 
 void CellBins::build(const NodeTable& t, uint32_t level, const int32_t* coords, uint32_t count) {
-  auto less = [](const Key& a, const Key& b) {
-    return std::tie(a.cell[0], a.cell[1], a.cell[2]) < std::tie(b.cell[0], b.cell[1], b.cell[2]);
-  };
-  keys_.clear();
-  for (uint32_t k = 0; k < t.nodes.size(); ++k)
-    if (t.nodes[k].level == level)
-      keys_.push_back({{t.nodes[k].cell[0], t.nodes[k].cell[1], t.nodes[k].cell[2]}, k});
-  std::sort(keys_.begin(), keys_.end(), less);
-  bins_.assign(keys_.size(), {});
+  const NodeIndex index(t);
   const NodeGrid& g = t.levels[level];
+  bins_.assign(t.nodes.size(), {});
   for (uint32_t v = 0; v < count; ++v) {
-    Key want{{0, 0, 0}, 0};
+    int64_t cell[3] = {0, 0, 0};
     if (g.side)
-      for (int a = 0; a < 3; ++a) want.cell[a] = g.index(coords[size_t(v) * 3 + a], a);
-    const auto it = std::lower_bound(keys_.begin(), keys_.end(), want, less);
-    if (it != keys_.end() && !less(want, *it)) bins_[size_t(it - keys_.begin())].push_back(v);
+      for (int a = 0; a < 3; ++a) cell[a] = g.index(coords[size_t(v) * 3 + a], a);
+    if (const int64_t k = index.find(level, cell); k >= 0) bins_[size_t(k)].push_back(v);
   }
 }
 
-std::vector<uint32_t> CellBins::take(uint32_t node) {
-  for (size_t i = 0; i < keys_.size(); ++i)
-    if (keys_[i].node == node) return std::move(bins_[i]);
-  return {};
-}
+std::vector<uint32_t> CellBins::take(uint32_t node) { return std::move(bins_[node]); }
 
 }  // namespace pmz

@@ -646,6 +646,24 @@ def case_info_nodes():
           run([tool("pmz-info"), SAMPLE_PMZ]).stdout.decode(), f"sample.pmz: {j}")
 
 
+def case_encode_nodes_by_default():
+    # --cluster-vertices auto: a mesh of at least 65,536 vertices is written in nodes, a smaller
+    # one as one node; either decodes to its full face count.
+    d = fresh("encode_nodes")
+    for faces, nodes in ((140000, True), (120000, False)):
+        ply, pmz, out = (os.path.join(d, f"t{faces}.{e}") for e in ("ply", "pmz", "obj"))
+        r = run([tool("pmz-generate"), "--faces", str(faces), "-o", ply, "-q"])
+        check(r.returncode == 0, f"pmz-generate: {err_text(r)}")
+        r = run([tool("pmz-encode"), ply, "-o", pmz, "-q"])
+        check(r.returncode == 0, f"pmz-encode {ply}: {err_text(r)}")
+        j = info_json(pmz)
+        check((j["full_vertices"] >= 65536) == nodes and (j["nodes"] > 1) == nodes,
+              f"{faces} faces: {j['full_vertices']} vertices, {j['nodes']} nodes")
+        r = run([tool("pmz-decode"), pmz, "-o", out])
+        check(r.returncode == 0 and f"{j['full_faces']} faces" in err_text(r),
+              f"pmz-decode {pmz}: {err_text(r)}")
+
+
 def case_info_texcoords_only():
     d = fresh("info_texcoords")
     obj = os.path.join(d, "uv.obj")

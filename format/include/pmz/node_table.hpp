@@ -89,6 +89,7 @@ class NodeIndex {
     int64_t level, cell[3];
     uint32_t node;
   };
+  static bool less(const Key& a, const Key& b);  // by (level, cell, node)
   const NodeTable& t_;
   std::vector<Key> sorted_;  // by (level, cell)
 };
@@ -96,19 +97,14 @@ class NodeIndex {
 // The candidates of a node (spec/format.md section 15.4): the vertices below `count` whose
 // coordinates lie in its cell, ascending. Binned once per level (the nodes of a level follow one
 // another in file order): build() puts every vertex in the bin of its level's node, if any; take()
-// hands a node's bin over.
+// hands node k's bin over (k < the table's node count).
 class CellBins {
  public:
   void build(const NodeTable& t, uint32_t level, const int32_t* coords, uint32_t count);
   std::vector<uint32_t> take(uint32_t node);
 
  private:
-  struct Key {
-    int64_t cell[3];
-    uint32_t node;
-  };
-  std::vector<Key> keys_;                    // the level's nodes by cell
-  std::vector<std::vector<uint32_t>> bins_;  // per key
+  std::vector<std::vector<uint32_t>> bins_;  // per node of the table
 };
 
 }  // namespace pmz
