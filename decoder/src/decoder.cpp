@@ -598,26 +598,19 @@ Status Decoder::Impl::attribute_chunk(const uint8_t* p, size_t n) {
 Status Decoder::Impl::split_chunk(const uint8_t* p, size_t n) {
   std::string err;
   SplitChunkReader r;
-  SplitModels* models;
   uint64_t max_splits = info.total_splits - record.splits.size();
+  std::unique_ptr<SplitModels>* models = &frontier.models;
   if (nodes.present) {  // the chunk's node: models of its own (spec/format.md section 15.4)
     if (nodes.arriving >= nodes.table.nodes.size())
       return fail(Status::corrupt, "SPLT after every node's splits");
-    std::unique_ptr<SplitModels>& m = nodes.models[nodes.arriving];
-    if (!m) {
-      m = std::make_unique<SplitModels>();
-      m->speed = info.level == kLevelSpeed;
-    }
-    models = m.get();
+    models = &nodes.models[nodes.arriving];
     max_splits = nodes.table.nodes[nodes.arriving].splits - nodes.arrived_splits;
-  } else {
-    if (!frontier.models) {
-      frontier.models = std::make_unique<SplitModels>();
-      frontier.models->speed = info.level == kLevelSpeed;
-    }
-    models = frontier.models.get();
   }
-  if (!r.open(p, n, max_splits, *models, err, frontier.open)) return fail(Status::corrupt, err);
+  if (!*models) {
+    *models = std::make_unique<SplitModels>();
+    (*models)->speed = info.level == kLevelSpeed;
+  }
+  if (!r.open(p, n, max_splits, **models, err, frontier.open)) return fail(Status::corrupt, err);
   frontier.open = r.open_group();
   if (nodes.present) nodes.arrived_splits += r.split_count();
   const size_t size = record.splits.size() + r.split_count();
