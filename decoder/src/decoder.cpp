@@ -134,6 +134,7 @@ struct Decoder::Impl {
     std::vector<uint32_t> rings;
     Status status = Status::ok;
     std::string message;
+    bool paused = false;  // before split `decoded`, whose faces would pass face_end
     ProgressiveMesh view;
     // Chunks whose wedge and residual symbols are not all decoded yet, oldest first; the front
     // one starts at split lazy_first.
@@ -257,11 +258,18 @@ struct Decoder::Impl {
   PMZ_COLD Status install_base(ProgressiveMesh&& m, std::vector<int32_t>&& coords);
   bool apply();
   PMZ_COLD bool refuse(Status s, const std::string& what);
-  bool first_apply(Frontier& f, uint64_t i);
+  // resume: a worker paused before the split (see Frontier::paused) goes on from there.
+  bool first_apply(Frontier& f, uint64_t i, bool resume = false);
   static constexpr const char* kValences = "vertex valences beyond what a mesh needs";
   // Decoding threads (set_threads; 1: serial) and the level-wise parallel first applications.
   uint32_t threads = 1;
   uint64_t parallel_nodes(uint64_t max_splits, uint64_t face_target);
+  // Undoes a worker's splits from `from` on (the last first).
+  void undo_worker(Frontier& w, uint64_t from) {
+    for (uint64_t t = w.decoded; t-- > from;)
+      w.view.undo_split(record.splits[t].v, record.sides[t] & kHasLeft,
+                        record.sides[t] & kHasRight);
+  }
   // The mesh, record and vertex choice arrays sized for that many faces, vertices and splits.
   void resize_level(uint64_t faces, uint64_t vertices, uint64_t splits) {
     level.mesh.corner_vertex.resize(faces * 3);
@@ -811,7 +819,7 @@ bool Decoder::Impl::apply() {
 // vertex, wedge and position symbols with contexts from f's mesh, the split, and what re-applying
 // it needs. A failure leaves the mesh at the level before the split: the serial frontier refuses
 // the split, a worker keeps the status and message for the merge.
-bool Decoder::Impl::first_apply(Frontier& f, uint64_t i) {
+bool Decoder::Impl::first_apply(Frontier& f, uint64_t i, bool resume) {
   Split& s = record.splits[i];
   ProgressiveMesh& mesh = *f.mesh;
   const bool serial = &f == &frontier;
@@ -826,65 +834,70 @@ bool Decoder::Impl::first_apply(Frontier& f, uint64_t i) {
   };
   auto invalid = [&] { return stop_split(" has an invalid wedge"); };
   SplitChunkReader& reader = f.lazy.front();
-  if (i - f.lazy_first == reader.group_end()) {  // a group's first split: start its scan
-    if (serial && nodes.present && nodes.applying < nodes.first_split.size() &&
-        i == nodes.first_split[nodes.applying] && !start_node())
-      return false;
-    f.group_first = i;
-    f.choice_ok = reader.begin_group(f.choice, mesh.vertex_count());
-    f.find_vertices(scan_at_group_start(), record.splits);
-  }
-  if (s.v == kNoCorner) return stop_split(": vertex choice malformed");
-  if (!mesh.gather_ring(s.v)) return invalid();
-  if (nodes.present && f.cells) {  // v's ring within the node's cell (spec/format.md section 15.4)
-    bool inside = f.box.contains(&record.coords[size_t(s.v) * 3]);
-    for (uint32_t w : mesh.ring()) inside = inside && f.box.contains(&record.coords[size_t(w) * 3]);
-    if (!inside) return stop_split(" reaches outside its node's cell");
-  }
-  {  // first application: the wedge symbols, with contexts from v's ring
-    const uint32_t k = uint32_t(mesh.ring().size());
-    // Ring walks cost the valence: bound their total (first applications; re-applying after
-    // coarsening repeats the same work) so splits piling on one vertex cannot go quadratic.
-    // (A worker counts from the total before its level: a lower bound, checked exactly as the
-    // nodes are merged in file order.)
-    f.ring_work += k;
-    if (!serial) f.rings.push_back(k);
-    if (f.ring_work > kRingWorkPerSplit * (i + 1) + kRingWorkSlack)
-      return stop(Status::limit_exceeded, kValences);
-    // Decoded symbols cannot be put back: allocate what wedge_ranks needs before decoding them
-    // (an allocation failure then leaves this split to retry, not a symbol lost).
-    if (k > f.wedge_scratch_ring) {
-      f.wedge_scratch.reserve(k);
-      f.wedge_scratch_ring = k;
+  if (!resume) {
+    if (i - f.lazy_first == reader.group_end()) {  // a group's first split: start its scan
+      if (serial && nodes.present && nodes.applying < nodes.first_split.size() &&
+          i == nodes.first_split[nodes.applying] && !start_node())
+        return false;
+      f.group_first = i;
+      f.choice_ok = reader.begin_group(f.choice, mesh.vertex_count());
+      f.find_vertices(scan_at_group_start(), record.splits);
     }
-    f.choice.reserve(k);
-    // (About four sector corners per split on a regular mesh, valence 6: room for four per
-    // split refine() made room for.)
-    if (serial && record.sector_corners.capacity() - record.sector_corners.size() < k)
-      record.sector_corners.reserve(
-          std::max({2 * record.sector_corners.capacity(), record.sector_corners.size() + k,
-                    4 * record.sides.capacity()}));
-    if (attrs) attrs->reserve_split(mesh.face_count(), k);
-    uint32_t count, rank;
-    auto malformed = [&] { return stop_split(": wedge streams malformed"); };
-    if (!reader.wedge_count(wedge_context(k, mesh.ring_closed()), count)) return malformed();
-    if (info.level == kLevelSpeed) {  // the candidate's index (spec/format.md section 9.10)
-      if (!reader.wedge_rank(rank_context(mesh.ring_closed(), false), rank)) return malformed();
-      if (!speed_wedge_pick(mesh, count, rank, s.a, s.b)) return invalid();
-    } else {
-      if (!wedge_scores(record.coords.data(), f.choice.degrees(), s.v, mesh, count,
-                        f.wedge_scratch))
-        return invalid();
-      if (!reader.wedge_rank(rank_context(mesh.ring_closed(), f.wedge_scratch.confident), rank))
-        return malformed();
-      if (!wedge_pick(mesh, count, rank, s.a, s.b, f.wedge_scratch)) return invalid();
+    if (s.v == kNoCorner) return stop_split(": vertex choice malformed");
+    if (!mesh.gather_ring(s.v)) return invalid();
+    if (nodes.present &&
+        f.cells) {  // v's ring within the node's cell (spec/format.md section 15.4)
+      bool inside = f.box.contains(&record.coords[size_t(s.v) * 3]);
+      for (uint32_t w : mesh.ring())
+        inside = inside && f.box.contains(&record.coords[size_t(w) * 3]);
+      if (!inside) return stop_split(" reaches outside its node's cell");
     }
+    {  // first application: the wedge symbols, with contexts from v's ring
+      const uint32_t k = uint32_t(mesh.ring().size());
+      // Ring walks cost the valence: bound their total (first applications; re-applying after
+      // coarsening repeats the same work) so splits piling on one vertex cannot go quadratic.
+      // (A worker counts from the total before its level: a lower bound, checked exactly as the
+      // nodes are merged in file order.)
+      f.ring_work += k;
+      if (!serial) f.rings.push_back(k);
+      if (f.ring_work > kRingWorkPerSplit * (i + 1) + kRingWorkSlack)
+        return stop(Status::limit_exceeded, kValences);
+      // Decoded symbols cannot be put back: allocate what wedge_ranks needs before decoding them
+      // (an allocation failure then leaves this split to retry, not a symbol lost).
+      if (k > f.wedge_scratch_ring) {
+        f.wedge_scratch.reserve(k);
+        f.wedge_scratch_ring = k;
+      }
+      f.choice.reserve(k);
+      // (About four sector corners per split on a regular mesh, valence 6: room for four per
+      // split refine() made room for.)
+      if (serial && record.sector_corners.capacity() - record.sector_corners.size() < k)
+        record.sector_corners.reserve(
+            std::max({2 * record.sector_corners.capacity(), record.sector_corners.size() + k,
+                      4 * record.sides.capacity()}));
+      if (attrs) attrs->reserve_split(mesh.face_count(), k);
+      uint32_t count, rank;
+      auto malformed = [&] { return stop_split(": wedge streams malformed"); };
+      if (!reader.wedge_count(wedge_context(k, mesh.ring_closed()), count)) return malformed();
+      if (info.level == kLevelSpeed) {  // the candidate's index (spec/format.md section 9.10)
+        if (!reader.wedge_rank(rank_context(mesh.ring_closed(), false), rank)) return malformed();
+        if (!speed_wedge_pick(mesh, count, rank, s.a, s.b)) return invalid();
+      } else {
+        if (!wedge_scores(record.coords.data(), f.choice.degrees(), s.v, mesh, count,
+                          f.wedge_scratch))
+          return invalid();
+        if (!reader.wedge_rank(rank_context(mesh.ring_closed(), f.wedge_scratch.confident), rank))
+          return malformed();
+        if (!wedge_pick(mesh, count, rank, s.a, s.b, f.wedge_scratch)) return invalid();
+      }
+    }
+    // A worker writes only within its node's face ids: beyond them it pauses, and the merge lets
+    // it go on alone, as the serial decoder does (which finds a node that adds more faces than
+    // its table entry where spec/format.md section 15 says).
+    if (!serial && mesh.face_count() + uint64_t(s.a != kNoRank) + (s.b != kNoRank) > f.face_end)
+      return !(f.paused = true);
   }
   const bool has_l = s.a != kNoRank, has_r = s.b != kNoRank;
-  // A worker writes only within its node's face ids. (The serial decoder goes on: it finds a
-  // node that adds more faces than its table entry where spec/format.md section 15 says.)
-  if (!serial && mesh.face_count() + uint64_t(has_l) + has_r > f.face_end)
-    return stop_split(": its node added other faces than its table entry (more)");
   if (!mesh.split_gathered(s.v, s.a, s.b)) return invalid();
   {  // the position, then what re-applying the split needs
     PositionPrediction pred;
@@ -1023,20 +1036,22 @@ uint64_t Decoder::Impl::parallel_nodes(uint64_t max_splits, uint64_t face_target
   frontier.lazy_first = s1;
   // The workers take the nodes in file order.
   std::atomic<size_t> next{0};
-  auto run = [&] {
-    for (size_t j; (j = next++) < work.size();) {
-      Frontier& w = *work[j];
-      PMZ_TRY {
-        nodes.models[k + j]->inherit(*nodes.first_models);
-        const uint64_t last = nodes.first_split[k + j] + table[k + j].splits;
-        while (w.decoded < last && first_apply(w, w.decoded)) {
-        }
-      }
-      PMZ_CATCH_BAD_ALLOC {
-        w.status = Status::out_of_memory;
-        w.message = "allocation failed while refining";
+  auto go = [&](size_t j, bool resume) {
+    Frontier& w = *work[j];
+    PMZ_TRY {
+      if (!resume) nodes.models[k + j]->inherit(*nodes.first_models);
+      const uint64_t last = nodes.first_split[k + j] + table[k + j].splits;
+      if (resume && !first_apply(w, w.decoded, true)) return;
+      while (w.decoded < last && first_apply(w, w.decoded)) {
       }
     }
+    PMZ_CATCH_BAD_ALLOC {
+      w.status = Status::out_of_memory;
+      w.message = "allocation failed while refining";
+    }
+  };
+  auto run = [&] {
+    for (size_t j; (j = next++) < work.size();) go(j, false);
   };
   {
     std::vector<std::jthread> pool;
@@ -1050,6 +1065,24 @@ uint64_t Decoder::Impl::parallel_nodes(uint64_t max_splits, uint64_t face_target
   for (size_t j = 0; j < work.size() && st == Status::ok; ++j) {
     Frontier& w = *work[j];
     const uint64_t first = nodes.first_split[k + j];
+    if (w.paused) {  // the nodes after it undone, it goes on alone, with room for its faces
+      for (size_t x = j + 1; x < work.size(); ++x) {
+        Frontier& o = *work[x];
+        undo_worker(o, nodes.first_split[k + x]);
+        o.decoded = nodes.first_split[k + x];
+        o.rings.clear();
+        o.status = Status::ok;
+        o.paused = false;
+      }
+      const uint64_t room = w.view.face_count() + 2 * (first + table[k + j].splits - w.decoded);
+      if (room * 3 > level.mesh.corner_vertex.size()) {
+        level.mesh.corner_vertex.resize(room * 3);
+        level.mesh.opposite.resize(room * 3);
+      }
+      w.paused = false;
+      w.face_end = UINT64_MAX;
+      go(j, true);
+    }
     for (size_t t = 0; t < w.rings.size(); ++t) {
       work_sum += w.rings[t];
       if (work_sum > kRingWorkPerSplit * (first + t + 1) + kRingWorkSlack) {
@@ -1071,9 +1104,7 @@ uint64_t Decoder::Impl::parallel_nodes(uint64_t max_splits, uint64_t face_target
   uint64_t f_end = f0;
   for (size_t j = 0; j < work.size(); ++j) {
     Frontier& w = *work[j];
-    for (uint64_t t = w.decoded; t-- > std::max(stop, nodes.first_split[k + j]);)
-      w.view.undo_split(record.splits[t].v, record.sides[t] & kHasLeft,
-                        record.sides[t] & kHasRight);
+    undo_worker(w, std::max(stop, nodes.first_split[k + j]));
     if (nodes.first_split[k + j] >= stop) continue;
     f_end = w.view.face_count();
     uint64_t faces_now = face_start[j], corners = 0;
@@ -1098,6 +1129,7 @@ uint64_t Decoder::Impl::parallel_nodes(uint64_t max_splits, uint64_t face_target
     refuse(st, what);
   } else if (end == total && !node_counts_match(total - 1)) {
     fail(Status::corrupt, "the last node added other faces or wedges than its table entry");
+    return stop - s0 - 1;  // (as apply(): the last split stands but is not counted)
   }
   return stop - s0;
 #endif
