@@ -136,6 +136,7 @@ struct Decoder::Impl {
     std::string message;
     bool paused = false;  // before split `decoded`, whose faces would pass face_end
     ProgressiveMesh view;
+    FanPrefetcher fans;  // (a worker's: the serial decoder's is level.fans)
     // Chunks whose wedge and residual symbols are not all decoded yet, oldest first; the front
     // one starts at split lazy_first.
     std::deque<SplitChunkReader> lazy;
@@ -1042,7 +1043,12 @@ uint64_t Decoder::Impl::parallel_nodes(uint64_t max_splits, uint64_t face_target
       if (!resume) nodes.models[k + j]->inherit(*nodes.first_models);
       const uint64_t last = nodes.first_split[k + j] + table[k + j].splits;
       if (resume && !first_apply(w, w.decoded, true)) return;
-      while (w.decoded < last && first_apply(w, w.decoded)) {
+      for (;;) {  // (the fans ahead, as prefetch(): within the node's cell)
+        const uint64_t ahead = w.decoded + FanPrefetcher::kWalkers;
+        w.fans.step(level.mesh, record.coords.data(), record.coords.size(),
+                    ahead < last ? record.splits[ahead].v : kNoCorner, frontier.choice.degrees(),
+                    frontier.choice.sums_bytes());
+        if (w.decoded >= last || !first_apply(w, w.decoded)) break;
       }
     }
     PMZ_CATCH_BAD_ALLOC {
