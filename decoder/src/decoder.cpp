@@ -13,6 +13,7 @@
 #include <deque>
 #include <new>
 #include <span>
+#include <system_error>
 #include <thread>
 #include <type_traits>
 
@@ -976,7 +977,7 @@ uint64_t Decoder::Impl::parallel_nodes(uint64_t max_splits, uint64_t face_target
   return 0;
 #else
   const size_t k = nodes.applying, total = nodes.table.nodes.size();
-  if (threads < 2 || !nodes.present || attrs || stage == Stage::failed || k < 2 || k >= total ||
+  if (threads < 2 || !nodes.present || attrs || stage == Stage::failed || k < 1 || k >= total ||
       level.applied != frontier.decoded || level.applied != nodes.first_split[k] ||
       !node_counts_match(k - 1))
     return 0;
@@ -998,41 +999,48 @@ uint64_t Decoder::Impl::parallel_nodes(uint64_t max_splits, uint64_t face_target
   const uint64_t s1 = end < total ? nodes.first_split[end] : info.total_splits;
   const uint64_t v1 = v0 + (s1 - s0);
   if (v1 > info.full_vertices) return 0;
-  // Room for every id the workers write: the owner's arrays sized to the level's end.
-  resize_level(faces, v1, s1);
-  if (k == 1) nodes.first_models = std::move(nodes.models[0]);
-  nodes.models[k - 1].reset();  // its splits are all decoded
-  if (nodes.bins_level != int64_t(lv)) {
-    nodes.bins.build(nodes.table, lv, record.coords.data(), uint32_t(v0));
-    nodes.bins_level = lv;
-  }
-  uint32_t epoch = frontier.choice.take_epochs(s1 - s0 + (end - k));
   std::vector<std::unique_ptr<Frontier>> work;
   std::vector<uint64_t> face_start;
-  uint64_t at = f0;
-  for (size_t j = k; j < end; ++j) {
-    Frontier& w = *work.emplace_back(std::make_unique<Frontier>());
-    const uint64_t first = nodes.first_split[j];
-    w.mesh = &w.view;
-    w.view.attach(level.mesh, uint32_t(v0 + first - s0), uint32_t(at));
-    w.choice.attach(frontier.choice, epoch);
-    epoch += uint32_t(table[j].splits + 1);
-    w.choice.begin_node(nodes.bins.take(uint32_t(j)));
-    for (uint64_t got = 0; got < table[j].splits; frontier.lazy.pop_front()) {
-      got += frontier.lazy.front().split_count();
-      w.lazy.push_back(std::move(frontier.lazy.front()));
+  PMZ_TRY {
+    // Room for every id the workers write: the owner's arrays sized to the level's end.
+    resize_level(faces, v1, s1);
+    if (k == 1) nodes.first_models = std::move(nodes.models[0]);
+    nodes.models[k - 1].reset();  // its splits are all decoded
+    if (nodes.bins_level != int64_t(lv)) {
+      nodes.bins.build(nodes.table, lv, record.coords.data(), uint32_t(v0));
+      nodes.bins_level = lv;
     }
-    w.lazy_first = w.decoded = first;
-    std::copy_n(frontier.box_lo, 3, w.box_lo);
-    std::copy_n(frontier.box_hi, 3, w.box_hi);
-    w.wedge_scratch.extent = frontier.wedge_scratch.extent;
-    w.ring_work = frontier.ring_work;
-    w.cells = true;
-    w.box = CellBox(nodes.table.levels[lv], table[j].cell);
-    face_start.push_back(at);
-    at += table[j].faces;
-    w.face_end = at;
-    w.group_vs.reserve(kChoiceLag + 2);
+    uint32_t epoch = frontier.choice.take_epochs(s1 - s0 + (end - k));
+    uint64_t at = f0;
+    for (size_t j = k; j < end; ++j) {
+      Frontier& w = *work.emplace_back(std::make_unique<Frontier>());
+      const uint64_t first = nodes.first_split[j];
+      w.mesh = &w.view;
+      w.view.attach(level.mesh, uint32_t(v0 + first - s0), uint32_t(at));
+      w.choice.attach(frontier.choice, epoch);
+      epoch += uint32_t(table[j].splits + 1);
+      w.choice.begin_node(nodes.bins.take(uint32_t(j)));
+      for (uint64_t got = 0; got < table[j].splits; frontier.lazy.pop_front()) {
+        got += frontier.lazy.front().split_count();
+        w.lazy.push_back(std::move(frontier.lazy.front()));
+      }
+      w.lazy_first = w.decoded = first;
+      std::copy_n(frontier.box_lo, 3, w.box_lo);
+      std::copy_n(frontier.box_hi, 3, w.box_hi);
+      w.wedge_scratch.extent = frontier.wedge_scratch.extent;
+      w.ring_work = frontier.ring_work;
+      w.cells = true;
+      w.box = CellBox(nodes.table.levels[lv], table[j].cell);
+      face_start.push_back(at);
+      at += table[j].faces;
+      w.face_end = at;
+      w.group_vs.reserve(kChoiceLag + 2);
+    }
+  }
+  PMZ_CATCH_BAD_ALLOC {  // (the readers may be gone: refused like any split out of memory)
+    resize_level(f0, v0, s0);
+    refuse(Status::out_of_memory, "allocation failed while refining");
+    return 0;
   }
   frontier.lazy_first = s1;
   // The workers take the nodes in file order.
@@ -1061,7 +1069,10 @@ uint64_t Decoder::Impl::parallel_nodes(uint64_t max_splits, uint64_t face_target
   };
   {
     std::vector<std::jthread> pool;
-    for (uint32_t t = 1; t < std::min<size_t>(threads, work.size()); ++t) pool.emplace_back(run);
+    try {  // (fewer threads if the system has none to give: this one runs the rest)
+      for (uint32_t t = 1; t < std::min<size_t>(threads, work.size()); ++t) pool.emplace_back(run);
+    } catch (const std::system_error&) {
+    }
     run();
   }
   // The merge: where the serial decoder would have stopped (stop, with its error).
