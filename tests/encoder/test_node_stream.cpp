@@ -295,8 +295,10 @@ Seen decode_with(const std::vector<uint8_t>& bytes, uint32_t threads, size_t sli
   out.indices.assign(d.indices(), d.indices() + size_t(d.face_count()) * 3);
   out.positions.assign(d.positions(), d.positions() + size_t(d.vertex_count()) * 3);
   out.parents.assign(d.split_parents(), d.split_parents() + d.vertex_count());
-  if (d.wedge_count())
+  if (d.wedge_count()) {
     out.wedges.assign(d.wedge_indices(), d.wedge_indices() + size_t(d.face_count()) * 3);
+    out.wedges.insert(out.wedges.end(), d.wedge_vertices(), d.wedge_vertices() + d.wedge_count());
+  }
   return out;
 }
 
@@ -345,6 +347,7 @@ TEST(NodeStreamAttributes, WedgesPerNodeAreChecked) {
   ASSERT_EQ(whole.status, pmz::Status::ok) << whole.message;
   EXPECT_GT(whole.nodes, 4u);
   EXPECT_EQ(whole.splits, seq.collapses.size());
+  expect_same_on_threads(bytes);  // (attributes: decoded on one thread whatever the count)
   // The table, read with the attribute fields: the wedges it states add up to the full count.
   NodeChunk c;
   size_t at = 8;
