@@ -265,7 +265,7 @@ struct Decoder::Impl {
   static constexpr const char* kValences = "vertex valences beyond what a mesh needs";
   // Decoding threads (set_threads; 1: serial) and the level-wise parallel first applications.
   uint32_t threads = 1;
-  uint64_t parallel_nodes(uint64_t max_splits, uint64_t face_target);
+  PMZ_COLD uint64_t parallel_nodes(uint64_t max_splits, uint64_t face_target);
   // Undoes a worker's splits from `from` on (the last first).
   void undo_worker(Frontier& w, uint64_t from) {
     for (uint64_t t = w.decoded; t-- > from;)
@@ -273,7 +273,7 @@ struct Decoder::Impl {
                         record.sides[t] & kHasRight);
   }
   // The mesh, record and vertex choice arrays sized for that many faces, vertices and splits.
-  void resize_level(uint64_t faces, uint64_t vertices, uint64_t splits) {
+  PMZ_COLD void resize_level(uint64_t faces, uint64_t vertices, uint64_t splits) {
     level.mesh.corner_vertex.resize(faces * 3);
     level.mesh.opposite.resize(faces * 3);
     level.mesh.vertex_corner.resize(vertices);
