@@ -44,6 +44,10 @@ int main(int argc, char** argv) {
   auto* ov = app.add_option("--vertices", vertices,
                             "level with N vertices (clamped to the base and full mesh)");
   app.add_option("--bytes", bytes, "decode only the first N bytes of the input");
+  uint32_t threads = 0;
+  app.add_option("--threads", threads,
+                 "decoding threads (0, the default: the machine's cores; the output is the same "
+                 "for every count)");
   bool salvage = false;
   app.add_flag("--salvage", salvage,
                "on a damaged or truncated stream, still write its last good level (exit 1 even "
@@ -80,6 +84,7 @@ int main(int argc, char** argv) {
   }
   size_t n = bytes ? std::min<size_t>(bytes, data.size()) : data.size();
   pmz::Decoder d;
+  d.set_threads(threads);
   pmz::Status s = d.feed(data.data(), n);
   if (s == pmz::Status::ok && !bytes) s = d.finish();
   // One line per failure: what is wrong with the stream, and what became of the output.

@@ -59,6 +59,9 @@ PMZ_API const char* pmz_status_name(int status) {
 PMZ_API uint64_t pmz_decoder_bytes_consumed(const pmz_decoder* d) {
   return d->dec.bytes_consumed();
 }
+PMZ_API void pmz_decoder_set_threads(pmz_decoder* d, uint32_t threads) {
+  d->dec.set_threads(threads);
+}
 PMZ_API void pmz_decoder_set_split_target(pmz_decoder* d, uint64_t splits) {
   d->dec.set_split_target(splits);
 }

@@ -6,12 +6,15 @@
 #include "pmz/decoder.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cmath>
 #include <cstring>
 #include <deque>
 #include <new>
 #include <span>
+#include <system_error>
+#include <thread>
 #include <type_traits>
 
 #include "attribute_stream.hpp"
@@ -121,6 +124,20 @@ struct Decoder::Impl {
   // The first-application frontier: splits below `decoded` have their symbols decoded; the
   // symbols of the others wait in their chunk readers, decoded with contexts from the mesh.
   struct Frontier {
+    ProgressiveMesh* mesh = nullptr;  // level.mesh, or a worker's view of it
+    // The node being applied (a stream with nodes): its cell's box, whether it has a cell, and
+    // (a worker's) the face count its table entry ends at.
+    CellBox box;
+    bool cells = false;
+    uint64_t face_end = 0;
+    // A worker's: its splits' sector corners and ring sizes, in order, and how it stopped.
+    BigVector<uint32_t> sectors;
+    std::vector<uint32_t> rings;
+    Status status = Status::ok;
+    std::string message;
+    bool paused = false;  // before split `decoded`, whose faces would pass face_end
+    ProgressiveMesh view;
+    FanPrefetcher fans;  // (a worker's: the serial decoder's is level.fans)
     // Chunks whose wedge and residual symbols are not all decoded yet, oldest first; the front
     // one starts at split lazy_first.
     std::deque<SplitChunkReader> lazy;
@@ -214,11 +231,6 @@ struct Decoder::Impl {
     uint64_t start_faces = 0, start_wedges = 0;
     CellBins bins;
     int64_t bins_level = -1;
-    bool cells = false;  // the node being applied has a cell (its level a grid): its box
-    CellBox box;
-    bool in_cell(const int32_t* coords, uint32_t x) const {
-      return box.contains(coords + size_t(x) * 3);
-    }
   } nodes;
   PMZ_COLD Status node_chunk(const uint8_t* p, size_t n);
   PMZ_COLD Status node_arrived(uint64_t bytes, bool attributes_done);
@@ -248,8 +260,28 @@ struct Decoder::Impl {
   PMZ_COLD Status install_base(ProgressiveMesh&& m, std::vector<int32_t>&& coords);
   bool apply();
   PMZ_COLD bool refuse(Status s, const std::string& what);
-  PMZ_COLD bool refuse_split(const char* what) {  // corrupt at split `applied`
-    return refuse(Status::corrupt, "split " + PMZ_DECIMAL(level.applied) + " " + what);
+  // resume: a worker paused before the split (see Frontier::paused) goes on from there.
+  bool first_apply(Frontier& f, uint64_t i, bool resume = false);
+  static constexpr const char* kValences = "vertex valences beyond what a mesh needs";
+  // Decoding threads (set_threads; 1: serial) and the level-wise parallel first applications.
+  uint32_t threads = 1;
+  PMZ_COLD uint64_t parallel_nodes(uint64_t max_splits, uint64_t face_target);
+  // Undoes a worker's splits from `from` on (the last first).
+  void undo_worker(Frontier& w, uint64_t from) {
+    for (uint64_t t = w.decoded; t-- > from;)
+      w.view.undo_split(record.splits[t].v, record.sides[t] & kHasLeft,
+                        record.sides[t] & kHasRight);
+  }
+  // The mesh, record and vertex choice arrays sized for that many faces, vertices and splits.
+  PMZ_COLD void resize_level(uint64_t faces, uint64_t vertices, uint64_t splits) {
+    level.mesh.corner_vertex.resize(faces * 3);
+    level.mesh.opposite.resize(faces * 3);
+    level.mesh.vertex_corner.resize(vertices);
+    record.coords.resize(vertices * 3);
+    record.positions.resize(vertices * 3);
+    record.parents.resize(vertices);
+    record.sides.resize(splits);
+    frontier.choice.resize_vertices(vertices);
   }
   void undo();
   // Up to max_splits splits, stopping once the mesh has face_target faces / before it would
@@ -365,21 +397,34 @@ struct Decoder::Impl {
   }
   // Never throws: called after the mesh changed, it must not leave a split half counted. Out of
   // memory for the list, it reports everything as changed.
-  void note_rewritten(std::span<const uint32_t> faces) noexcept {
+  // (kPer 3: the faces of a list of their corners)
+  template <uint32_t kPer = 1>
+  void note_rewritten(std::span<const uint32_t> faces, uint64_t face_count) noexcept {
     if (level.changes.all) return;
     PMZ_TRY {
       for (uint32_t f : faces)
-        if (f < level.changes.face_begin) level.changes.modified_faces.push_back(f);
+        if (f / kPer < level.changes.face_begin) level.changes.modified_faces.push_back(f / kPer);
     }
     PMZ_CATCH_BAD_ALLOC { level.changes.all = true; }
-    if (level.changes.all || level.changes.modified_faces.size() > level.mesh.face_count() + 64u) {
+    if (level.changes.all || level.changes.modified_faces.size() > face_count + 64u) {
       level.changes.all = true;
       level.changes.modified_faces.clear();
     }
   }
 };
 
-Decoder::Decoder(const DecoderLimits& limits) : impl_(new Impl) { impl_->limits = limits; }
+Decoder::Decoder(const DecoderLimits& limits) : impl_(new Impl) {
+  impl_->limits = limits;
+  impl_->frontier.mesh = &impl_->level.mesh;
+  set_threads(0);
+}
+
+void Decoder::set_threads(uint32_t n) {
+#if defined(__wasm__)
+  n = 1;  // (built without threads)
+#endif
+  impl_->threads = n ? n : std::max(1u, std::thread::hardware_concurrency());
+}
 Decoder::~Decoder() = default;
 Decoder::Decoder(Decoder&&) noexcept = default;
 Decoder& Decoder::operator=(Decoder&&) noexcept = default;
@@ -707,9 +752,9 @@ bool Decoder::Impl::start_node() {
   const NodeEntry& e = nodes.table.nodes[k];
   nodes.start_faces = level.mesh.face_count();
   nodes.start_wedges = attrs ? attrs->state.wedge_count : 0;
-  nodes.cells = nodes.table.levels[e.level].side > 0;
-  nodes.box = CellBox(nodes.table.levels[e.level], e.cell);
-  if (!nodes.cells) {
+  frontier.cells = nodes.table.levels[e.level].side > 0;
+  frontier.box = CellBox(nodes.table.levels[e.level], e.cell);
+  if (!frontier.cells) {
     frontier.choice.begin_whole_node();
   } else {
     if (nodes.bins_level != int64_t(e.level)) {
@@ -746,134 +791,14 @@ bool Decoder::Impl::apply() {
                               side & kHasLeft, side & kHasRight);
     level.sector_end += s.b;
     if (attrs) attrs->reapply(level.mesh, level.applied, side & kHasLeft, side & kHasRight);
-    note_rewritten(level.mesh.sector_faces());
+    note_rewritten(level.mesh.sector_faces(), level.mesh.face_count());
     ++level.applied;
     return true;
   }
-  auto invalid = [&] {
-    return refuse(Status::corrupt, "split " + PMZ_DECIMAL(level.applied) + " has an invalid wedge");
-  };
-  SplitChunkReader& reader = frontier.lazy.front();
-  if (level.applied - frontier.lazy_first ==
-      reader.group_end()) {  // a group's first split: start its scan
-    if (nodes.present && nodes.applying < nodes.first_split.size() &&
-        level.applied == nodes.first_split[nodes.applying] && !start_node())
-      return false;
-    frontier.group_first = level.applied;
-    frontier.choice_ok = reader.begin_group(frontier.choice, level.mesh.vertex_count());
-    frontier.find_vertices(scan_at_group_start(), record.splits);
-  }
-  if (s.v == kNoCorner)
-    return refuse(Status::corrupt,
-                  "split " + PMZ_DECIMAL(level.applied) + ": vertex choice malformed");
-  if (!level.mesh.gather_ring(s.v)) return invalid();
-  if (nodes.present &&
-      nodes.cells) {  // v's ring within the node's cell (spec/format.md section 15.4)
-    bool inside = nodes.in_cell(record.coords.data(), s.v);
-    for (uint32_t w : level.mesh.ring()) inside = inside && nodes.in_cell(record.coords.data(), w);
-    if (!inside) return refuse_split("reaches outside its node's cell");
-  }
-  {  // first application: the wedge symbols, with contexts from v's ring
-    const uint32_t k = uint32_t(level.mesh.ring().size());
-    // Ring walks cost the valence: bound their total (first applications; re-applying after
-    // coarsening repeats the same work) so splits piling on one vertex cannot go quadratic.
-    frontier.ring_work += k;
-    if (frontier.ring_work > kRingWorkPerSplit * (level.applied + 1) + kRingWorkSlack)
-      return refuse(Status::limit_exceeded, "vertex valences beyond what a mesh needs");
-    // Decoded symbols cannot be put back: allocate what wedge_ranks needs before decoding them
-    // (an allocation failure then leaves this split to retry, not a symbol lost).
-    if (k > frontier.wedge_scratch_ring) {
-      frontier.wedge_scratch.reserve(k);
-      frontier.wedge_scratch_ring = k;
-    }
-    frontier.choice.reserve(k);
-    // (About four sector corners per split on a regular mesh, valence 6: room for four per
-    // split refine() made room for.)
-    if (record.sector_corners.capacity() - record.sector_corners.size() < k)
-      record.sector_corners.reserve(
-          std::max({2 * record.sector_corners.capacity(), record.sector_corners.size() + k,
-                    4 * record.sides.capacity()}));
-    if (attrs) attrs->reserve_split(level.mesh.face_count(), k);
-    uint32_t count, rank;
-    auto malformed = [&] {
-      return refuse(Status::corrupt,
-                    "split " + PMZ_DECIMAL(level.applied) + ": wedge streams malformed");
-    };
-    if (!frontier.lazy.front().wedge_count(wedge_context(k, level.mesh.ring_closed()), count))
-      return malformed();
-    if (info.level == kLevelSpeed) {  // the candidate's index (spec/format.md section 9.10)
-      if (!frontier.lazy.front().wedge_rank(rank_context(level.mesh.ring_closed(), false), rank))
-        return malformed();
-      if (!speed_wedge_pick(level.mesh, count, rank, s.a, s.b)) return invalid();
-    } else {
-      if (!wedge_scores(record.coords.data(), frontier.choice.degrees(), s.v, level.mesh, count,
-                        frontier.wedge_scratch))
-        return invalid();
-      if (!frontier.lazy.front().wedge_rank(
-              rank_context(level.mesh.ring_closed(), frontier.wedge_scratch.confident), rank))
-        return malformed();
-      if (!wedge_pick(level.mesh, count, rank, s.a, s.b, frontier.wedge_scratch)) return invalid();
-    }
-  }
-  if (!level.mesh.split_gathered(s.v, s.a, s.b)) return invalid();
-  const bool has_l = s.a != kNoRank, has_r = s.b != kNoRank;
-  {  // the position, then what re-applying the split needs
-    PositionPrediction pred;
-    int32_t residual[3], c[3];
-    // (v's ring offsets: summed by the wedge scores over the same ring and coordinates.)
-    const WedgeScratch& ws = frontier.wedge_scratch;
-    bool decoded;
-    if (info.level == kLevelSpeed) {
-      speed_predict_position(record.coords.data(), level.mesh.u_ring(), pred);
-      decoded = frontier.lazy.front().speed_residuals(pred.context, residual);
-    } else {
-      predict_position(record.coords.data(), level.mesh.u_ring(), level.mesh.ring(), info.curvature,
-                       info.fine_curvature, pred, ws.extent,
-                       ws.ring_offsets_ok ? ws.ring_offsets : nullptr);
-      decoded = frontier.lazy.front().residuals(pred.context, pred.mix, residual);
-    }
-    if (!decoded) {
-      level.mesh.undo_split(s.v, has_l, has_r);
-      return refuse(Status::corrupt,
-                    "split " + PMZ_DECIMAL(level.applied) + ": residual streams malformed");
-    }
-    position_from_residuals(pred, residual, c);
-    if (nodes.present && !nodes.box.contains(c)) {
-      level.mesh.undo_split(s.v, has_l, has_r);
-      return refuse_split("has u outside its node's cell");
-    }
-    frontier.grow_box(c);
-    for (int k = 0; k < 3; ++k) {
-      record.coords.push_back(c[k]);
-      record.positions.push_back(quant.dequantize(c[k], k));
-    }
-    if (attrs && !attrs->first_apply(level.mesh, record.coords.data(), record.positions.data(),
-                                     has_l, has_r)) {
-      record.coords.resize(record.coords.size() - 3);
-      record.positions.resize(record.positions.size() - 3);
-      level.mesh.undo_split(s.v, has_l, has_r);
-      return refuse(Status::corrupt,
-                    "split " + PMZ_DECIMAL(level.applied) + ": attributes malformed");
-    }
-    record.parents.push_back(s.v);
-    record.sides.push_back(uint8_t((has_l ? kHasLeft : 0) | (has_r ? kHasRight : 0)));
-    // The vertex choice state (its umbrella sums need u's coordinates), then the group's
-    // vertices kChoiceLag + 1 ahead (the lag: this split's ring is noted now).
-    frontier.choice.applied(level.mesh, record.coords.data(), has_l, has_r);
-    frontier.find_vertices(scan_after_split(uint32_t(level.applied - frontier.group_first)),
-                           record.splits);
-    s.a = level.mesh.sector_hint();
-    s.b = uint32_t(level.mesh.sector_faces().size());
-    for (uint32_t n : level.mesh.sector_corners())
-      record.sector_corners.push_back(n);  // (reserved above: no allocation)
-    level.sector_end += s.b;
-    if (++frontier.decoded - frontier.lazy_first == frontier.lazy.front().split_count()) {
-      frontier.lazy_first = frontier.decoded;
-      frontier.lazy.pop_front();  // its bytes are no longer needed
-      if (attrs) attrs->chunk_done();
-    }
-  }
-  note_rewritten(level.mesh.sector_faces());
+  if (!first_apply(frontier, level.applied)) return false;
+  level.sector_end += s.b;
+  if (attrs && frontier.lazy_first == frontier.decoded) attrs->chunk_done();
+  note_rewritten(level.mesh.sector_faces(), level.mesh.face_count());
   ++level.applied;
   // The last node's faces (the others' are checked as the next node starts). The split stands:
   // the mesh is valid, the stream is not.
@@ -883,6 +808,341 @@ bool Decoder::Impl::apply() {
     return false;
   }
   return true;
+}
+
+// The first application of split i (f.decoded), by the serial frontier or a node's worker: its
+// vertex, wedge and position symbols with contexts from f's mesh, the split, and what re-applying
+// it needs. A failure leaves the mesh at the level before the split: the serial frontier refuses
+// the split, a worker keeps the status and message for the merge.
+bool Decoder::Impl::first_apply(Frontier& f, uint64_t i, bool resume) {
+  Split& s = record.splits[i];
+  ProgressiveMesh& mesh = *f.mesh;
+  const bool serial = &f == &frontier;
+  auto stop = [&](Status st, const std::string& what) {
+    if (serial) return refuse(st, what);
+    f.status = st;
+    f.message = what;
+    return false;
+  };
+  auto stop_split = [&](const char* what) {
+    return stop(Status::corrupt, "split " + PMZ_DECIMAL(i) + what);
+  };
+  auto invalid = [&] { return stop_split(" has an invalid wedge"); };
+  SplitChunkReader& reader = f.lazy.front();
+  if (!resume) {
+    if (i - f.lazy_first == reader.group_end()) {  // a group's first split: start its scan
+      if (serial && nodes.present && nodes.applying < nodes.first_split.size() &&
+          i == nodes.first_split[nodes.applying] && !start_node())
+        return false;
+      f.group_first = i;
+      f.choice_ok = reader.begin_group(f.choice, mesh.vertex_count());
+      f.find_vertices(scan_at_group_start(), record.splits);
+    }
+    if (s.v == kNoCorner) return stop_split(": vertex choice malformed");
+    if (!mesh.gather_ring(s.v)) return invalid();
+    if (nodes.present &&
+        f.cells) {  // v's ring within the node's cell (spec/format.md section 15.4)
+      bool inside = f.box.contains(&record.coords[size_t(s.v) * 3]);
+      for (uint32_t w : mesh.ring())
+        inside = inside && f.box.contains(&record.coords[size_t(w) * 3]);
+      if (!inside) return stop_split(" reaches outside its node's cell");
+    }
+    {  // first application: the wedge symbols, with contexts from v's ring
+      const uint32_t k = uint32_t(mesh.ring().size());
+      // Ring walks cost the valence: bound their total (first applications; re-applying after
+      // coarsening repeats the same work) so splits piling on one vertex cannot go quadratic.
+      // (A worker counts from the total before its level: a lower bound, checked exactly as the
+      // nodes are merged in file order.)
+      f.ring_work += k;
+      if (!serial) f.rings.push_back(k);
+      if (f.ring_work > kRingWorkPerSplit * (i + 1) + kRingWorkSlack)
+        return stop(Status::limit_exceeded, kValences);
+      // Decoded symbols cannot be put back: allocate what wedge_ranks needs before decoding them
+      // (an allocation failure then leaves this split to retry, not a symbol lost).
+      if (k > f.wedge_scratch_ring) {
+        f.wedge_scratch.reserve(k);
+        f.wedge_scratch_ring = k;
+      }
+      f.choice.reserve(k);
+      // (About four sector corners per split on a regular mesh, valence 6: room for four per
+      // split refine() made room for.)
+      if (serial && record.sector_corners.capacity() - record.sector_corners.size() < k)
+        record.sector_corners.reserve(
+            std::max({2 * record.sector_corners.capacity(), record.sector_corners.size() + k,
+                      4 * record.sides.capacity()}));
+      if (attrs) attrs->reserve_split(mesh.face_count(), k);
+      uint32_t count, rank;
+      auto malformed = [&] { return stop_split(": wedge streams malformed"); };
+      if (!reader.wedge_count(wedge_context(k, mesh.ring_closed()), count)) return malformed();
+      if (info.level == kLevelSpeed) {  // the candidate's index (spec/format.md section 9.10)
+        if (!reader.wedge_rank(rank_context(mesh.ring_closed(), false), rank)) return malformed();
+        if (!speed_wedge_pick(mesh, count, rank, s.a, s.b)) return invalid();
+      } else {
+        if (!wedge_scores(record.coords.data(), f.choice.degrees(), s.v, mesh, count,
+                          f.wedge_scratch))
+          return invalid();
+        if (!reader.wedge_rank(rank_context(mesh.ring_closed(), f.wedge_scratch.confident), rank))
+          return malformed();
+        if (!wedge_pick(mesh, count, rank, s.a, s.b, f.wedge_scratch)) return invalid();
+      }
+    }
+    // A worker writes only within its node's face ids: beyond them it pauses, and the merge lets
+    // it go on alone, as the serial decoder does (which finds a node that adds more faces than
+    // its table entry where spec/format.md section 15 says).
+    if (!serial && mesh.face_count() + uint64_t(s.a != kNoRank) + (s.b != kNoRank) > f.face_end)
+      return !(f.paused = true);
+  }
+  const bool has_l = s.a != kNoRank, has_r = s.b != kNoRank;
+  if (!mesh.split_gathered(s.v, s.a, s.b)) return invalid();
+  {  // the position, then what re-applying the split needs
+    PositionPrediction pred;
+    int32_t residual[3], c[3];
+    // (v's ring offsets: summed by the wedge scores over the same ring and coordinates.)
+    const WedgeScratch& ws = f.wedge_scratch;
+    bool decoded;
+    if (info.level == kLevelSpeed) {
+      speed_predict_position(record.coords.data(), mesh.u_ring(), pred);
+      decoded = reader.speed_residuals(pred.context, residual);
+    } else {
+      predict_position(record.coords.data(), mesh.u_ring(), mesh.ring(), info.curvature,
+                       info.fine_curvature, pred, ws.extent,
+                       ws.ring_offsets_ok ? ws.ring_offsets : nullptr);
+      decoded = reader.residuals(pred.context, pred.mix, residual);
+    }
+    if (!decoded) {
+      mesh.undo_split(s.v, has_l, has_r);
+      return stop_split(": residual streams malformed");
+    }
+    position_from_residuals(pred, residual, c);
+    if (nodes.present && !f.box.contains(c)) {
+      mesh.undo_split(s.v, has_l, has_r);
+      return stop_split(" has u outside its node's cell");
+    }
+    f.grow_box(c);
+    // Serially appended; a worker's vertex, split and face ids are within what was sized for
+    // its level.
+    const size_t u = mesh.vertex_count() - 1;
+    auto put = [](auto& to, size_t at, auto x) {
+      if (to.size() == at)
+        to.push_back(x);
+      else
+        to[at] = x;
+    };
+    for (int a = 0; a < 3; ++a) {
+      put(record.coords, u * 3 + a, c[a]);
+      put(record.positions, u * 3 + a, quant.dequantize(c[a], a));
+    }
+    if (attrs &&
+        !attrs->first_apply(mesh, record.coords.data(), record.positions.data(), has_l, has_r)) {
+      record.coords.resize(record.coords.size() - 3);
+      record.positions.resize(record.positions.size() - 3);
+      mesh.undo_split(s.v, has_l, has_r);
+      return stop_split(": attributes malformed");
+    }
+    put(record.parents, u, s.v);
+    put(record.sides, i, uint8_t((has_l ? kHasLeft : 0) | (has_r ? kHasRight : 0)));
+    // The vertex choice state (its umbrella sums need u's coordinates), then the group's
+    // vertices kChoiceLag + 1 ahead (the lag: this split's ring is noted now).
+    f.choice.applied(mesh, record.coords.data(), has_l, has_r);
+    f.find_vertices(scan_after_split(uint32_t(i - f.group_first)), record.splits);
+    s.a = mesh.sector_hint();
+    s.b = uint32_t(mesh.sector_faces().size());
+    for (uint32_t n : mesh.sector_corners())
+      (serial ? record.sector_corners : f.sectors).push_back(n);  // (serially: reserved above)
+    if (++f.decoded - f.lazy_first == reader.split_count()) {
+      f.lazy_first = f.decoded;
+      f.lazy.pop_front();  // its bytes are no longer needed
+    }
+  }
+  return true;
+}
+
+// Several nodes of one level whose bytes all arrived, at once (threads > 1, a stream with nodes
+// and without attributes, at a node's start): each on a worker with its own view of the mesh and
+// vertex choice, writing the vertex, face and split ids the table gives it (nodes of a level touch
+// disjoint state). Then merged in file order as the serial decoder would have applied them: the
+// first failure (the worker's own, the ring work bound, a node's face count) ends the applied
+// prefix there, the splits after it are undone and the serial error reported. Returns the splits
+// applied (0: nothing to run in parallel here; the serial path goes on).
+uint64_t Decoder::Impl::parallel_nodes(uint64_t max_splits, uint64_t face_target) {
+#if defined(__wasm__)
+  (void)max_splits, (void)face_target;
+  return 0;
+#else
+  const size_t k = nodes.applying, total = nodes.table.nodes.size();
+  if (threads < 2 || !nodes.present || attrs || stage == Stage::failed || k < 1 || k >= total ||
+      level.applied != frontier.decoded || level.applied != nodes.first_split[k] ||
+      !node_counts_match(k - 1))
+    return 0;
+  const std::vector<NodeEntry>& table = nodes.table.nodes;
+  const uint32_t lv = table[k].level;
+  if (nodes.table.levels[lv].side == 0) return 0;
+  const uint64_t v0 = level.mesh.vertex_count(), f0 = level.mesh.face_count(), s0 = level.applied;
+  // The level's nodes from k on that arrived whole and that the serial decoder would apply
+  // whole within the targets (their table faces below face_target and the face limit).
+  size_t end = k;
+  uint64_t faces = f0;
+  while (end < total && end < nodes.arriving && table[end].level == lv &&
+         nodes.first_split[end] + table[end].splits - s0 <= max_splits &&
+         faces + table[end].faces < face_target &&
+         faces + table[end].faces + 2 <= limits.max_faces &&
+         faces + table[end].faces <= info.full_faces)
+    faces += table[end++].faces;
+  if (end - k < 2) return 0;
+  const uint64_t s1 = end < total ? nodes.first_split[end] : info.total_splits;
+  const uint64_t v1 = v0 + (s1 - s0);
+  if (v1 > info.full_vertices) return 0;
+  std::vector<std::unique_ptr<Frontier>> work;
+  std::vector<uint64_t> face_start;
+  PMZ_TRY {
+    // Room for every id the workers write: the owner's arrays sized to the level's end.
+    resize_level(faces, v1, s1);
+    if (k == 1) nodes.first_models = std::move(nodes.models[0]);
+    nodes.models[k - 1].reset();  // its splits are all decoded
+    if (nodes.bins_level != int64_t(lv)) {
+      nodes.bins.build(nodes.table, lv, record.coords.data(), uint32_t(v0));
+      nodes.bins_level = lv;
+    }
+    uint32_t epoch = frontier.choice.take_epochs(s1 - s0 + (end - k));
+    uint64_t at = f0;
+    for (size_t j = k; j < end; ++j) {
+      Frontier& w = *work.emplace_back(std::make_unique<Frontier>());
+      const uint64_t first = nodes.first_split[j];
+      w.mesh = &w.view;
+      w.view.attach(level.mesh, uint32_t(v0 + first - s0), uint32_t(at));
+      w.choice.attach(frontier.choice, epoch);
+      epoch += uint32_t(table[j].splits + 1);
+      w.choice.begin_node(nodes.bins.take(uint32_t(j)));
+      for (uint64_t got = 0; got < table[j].splits; frontier.lazy.pop_front()) {
+        got += frontier.lazy.front().split_count();
+        w.lazy.push_back(std::move(frontier.lazy.front()));
+      }
+      w.lazy_first = w.decoded = first;
+      std::copy_n(frontier.box_lo, 3, w.box_lo);
+      std::copy_n(frontier.box_hi, 3, w.box_hi);
+      w.wedge_scratch.extent = frontier.wedge_scratch.extent;
+      w.ring_work = frontier.ring_work;
+      w.cells = true;
+      w.box = CellBox(nodes.table.levels[lv], table[j].cell);
+      face_start.push_back(at);
+      at += table[j].faces;
+      w.face_end = at;
+      w.group_vs.reserve(kChoiceLag + 2);
+    }
+  }
+  PMZ_CATCH_BAD_ALLOC {  // (the readers may be gone: refused like any split out of memory)
+    resize_level(f0, v0, s0);
+    refuse(Status::out_of_memory, "allocation failed while refining");
+    return 0;
+  }
+  frontier.lazy_first = s1;
+  // The workers take the nodes in file order.
+  std::atomic<size_t> next{0};
+  auto go = [&](size_t j, bool resume) {
+    Frontier& w = *work[j];
+    PMZ_TRY {
+      if (!resume) nodes.models[k + j]->inherit(*nodes.first_models);
+      const uint64_t last = nodes.first_split[k + j] + table[k + j].splits;
+      if (resume && !first_apply(w, w.decoded, true)) return;
+      for (;;) {  // (the fans ahead, as prefetch(): within the node's cell)
+        const uint64_t ahead = w.decoded + FanPrefetcher::kWalkers;
+        w.fans.step(level.mesh, record.coords.data(), record.coords.size(),
+                    ahead < last ? record.splits[ahead].v : kNoCorner, frontier.choice.degrees(),
+                    frontier.choice.sums_bytes());
+        if (w.decoded >= last || !first_apply(w, w.decoded)) break;
+      }
+    }
+    PMZ_CATCH_BAD_ALLOC {
+      w.status = Status::out_of_memory;
+      w.message = "allocation failed while refining";
+    }
+  };
+  auto run = [&] {
+    for (size_t j; (j = next++) < work.size();) go(j, false);
+  };
+  {
+    std::vector<std::jthread> pool;
+    try {  // (fewer threads if the system has none to give: this one runs the rest)
+      for (uint32_t t = 1; t < std::min<size_t>(threads, work.size()); ++t) pool.emplace_back(run);
+    } catch (const std::system_error&) {
+    }
+    run();
+  }
+  // The merge: where the serial decoder would have stopped (stop, with its error).
+  uint64_t stop = s1, work_sum = frontier.ring_work;
+  Status st = Status::ok;
+  std::string what;
+  for (size_t j = 0; j < work.size() && st == Status::ok; ++j) {
+    Frontier& w = *work[j];
+    const uint64_t first = nodes.first_split[k + j];
+    if (w.paused) {  // the nodes after it undone, it goes on alone, with room for its faces
+      for (size_t x = j + 1; x < work.size(); ++x) {
+        Frontier& o = *work[x];
+        undo_worker(o, nodes.first_split[k + x]);
+        o.decoded = nodes.first_split[k + x];
+        o.rings.clear();
+        o.status = Status::ok;
+        o.paused = false;
+      }
+      const uint64_t room = w.view.face_count() + 2 * (first + table[k + j].splits - w.decoded);
+      if (room * 3 > level.mesh.corner_vertex.size()) {
+        level.mesh.corner_vertex.resize(room * 3);
+        level.mesh.opposite.resize(room * 3);
+      }
+      w.paused = false;
+      w.face_end = UINT64_MAX;
+      go(j, true);
+    }
+    for (size_t t = 0; t < w.rings.size(); ++t) {
+      work_sum += w.rings[t];
+      if (work_sum > kRingWorkPerSplit * (first + t + 1) + kRingWorkSlack) {
+        stop = first + t, st = Status::limit_exceeded, what = kValences;
+        break;
+      }
+    }
+    if (st != Status::ok) break;
+    if (w.status != Status::ok) {
+      stop = w.decoded, st = w.status, what = w.message;
+    } else if (k + j + 1 < end && w.view.face_count() != w.face_end) {
+      stop = nodes.first_split[k + j + 1], st = Status::corrupt;
+      what = "node " + PMZ_DECIMAL(k + j) + " added other faces or wedges than its table entry";
+    }
+    frontier.ring_work = work_sum;
+  }
+  // Undo what lies past stop (nodes touch disjoint state: in any node order), then take the
+  // prefix over: sizes, sector lists, the change report, the box.
+  uint64_t f_end = f0;
+  for (size_t j = 0; j < work.size(); ++j) {
+    Frontier& w = *work[j];
+    undo_worker(w, std::max(stop, nodes.first_split[k + j]));
+    if (nodes.first_split[k + j] >= stop) continue;
+    f_end = w.view.face_count();
+    uint64_t faces_now = face_start[j], corners = 0;
+    for (uint64_t t = nodes.first_split[k + j]; t < std::min(w.decoded, stop); ++t) {
+      const Split& x = record.splits[t];
+      faces_now += new_faces(record.sides[t]);
+      note_rewritten<3>({w.sectors.data() + corners, x.b}, faces_now);
+      corners += x.b;
+    }
+    record.sector_corners.insert(record.sector_corners.end(), w.sectors.begin(),
+                                 w.sectors.begin() + ptrdiff_t(corners));
+    level.sector_end += corners;
+    if (j) nodes.models[k + j - 1].reset();
+    nodes.start_faces = face_start[j];
+    nodes.applying = k + j + 1;
+  }
+  const uint64_t v_end = v0 + (stop - s0);
+  resize_level(f_end, v_end, stop);
+  for (uint64_t x = v0; x < v_end; ++x) frontier.grow_box(&record.coords[x * 3]);
+  frontier.decoded = level.applied = stop;
+  if (st != Status::ok) {
+    refuse(st, what);
+  } else if (end == total && !node_counts_match(total - 1)) {
+    fail(Status::corrupt, "the last node added other faces or wedges than its table entry");
+    return stop - s0 - 1;  // (as apply(): the last split stands but is not counted)
+  }
+  return stop - s0;
+#endif
 }
 
 void Decoder::Impl::undo() {
@@ -899,7 +1159,7 @@ void Decoder::Impl::undo() {
   }
   level.changes.face_begin = std::min(level.changes.face_begin, level.mesh.face_count());
   level.changes.vertex_begin = std::min(level.changes.vertex_begin, level.mesh.vertex_count());
-  note_rewritten(level.mesh.sector_faces());
+  note_rewritten(level.mesh.sector_faces(), level.mesh.face_count());
 }
 
 Status Decoder::feed(const void* data, size_t size) {
@@ -979,6 +1239,11 @@ uint64_t Decoder::Impl::refine(uint64_t max_splits, uint64_t face_target) {
     level.listed_ahead = 0;
     while (n < max_splits && level.applied < record.available &&
            level.mesh.face_count() < face_target) {
+      if (const uint64_t m = parallel_nodes(max_splits - n, face_target)) {
+        n += m;
+        level.fans.reset();
+        continue;
+      }
       prefetch();
       if (!apply()) break;
       ++n;

@@ -6,6 +6,14 @@
 
 namespace pmz {
 
+// The arrays worked on (this object's, or attach()'s owner's), under the members' names.
+#define PMZ_MESH_ARRAYS                             \
+  ProgressiveMesh& mesh_arrays_ = arrays();         \
+  auto& corner_vertex = mesh_arrays_.corner_vertex; \
+  auto& opposite = mesh_arrays_.opposite;           \
+  auto& vertex_corner = mesh_arrays_.vertex_corner; \
+  (void)corner_vertex, (void)opposite, (void)vertex_corner
+
 PMZ_SMALL_IN_WASM void ProgressiveMesh::grow_scratch(size_t need) {
   size_t cap = std::max<size_t>(64, scratch_cap_);
   while (cap < need) cap *= 2;
@@ -14,6 +22,7 @@ PMZ_SMALL_IN_WASM void ProgressiveMesh::grow_scratch(size_t need) {
 }
 
 bool ProgressiveMesh::gather_fan(uint32_t v) {
+  PMZ_MESH_ARRAYS;
   fan_n_ = ring_n_ = 0;
   start_ = 0;
   closed_ = false;
@@ -101,6 +110,7 @@ uint32_t ProgressiveMesh::rank_of(uint32_t w) const {
 }
 
 bool ProgressiveMesh::split_gathered(uint32_t v, uint32_t a, uint32_t b) {
+  PMZ_MESH_ARRAYS;
   const uint32_t m = fan_n_, k = ring_n_;
   uint32_t s, count;
   if (closed_) {
@@ -174,6 +184,7 @@ bool ProgressiveMesh::split_gathered(uint32_t v, uint32_t a, uint32_t b) {
 }
 
 void ProgressiveMesh::resplit(uint32_t v, uint32_t h, uint32_t count, bool has_l, bool has_r) {
+  PMZ_MESH_ARRAYS;
   if (count > scratch_cap_) grow_scratch(count);
   // h = fan[s]: the sector's fan entries along the fan from there (the walk reads only
   // opposite, which the sector's rewrite does not change), then as from a list.
@@ -184,6 +195,7 @@ void ProgressiveMesh::resplit(uint32_t v, uint32_t h, uint32_t count, bool has_l
 
 void ProgressiveMesh::resplit_listed(uint32_t v, const uint32_t* sector, uint32_t count, uint32_t h,
                                      bool has_l, bool has_r) {
+  PMZ_MESH_ARRAYS;
   if (count > scratch_cap_) grow_scratch(count);
   const uint32_t u = vertex_count();
   uint32_t* cv = corner_vertex.data();
@@ -236,6 +248,7 @@ namespace {
 
 void ProgressiveMesh::link_new_faces(uint32_t v, uint32_t vl, uint32_t vr, uint32_t pl, uint32_t ql,
                                      uint32_t pr, uint32_t qr, bool has_l, bool has_r) {
+  PMZ_MESH_ARRAYS;
   const uint32_t u = vertex_count(), F = face_count();
   uint32_t* opp = opposite.data();
   const uint32_t f0 = 3 * F, g0 = 3 * (F + (has_l ? 1 : 0));
@@ -261,9 +274,11 @@ void ProgressiveMesh::link_new_faces(uint32_t v, uint32_t vl, uint32_t vr, uint3
   // Natively both faces at once: one resize per buffer (the decoder reserved the capacity),
   // then plain stores. Six push_backs out of line cost about 112 instructions per split; inlined,
   // about 2 KB of the decoder library's size budget.
-  const size_t at = corner_vertex.size(), n = 3 * ((has_l ? 1 : 0) + (has_r ? 1 : 0));
-  corner_vertex.resize(at + n);
-  opposite.resize(at + n);
+  const size_t at = size_t(F) * 3, n = 3 * ((has_l ? 1 : 0) + (has_r ? 1 : 0));
+  if (!owner_) {  // (attached: the owner's arrays hold the faces already)
+    corner_vertex.resize(at + n);
+    opposite.resize(at + n);
+  }
   uint32_t* c = corner_vertex.data() + at;
   uint32_t* o = opposite.data() + at;
   if (has_l) {
@@ -276,11 +291,18 @@ void ProgressiveMesh::link_new_faces(uint32_t v, uint32_t vl, uint32_t vr, uint3
     o[0] = pr, o[1] = qr, o[2] = across ? f0 + 2 : kNoCorner;
   }
 #endif
-  vertex_corner.push_back(has_l ? f0 : g0 + 1);
+  if (owner_) {
+    vertex_corner[u] = has_l ? f0 : g0 + 1;
+    ++vn_;
+    fn_ += (has_l ? 1 : 0) + (has_r ? 1 : 0);
+  } else {
+    vertex_corner.push_back(has_l ? f0 : g0 + 1);
+  }
   vertex_corner[v] = has_l ? f0 + 1 : g0;
 }
 
 PMZ_SMALL_IN_WASM void ProgressiveMesh::undo_split(uint32_t v, bool has_l, bool has_r) {
+  PMZ_MESH_ARRAYS;
   const uint32_t u = vertex_count() - 1;
   const uint32_t limit = 3 * (face_count() - (has_l ? 1 : 0) - (has_r ? 1 : 0));
   gather_fan(u);
@@ -296,6 +318,7 @@ PMZ_SMALL_IN_WASM void ProgressiveMesh::undo_split(uint32_t v, bool has_l, bool 
 
 PMZ_SMALL_IN_WASM void ProgressiveMesh::undo_resplit(uint32_t v, uint32_t h, uint32_t count,
                                                      bool has_l, bool has_r) {
+  PMZ_MESH_ARRAYS;
   if (count > scratch_cap_) grow_scratch(count);
   // u's fan is [left face], the sector from h in order, [right face]: the order undo_split()
   // finds the sector in. The links inside the sector are those of before the split.
@@ -311,6 +334,7 @@ PMZ_SMALL_IN_WASM void ProgressiveMesh::undo_resplit(uint32_t v, uint32_t h, uin
 }
 
 PMZ_SMALL_IN_WASM void ProgressiveMesh::unlink_new_faces(uint32_t v, bool has_l, bool has_r) {
+  PMZ_MESH_ARRAYS;
   const uint32_t nf = (has_l ? 1 : 0) + (has_r ? 1 : 0);
   const uint32_t limit = 3 * (face_count() - nf);
   const uint32_t f0 = limit, g0 = limit + (has_l ? 3 : 0);
@@ -331,9 +355,14 @@ PMZ_SMALL_IN_WASM void ProgressiveMesh::unlink_new_faces(uint32_t v, bool has_l,
     links[2] = p;
     links[3] = q;
   }
-  corner_vertex.resize(limit);
-  opposite.resize(limit);
-  vertex_corner.pop_back();
+  if (owner_) {
+    --vn_;
+    fn_ -= nf;
+  } else {
+    corner_vertex.resize(limit);
+    opposite.resize(limit);
+    vertex_corner.pop_back();
+  }
   // v, vl and vr may have pointed into the removed faces: repoint to a neighbouring face.
   for (uint32_t x : {v, vl, vr}) {
     if (x == kNoCorner || (vertex_corner[x] != kNoCorner && vertex_corner[x] < limit)) continue;

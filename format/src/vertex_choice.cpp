@@ -7,6 +7,16 @@
 
 namespace pmz {
 
+// The per-vertex arrays worked on (this object's, or attach()'s owner's), under the members'
+// names.
+#define PMZ_CHOICE_ARRAYS                  \
+  VertexChoice& choice_arrays_ = shared(); \
+  auto& degree_ = choice_arrays_.degree_;  \
+  auto& sums_ = choice_arrays_.sums_;      \
+  auto& key_ = choice_arrays_.key_;        \
+  auto& mark_ = choice_arrays_.mark_;      \
+  (void)degree_, (void)sums_, (void)key_, (void)mark_
+
 namespace {
 inline uint64_t l1(int64_t x, int64_t y, int64_t z) {
   return uint64_t(x < 0 ? -x : x) + uint64_t(y < 0 ? -y : y) + uint64_t(z < 0 ? -z : z);
@@ -46,6 +56,7 @@ inline uint64_t l1(int64_t x, int64_t y, int64_t z) {
 }
 
 void VertexChoice::start_group(bool near) {
+  PMZ_CHOICE_ARRAYS;
   const size_t n = degree_.size();  // the vertex count: every noted vertex is below it
   const size_t words = (n + 63) / 64;
   if (near && bits_.size() < words) bits_.resize(words);  // writer only: the decoder reserve()d
@@ -78,11 +89,13 @@ void VertexChoice::start_group(bool near) {
 }
 
 void VertexChoice::exclude(const ProgressiveMesh& mesh, uint32_t w) {
+  PMZ_CHOICE_ARRAYS;
   mark_[w] = excluded_;
   mesh.for_each_fan_face(w, [&](uint32_t a, uint32_t b) { mark_[a] = mark_[b] = excluded_; });
 }
 
 bool VertexChoice::independent(const ProgressiveMesh& mesh, std::span<const uint32_t> vs) {
+  PMZ_CHOICE_ARRAYS;
   const uint32_t epoch = next_epoch();
   for (uint32_t v : vs) {
     if (mark_[v] == epoch) return false;
@@ -112,9 +125,17 @@ void make_room(V& b, size_t extra) {
 }  // namespace
 
 // u's entries, within the capacity reserve() made (no reallocation code: the decoder's library
-// has a size budget).
-void VertexChoice::push_vertex(uint32_t degree) {
-  if (degree_.size() == degree_.capacity() || mark_.size() == mark_.capacity() ||
+// has a size budget); attached, at u in the owner's arrays (sized by it).
+void VertexChoice::push_vertex(uint32_t u, uint32_t degree) {
+  PMZ_CHOICE_ARRAYS;
+  if (owner_) {
+    degree_[u] = degree;
+    mark_[u] = 0;
+    key_[u] = 0;
+    sums_[u] = RingSums{{0, 0, 0}, 0};
+    return;
+  }
+  if (degree_.size() == degree_.capacity() || mark_.capacity() == mark_.size() ||
       key_.size() == key_.capacity() || sums_.size() == sums_.capacity())
     __builtin_unreachable();
   degree_.push_back(degree);
@@ -125,14 +146,16 @@ void VertexChoice::push_vertex(uint32_t degree) {
 
 PMZ_SMALL_IN_WASM void VertexChoice::grow(size_t k) {
   make_room(noted_, k + 2);
-  make_room(degree_, 1);
-  make_room(mark_, 1);
-  make_room(sums_, 1);
-  make_room(key_, 1);
+  if (!owner_) {
+    make_room(degree_, 1);
+    make_room(mark_, 1);
+    make_room(sums_, 1);
+    make_room(key_, 1);
+  }
   make_room(cell_, 1);
   // start_group's bitmap for the vertex count after this split (it must not allocate then: the
   // group's state has begun to change).
-  const size_t words = (degree_.size() + 64) / 64;
+  const size_t words = (shared().degree_.size() + 64) / 64;
   if (bits_.size() < words) {
     make_room(bits_, 1);
     bits_.resize(words);
@@ -152,6 +175,7 @@ void VertexChoice::umbrella(const ProgressiveMesh& pm, const int32_t* coords, bo
 template <bool kShift>
 void VertexChoice::umbrella_sums(const ProgressiveMesh& pm, const int32_t* coords, bool has_left,
                                  bool has_right) {
+  PMZ_CHOICE_ARRAYS;
   // From e = c'[x] - c'[v] per ring vertex x of u and du = c'[u] - c'[v], modulo 2^32: an
   // interior vertex's spoke -e to v becomes du - e; vl and vr gain the spoke du - e to u; v
   // loses the interior's spokes e and gains du; u's spokes are -du to v and e - du to each x.
@@ -234,11 +258,12 @@ void VertexChoice::umbrella_sums(const ProgressiveMesh& pm, const int32_t* coord
 
 void VertexChoice::applied(const ProgressiveMesh& pm, const int32_t* coords, bool has_left,
                            bool has_right) {
+  PMZ_CHOICE_ARRAYS;
   const std::span<const uint32_t> ring = pm.ring(), ur = pm.u_ring();
   const uint32_t v = ur[0], u = pm.vertex_count() - 1, r = uint32_t(ur.size());
   reserve(ring.size());  // (the decoder did, before the split)
   degree_[v] = uint32_t(ring.size()) + 2 + (has_left ? 1 : 0) + (has_right ? 1 : 0) - r;
-  push_vertex(r);
+  push_vertex(u, r);
   if (has_left) ++degree_[ur[1]];
   if (has_right) ++degree_[ur[r - 1]];
   if (umbrella_)

@@ -252,6 +252,92 @@ TEST_F(NodeStream, ATableThatDisagreesWithTheNodesIsRefused) {
   }
 }
 
+// Everything a caller sees of a decoder, after each step of a refine / coarsen schedule.
+struct Seen {
+  pmz::Status status;
+  std::string message;
+  std::vector<uint64_t> steps;  // per step: its result, splits applied, faces, change report
+  std::vector<uint32_t> indices, parents, modified, wedges;
+  std::vector<float> positions;
+  bool operator==(const Seen&) const = default;
+};
+
+Seen decode_with(const std::vector<uint8_t>& bytes, uint32_t threads, size_t slice,
+                 bool refine_while_feeding) {
+  pmz::Decoder d;
+  d.set_threads(threads);
+  Seen out;
+  auto look = [&] {
+    const pmz::MeshChanges& c = d.changes();
+    out.steps.insert(out.steps.end(), {d.splits_applied(), d.face_count(), c.vertex_begin,
+                                       c.face_begin, c.wedge_begin, c.all ? 1u : 0u});
+    out.modified.insert(out.modified.end(), c.modified_faces.begin(), c.modified_faces.end());
+    d.clear_changes();
+  };
+  for (size_t at = 0; at < bytes.size(); at += slice) {
+    d.feed(bytes.data() + at, std::min(slice, bytes.size() - at));
+    if (refine_while_feeding) {
+      out.steps.push_back(d.refine(d.splits_available() / 3));
+      look();
+    }
+  }
+  d.finish();
+  out.steps.push_back(d.refine());
+  look();
+  d.set_face_target(d.face_count() / 2);
+  look();
+  out.steps.push_back(d.coarsen(d.splits_applied() / 3));
+  look();
+  out.steps.push_back(d.refine());
+  look();
+  out.status = d.status();
+  out.message = d.error_message();
+  out.indices.assign(d.indices(), d.indices() + size_t(d.face_count()) * 3);
+  out.positions.assign(d.positions(), d.positions() + size_t(d.vertex_count()) * 3);
+  out.parents.assign(d.split_parents(), d.split_parents() + d.vertex_count());
+  if (d.wedge_count()) {
+    out.wedges.assign(d.wedge_indices(), d.wedge_indices() + size_t(d.face_count()) * 3);
+    out.wedges.insert(out.wedges.end(), d.wedge_vertices(), d.wedge_vertices() + d.wedge_count());
+  }
+  return out;
+}
+
+// The nodes of a level decode on several threads: the same mesh, ids, change reports and errors
+// as on one, however the bytes arrive and whatever the refinement schedule.
+void expect_same_on_threads(const std::vector<uint8_t>& bytes) {
+  for (bool feeding : {false, true})
+    for (size_t slice : {bytes.size(), size_t(997), size_t(61)}) {
+      const Seen one = decode_with(bytes, 1, slice, feeding);
+      for (uint32_t threads : {2u, 3u, 8u})
+        EXPECT_TRUE(decode_with(bytes, threads, slice, feeding) == one)
+            << threads << " threads, slices of " << slice << (feeding ? ", refining" : "");
+    }
+}
+
+TEST_F(NodeStream, ThreadsChangeNothing) {
+  expect_same_on_threads(*bytes_);
+  EXPECT_EQ(decode_with(*bytes_, 2, bytes_->size(), false).status, pmz::Status::ok);
+  // Damaged tables and nodes: the same errors at the same splits.
+  const uint64_t total = seq_->collapses.size();
+  const NodeChunk c = find_node_chunk(*bytes_, total);
+  for (size_t k : {size_t(1), size_t(2), c.table.nodes.size() / 2, c.table.nodes.size() - 1}) {
+    pmz::NodeTable t = c.table;
+    t.nodes[k].faces += 1;
+    expect_same_on_threads(with_table(*bytes_, c, t));
+    t.nodes[k].faces -= 2;  // a node that adds more faces than its entry
+    expect_same_on_threads(with_table(*bytes_, c, t));
+    t.nodes[k].faces += 1;  // (back, and one node's cell moved)
+    t.nodes[k].cell[0] += 1000;
+    expect_same_on_threads(with_table(*bytes_, c, t));
+  }
+  // A bit flipped in a late chunk: its checksum stops the stream there.
+  std::vector<uint8_t> flipped = *bytes_;
+  const size_t at = flipped.size() - flipped.size() / 5;
+  flipped[at] ^= 0x10;
+  const Seen one = decode_with(flipped, 1, flipped.size(), false);
+  EXPECT_TRUE(decode_with(flipped, 2, flipped.size(), false) == one);
+}
+
 // With attributes every node states the wedges it adds, and the decoder holds it to them.
 TEST(NodeStreamAttributes, WedgesPerNodeAreChecked) {
   const IndexedMesh mesh = pmz_test::seamed_grid(60, 23);
@@ -261,6 +347,7 @@ TEST(NodeStreamAttributes, WedgesPerNodeAreChecked) {
   ASSERT_EQ(whole.status, pmz::Status::ok) << whole.message;
   EXPECT_GT(whole.nodes, 4u);
   EXPECT_EQ(whole.splits, seq.collapses.size());
+  expect_same_on_threads(bytes);  // (attributes: decoded on one thread whatever the count)
   // The table, read with the attribute fields: the wedges it states add up to the full count.
   NodeChunk c;
   size_t at = 8;

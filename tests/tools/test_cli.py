@@ -772,6 +772,55 @@ def case_zero_is_the_base_mesh():
               f"{err_text(r)}")
 
 
+# ---- decoding threads ----
+
+
+def chunk_types(path):
+    # The chunk types of a stream: after the 8-byte signature, type, varint size, CRC, payload.
+    data, at, types = open(path, "rb").read(), 8, []
+    while at < len(data):
+        types.append(data[at])
+        size, shift, at = 0, 0, at + 1
+        while True:
+            size |= (data[at] & 0x7F) << shift
+            at, shift = at + 1, shift + 7
+            if not data[at - 1] & 0x80:
+                break
+        at += 4 + size
+    return types
+
+
+def case_decode_threads_same_bytes():
+    # A bumpy grid in cells of 200 vertices: a stream whose levels hold several nodes each.
+    d = fresh("threads")
+    n = 64
+    mesh = os.path.join(d, "grid.off")
+    with open(mesh, "w") as f:
+        f.write(f"OFF\n{n * n} {2 * (n - 1) * (n - 1)} 0\n")
+        for y in range(n):
+            for x in range(n):
+                f.write(f"{x} {y} {((x * 7919 + y * 104729) % 13) / 4}\n")
+        for y in range(n - 1):
+            for x in range(n - 1):
+                a = y * n + x
+                f.write(f"3 {a} {a + 1} {a + n + 1}\n3 {a} {a + n + 1} {a + n}\n")
+    pmz = os.path.join(d, "grid.pmz")
+    r = run([tool("pmz-encode"), mesh, "--cluster-vertices", "200", "-o", pmz])
+    check(r.returncode == 0, f"pmz-encode --cluster-vertices: {err_text(r)}")
+    check(6 in chunk_types(pmz) and info_json(pmz)["split_chunks"] > 8,
+          "expected a NODE chunk (type 6) and many nodes' SPLT chunks")
+    outs = {}
+    for t in ("1", "2", "3", "0"):
+        for target in ([], ["--ratio", "0.6"]):
+            out = os.path.join(d, f"t{t}{len(target)}.ply")
+            r = run([tool("pmz-decode"), pmz, "-o", out, "--threads", t] + target)
+            check(r.returncode == 0, f"pmz-decode --threads {t}: {err_text(r)}")
+            with open(out, "rb") as f:
+                outs[(t, len(target))] = f.read()
+    for key, data in outs.items():
+        check(data == outs[("1", key[1])], f"pmz-decode --threads {key[0]} wrote other bytes")
+
+
 # ---- batch encoding ----
 
 def case_batch_encoding():

@@ -127,6 +127,14 @@ class PMZ_API Decoder {
   // Bytes fed while the status was ok, including those waiting for the rest of their chunk.
   uint64_t bytes_consumed() const;
 
+  // Decoding threads for refine(), set_face_target() and set_split_target(): 0 (the default)
+  // takes std::thread::hardware_concurrency(), 1 decodes on the calling thread only. With more,
+  // the nodes of one level of a stream with a node table (spec/format.md section 15) whose bytes
+  // all arrived are first applied on that many threads at once (streams without attributes; the
+  // WebAssembly build always uses one). The result is the same for every count: mesh, ids, change
+  // report and errors. Never fails; the threads live only during those calls.
+  void set_threads(uint32_t n);
+
   // ---- level of detail ----
   // Each returns the number of splits applied / undone (fewer than asked when no more are
   // available or applied, or when an error stops it).

@@ -119,6 +119,12 @@ typedef struct pmz_stream_info {
 /* Fills *out (all zero before the header is in). */
 PMZ_API void pmz_decoder_info(const pmz_decoder* d, pmz_stream_info* out);
 
+/* Decoding threads for the level-of-detail calls below: 0 (the default) uses the machine's
+   cores (std::thread::hardware_concurrency), 1 the calling thread only. The mesh, ids, change
+   report and errors are the same for every count (only streams with a node table and without
+   attributes use more than one; the WebAssembly build always uses one). Never fails. */
+PMZ_API void pmz_decoder_set_threads(pmz_decoder* d, uint32_t threads);
+
 /* ---- Level of detail ---- */
 
 /* Applies up to max_splits available splits (UINT64_MAX: all); returns how many were applied

@@ -36,8 +36,18 @@ class ProgressiveMesh {
     opposite.reserve(faces * 3);
     vertex_corner.reserve(vertices);
   }
-  uint32_t vertex_count() const { return uint32_t(vertex_corner.size()); }
-  uint32_t face_count() const { return uint32_t(corner_vertex.size() / 3); }
+  uint32_t vertex_count() const { return owner_ ? vn_ : uint32_t(vertex_corner.size()); }
+  uint32_t face_count() const { return owner_ ? fn_ : uint32_t(corner_vertex.size() / 3); }
+  // Parallel decoding: this object works on owner's arrays (sized beforehand for every vertex and
+  // face it adds) instead of its own: its splits write vertex u and their faces at the ids from
+  // `vertices` and `faces` on (counted here, not by the arrays' sizes), its undos take them back.
+  // Workers whose splits touch disjoint vertices and faces (the nodes of one level of a stream
+  // with a node table) may split at once; each has its own ring scratch.
+  void attach(ProgressiveMesh& owner, uint32_t vertices, uint32_t faces) {
+    owner_ = &owner;
+    vn_ = vertices;
+    fn_ = faces;
+  }
 
   // Resets to the given mesh. Fails (false + message) on out-of-range indices, degenerate
   // faces, an edge used twice in the same direction or by more than two faces, a vertex whose
@@ -58,11 +68,12 @@ class ProgressiveMesh {
   // without faces. Touches no scratch: cheaper than gather_ring when the order does not matter.
   template <class F>
   void for_each_fan_face(uint32_t v, F&& f) const {
-    const uint32_t c0 = v < vertex_corner.size() ? vertex_corner[v] : kNoCorner;
+    const ProgressiveMesh& m = arrays();
+    const uint32_t c0 = v < m.vertex_corner.size() ? m.vertex_corner[v] : kNoCorner;
     if (c0 == kNoCorner) return;
-    const uint32_t* opp = opposite.data();
-    const uint32_t* cv = corner_vertex.data();
-    const size_t cap = corner_vertex.size();
+    const uint32_t* opp = m.opposite.data();
+    const uint32_t* cv = m.corner_vertex.data();
+    const size_t cap = m.corner_vertex.size();
     // Counter-clockwise from c0 (n = next(c) of the corner c at v, as gather_ring), then, if
     // the fan is open, clockwise from c0 to the other boundary.
     const uint32_t n0 = c0 % 3 == 2 ? c0 - 2 : c0 + 1;
@@ -128,6 +139,10 @@ class ProgressiveMesh {
   void undo_resplit(uint32_t v, uint32_t hint, uint32_t count, bool has_left, bool has_right);
 
  private:
+  ProgressiveMesh* owner_ = nullptr;  // attach()'s, or null: the arrays are this object's
+  uint32_t vn_ = 0, fn_ = 0;          // attached: the vertex and face counts
+  ProgressiveMesh& arrays() { return owner_ ? *owner_ : *this; }
+  const ProgressiveMesh& arrays() const { return owner_ ? *owner_ : *this; }
   bool gather_fan(uint32_t v);  // fan_ (per face ccw: next of the corner at v), ring_, closed_
   // The part split_gathered() and resplit() share once the old links are read: the new faces,
   // their links and vertex_corner.

@@ -118,10 +118,10 @@ class VertexChoice {
     // The scan's state in locals (f's stores could alias the members), written back on exit.
     const uint64_t n = n_;
     const uint32_t* const list = near_scan_ ? near_.data() : cell_.data();
-    const uint32_t* const mark = mark_.data();  // exclude() writes marks, never resizes
+    const uint32_t* const mark = shared().mark_.data();  // exclude() writes marks, never resizes
     const uint32_t excluded = excluded_;
     const bool near = near_scan_, listed = near_scan_ || cells_;
-    const uint8_t* const key = key_.data();
+    const uint8_t* const key = shared().key_.data();
     uint64_t i = i_;
     uint32_t found = found_;
     // The density class d = bitlen_quotient(n - at, size_ - found) changes only once n - at
@@ -185,11 +185,44 @@ class VertexChoice {
   // Decoder, before a split with a ring of k vertices: room so that applied() and the next
   // start_group() do not allocate. (Inline: once per split, it rarely needs to grow anything.)
   void reserve(size_t k) {
-    if (noted_.capacity() - noted_.size() < k + 2 || degree_.capacity() == degree_.size() ||
-        mark_.capacity() == mark_.size() || sums_.capacity() == sums_.size() ||
-        key_.capacity() == key_.size() || bits_.size() * 64 <= degree_.size() ||
-        cell_.capacity() == cell_.size())
+    const VertexChoice& o = shared();
+    if (noted_.capacity() - noted_.size() < k + 2 ||
+        (!owner_ && (degree_.capacity() == degree_.size() || mark_.capacity() == mark_.size() ||
+                     sums_.capacity() == sums_.size() || key_.capacity() == key_.size())) ||
+        bits_.size() * 64 <= o.degree_.size() || cell_.capacity() == cell_.size())
       grow(k);
+  }
+  // Parallel decoding: this object scans and applies the splits of one node (its own near list,
+  // cell, scan and exclusion epochs) on owner's per-vertex arrays (degrees, sums, keys, marks),
+  // sized beforehand for every vertex it adds. Marks are compared only within a node's cell,
+  // but must never meet an older value: this object takes epochs from `epochs` on, one per
+  // group, and the caller gives each node room for one per split (see epochs_used()).
+  void attach(VertexChoice& owner, uint32_t epochs) {
+    owner_ = &owner;
+    shift_ = owner.shift_;
+    umbrella_ = owner.umbrella_;
+    epoch_ = excluded_ = epochs;
+    bits_.assign(owner.degree_.size() / 64 + 2, 0);
+  }
+  // The owner before attaching workers: a fresh epoch range of n values for them (the marks are
+  // cleared first if it would wrap), returned as its first value; the owner's own epochs go on
+  // after it.
+  uint32_t take_epochs(uint64_t n) {
+    if (uint64_t(epoch_) + n + 2 > UINT32_MAX) {
+      std::fill(mark_.begin(), mark_.end(), 0);
+      epoch_ = 0;
+    }
+    const uint32_t first = epoch_;
+    epoch_ += uint32_t(n);
+    return first;
+  }
+  // The per-vertex arrays for n vertices (value-initialized; the owner, before attaching
+  // workers that add vertices up to n).
+  void resize_vertices(size_t n) {
+    degree_.resize(n);
+    mark_.resize(n);
+    key_.resize(n);
+    sums_.resize(n);
   }
   // Decoder: room for n vertices in the per-vertex arrays at once (refine() knows how many it
   // may add): growing them by doubling one vertex at a time copied them and faulted their
@@ -204,14 +237,14 @@ class VertexChoice {
   // After pm.split_gathered() (its ring and u_ring still those of the split), once u's
   // coordinates are known: coords holds 3 per vertex, u's included.
   void applied(const ProgressiveMesh& pm, const int32_t* coords, bool has_left, bool has_right);
-  uint32_t degree(uint32_t w) const { return degree_[w]; }
-  const RingSums& sums(uint32_t w) const { return sums_[w]; }
+  uint32_t degree(uint32_t w) const { return shared().degree_[w]; }
+  const RingSums& sums(uint32_t w) const { return shared().sums_[w]; }
   const uint8_t* sums_bytes() const {
-    return reinterpret_cast<const uint8_t*>(sums_.data());
-  }                                                                     // (prefetching)
-  uint32_t shape(uint32_t w) const { return key_[w] % kChoiceShapes; }  // umbrella class
+    return reinterpret_cast<const uint8_t*>(shared().sums_.data());
+  }                                                                              // (prefetching)
+  uint32_t shape(uint32_t w) const { return shared().key_[w] % kChoiceShapes; }  // umbrella class
   const uint32_t* degrees() const {
-    return degree_.data();
+    return shared().degree_.data();
   }  // per vertex (the wedge score's end weights)
 
  private:
@@ -227,26 +260,31 @@ class VertexChoice {
     return uint8_t((deg < kChoiceDegrees ? deg : kChoiceDegrees - 1) * kChoiceShapes +
                    umbrella_class(s));
   }
-  void push_vertex(uint32_t degree);
+  void push_vertex(uint32_t u, uint32_t degree);
   void umbrella(const ProgressiveMesh& pm, const int32_t* coords, bool has_left, bool has_right);
   template <bool kShift>
   void umbrella_sums(const ProgressiveMesh& pm, const int32_t* coords, bool has_left,
                      bool has_right);
   void degree_keys(const ProgressiveMesh& pm, bool has_left, bool has_right);
   void update_key(uint32_t w) {
-    key_[w] = umbrella_ ? key_of(sums_[w], degree_[w])
-                        : uint8_t((degree_[w] < kChoiceDegrees ? degree_[w] : kChoiceDegrees - 1) *
-                                  kChoiceShapes);
+    VertexChoice& o = shared();
+    const uint32_t deg = o.degree_[w];
+    o.key_[w] = umbrella_
+                    ? key_of(o.sums_[w], deg)
+                    : uint8_t((deg < kChoiceDegrees ? deg : kChoiceDegrees - 1) * kChoiceShapes);
   }
   // A fresh mark value (all of mark_ differs from it).
   uint32_t next_epoch() {
-    if (++epoch_ == 0) {
+    if (++epoch_ == 0) {  // (never attached: attach() leaves room)
       std::fill(mark_.begin(), mark_.end(), 0);
       epoch_ = 1;
     }
     return epoch_;
   }
   void exclude(const ProgressiveMesh& mesh, uint32_t w);
+  VertexChoice* owner_ = nullptr;  // attach()'s, or null: the per-vertex arrays are this object's
+  VertexChoice& shared() { return owner_ ? *owner_ : *this; }
+  const VertexChoice& shared() const { return owner_ ? *owner_ : *this; }
   void grow(size_t k);  // reserve()'s work  // w's closed one-ring in mesh
   BigVector<uint32_t> degree_;
   std::vector<uint32_t> near_, noted_;
