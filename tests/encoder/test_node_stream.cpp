@@ -262,8 +262,29 @@ struct Seen {
   bool operator==(const Seen&) const = default;
 };
 
+// Which parts of two decodes differ (for the failure message).
+std::string differences(const Seen& a, const Seen& b) {
+  std::string out;
+  if (a.status != b.status || a.message != b.message)
+    out += " status: '" + a.message + "' vs '" + b.message + "'";
+  if (a.steps != b.steps) {
+    size_t i = 0;
+    while (i < a.steps.size() && i < b.steps.size() && a.steps[i] == b.steps[i]) ++i;
+    out += " steps from " + std::to_string(i) + ": " +
+           (i < a.steps.size() ? std::to_string(a.steps[i]) : "-") + " vs " +
+           (i < b.steps.size() ? std::to_string(b.steps[i]) : "-");
+  }
+  if (a.indices != b.indices) out += " indices";
+  if (a.positions != b.positions) out += " positions";
+  if (a.parents != b.parents) out += " parents";
+  if (a.modified != b.modified) out += " modified faces";
+  if (a.wedges != b.wedges) out += " wedges";
+  return out;
+}
+
+// targets: face targets gone to (ascending) before refining to the end.
 Seen decode_with(const std::vector<uint8_t>& bytes, uint32_t threads, size_t slice,
-                 bool refine_while_feeding) {
+                 bool refine_while_feeding, const std::vector<uint64_t>& targets = {}) {
   pmz::Decoder d;
   d.set_threads(threads);
   Seen out;
@@ -282,6 +303,10 @@ Seen decode_with(const std::vector<uint8_t>& bytes, uint32_t threads, size_t sli
     }
   }
   d.finish();
+  for (uint64_t faces : targets) {
+    d.set_face_target(faces);
+    look();
+  }
   out.steps.push_back(d.refine());
   look();
   d.set_face_target(d.face_count() / 2);
@@ -304,18 +329,25 @@ Seen decode_with(const std::vector<uint8_t>& bytes, uint32_t threads, size_t sli
 
 // The nodes of a level decode on several threads: the same mesh, ids, change reports and errors
 // as on one, however the bytes arrive and whatever the refinement schedule.
-void expect_same_on_threads(const std::vector<uint8_t>& bytes) {
+void expect_same_on_threads(const std::vector<uint8_t>& bytes,
+                            const std::vector<uint64_t>& targets = {}) {
   for (bool feeding : {false, true})
     for (size_t slice : {bytes.size(), size_t(997), size_t(61)}) {
-      const Seen one = decode_with(bytes, 1, slice, feeding);
+      const Seen one = decode_with(bytes, 1, slice, feeding, targets);
       for (uint32_t threads : {2u, 3u, 8u})
-        EXPECT_TRUE(decode_with(bytes, threads, slice, feeding) == one)
+        EXPECT_EQ(differences(one, decode_with(bytes, threads, slice, feeding, targets)), "")
             << threads << " threads, slices of " << slice << (feeding ? ", refining" : "");
     }
 }
 
 TEST_F(NodeStream, ThreadsChangeNothing) {
   expect_same_on_threads(*bytes_);
+  {  // refined from the base mesh to face targets that end inside nodes
+    pmz::Decoder probe;
+    probe.feed(bytes_->data(), bytes_->size());
+    const uint64_t full = probe.info().full_faces;
+    expect_same_on_threads(*bytes_, {full / 7, full / 3 + 1, full / 2 + 2});
+  }
   EXPECT_EQ(decode_with(*bytes_, 2, bytes_->size(), false).status, pmz::Status::ok);
   // Damaged tables and nodes: the same errors at the same splits.
   const uint64_t total = seq_->collapses.size();
