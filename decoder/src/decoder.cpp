@@ -1239,7 +1239,9 @@ uint64_t Decoder::Impl::refine(uint64_t max_splits, uint64_t face_target) {
     level.listed_ahead = 0;
     while (n < max_splits && level.applied < record.available &&
            level.mesh.face_count() < face_target) {
-      if (const uint64_t m = parallel_nodes(max_splits - n, face_target)) {
+      // (A batch refused at its first split applied none: the loop's test then ends it.)
+      const uint64_t m = parallel_nodes(max_splits - n, face_target);
+      if (m || level.applied >= record.available) {
         n += m;
         level.fans.reset();
         continue;

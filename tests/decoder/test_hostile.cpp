@@ -1377,4 +1377,27 @@ TEST(Hostile, EveryByteOfTheSampleFile) {
   corrupt_every_byte(b, true);
 }
 
+// A stream in nodes whose parallel batch of a level is refused at its first split (found by
+// fuzz_container): the decoder stops there, on every thread count, and decodes nothing after the
+// refusal (it once went on with a chunk reader the refusal had dropped).
+TEST(Hostile, NodeBatchRefusedAtItsFirstSplit) {
+  FILE* fp = std::fopen(PMZ_SOURCE_DIR
+                        "/tests/data/fuzz-regressions/nodes-batch-refused-at-its-first-split.pmz",
+                        "rb");
+  ASSERT_TRUE(fp);
+  Bytes b(1 << 16);
+  b.resize(std::fread(b.data(), 1, b.size(), fp));
+  std::fclose(fp);
+  std::vector<std::pair<uint64_t, std::string>> seen;
+  for (uint32_t threads : {1u, 2u}) {
+    pmz::Decoder d;
+    d.set_threads(threads);
+    d.feed(b.data(), b.size());
+    d.refine();
+    EXPECT_EQ(d.status(), pmz::Status::corrupt) << threads;
+    seen.emplace_back(d.splits_applied(), d.error_message());
+  }
+  EXPECT_EQ(seen[0], seen[1]);
+}
+
 }  // namespace

@@ -361,6 +361,16 @@ TEST_F(NodeStream, ThreadsChangeNothing) {
     t.nodes[k].faces += 1;  // (back, and one node's cell moved)
     t.nodes[k].cell[0] += 1000;
     expect_same_on_threads(with_table(*bytes_, c, t));
+    // Moved to a free cell next to its level's others: its first split leaves the cell (for
+    // node 1, the first split of the first parallel batch).
+    t = c.table;
+    int64_t free_x = t.nodes[k].cell[0];
+    for (const pmz::NodeEntry& e : t.nodes)
+      if (e.level == t.nodes[k].level) free_x = std::max(free_x, e.cell[0] + 1);
+    t.nodes[k].cell[0] = free_x;
+    const std::vector<uint8_t> moved = with_table(*bytes_, c, t);
+    EXPECT_EQ(decode_with(moved, 1, moved.size(), false).status, pmz::Status::corrupt) << k;
+    expect_same_on_threads(moved);
   }
   // A bit flipped in a late chunk: its checksum stops the stream there.
   std::vector<uint8_t> flipped = *bytes_;
