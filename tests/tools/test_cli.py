@@ -619,23 +619,31 @@ def case_info_attribute_kinds():
           f"pmz-info --decode counts otherwise: {r.stdout!r}")
 
 
+def chunk_frames(path):
+    # (type, whole size) of each chunk of a stream: after the 8-byte signature, type, varint
+    # size, CRC, payload.
+    data, at, frames = open(path, "rb").read(), 8, []
+    while at < len(data):
+        start, size, shift, at = at, 0, 0, at + 1
+        while True:
+            size |= (data[at] & 0x7F) << shift
+            at, shift = at + 1, shift + 7
+            if not data[at - 1] & 0x80:
+                break
+        at += 4 + size
+        frames.append((data[start], at - start))
+    return frames
+
+
+def chunk_types(path):
+    return [t for t, _ in chunk_frames(path)]
+
+
 def case_info_nodes():
     # A stream in nodes: their count and the NODE chunk's size; a stream without, 0.
     path = os.path.join(SEAMED, "vectors", "terrain-nodes.pmz")
     j = info_json(path)
-    data = open(path, "rb").read()
-    at, table = 8, 0
-    while at < len(data):  # chunk framing: type, varint size, CRC, payload
-        size, shift, p = 0, 0, at + 1
-        while True:
-            size |= (data[p] & 0x7F) << shift
-            shift += 7
-            p += 1
-            if data[p - 1] < 0x80:
-                break
-        if data[at] == 6:
-            table = p + 4 + size - at
-        at = p + 4 + size
+    table = sum(size for t, size in chunk_frames(path) if t == 6)
     check(j["nodes"] == 16 and j["node_table_bytes"] == table > 0,
           f"terrain-nodes.pmz: nodes {j['nodes']}, table {j['node_table_bytes']} (NODE: {table})")
     o = run([tool("pmz-info"), path]).stdout.decode()
@@ -773,21 +781,6 @@ def case_zero_is_the_base_mesh():
 
 
 # ---- decoding threads ----
-
-
-def chunk_types(path):
-    # The chunk types of a stream: after the 8-byte signature, type, varint size, CRC, payload.
-    data, at, types = open(path, "rb").read(), 8, []
-    while at < len(data):
-        types.append(data[at])
-        size, shift, at = 0, 0, at + 1
-        while True:
-            size |= (data[at] & 0x7F) << shift
-            at, shift = at + 1, shift + 7
-            if not data[at - 1] & 0x80:
-                break
-        at += 4 + size
-    return types
 
 
 def case_decode_threads_same_bytes():
