@@ -229,12 +229,17 @@ float AttributeField::cost(const HalfEdgeMesh& m, uint32_t u, uint32_t x, uint32
   return float(sum * scale + seam_sum * seam_scale);
 }
 
-void AttributeField::collapse(const HalfEdgeMesh& m, uint32_t u, uint32_t ha, uint32_t hb) {
+void AttributeField::collapse(const HalfEdgeMesh& m, uint32_t u, uint32_t ha, uint32_t hb,
+                              std::vector<std::pair<uint32_t, uint32_t>>& moved, bool count) {
   // Decided on the wedges as they are, then written (the walk reads u's old wedges).
-  moved_.clear();
-  for_each_moved_corner(m, u, ha, hb, [&](uint32_t h, uint32_t w) { moved_.push_back({h, w}); });
-  for (const auto& [h, w] : moved_) wedge[h] = w;
-  faces_ -= (ha != kNone) + (hb != kNone);
+  moved.clear();
+  for_each_moved_corner(m, u, ha, hb, [&](uint32_t h, uint32_t w) { moved.push_back({h, w}); });
+  for (const auto& [h, w] : moved) wedge[h] = w;
+  if (count) remove_faces((ha != kNone) + (hb != kNone));
+}
+
+void AttributeField::remove_faces(uint64_t removed) {
+  faces_ -= uint32_t(removed);
   if (cost_term) scale = input_scale_ * std::pow(double(faces_) / input_faces_, kFieldDecay);
 }
 

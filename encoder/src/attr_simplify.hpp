@@ -63,9 +63,12 @@ struct AttributeField {
   // times the squared distances of p_x from the planes of u's seam edges (the plane through
   // the edge perpendicular to its face), each weighted by the edge's squared length.
   float cost(const HalfEdgeMesh& m, uint32_t u, uint32_t x, uint32_t ha, uint32_t hb) const;
-  // Applies the collapse rule to u's corners outside L and R; before the topology changes.
-  // Also counts the faces the collapse removes and rescales the field term.
-  void collapse(const HalfEdgeMesh& m, uint32_t u, uint32_t ha, uint32_t hb);
+  // Applies the collapse rule to u's corners outside L and R; before the topology changes
+  // (moved: scratch). With `count`, also counts the faces the collapse removes and rescales
+  // the field term (the cells of one level, simplified apart, call remove_faces() after).
+  void collapse(const HalfEdgeMesh& m, uint32_t u, uint32_t ha, uint32_t hb,
+                std::vector<std::pair<uint32_t, uint32_t>>& moved, bool count);
+  void remove_faces(uint64_t removed);
 
  private:
   bool seam_rule(const HalfEdgeMesh& m, uint32_t u, uint32_t x) const;
@@ -74,9 +77,8 @@ struct AttributeField {
   template <class F>
   void for_each_moved_corner(const HalfEdgeMesh& m, uint32_t u, uint32_t ha, uint32_t hb,
                              F&& f) const;
-  std::vector<std::pair<uint32_t, uint32_t>> moved_;  // collapse(): corner, new wedge
-  double input_scale_ = 0;                            // scale at the input
-  uint32_t input_faces_ = 0, faces_ = 0;              // faces at the input, and now
+  double input_scale_ = 0;                // scale at the input
+  uint32_t input_faces_ = 0, faces_ = 0;  // faces at the input, and now
 };
 
 }  // namespace pmz::detail

@@ -5,9 +5,12 @@
 #include "pmz/simplify.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <memory>
+#include <thread>
 
 #include "attr_collapse.hpp"
 #include "attr_simplify.hpp"
@@ -109,6 +112,11 @@ class VertexHeap {
     pos.assign(vertex_count, kNone);
   }
   bool empty() const { return entries.empty(); }
+  // Empties the heap in time of its size (a lane's heap serves many cells).
+  void clear() {
+    for (const Entry& e : entries) pos[e.v] = kNone;
+    entries.clear();
+  }
   uint32_t top() const { return entries[0].v; }
   bool contains(uint32_t v) const { return pos[v] != kNone; }
   void prefetch(uint32_t v) const { __builtin_prefetch(&pos[v]); }
@@ -199,42 +207,132 @@ struct Candidate {
   uint32_t target;
 };
 
-class Engine {
- public:
+// The Hausdorff guard (Metric::guarded, spec/algorithm.md section 6): per vertex kWitnesses
+// original points its region must stay near (those found farthest from the surface so far; at
+// the start the vertex itself), and the largest bound of the collapses performed so far.
+// One witness forgot the points it displaced, and the surface later drifted from them.
+constexpr int kWitnesses = 4;
+constexpr int kBoundPoints = 1 + 2 * kWitnesses;  // p_u, witnesses of u and of v
+
+// What the threads simplifying the cells of one level share: the mesh and every term kept per
+// vertex, face or half-edge. A cell's collapses write only vertices of the cell and faces whose
+// corners are all in it, and its keys read only those (Engine::run_cell).
+struct EngineData {
   HalfEdgeMesh m;
   Features feat;
-  // The quadric a cost evaluates: QSlim's accumulated one (qem), or the current mesh's plus
-  // quadric_memory times the accumulated one, kept in `accumulated` (multifeature).
-  std::vector<Quadric> quad;
-  std::vector<Quadric> accumulated;
-  std::vector<double> self_error;  // Q_v(p_v) / L^4, cached: half of every cost evaluation
-  Metric metric = Metric::multifeature;
-  MetricParams params;
-  // The Hausdorff guard (Metric::guarded, spec/algorithm.md section 6): per vertex kWitnesses
-  // original points its region must stay near (those found farthest from the surface so far; at
-  // the start the vertex itself), and the largest bound of the collapses performed so far.
-  // One witness forgot the points it displaced, and the surface later drifted from them.
-  static constexpr int kWitnesses = 4;
-  static constexpr int kBoundPoints = 1 + 2 * kWitnesses;  // p_u, witnesses of u and of v
-  bool guard = false;
-  std::vector<float> witness;  // kWitnesses points (x, y, z) per vertex
+  std::vector<Quadric> quad, accumulated;
+  std::vector<double> self_error;
+  std::vector<float> witness;
+  AttributeField attr;
+  std::vector<uint32_t> target;
+  std::vector<uint8_t> stale;
+  std::vector<uint64_t> cell;
+  // Between the levels of a hierarchical simplification: each queued vertex's key (the heaps
+  // are per cell), whether a vertex has all its neighbours in its cell at this level, and per
+  // vertex the worst guard bound of the cells it was in.
+  std::vector<float> key;
+  std::vector<uint8_t> inner;
+  std::vector<float> region_bound;
+};
+
+// What one thread of the engine owns: its heap, the count of faces it simplifies, its record
+// and scratch buffers.
+struct Pending {
+  uint32_t x, h;
+  float length_ratio;
+  double error;
+};
+struct EngineLane {
+  VertexHeap heap;
+  // Scratch: a stamp per vertex for set membership, and buffers reused across collapses.
+  std::vector<uint32_t> mark;
+  uint32_t mark_id = 0;
+  // The stamp perform() gives the vertices whose fan the collapse changed (besides v).
+  uint32_t fan_changed = 0;
+  std::vector<uint32_t> ring1, ring2, corners, walk, pair = {0, 0};
+  std::vector<Candidate> candidates;
+  std::vector<Pending> pending;
+  std::vector<std::pair<uint32_t, uint32_t>> moved;  // AttributeField::collapse's
   // guard_bound's choice of the witnesses v keeps if the collapse is performed.
   float next_witness[3 * kWitnesses];
-  AttributeField attr;  // seams and the attribute term (inactive without attributes)
   double worst_bound = 0;
-  double inv_unit4 = 1, unit = 1;
   SimplifyStats stats;
-  bool stats_enabled = false;
   uint64_t faces = 0;
   std::vector<HalfEdgeCollapse>* record = nullptr;
+};
+
+// The engine's settings, read-only during a run.
+struct EngineSettings {
+  Metric metric = Metric::multifeature;
+  MetricParams params;
+  bool guard = false;
+  double inv_unit4 = 1, unit = 1;
+  bool stats_enabled = false;
   // Hierarchical simplification: while `cells` is set, a collapse u -> v is legal only when u,
   // v and every neighbour of both have one cell[] (encoder/src/cluster_grid.hpp says why).
-  std::vector<uint64_t> cell;
   bool cells = false;
   uint64_t max_collapses = UINT64_MAX;  // run() stops after this many (detail::queued_collapses)
+  bool keyed = false;                   // the heap holds the keys of an earlier run
+};
+
+class Engine : public EngineSettings, public EngineLane {
+  std::shared_ptr<EngineData> data_ = std::make_shared<EngineData>();
+
+ public:
+  Engine() = default;
+  // A copy has its own data.
+  Engine(const Engine& o)
+      : EngineSettings(o), EngineLane(o), data_(std::make_shared<EngineData>(*o.data_)) {}
+  Engine& operator=(const Engine&) = delete;
+  // A lane of `o` for one thread of a cell level: o's data and settings, its own heap and
+  // scratch.
+  struct Lane {};
+  Engine(const Engine& o, Lane) : EngineSettings(o), data_(o.data_) {
+    cells = keyed = true;
+    heap.reset(m.vertex_count());
+    mark.assign(m.vertex_count(), 0);
+  }
+
+  HalfEdgeMesh& m = data_->m;
+  Features& feat = data_->feat;
+  // The quadric a cost evaluates: QSlim's accumulated one (qem), or the current mesh's plus
+  // quadric_memory times the accumulated one, kept in `accumulated` (multifeature).
+  std::vector<Quadric>& quad = data_->quad;
+  std::vector<Quadric>& accumulated = data_->accumulated;
+  std::vector<double>& self_error = data_->self_error;  // Q_v(p_v) / L^4, cached: half of
+                                                        // every cost evaluation
+  std::vector<float>& witness = data_->witness;         // kWitnesses points (x, y, z) per vertex
+  AttributeField& attr = data_->attr;  // seams and the attribute term (inactive without attributes)
+  std::vector<uint64_t>& cell = data_->cell;
+  std::vector<float>& key = data_->key;
+  std::vector<uint8_t>& inner = data_->inner;
+  std::vector<float>& region_bound = data_->region_bound;
 
   bool init(const IndexedMesh& input, const SimplifyOptions& options, std::string& error);
   void run(const SimplifyOptions& options);
+  // The keys of every vertex from scratch, kNone where a vertex has no collapse.
+  void initial_keys(std::vector<Candidate>& initial);
+  // Collapses until the faces drop to goal (0: no goal) or the heap runs out.
+  void collapse_until(uint64_t goal, const SimplifyOptions& options);
+  // One cell of a level, on a lane: `vertices` (the cell's live vertices, ascending) keyed
+  // from key[], collapsed until its `cell_faces` drop to `goal`, their keys written back.
+  void run_cell(const uint32_t* vertices, size_t count, uint64_t cell_faces, uint64_t goal,
+                const SimplifyOptions& options);
+  // The queued keys of key[] into the heap (after the cell levels, for the whole mesh).
+  void load_keys();
+  void set_queued(uint32_t v, Candidate c) {
+    target[v] = c.target, key[v] = c.cost, stale[v] |= kQueued;
+  }
+  // After a cell level: every live vertex with a neighbour in another cell gets its T and key
+  // recomputed when next needed.
+  void hold_borders() {
+    for (uint32_t v = 0; v < m.vertex_count(); ++v)
+      if (m.out[v] != kNone && !inner[v]) stale[v] |= kTorsionStale | kCellHeld;
+  }
+  void add_counts(const SimplifyStats& s) {
+    stats.cost_evaluations += s.cost_evaluations, stats.legality_checks += s.legality_checks;
+    stats.guard_checks += s.guard_checks, stats.guard_deferrals += s.guard_deferrals;
+  }
   // The queue now, each key beside its collapse's cost from scratch (detail::queued_collapses);
   // input: the mesh init() was given, collapses: those performed (engine ids).
   void queued(const IndexedMesh& input, const std::vector<HalfEdgeCollapse>& collapses,
@@ -249,8 +347,7 @@ class Engine {
   }
 
  private:
-  VertexHeap heap;
-  std::vector<uint32_t> target;
+  std::vector<uint32_t>& target = data_->target;
   // Per vertex: T(v) is stale (recomputed when next needed); the key is stale (recomputed when
   // it reaches the top of the heap); Q(v) is still the input's (multifeature: the first
   // recomputation from the current mesh changes its bits even where the faces did not change).
@@ -267,19 +364,14 @@ class Engine {
     kInputQuadric = 4,
     kBoundary = 8,
     kGuardDeferred = 16,
-    kCellHeld = 32
+    kCellHeld = 32,
+    kQueued = 64  // between the levels: the vertex has a key in key[] and target[]
   };
-  bool keyed = false;  // the heap holds the keys of an earlier run
-  std::vector<uint8_t> stale;
-  // Scratch: a stamp per vertex for set membership, and buffers reused across collapses.
-  std::vector<uint32_t> mark;
-  uint32_t mark_id = 0;
+  std::vector<uint8_t>& stale = data_->stale;
   uint32_t new_mark() {
     if (++mark_id == 0) std::fill(mark.begin(), mark.end(), 0), mark_id = 1;
     return mark_id;
   }
-  // The stamp perform() gives the vertices whose fan the collapse changed (besides v).
-  uint32_t fan_changed = 0;
   // The engine's time is mostly cache misses on the neighbourhood a collapse lands on: the
   // prefetches start the loads of what the next steps read, so that they overlap.
   static void prefetch_quadric(const std::vector<Quadric>& q, uint32_t v) {
@@ -287,8 +379,6 @@ class Engine {
     __builtin_prefetch(&q[v]);  // 80 bytes at a multiple of 16: two cache lines
     __builtin_prefetch(reinterpret_cast<const char*>(&q[v]) + sizeof(Quadric) - 1);
   }
-  std::vector<uint32_t> ring1, ring2, corners, walk, pair = {0, 0};
-  std::vector<Candidate> candidates;
 
   // What every collapse out of u shares, read once per vertex: evaluating its costs from it
   // does the same arithmetic as evaluating each from scratch.
@@ -336,12 +426,6 @@ class Engine {
   }
   // scan() for a vertex whose T is stale: T and the costs in one walk round u.
   Candidate scan_with_torsion(uint32_t u);
-  struct Pending {
-    uint32_t x, h;
-    float length_ratio;
-    double error;
-  };
-  std::vector<Pending> pending;
   // The cheapest direction out of u by cost alone (T(u) up to date); counts its evaluations.
   Candidate scan(uint32_t u, uint64_t& evaluations) const;
   void refresh_torsion(uint32_t u) {
@@ -626,7 +710,7 @@ void Engine::perform(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb, float c) 
   const uint32_t vl = ha != kNone ? m.vert[HalfEdgeMesh::prev(ha)] : kNone;
   const uint32_t vr = hb != kNone ? m.vert[HalfEdgeMesh::prev(hb)] : kNone;
   record->push_back({u, v, vl, vr, c});
-  if (attr.active) attr.collapse(m, u, ha, hb);
+  if (attr.active) attr.collapse(m, u, ha, hb, moved, !cells);
   if (metric == Metric::qem) {
     quad[v].add(quad[u]);
     self_error[v] = quad[v].error(m.p(v)) * inv_unit4;
@@ -731,7 +815,14 @@ void Engine::update_after(uint32_t u, uint32_t v) {
         },
         [&](uint32_t f) { __builtin_prefetch(&feat.face[f]); });
     for_each_outgoing(m, v, [&](uint32_t h) { feat.update_face(m, HalfEdgeMesh::face(h)); });
-    for (uint32_t x : ring2) stale[x] |= kTorsionStale | kKeyStale;
+    // In a cell level another cell's vertices are not this thread's: run_cell_levels flags
+    // every vertex with a neighbour in another cell when the level ends.
+    if (cells) {
+      for (uint32_t x : ring2)
+        if (cell[x] == cell[v]) stale[x] |= kTorsionStale | kKeyStale;
+    } else {
+      for (uint32_t x : ring2) stale[x] |= kTorsionStale | kKeyStale;
+    }
     for (uint32_t w : ring1) {
       // A vertex whose fan did not change reads bit for bit the same faces: same terms.
       if (w != v && mark[w] != fan_changed && !(stale[w] & kInputQuadric)) continue;
@@ -748,10 +839,12 @@ void Engine::update_after(uint32_t u, uint32_t v) {
   const auto t1 = stats_enabled ? Clock::now() : Clock::time_point{};
   for (uint32_t w : ring1) heap.prefetch_entry(w);
   if (metric == Metric::multifeature) {
-    for (uint32_t w : ring1) stale[w] &= uint8_t(~kKeyStale), set_key(w, best_candidate(w));
+    for (uint32_t w : ring1)
+      if (!cells || inner[w]) stale[w] &= uint8_t(~kKeyStale), set_key(w, best_candidate(w));
   } else {
     set_key(v, best_candidate(v));
     for_each_neighbour(m, v, [&](uint32_t w, uint32_t h) {
+      if (cells && !inner[w]) return;
       const uint32_t t = target[w];
       if (!heap.contains(w) || t == u || t == v || t == kNone) {
         set_key(w, best_candidate(w));
@@ -850,16 +943,9 @@ void Engine::run(const SimplifyOptions& options) {
         set_key(v, best_candidate(v));
       }
   } else {
-    // The initial keys on two threads (T is not stale at the start, nothing else is written),
-    // pushed in vertex order.
-    std::vector<Candidate> initial(n);
-    uint64_t evaluations[2] = {0, 0};
-    parallel_halves(n, [&](uint32_t begin, uint32_t end) {
-      for (uint32_t v = begin; v < end; ++v)
-        initial[v] =
-            m.out[v] == kNone ? Candidate{kInfinity, kNone} : scan(v, evaluations[begin != 0]);
-    });
-    stats.cost_evaluations += evaluations[0] + evaluations[1];
+    // The initial keys, pushed in vertex order.
+    std::vector<Candidate> initial;
+    initial_keys(initial);
     for (uint32_t v = 0; v < n; ++v) {
       if (initial[v].target == kNone) continue;
       target[v] = initial[v].target;
@@ -870,9 +956,26 @@ void Engine::run(const SimplifyOptions& options) {
   }
   stats.initial_costs = seconds_since(t0);
   t0 = Clock::now();
+  collapse_until(options.target_faces, options);
+  stats.collapse = seconds_since(t0) - stats.update_terms - stats.update_costs;
+  stats.guard_worst_bound = worst_bound;
+}
 
+void Engine::initial_keys(std::vector<Candidate>& initial) {
+  // On two threads: T is not stale at the start, nothing else is written.
+  const uint32_t n = m.vertex_count();
+  initial.resize(n);
+  uint64_t evaluations[2] = {0, 0};
+  parallel_halves(n, [&](uint32_t begin, uint32_t end) {
+    for (uint32_t v = begin; v < end; ++v)
+      initial[v] =
+          m.out[v] == kNone ? Candidate{kInfinity, kNone} : scan(v, evaluations[begin != 0]);
+  });
+  stats.cost_evaluations += evaluations[0] + evaluations[1];
+}
+
+void Engine::collapse_until(uint64_t goal, const SimplifyOptions& options) {
   const uint64_t start_faces = faces;
-  const uint64_t goal = options.target_faces;
   const uint64_t progress_step = std::max<uint64_t>(1, start_faces / 200);
   uint64_t next_progress = progress_step;
   while (!heap.empty()) {
@@ -910,7 +1013,7 @@ void Engine::run(const SimplifyOptions& options) {
     }
     const uint64_t removes = (ha != kNone) + (hb != kNone);
     if (goal && faces - removes < goal) {
-      final_boundary_collapse();
+      if (!cells) final_boundary_collapse();  // a cell's goal need not be met exactly
       break;
     }
     float bound = 0;
@@ -939,8 +1042,50 @@ void Engine::run(const SimplifyOptions& options) {
       options.progress(span > 0 ? std::min(1.0, double(start_faces - faces) / span) : 1.0);
     }
   }
-  stats.collapse = seconds_since(t0) - stats.update_terms - stats.update_costs;
-  stats.guard_worst_bound = worst_bound;
+}
+
+void Engine::run_cell(const uint32_t* vertices, size_t count, uint64_t cell_faces, uint64_t goal,
+                      const SimplifyOptions& options) {
+  // The cell's heap: its vertices with every neighbour in the cell (no other can be u or v of
+  // a collapse confined to it), those a border held back keyed afresh. The guard's worst bound
+  // starts at the worst of the cells of the levels below that its vertices were in.
+  faces = cell_faces;
+  worst_bound = 0;
+  for (size_t i = 0; i < count; ++i) {
+    const uint32_t v = vertices[i];
+    if (guard) worst_bound = std::max(worst_bound, double(region_bound[v]));
+    if (!inner[v]) continue;
+    if (stale[v] & kCellHeld) {
+      stale[v] &= uint8_t(~(kCellHeld | kGuardDeferred | kQueued));
+      const Candidate c = best_candidate(v);
+      if (c.target != kNone) set_queued(v, c);
+    }
+    if (stale[v] & kQueued) heap.push_unordered(v, key[v]);
+  }
+  heap.build();
+  collapse_until(goal, options);
+  for (size_t i = 0; i < count; ++i) {
+    const uint32_t v = vertices[i];
+    if (guard) region_bound[v] = float(worst_bound);
+    if (!inner[v]) continue;
+    if (heap.contains(v))
+      key[v] = heap.key(v), stale[v] |= kQueued;
+    else
+      stale[v] &= uint8_t(~kQueued);
+  }
+  heap.clear();
+}
+
+void Engine::load_keys() {
+  for (uint32_t v = 0; v < m.vertex_count(); ++v) {
+    if (guard && v < region_bound.size())
+      worst_bound = std::max(worst_bound, double(region_bound[v]));
+    if (!(stale[v] & kQueued)) continue;
+    stale[v] &= uint8_t(~kQueued);
+    heap.push_unordered(v, key[v]);
+  }
+  heap.build();
+  keyed = true;
 }
 
 void Engine::queued(const IndexedMesh& input, const std::vector<HalfEdgeCollapse>& collapses,
@@ -1052,9 +1197,12 @@ void reorder_for_locality(const IndexedMesh& in, IndexedMesh& out, std::vector<u
   }
 }
 
-// The levels of a hierarchical simplification (SimplifyOptions::clusters): one run of the
-// engine per grid, finest first, each down to phase_ratio of its start; `levels` gets each
-// level's grid and first collapse. The caller runs the last level (the whole mesh).
+// The levels of a hierarchical simplification (SimplifyOptions::clusters), finest first. Each
+// cell of a level is simplified on its own (Engine::run_cell), down to phase_ratio of its faces
+// at the level's start: its collapses depend only on its faces and the ring of faces around
+// its border, not on the other cells or on the order the cells run in, so the cells run on
+// several threads and their collapses are recorded in cell order. `levels` gets each level's
+// grid and first collapse. The caller runs the last level (the whole mesh).
 void run_cell_levels(Engine& engine, const SimplifyOptions& options,
                      std::vector<CollapseSequence::Level>& levels) {
   const SimplifyOptions::Clusters& clusters = options.clusters;
@@ -1079,18 +1227,99 @@ void run_cell_levels(Engine& engine, const SimplifyOptions& options,
   }
   SimplifyOptions level = options;
   level.progress = nullptr;
+  // Every vertex keyed once; from here keys wait in key[] between the cells' heaps.
+  {
+    std::vector<Candidate> initial;
+    engine.initial_keys(initial);
+    engine.key.assign(n, 0);
+    for (uint32_t v = 0; v < n; ++v)
+      if (initial[v].target != kNone) engine.set_queued(v, initial[v]);
+  }
   engine.cells = true;
   engine.cell.resize(n);
+  engine.inner.assign(n, 0);
+  if (engine.guard) engine.region_bound.assign(n, 0.f);
+  const uint32_t threads =
+      clusters.threads ? clusters.threads : std::max(1u, std::thread::hardware_concurrency());
+  std::vector<std::unique_ptr<Engine>> lanes;
+  std::vector<uint32_t> index(n), members;  // per vertex its cell's index; vertices by cell
+  std::vector<uint64_t> keys, start, cell_faces, removed;
   for (CellGrid grid = detail::cell_grid_for(coords, area, clusters.vertices);
        detail::grid_cuts(grid, coords); grid = grid.coarser()) {
-    for (uint32_t v = 0; v < n; ++v) engine.cell[v] = grid.cell(&coords[size_t(v) * 3]);
     levels.push_back({grid, engine.record->size()});
-    level.target_faces = std::max<uint64_t>(options.target_faces,
-                                            uint64_t(double(engine.faces) * clusters.phase_ratio));
-    engine.run(level);
+    // The level's cells (ascending keys), their live vertices and faces (a face counts in the
+    // cell of its first corner: the faces a cell can remove have all their corners in it).
+    keys.clear();
+    for (uint32_t v = 0; v < n; ++v) {
+      engine.cell[v] = grid.cell(&coords[size_t(v) * 3]);
+      if (engine.m.out[v] != kNone) keys.push_back(engine.cell[v]);
+    }
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    const size_t cells = keys.size();
+    start.assign(cells + 1, 0);
+    for (uint32_t v = 0; v < n; ++v) {
+      if (engine.m.out[v] == kNone) continue;
+      index[v] =
+          uint32_t(std::lower_bound(keys.begin(), keys.end(), engine.cell[v]) - keys.begin());
+      ++start[index[v] + 1];
+    }
+    for (size_t c = 0; c < cells; ++c) start[c + 1] += start[c];
+    members.resize(start[cells]);
+    {
+      std::vector<uint64_t> fill(start.begin(), start.end() - 1);
+      for (uint32_t v = 0; v < n; ++v)
+        if (engine.m.out[v] != kNone) members[fill[index[v]]++] = v;
+    }
+    cell_faces.assign(cells, 0);
+    for (uint32_t f = 0; f < engine.m.face_count(); ++f)
+      if (engine.m.face_alive(f)) ++cell_faces[index[engine.m.vert[HalfEdgeMesh::half_edge(f, 0)]]];
+    parallel_halves(n, [&](uint32_t begin, uint32_t end) {
+      for (uint32_t v = begin; v < end; ++v) {
+        bool in = engine.m.out[v] != kNone;
+        if (in)
+          for_each_neighbour(engine.m, v,
+                             [&](uint32_t w, uint32_t) { in &= engine.cell[w] == engine.cell[v]; });
+        engine.inner[v] = in;
+      }
+    });
+    // Each cell down to phase_ratio of its faces (or the share of them the target leaves).
+    double ratio = clusters.phase_ratio;
+    if (options.target_faces)
+      ratio = std::max(ratio, double(options.target_faces) / double(engine.faces));
+    std::vector<std::vector<HalfEdgeCollapse>> records(cells);
+    removed.assign(cells, 0);
+    std::atomic<size_t> next{0};
+    auto work = [&](Engine& lane) {
+      for (size_t c; (c = next.fetch_add(1)) < cells;) {
+        lane.record = &records[c];
+        lane.run_cell(&members[start[c]], start[c + 1] - start[c], cell_faces[c],
+                      uint64_t(double(cell_faces[c]) * ratio), level);
+        removed[c] = cell_faces[c] - lane.faces;
+      }
+    };
+    const size_t workers = std::min<size_t>(threads, cells);
+    while (lanes.size() < workers)
+      lanes.push_back(std::make_unique<Engine>(engine, Engine::Lane{}));
+    std::vector<std::thread> others;
+    for (size_t t = 1; t < workers; ++t) others.emplace_back(work, std::ref(*lanes[t]));
+    work(*lanes[0]);
+    for (std::thread& t : others) t.join();
+    uint64_t level_removed = 0;
+    for (size_t c = 0; c < cells; ++c) {
+      engine.record->insert(engine.record->end(), records[c].begin(), records[c].end());
+      level_removed += removed[c];
+    }
+    engine.faces -= level_removed;
+    if (engine.attr.active) engine.attr.remove_faces(level_removed);
+    // The vertices next to another cell: their T may have changed with that cell's faces, and
+    // their keys were left as they were: both are recomputed when next needed.
+    engine.hold_borders();
     if (options.target_faces && engine.faces <= options.target_faces) break;
   }
+  for (const std::unique_ptr<Engine>& lane : lanes) engine.add_counts(lane->stats);
   engine.cells = false;
+  engine.load_keys();
   levels.push_back({CellGrid{}, engine.record->size()});
 }
 

@@ -391,8 +391,9 @@ TEST(AttributeSimplify, FieldTermDecaysWithTheFaceCount) {
   });
   ASSERT_NE(ha, kNone);
   ASSERT_EQ(m.twin[ha], kNone);
+  std::vector<std::pair<uint32_t, uint32_t>> moved;
   for (uint32_t faces = m.face_count(); faces > m.face_count() / 2; --faces)
-    field.collapse(m, far, ha, kNone);  // a boundary collapse: one face
+    field.collapse(m, far, ha, kNone, moved, true);  // a boundary collapse: one face
   EXPECT_NEAR(cost(u, u + 1) / distortion, 0.125f, 1e-4f);
   EXPECT_NEAR(cost(s, s + (n + 1)) / slide, 1.f, 1e-4f);
 }

@@ -119,14 +119,18 @@ struct SimplifyOptions {
   // the first on a grid of cells of about `vertices` vertices each (encoder/src/cluster_grid.hpp),
   // each next on a grid of twice the side whose planes lie between the last one's, until a grid
   // no longer cuts the mesh; then one level on the whole mesh, as without clusters. Within a
-  // level a collapse is legal only when u, v and every neighbour of both lie in one cell, and the
-  // level ends when the faces have dropped to phase_ratio of its start (or no legal collapse is
-  // left). Cells are cut on the writer's integer coordinates: position_bits must be the
-  // writer's (WriteOptions::position_bits).
+  // level a collapse is legal only when u, v and every neighbour of both lie in one cell, and each
+  // cell is simplified on its own (its own heap and guard bound; the result does not depend on
+  // the other cells) until its faces have dropped to phase_ratio of its faces at the level's
+  // start (or no legal collapse is left in it). Cells are cut on the writer's integer coordinates:
+  // position_bits must be the writer's (WriteOptions::position_bits).
   struct Clusters {
     uint32_t vertices = 0;  // 0: off
     uint32_t position_bits = 14;
     double phase_ratio = 0.5;
+    // Threads simplifying the cells of a level (0: one per core); the result is the same for
+    // any count.
+    uint32_t threads = 0;
   } clusters;
   // Progress callback (fraction done 0..1), called on simplify()'s thread during the run; may
   // be empty.
