@@ -21,6 +21,7 @@ struct SimplifierCli {
   std::string attributes = "full";
   MetricParams params;
   std::string cluster_vertices = "auto";
+  uint32_t cell_threads = 0;
 
   // --metric, --attributes, --attribute-weight, then the parameters (--epsilon ...
   // --guard-slack), each --help line with its default.
@@ -71,6 +72,11 @@ struct SimplifierCli {
                    "node; auto: 16384 for meshes of at least 65536 vertices, else 0")
         ->check(CLI::IsMember({"auto"}) | CLI::Range(0u, 1u << 30))
         ->capture_default_str();
+    app.add_option("--cell-threads", cell_threads,
+                   "threads simplifying the cells of a level (0: one per core); the output is "
+                   "the same for any count")
+        ->check(CLI::Range(0u, 1024u))
+        ->capture_default_str();
   }
 
   // The parsed values into the engine's options (metric, attribute mode, parameters, an explicit
@@ -85,6 +91,7 @@ struct SimplifierCli {
     options.params = params;
     options.clusters.vertices =
         cluster_vertices == "auto" ? 0 : uint32_t(std::stoul(cluster_vertices));
+    options.clusters.threads = cell_threads;
   }
 
   // The cell size for a mesh of `vertices` vertices (after apply()).

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <queue>
 #include <thread>
 
 #include "attr_collapse.hpp"
@@ -1197,12 +1198,31 @@ void reorder_for_locality(const IndexedMesh& in, IndexedMesh& out, std::vector<u
   }
 }
 
+// The collapses of a level's cells into one sequence, each cell's in its order, the next always
+// the cheapest of the cells' next ones (ties to the lower cell): the collapses of different
+// cells commute, and a prefix of the level is then about what one heap over the mesh would
+// have collapsed first (mesh_after, and a decoder that stops inside a level).
+void merge_by_cost(const std::vector<std::vector<HalfEdgeCollapse>>& records,
+                   std::vector<HalfEdgeCollapse>& out) {
+  using Next = std::pair<float, uint32_t>;  // the cell's next cost, the cell
+  std::priority_queue<Next, std::vector<Next>, std::greater<>> next;
+  std::vector<size_t> taken(records.size(), 0);
+  for (uint32_t c = 0; c < records.size(); ++c)
+    if (!records[c].empty()) next.push({records[c][0].cost, c});
+  while (!next.empty()) {
+    const uint32_t c = next.top().second;
+    next.pop();
+    out.push_back(records[c][taken[c]++]);
+    if (taken[c] < records[c].size()) next.push({records[c][taken[c]].cost, c});
+  }
+}
+
 // The levels of a hierarchical simplification (SimplifyOptions::clusters), finest first. Each
 // cell of a level is simplified on its own (Engine::run_cell), down to phase_ratio of its faces
 // at the level's start: its collapses depend only on its faces and the ring of faces around
 // its border, not on the other cells or on the order the cells run in, so the cells run on
-// several threads and their collapses are recorded in cell order. `levels` gets each level's
-// grid and first collapse. The caller runs the last level (the whole mesh).
+// several threads and their collapses are merged by cost (merge_by_cost). `levels` gets each
+// level's grid and first collapse. The caller runs the last level (the whole mesh).
 void run_cell_levels(Engine& engine, const SimplifyOptions& options,
                      std::vector<CollapseSequence::Level>& levels) {
   const SimplifyOptions::Clusters& clusters = options.clusters;
@@ -1305,11 +1325,9 @@ void run_cell_levels(Engine& engine, const SimplifyOptions& options,
     for (size_t t = 1; t < workers; ++t) others.emplace_back(work, std::ref(*lanes[t]));
     work(*lanes[0]);
     for (std::thread& t : others) t.join();
+    merge_by_cost(records, *engine.record);
     uint64_t level_removed = 0;
-    for (size_t c = 0; c < cells; ++c) {
-      engine.record->insert(engine.record->end(), records[c].begin(), records[c].end());
-      level_removed += removed[c];
-    }
+    for (size_t c = 0; c < cells; ++c) level_removed += removed[c];
     engine.faces -= level_removed;
     if (engine.attr.active) engine.attr.remove_faces(level_removed);
     // The vertices next to another cell: their T may have changed with that cell's faces, and
