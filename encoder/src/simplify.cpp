@@ -315,12 +315,17 @@ class Engine : public EngineSettings, public EngineLane {
   void initial_keys(std::vector<Candidate>& initial);
   // Collapses until the faces drop to goal (0: no goal) or the heap runs out.
   void collapse_until(uint64_t goal, const SimplifyOptions& options);
+  // Keys afresh the vertices of a cell (its live vertices, ascending) inside it that a border
+  // held back, into key[].
+  void key_cell(const uint32_t* vertices, size_t count);
   // One cell of a level, on a lane: `vertices` (the cell's live vertices, ascending) keyed
-  // from key[], collapsed until its `cell_faces` drop to `goal`, their keys written back.
+  // from key[], collapsed until its `cell_faces` drop to `goal` or the cheapest collapse costs
+  // more than options.max_cost, their keys written back.
   void run_cell(const uint32_t* vertices, size_t count, uint64_t cell_faces, uint64_t goal,
                 const SimplifyOptions& options);
   // The queued keys of key[] into the heap (after the cell levels, for the whole mesh).
   void load_keys();
+  bool queued_key(uint32_t v) const { return stale[v] & kQueued; }
   void set_queued(uint32_t v, Candidate c) {
     target[v] = c.target, key[v] = c.cost, stale[v] |= kQueued;
   }
@@ -1045,23 +1050,27 @@ void Engine::collapse_until(uint64_t goal, const SimplifyOptions& options) {
   }
 }
 
+void Engine::key_cell(const uint32_t* vertices, size_t count) {
+  for (size_t i = 0; i < count; ++i) {
+    const uint32_t v = vertices[i];
+    if (!inner[v] || !(stale[v] & kCellHeld)) continue;
+    stale[v] &= uint8_t(~(kCellHeld | kGuardDeferred | kQueued));
+    const Candidate c = best_candidate(v);
+    if (c.target != kNone) set_queued(v, c);
+  }
+}
+
 void Engine::run_cell(const uint32_t* vertices, size_t count, uint64_t cell_faces, uint64_t goal,
                       const SimplifyOptions& options) {
   // The cell's heap: its vertices with every neighbour in the cell (no other can be u or v of
-  // a collapse confined to it), those a border held back keyed afresh. The guard's worst bound
-  // starts at the worst of the cells of the levels below that its vertices were in.
+  // a collapse confined to it). The guard's worst bound starts at the worst of the cells of the
+  // levels below that its vertices were in.
   faces = cell_faces;
   worst_bound = 0;
   for (size_t i = 0; i < count; ++i) {
     const uint32_t v = vertices[i];
     if (guard) worst_bound = std::max(worst_bound, double(region_bound[v]));
-    if (!inner[v]) continue;
-    if (stale[v] & kCellHeld) {
-      stale[v] &= uint8_t(~(kCellHeld | kGuardDeferred | kQueued));
-      const Candidate c = best_candidate(v);
-      if (c.target != kNone) set_queued(v, c);
-    }
-    if (stale[v] & kQueued) heap.push_unordered(v, key[v]);
+    if (inner[v] && (stale[v] & kQueued)) heap.push_unordered(v, key[v]);
   }
   heap.build();
   collapse_until(goal, options);
@@ -1264,6 +1273,16 @@ void run_cell_levels(Engine& engine, const SimplifyOptions& options,
   std::vector<std::unique_ptr<Engine>> lanes;
   std::vector<uint32_t> index(n), members;  // per vertex its cell's index; vertices by cell
   std::vector<uint64_t> keys, start, cell_faces, removed;
+  std::vector<float> keys_inside;
+  // f(lane) on `workers` lanes, one on this thread.
+  auto on_lanes = [&](size_t workers, auto&& f) {
+    while (lanes.size() < workers)
+      lanes.push_back(std::make_unique<Engine>(engine, Engine::Lane{}));
+    std::vector<std::thread> others;
+    for (size_t t = 1; t < workers; ++t) others.emplace_back([&, t] { f(*lanes[t]); });
+    f(*lanes[0]);
+    for (std::thread& t : others) t.join();
+  };
   for (CellGrid grid = detail::cell_grid_for(coords, area, clusters.vertices);
        detail::grid_cuts(grid, coords); grid = grid.coarser()) {
     levels.push_back({grid, engine.record->size()});
@@ -1303,13 +1322,35 @@ void run_cell_levels(Engine& engine, const SimplifyOptions& options,
         engine.inner[v] = in;
       }
     });
-    // Each cell down to phase_ratio of its faces (or the share of them the target leaves).
+    // Each cell down to phase_ratio of its faces at most (or the share of them the target
+    // leaves).
     double ratio = clusters.phase_ratio;
     if (options.target_faces)
       ratio = std::max(ratio, double(options.target_faces) / double(engine.faces));
+    // The keys at the level's start: the vertices a border held back keyed afresh, then the
+    // threshold (the cost quantile of the keys of the vertices inside cells).
+    std::atomic<size_t> next{0};
+    auto key_cells = [&](Engine& lane) {
+      for (size_t c; (c = next.fetch_add(1)) < cells;)
+        lane.key_cell(&members[start[c]], start[c + 1] - start[c]);
+    };
+    on_lanes(std::min<size_t>(threads, cells), key_cells);
+    level.max_cost = options.max_cost;
+    if (clusters.cost_quantile < 1) {
+      keys_inside.clear();
+      for (uint32_t v = 0; v < n; ++v)
+        if (engine.inner[v] && engine.queued_key(v)) keys_inside.push_back(engine.key[v]);
+      if (!keys_inside.empty()) {
+        const size_t at = std::min(keys_inside.size() - 1,
+                                   size_t(clusters.cost_quantile * double(keys_inside.size())));
+        std::nth_element(keys_inside.begin(), keys_inside.begin() + at, keys_inside.end());
+        const double threshold = keys_inside[at];
+        level.max_cost = options.max_cost >= 0 ? std::min(options.max_cost, threshold) : threshold;
+      }
+    }
     std::vector<std::vector<HalfEdgeCollapse>> records(cells);
     removed.assign(cells, 0);
-    std::atomic<size_t> next{0};
+    next = 0;
     auto work = [&](Engine& lane) {
       for (size_t c; (c = next.fetch_add(1)) < cells;) {
         lane.record = &records[c];
@@ -1318,13 +1359,7 @@ void run_cell_levels(Engine& engine, const SimplifyOptions& options,
         removed[c] = cell_faces[c] - lane.faces;
       }
     };
-    const size_t workers = std::min<size_t>(threads, cells);
-    while (lanes.size() < workers)
-      lanes.push_back(std::make_unique<Engine>(engine, Engine::Lane{}));
-    std::vector<std::thread> others;
-    for (size_t t = 1; t < workers; ++t) others.emplace_back(work, std::ref(*lanes[t]));
-    work(*lanes[0]);
-    for (std::thread& t : others) t.join();
+    on_lanes(std::min<size_t>(threads, cells), work);
     merge_by_cost(records, *engine.record);
     uint64_t level_removed = 0;
     for (size_t c = 0; c < cells; ++c) level_removed += removed[c];

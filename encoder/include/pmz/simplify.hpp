@@ -121,13 +121,16 @@ struct SimplifyOptions {
   // no longer cuts the mesh; then one level on the whole mesh, as without clusters. Within a
   // level a collapse is legal only when u, v and every neighbour of both lie in one cell, and each
   // cell is simplified on its own (its own heap and guard bound; the result does not depend on
-  // the other cells) until its faces have dropped to phase_ratio of its faces at the level's
-  // start (or no legal collapse is left in it). Cells are cut on the writer's integer coordinates:
+  // the other cells) until its cheapest collapse costs more than the level's threshold (the
+  // cost_quantile of the keys of the vertices inside cells at the level's start; 1: none) or
+  // its faces have dropped to phase_ratio of its faces at the level's start (or no legal
+  // collapse is left in it). Cells are cut on the writer's integer coordinates:
   // position_bits must be the writer's (WriteOptions::position_bits).
   struct Clusters {
     uint32_t vertices = 0;  // 0: off
     uint32_t position_bits = 14;
-    double phase_ratio = 0.5;
+    double phase_ratio = 0.25;
+    double cost_quantile = 0.7;
     // Threads simplifying the cells of a level (0: one per core); the result is the same for
     // any count.
     uint32_t threads = 0;
