@@ -18,6 +18,7 @@
 #include "pmz/format.hpp"
 #include "pmz/simplify.hpp"
 #include "pmz/writer.hpp"
+#include "seamed_grid.hpp"
 #include "simplify_test_meshes.hpp"
 
 namespace {
@@ -225,6 +226,14 @@ TEST(ClusterLevels, TheThreadCountLeavesTheSequenceAsItIs) {
     options.clusters.threads = threads;
     expect_same_sequence(one, run(mesh, options), std::to_string(threads) + " threads");
   }
+  // With seams and texture coordinates too (the attribute field's wedges are per corner).
+  const IndexedMesh seamed = pmz_test::seamed_grid(60, 23);
+  pmz::SimplifyOptions with_attributes = clustered(150);
+  with_attributes.clusters.threads = 1;
+  const CollapseSequence seamed_one = run(seamed, with_attributes);
+  ASSERT_GE(seamed_one.levels.size(), 3u);
+  with_attributes.clusters.threads = 4;
+  expect_same_sequence(seamed_one, run(seamed, with_attributes), "seamed, 4 threads");
 }
 
 TEST(ClusterLevels, ACellsCollapsesDependOnlyOnTheCell) {
