@@ -8,10 +8,12 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <queue>
 #include <thread>
+#include <type_traits>
 
 #include "attr_collapse.hpp"
 #include "attr_simplify.hpp"
@@ -234,6 +236,15 @@ struct EngineData {
   std::vector<float> key;
   std::vector<uint8_t> inner;
   std::vector<float> region_bound;
+
+  // f(array) for every array above: what a cell's collapses can change (a cell run apart hands
+  // over the elements it changed: CellResult).
+  template <class F>
+  void for_each_array(F&& f) {
+    f(m.pos), f(m.vert), f(m.twin), f(m.out), f(feat.face), f(feat.vertex), f(quad);
+    f(accumulated), f(self_error), f(witness), f(attr.wedge), f(attr.material), f(attr.values);
+    f(target), f(stale), f(cell), f(key), f(inner), f(region_bound);
+  }
 };
 
 // What one thread of the engine owns: its heap, the count of faces it simplifies, its record
@@ -294,6 +305,7 @@ class Engine : public EngineSettings, public EngineLane {
     mark.assign(m.vertex_count(), 0);
   }
 
+  EngineData* data() { return data_.get(); }
   HalfEdgeMesh& m = data_->m;
   Features& feat = data_->feat;
   // The quadric a cost evaluates: QSlim's accumulated one (qem), or the current mesh's plus
@@ -1226,14 +1238,109 @@ void merge_by_cost(const std::vector<std::vector<HalfEdgeCollapse>>& records,
   }
 }
 
+// A cell of the first level simplified apart (simplify_cell): its collapses, the faces they
+// removed, and every element of the engine's arrays they changed (the cells of a level write
+// disjoint elements), as bytes: "PMZCELL1", the cell and the level's cell count (u32), removed
+// faces (u64), the collapses (u64 count, then u, v, vl, vr, cost), then per array of
+// EngineData::for_each_array its size and changed count (u64) and each change (u32 index, the
+// element). Host byte order: the tasks of one plan run on machines of one kind.
+class CellResult {
+ public:
+  static constexpr char kMagic[8] = {'P', 'M', 'Z', 'C', 'E', 'L', 'L', '1'};
+
+  // The state of `data` before the cell runs.
+  void snapshot(EngineData& data) {
+    before_.clear();
+    data.for_each_array([&](const auto& a) {
+      const auto* p = reinterpret_cast<const uint8_t*>(a.data());
+      before_.emplace_back(p, p + a.size() * sizeof(a[0]));
+    });
+  }
+  // The result of cell `cell` of `cells` after it ran (snapshot() before).
+  void write(EngineData& data, uint32_t cell, uint32_t cells, uint64_t removed,
+             const std::vector<HalfEdgeCollapse>& record, std::vector<uint8_t>& out) const {
+    out.assign(kMagic, kMagic + 8);
+    put(out, cell), put(out, cells), put(out, removed), put(out, uint64_t(record.size()));
+    for (const HalfEdgeCollapse& c : record)
+      put(out, c.u), put(out, c.v), put(out, c.vl), put(out, c.vr), put(out, c.cost);
+    size_t k = 0;
+    data.for_each_array([&](const auto& a) {
+      using T = std::decay_t<decltype(a[0])>;
+      static_assert(std::is_trivially_copyable_v<T>);
+      const uint8_t* was = before_[k++].data();
+      std::vector<uint32_t> changed;
+      for (uint32_t i = 0; i < a.size(); ++i)
+        if (std::memcmp(&a[i], was + size_t(i) * sizeof(T), sizeof(T)) != 0) changed.push_back(i);
+      put(out, uint64_t(a.size())), put(out, uint64_t(changed.size()));
+      for (uint32_t i : changed) put(out, i), put(out, a[i]);
+    });
+  }
+  // Reads a result of cell `cell` of `cells` into `data`, `record` and `removed`; false with
+  // `error` when it is not one that fits them.
+  static bool read(const std::vector<uint8_t>& bytes, uint32_t cell, uint32_t cells,
+                   EngineData& data, std::vector<HalfEdgeCollapse>& record, uint64_t& removed,
+                   std::string& error) {
+    const uint8_t *p = bytes.data(), *end = p + bytes.size();
+    auto get = [&](auto& v) {
+      if (size_t(end - p) < sizeof v) return false;
+      std::memcpy(&v, p, sizeof v), p += sizeof v;
+      return true;
+    };
+    uint32_t c = 0, n = 0;
+    uint64_t count = 0;
+    if (bytes.size() < 8 || std::memcmp(p, kMagic, 8) != 0)
+      return error = "not a cell result", false;
+    p += 8;
+    if (!get(c) || !get(n) || !get(removed) || !get(count)) return error = "cut short", false;
+    if (c != cell || n != cells)
+      return error = "the result of cell " + std::to_string(c) + " of " + std::to_string(n) +
+                     ", not of cell " + std::to_string(cell) + " of " + std::to_string(cells),
+             false;
+    if (count > uint64_t(end - p) / 20) return error = "cut short", false;
+    record.resize(count);
+    for (HalfEdgeCollapse& r : record) get(r.u), get(r.v), get(r.vl), get(r.vr), get(r.cost);
+    bool ok = true;
+    data.for_each_array([&](auto& a) {
+      uint64_t size = 0, changed = 0;
+      if (!ok || !get(size) || !get(changed) || size != a.size()) return void(ok = false);
+      for (uint64_t j = 0; j < changed && ok; ++j) {
+        uint32_t i = 0;
+        ok = get(i) && i < a.size() && get(a[i]);
+      }
+    });
+    if (!ok || p != end) return error = "does not fit the mesh (made from another plan?)", false;
+    return true;
+  }
+
+ private:
+  template <class T>
+  static void put(std::vector<uint8_t>& out, const T& v) {
+    const auto* b = reinterpret_cast<const uint8_t*>(&v);
+    out.insert(out.end(), b, b + sizeof v);
+  }
+  std::vector<std::vector<uint8_t>> before_;
+};
+
+// What run_cell_levels does with the first level's cells: simplify them all here (run), only
+// count them (count: `cells`), simplify cell `cell` alone and stop (one: `result`), or take
+// every cell's result from SimplifyOptions::clusters.first_level (when set, in mode run).
+struct FirstLevel {
+  enum Mode { run, count, one } mode = run;
+  uint32_t cell = 0, cells = 0;
+  std::vector<uint8_t>* result = nullptr;
+};
+
 // The levels of a hierarchical simplification (SimplifyOptions::clusters), finest first. Each
 // cell of a level is simplified on its own (Engine::run_cell), down to phase_ratio of its faces
 // at the level's start: its collapses depend only on its faces and the ring of faces around
 // its border, not on the other cells or on the order the cells run in, so the cells run on
 // several threads and their collapses are merged by cost (merge_by_cost). `levels` gets each
-// level's grid and first collapse. The caller runs the last level (the whole mesh).
-void run_cell_levels(Engine& engine, const SimplifyOptions& options,
-                     std::vector<CollapseSequence::Level>& levels) {
+// level's grid and first collapse. The caller runs the last level (the whole mesh), unless
+// `first` stops after the first level's cells. False with `error` on a first-level result that
+// does not fit (or that first_level could not give).
+bool run_cell_levels(Engine& engine, const SimplifyOptions& options,
+                     std::vector<CollapseSequence::Level>& levels, FirstLevel& first,
+                     std::string& error) {
   const SimplifyOptions::Clusters& clusters = options.clusters;
   const uint32_t n = engine.m.vertex_count();
   // The writer's integer coordinates (the same bounding box and quantizer: writer.cpp).
@@ -1257,7 +1364,7 @@ void run_cell_levels(Engine& engine, const SimplifyOptions& options,
   SimplifyOptions level = options;
   level.progress = nullptr;
   // Every vertex keyed once; from here keys wait in key[] between the cells' heaps.
-  {
+  if (first.mode != FirstLevel::count) {
     std::vector<Candidate> initial;
     engine.initial_keys(initial);
     engine.key.assign(n, 0);
@@ -1296,6 +1403,7 @@ void run_cell_levels(Engine& engine, const SimplifyOptions& options,
     std::sort(keys.begin(), keys.end());
     keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
     const size_t cells = keys.size();
+    if (first.mode == FirstLevel::count) return first.cells = uint32_t(cells), true;
     start.assign(cells + 1, 0);
     for (uint32_t v = 0; v < n; ++v) {
       if (engine.m.out[v] == kNone) continue;
@@ -1350,16 +1458,41 @@ void run_cell_levels(Engine& engine, const SimplifyOptions& options,
     }
     std::vector<std::vector<HalfEdgeCollapse>> records(cells);
     removed.assign(cells, 0);
-    next = 0;
-    auto work = [&](Engine& lane) {
-      for (size_t c; (c = next.fetch_add(1)) < cells;) {
-        lane.record = &records[c];
-        lane.run_cell(&members[start[c]], start[c + 1] - start[c], cell_faces[c],
-                      uint64_t(double(cell_faces[c]) * ratio), level);
-        removed[c] = cell_faces[c] - lane.faces;
-      }
+    auto run_cell = [&](Engine& lane, size_t c) {
+      lane.record = &records[c];
+      lane.run_cell(&members[start[c]], start[c + 1] - start[c], cell_faces[c],
+                    uint64_t(double(cell_faces[c]) * ratio), level);
+      removed[c] = cell_faces[c] - lane.faces;
     };
-    on_lanes(std::min<size_t>(threads, cells), work);
+    const bool first_level = levels.size() == 1;
+    if (first_level && first.mode == FirstLevel::one) {
+      if (first.cell >= cells)
+        return error = "there is no cell " + std::to_string(first.cell) + " (the first level has " +
+                       std::to_string(cells) + ")",
+               false;
+      CellResult result;
+      result.snapshot(*engine.data());
+      Engine lane(engine, Engine::Lane{});
+      run_cell(lane, first.cell);
+      result.write(*engine.data(), first.cell, uint32_t(cells), removed[first.cell],
+                   records[first.cell], *first.result);
+      return true;
+    }
+    if (first_level && clusters.first_level) {
+      std::vector<uint8_t> bytes;
+      for (uint32_t c = 0; c < cells; ++c) {
+        std::string why;
+        if (!clusters.first_level(c, bytes, error)) return false;
+        if (!CellResult::read(bytes, c, uint32_t(cells), *engine.data(), records[c], removed[c],
+                              why))
+          return error = "the result of cell " + std::to_string(c) + ": " + why, false;
+      }
+    } else {
+      next = 0;
+      on_lanes(std::min<size_t>(threads, cells), [&](Engine& lane) {
+        for (size_t c; (c = next.fetch_add(1)) < cells;) run_cell(lane, c);
+      });
+    }
     merge_by_cost(records, *engine.record);
     uint64_t level_removed = 0;
     for (size_t c = 0; c < cells; ++c) level_removed += removed[c];
@@ -1374,6 +1507,7 @@ void run_cell_levels(Engine& engine, const SimplifyOptions& options,
   engine.cells = false;
   engine.load_keys();
   levels.push_back({CellGrid{}, engine.record->size()});
+  return true;
 }
 
 // Checks the input, renumbers it for locality (local; order[engine id] = input id) and sets the
@@ -1403,8 +1537,12 @@ bool start_engine(const IndexedMesh& input, const SimplifyOptions& options, Engi
 
 }  // namespace
 
-bool simplify(const IndexedMesh& input, const SimplifyOptions& options, CollapseSequence& out,
-              std::string& error) {
+namespace {
+
+// simplify(), or with `first` in mode count or one, the first level's cells counted or one of
+// them simplified (`out` then untouched).
+bool simplify_levels(const IndexedMesh& input, const SimplifyOptions& options, FirstLevel& first,
+                     CollapseSequence& out, std::string& error) {
   const auto t0 = Clock::now();
   std::vector<uint32_t> order;
   Engine engine;
@@ -1412,16 +1550,20 @@ bool simplify(const IndexedMesh& input, const SimplifyOptions& options, Collapse
     IndexedMesh local;
     if (!start_engine(input, options, engine, local, order, error)) return false;
   }
-  out.mesh = input;
-  out.collapses.clear();
-  out.collapses.reserve(input.vertex_count());
-  out.levels.clear();
-  engine.record = &out.collapses;
+  std::vector<HalfEdgeCollapse> collapses;
+  std::vector<CollapseSequence::Level> levels;
+  collapses.reserve(input.vertex_count());
+  engine.record = &collapses;
   engine.stats.setup = seconds_since(t0);
   if (options.clusters.vertices > 0 &&
-      engine.m.vertex_count() > 2 * uint64_t(options.clusters.vertices))
-    run_cell_levels(engine, options, out.levels);
+      engine.m.vertex_count() > 2 * uint64_t(options.clusters.vertices) &&
+      !run_cell_levels(engine, options, levels, first, error))
+    return false;
+  if (first.mode != FirstLevel::run) return true;
   engine.run(options);
+  out.mesh = input;
+  out.collapses = std::move(collapses);
+  out.levels = std::move(levels);
   auto input_id = [&](uint32_t v) { return v == kNone ? kNoVertex : order[v]; };
   for (HalfEdgeCollapse& c : out.collapses)
     c.u = input_id(c.u), c.v = input_id(c.v), c.vl = input_id(c.vl), c.vr = input_id(c.vr);
@@ -1433,6 +1575,39 @@ bool simplify(const IndexedMesh& input, const SimplifyOptions& options, Collapse
         out.base_indices.push_back(order[engine.m.vert[HalfEdgeMesh::half_edge(f, k)]]);
   engine.stats.total = seconds_since(t0);
   if (options.stats) *options.stats = engine.stats;
+  return true;
+}
+
+}  // namespace
+
+bool simplify(const IndexedMesh& input, const SimplifyOptions& options, CollapseSequence& out,
+              std::string& error) {
+  FirstLevel first;
+  return simplify_levels(input, options, first, out, error);
+}
+
+bool cell_tasks(const IndexedMesh& input, const SimplifyOptions& options, uint32_t& count,
+                std::string& error) {
+  FirstLevel first;
+  first.mode = FirstLevel::count;
+  CollapseSequence unused;
+  if (!simplify_levels(input, options, first, unused, error)) return false;
+  count = first.cells;
+  return true;
+}
+
+bool simplify_cell(const IndexedMesh& input, const SimplifyOptions& options, uint32_t cell,
+                   std::vector<uint8_t>& result, std::string& error) {
+  FirstLevel first;
+  first.mode = FirstLevel::one;
+  first.cell = cell;
+  std::vector<uint8_t> bytes;
+  first.result = &bytes;
+  CollapseSequence unused;
+  if (!simplify_levels(input, options, first, unused, error)) return false;
+  if (bytes.empty())
+    return error = "there is no cell " + std::to_string(cell) + " (no cell levels)", false;
+  result = std::move(bytes);
   return true;
 }
 

@@ -236,6 +236,55 @@ TEST(ClusterLevels, TheThreadCountLeavesTheSequenceAsItIs) {
   expect_same_sequence(seamed_one, run(seamed, with_attributes), "seamed, 4 threads");
 }
 
+// The sequence of `options` with the first level's cells simplified apart (simplify_cell),
+// each from a fresh call as another process would, their results handed over by first_level.
+CollapseSequence run_apart(const IndexedMesh& mesh, pmz::SimplifyOptions options,
+                           std::vector<std::vector<uint8_t>>& results) {
+  uint32_t cells = 0;
+  std::string error;
+  EXPECT_TRUE(pmz::cell_tasks(mesh, options, cells, error)) << error;
+  results.assign(cells, {});
+  for (uint32_t c = cells; c-- > 0;)  // in any order
+    EXPECT_TRUE(pmz::simplify_cell(mesh, options, c, results[c], error)) << error;
+  options.clusters.first_level = [&](uint32_t c, std::vector<uint8_t>& result, std::string&) {
+    result = results[c];
+    return true;
+  };
+  return run(mesh, options);
+}
+
+TEST(ClusterLevels, CellsSimplifiedApartGiveTheSameSequence) {
+  const IndexedMesh mesh = bumpy_sphere(5);
+  std::vector<std::vector<uint8_t>> results;
+  const CollapseSequence apart = run_apart(mesh, clustered(200), results);
+  EXPECT_GT(results.size(), 8u);
+  expect_same_sequence(run(mesh, clustered(200)), apart, "cells apart");
+  const IndexedMesh seamed = pmz_test::seamed_grid(60, 23);
+  std::vector<std::vector<uint8_t>> seamed_results;
+  expect_same_sequence(run(seamed, clustered(150)),
+                       run_apart(seamed, clustered(150), seamed_results), "seamed, cells apart");
+  // A result that is not the cell's, or is cut short, is refused with a message.
+  pmz::SimplifyOptions options = clustered(200);
+  CollapseSequence seq;
+  std::string error;
+  for (int damage = 0; damage < 2; ++damage) {
+    options.clusters.first_level = [&](uint32_t c, std::vector<uint8_t>& result, std::string&) {
+      result = results[damage == 0 && c == 1 ? 2 : c];
+      if (damage == 1 && c == 3) result.resize(result.size() - 5);
+      return true;
+    };
+    EXPECT_FALSE(pmz::simplify(mesh, options, seq, error));
+    EXPECT_NE(error.find(damage == 0 ? "cell 1" : "cell 3"), std::string::npos) << error;
+  }
+  EXPECT_TRUE(seq.collapses.empty());
+  // A cell past the last, and a mesh without cell levels, have no task.
+  std::vector<uint8_t> result;
+  EXPECT_FALSE(pmz::simplify_cell(mesh, options, uint32_t(results.size()), result, error));
+  uint32_t cells = 1;
+  EXPECT_TRUE(pmz::cell_tasks(mesh, clustered(0), cells, error));
+  EXPECT_EQ(cells, 0u);
+}
+
 TEST(ClusterLevels, ACellsCollapsesDependOnlyOnTheCell) {
   // Two bumpy spheres far apart; the second is mirrored in y (and its faces turned over, so
   // they face out): the bounding box, the edge lengths and so the metric's unit stay the same,

@@ -134,6 +134,11 @@ struct SimplifyOptions {
     // Threads simplifying the cells of a level (0: one per core); the result is the same for
     // any count.
     uint32_t threads = 0;
+    // The first level's cells simplified apart (simplify_cell, possibly in other processes):
+    // when set, simplify() takes cell c's result from first_level(c, result, error) instead of
+    // simplifying the cell itself, and fails with that error when it returns false.
+    std::function<bool(uint32_t cell, std::vector<uint8_t>& result, std::string& error)>
+        first_level;
   } clusters;
   // Progress callback (fraction done 0..1), called on simplify()'s thread during the run; may
   // be empty.
@@ -162,6 +167,18 @@ struct CollapseSequence {
 // SimplifyOptions::stats object, when set, must outlive the call.
 bool simplify(const IndexedMesh& input, const SimplifyOptions& options, CollapseSequence& out,
               std::string& error);
+
+// The first cell level as tasks that can run apart, in other processes or on other machines.
+// cell_tasks() counts its cells (0 when the mesh and options make no cell levels);
+// simplify_cell() simplifies cell `cell` as simplify() would and gives, as opaque bytes, its
+// collapses and the engine's terms they changed; simplify() with clusters.first_level handing it
+// each cell's bytes then gives the same sequence as alone. All take the same input and options
+// (clusters.threads aside). They fail as simplify() does, and simplify() also on a result that
+// does not fit the mesh or the cell.
+bool cell_tasks(const IndexedMesh& input, const SimplifyOptions& options, uint32_t& count,
+                std::string& error);
+bool simplify_cell(const IndexedMesh& input, const SimplifyOptions& options, uint32_t cell,
+                   std::vector<uint8_t>& result, std::string& error);
 
 // The mesh after the first k collapses (faces in input ids compacted to the vertices left), with
 // its attributes when seq.mesh has them: the wedges the collapse rule leaves
