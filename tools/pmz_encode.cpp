@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "decoded_mesh.hpp"
+#include "encode_plan.hpp"
 #include "pmz/app_support.hpp"
 #include "pmz/decoder.hpp"
 #include "pmz/format.hpp"
@@ -37,6 +38,9 @@ struct EncodeSettings {
   pmz::WriteOptions write;
   std::string stdin_format;  // extension for a mesh read from stdin
   bool glb = false;          // every output a GLB (docs/gltf-binding.md)
+  // --assemble: the mesh and the first level's cells from this plan (encode_plan.hpp), not
+  // read from the input and simplified here.
+  std::string plan_dir;
 };
 
 bool glb_output(const std::string& output, const EncodeSettings& settings) {
@@ -84,13 +88,19 @@ bool encode(const std::string& input, const std::string& output, const EncodeSet
   app_support::OutputFile out;
   if (!out.open(output, true, error)) return false;
   pmz::IndexedMesh mesh;
-  if (!tool::read_mesh_input(input, settings.stdin_format, mesh, error, progress)) {
+  const tool::EncodePlan plan{settings.plan_dir};
+  if (plan.dir.empty() ? !tool::read_mesh_input(input, settings.stdin_format, mesh, error, progress)
+                       : !plan.read_mesh(mesh, error)) {
     if (progress) progress->clear();
     return false;
   }
   pmz::SimplifyOptions sopt = settings.simplify;
   settings.simplifier.apply_clusters(sopt, mesh.vertex_count());
   if (progress) sopt.progress = [&](double f) { progress->update("simplifying", f); };
+  if (!plan.dir.empty())
+    sopt.clusters.first_level = [&](uint32_t cell, std::vector<uint8_t>& result, std::string& e) {
+      return app_support::read_input(plan.result(std::to_string(cell)), result, e);
+    };
   pmz::CollapseSequence seq;
   std::vector<uint8_t> bytes;
   pmz::WriteStats st;
@@ -101,7 +111,12 @@ bool encode(const std::string& input, const std::string& output, const EncodeSet
   const bool as_glb = glb_output(output, settings);
   ok = ok && (!as_glb || wrap_in_glb(bytes, input, glb, error));
   if (progress) progress->clear();
-  if (!ok) return error = (input == "-" ? "stdin" : input) + ": " + error, false;
+  if (!ok)
+    return error = (!plan.dir.empty() ? plan.dir
+                    : input == "-"    ? "stdin"
+                                      : input) +
+                   ": " + error,
+           false;
   if (as_glb)
     out.write(glb.data(), glb.size());
   else
@@ -155,6 +170,96 @@ bool make_output_folder(const std::string& dir) {
   return true;
 }
 
+// One input to one output, its summary line printed.
+int encode_one(const std::string& input, const std::string& output, const EncodeSettings& settings,
+               bool quiet, bool force_progress) {
+  app_support::Progress progress(quiet, force_progress);
+  std::string line, error;
+  if (!encode(input, output, settings, progress.enabled() ? &progress : nullptr, line, error)) {
+    app_support::print_error(error);
+    return app_support::kExitFailure;
+  }
+  // With -o -, stdout carries the stream: the summary goes to stderr.
+  std::fprintf(output == "-" ? stderr : stdout, "%s\n", line.c_str());
+  return app_support::kExitOk;
+}
+
+// --plan: the mesh read and its first level's cells counted, then the plan written.
+int write_plan(const std::string& input, const tool::EncodePlan& plan,
+               const EncodeSettings& settings, const std::vector<std::string>& args, bool quiet,
+               bool force_progress) {
+  app_support::Progress progress(quiet, force_progress);
+  pmz::IndexedMesh mesh;
+  std::string error;
+  bool ok = tool::read_mesh_input(input, settings.stdin_format, mesh, error,
+                                  progress.enabled() ? &progress : nullptr);
+  progress.clear();
+  pmz::SimplifyOptions sopt = settings.simplify;
+  settings.simplifier.apply_clusters(sopt, mesh.vertex_count());
+  uint32_t tasks = 0;
+  if (ok && !pmz::cell_tasks(mesh, sopt, tasks, error))
+    ok = false, error = (input == "-" ? "stdin" : input) + ": " + error;
+  ok = ok && make_output_folder(plan.dir);
+  if (ok && !plan.write(mesh, args, tasks, error)) ok = false;
+  if (!ok) {
+    if (!error.empty()) app_support::print_error(error);
+    return app_support::kExitFailure;
+  }
+  std::printf(
+      "%s: %u tasks (the first level's cells) for %u faces; run pmz-encode --task %s ID "
+      "for each ID in %s, then pmz-encode --assemble %s -o OUTPUT\n",
+      plan.dir.c_str(), tasks, mesh.face_count(), plan.dir.c_str(), plan.file("tasks").c_str(),
+      plan.dir.c_str());
+  return app_support::kExitOk;
+}
+
+// --task DIR ID: one cell simplified, its result written whole (a temporary renamed).
+int run_task(const tool::EncodePlan& plan, const std::string& id, const EncodeSettings& settings) {
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<std::string> ids;
+  std::string error;
+  pmz::IndexedMesh mesh;
+  bool ok = plan.read_tasks(ids, error);
+  if (ok && (std::find(ids.begin(), ids.end(), id) == ids.end() || id.size() > 9 ||
+             id.find_first_not_of("0123456789") != std::string::npos))
+    ok = false, error = plan.file("tasks") + ": lists no task " + id;
+  ok = ok && plan.read_mesh(mesh, error);
+  pmz::SimplifyOptions sopt = settings.simplify;
+  settings.simplifier.apply_clusters(sopt, mesh.vertex_count());
+  std::vector<uint8_t> result;
+  if (ok && !pmz::simplify_cell(mesh, sopt, uint32_t(std::stoul(id)), result, error))
+    ok = false, error = plan.dir + ": task " + id + ": " + error;
+  ok = ok && app_support::write_output(plan.result(id), result.data(), result.size(), error);
+  if (!ok) {
+    app_support::print_error(error);
+    return app_support::kExitFailure;
+  }
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("%s: %zu bytes, %.2fs\n", plan.result(id).c_str(), result.size(), secs);
+  return app_support::kExitOk;
+}
+
+// --assemble: every task's result present, else one line naming the first missing one.
+bool all_tasks_done(const tool::EncodePlan& plan) {
+  std::vector<std::string> ids;
+  std::string error;
+  if (!plan.read_tasks(ids, error)) {
+    app_support::print_error(error);
+    return false;
+  }
+  for (const std::string& id : ids) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(plan.result(id), ec)) {
+      app_support::print_error(plan.result(id), "missing: task " + id +
+                                                    " has not run (pmz-encode "
+                                                    "--task " +
+                                                    plan.dir + " " + id + ")");
+      return false;
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -171,7 +276,6 @@ int main(int argc, char** argv) {
   tool::SimplifierCli& simplifier = settings.simplifier;
   app.add_option("inputs", inputs,
                  tool::mesh_files_help("input meshes", false, "- reads one from stdin"))
-      ->required()
       ->type_name("MESH...");
   auto* out_opt = app.add_option("-o,--output", output,
                                  "output .pmz, or .glb (glTF with the stream; - for stdout)");
@@ -216,11 +320,95 @@ int main(int argc, char** argv) {
   app.add_flag("--symbol-stats", settings.write.symbol_stats,
                "also print the code length per kind of split symbol (groups, choice, wedges, "
                "residual slots)");
+  std::string plan_dir, assemble_dir;
+  std::vector<std::string> task;
+  auto* plan_opt =
+      app.add_option("--plan", plan_dir,
+                     "instead of encoding, write the encode as tasks into this folder (made if "
+                     "missing): the mesh, these options, and one task per cell of the first cell "
+                     "level, their ids one a line in DIR/tasks; then --task for each, then "
+                     "--assemble (docs/design.md section 10)")
+          ->type_name("DIR");
+  auto* task_opt = app.add_option("--task", task,
+                                  "run task ID of the plan in DIR, its result written into DIR "
+                                  "(any process on any machine that sees DIR; a rerun rewrites "
+                                  "the same result)")
+                       ->expected(2)
+                       ->type_name("DIR ID");
+  auto* assemble_opt =
+      app.add_option("--assemble", assemble_dir,
+                     "write -o from the plan in DIR once every task has run: the bytes the "
+                     "input encoded with the plan's options gives")
+          ->type_name("DIR");
+  plan_opt->excludes(out_opt)->excludes(dir_opt)->excludes(task_opt)->excludes(assemble_opt);
+  task_opt->excludes(out_opt)->excludes(dir_opt)->excludes(assemble_opt);
+  assemble_opt->excludes(dir_opt);
   app_support::add_progress_options(app, quiet, force_progress);
   app_support::set_footer(app);
   if (int rc = app_support::parse(app, argc, argv); rc >= 0) return rc;
 
   auto usage = app_support::usage_error;
+  const bool task_mode = task_opt->count() > 0, assemble_mode = assemble_opt->count() > 0;
+  if (task_mode || assemble_mode) {
+    if (assemble_mode && out_opt->count() == 0) return usage("--assemble needs -o FILE");
+    // The plan's options are every step's: any other given here is refused, not ignored.
+    const std::set<const CLI::Option*> own = {task_opt,
+                                              assemble_opt,
+                                              out_opt,
+                                              app.get_option("--glb"),
+                                              app.get_option("--quiet"),
+                                              app.get_option("--progress"),
+                                              app.get_option("--cell-threads")};
+    if (!inputs.empty()) return usage("the input is the plan's (give it to --plan)");
+    for (const CLI::Option* o : app.get_options())
+      if (o->count() && !own.count(o))
+        return usage(o->get_name() + ": the plan's options are used (give it to --plan)");
+    const tool::EncodePlan plan{task_mode ? task[0] : assemble_dir};
+    std::vector<std::string> args;
+    std::string error;
+    if (!plan.read_options(args, error)) {
+      app_support::print_error(error);
+      return app_support::kExitFailure;
+    }
+    // The plan's command line parsed again, then what this one gives on top.
+    const std::string given_output = output;
+    const bool given_glb = settings.glb, given_quiet = quiet, given_progress = force_progress;
+    const uint32_t given_threads = simplifier.cell_threads;
+    const bool threads_given = app.get_option("--cell-threads")->count() > 0;
+    try {
+      std::reverse(args.begin(), args.end());
+      app.parse(args);
+    } catch (const CLI::ParseError& e) {
+      app_support::print_error(plan.file("options"),
+                               std::string("not options of this pmz-encode: ") + e.what());
+      return app_support::kExitFailure;
+    }
+    if (inputs.size() != 1 || plan_opt->count() == 0) {
+      app_support::print_error(plan.file("options"), "not the options of a plan");
+      return app_support::kExitFailure;
+    }
+    output = given_output, quiet = given_quiet, force_progress = given_progress;
+    settings.glb = settings.glb || given_glb;
+    if (threads_given) simplifier.cell_threads = given_threads;
+    simplifier.apply(settings.simplify);
+    settings.simplify.clusters.position_bits = settings.write.position_bits;
+    settings.stdin_format = format;
+    if (task_mode) return run_task(plan, task[1], settings);
+    if (!all_tasks_done(plan)) return app_support::kExitFailure;
+    settings.plan_dir = plan.dir;
+    return encode_one(inputs[0], output, settings, quiet, force_progress);
+  }
+  if (inputs.empty()) return usage("give an input mesh");
+  if (plan_opt->count()) {
+    if (inputs.size() != 1) return usage("--plan takes one input");
+    if (const std::string problem = tool::stdin_input_problem(inputs, format); !problem.empty())
+      return usage(problem);
+    simplifier.apply(settings.simplify);
+    settings.simplify.clusters.position_bits = settings.write.position_bits;
+    settings.stdin_format = format;
+    return write_plan(inputs[0], tool::EncodePlan{plan_dir}, settings,
+                      std::vector<std::string>(argv + 1, argv + argc), quiet, force_progress);
+  }
   if (out_opt->count() == 0 && dir_opt->count() == 0)
     return usage("give -o FILE (one input) or --out-dir DIR");
   if (out_opt->count() && inputs.size() > 1)
@@ -248,18 +436,7 @@ int main(int argc, char** argv) {
     if (!make_output_folder(out_dir)) return app_support::kExitFailure;
   }
 
-  if (inputs.size() == 1) {
-    app_support::Progress progress(quiet, force_progress);
-    std::string line, error;
-    if (!encode(inputs[0], outputs[0], settings, progress.enabled() ? &progress : nullptr, line,
-                error)) {
-      app_support::print_error(error);
-      return app_support::kExitFailure;
-    }
-    // With -o -, stdout carries the stream: the summary goes to stderr.
-    std::fprintf(outputs[0] == "-" ? stderr : stdout, "%s\n", line.c_str());
-    return app_support::kExitOk;
-  }
+  if (inputs.size() == 1) return encode_one(inputs[0], outputs[0], settings, quiet, force_progress);
 
   // A batch: workers take the next asset until none is left, largest files first so that no
   // big asset is left to run alone at the end; lines are printed whole as assets finish, and

@@ -5,7 +5,8 @@
 temporaries removed on error and on signals, one-line errors with the reason, exit codes
 (0 ok, 1 failure, 2 usage), defaults in --help, the progress bar, pmz-info without decoding
 and on truncated files, unreachable decode targets, --faces 0 / --ratio 0 as the base mesh,
-batch encoding with --out-dir and -j, one definition of the simplifier's options (pmz-encode and
+batch encoding with --out-dir and -j, an encode split into tasks (--plan, --task with GNU
+parallel, --assemble), one definition of the simplifier's options (pmz-encode and
 pmz-simplify).
 
 usage: test_cli.py BIN_DIR SAMPLE_OBJ SAMPLE_PMZ WORK_DIR [CASE...]
@@ -670,6 +671,49 @@ def case_encode_nodes_by_default():
         r = run([tool("pmz-decode"), pmz, "-o", out])
         check(r.returncode == 0 and f"{j['full_faces']} faces" in err_text(r),
               f"pmz-decode {pmz}: {err_text(r)}")
+
+
+def case_encode_plan_tasks_assemble():
+    # pmz-encode --plan / --task / --assemble: the tasks run by GNU parallel as separate
+    # processes, then the assembled stream is the one-process encode's bytes; a missing task's
+    # result is named, exit 1, nothing written; a task run twice writes the same result.
+    check(shutil.which("parallel"), "GNU parallel is not installed (README.md, set-up)")
+    d = fresh("encode_plan")
+    ply, plan, one, out = (os.path.join(d, n) for n in ("t.ply", "plan", "one.pmz", "out.pmz"))
+    r = run([tool("pmz-generate"), "--faces", "140000", "-o", ply, "-q"])
+    check(r.returncode == 0, f"pmz-generate: {err_text(r)}")
+    opts = ["--cluster-vertices", "4096", "--position-bits", "12"]
+    r = run([tool("pmz-encode"), ply, "--plan", plan] + opts)
+    check(r.returncode == 0, f"--plan: {err_text(r)}")
+    with open(os.path.join(plan, "tasks")) as f:
+        ids = f.read().split()
+    check(len(ids) > 4 and ids == [str(i) for i in range(len(ids))], f"tasks: {ids}")
+    r = run([tool("pmz-encode"), "--assemble", plan, "-o", out])
+    lines = err_text(r).strip().splitlines()
+    check(r.returncode == 1 and len(lines) == 1 and os.path.join(plan, "0.cell") in lines[0]
+          and "missing" in lines[0] and not os.path.exists(out),
+          f"assemble without results: rc={r.returncode} {lines}")
+    r = run([tool("pmz-encode"), "--task", plan, "0", "--metric", "qem"])
+    check(r.returncode == 2 and "--metric" in err_text(r), f"--task with an option: {err_text(r)}")
+    r = run([tool("pmz-encode"), "--task", plan, "0"])
+    check(r.returncode == 0, f"--task of the first cell: {err_text(r)}")
+    with open(os.path.join(plan, "0.cell"), "rb") as f:
+        first = f.read()
+    r = run(["parallel", "--will-cite", "-j", "2", tool("pmz-encode"), "--task", plan, "{}",
+             "::::", os.path.join(plan, "tasks")], timeout=300)
+    check(r.returncode == 0, f"parallel --task: {err_text(r)}")
+    with open(os.path.join(plan, "0.cell"), "rb") as f:
+        check(f.read() == first, "the first cell run twice wrote different results")
+    check(sorted(os.listdir(plan)) == sorted(["mesh", "options", "tasks"] +
+                                             [i + ".cell" for i in ids]),
+          f"the plan holds more: {sorted(os.listdir(plan))}")
+    r = run([tool("pmz-encode"), "--assemble", plan, "-o", out])
+    check(r.returncode == 0, f"--assemble: {err_text(r)}")
+    r = run([tool("pmz-encode"), ply, "-o", one, "-q"] + opts)
+    check(r.returncode == 0, f"pmz-encode {ply}: {err_text(r)}")
+    r = run(["cmp", one, out])
+    check(r.returncode == 0, f"assembled and one-process streams differ: {r.stdout}")
+    check(info_json(out)["nodes"] > len(ids), "the stream has no more nodes than cells")
 
 
 def case_info_texcoords_only():
