@@ -10,6 +10,32 @@
 
 namespace pmz::tool {
 
+// A mesh decoded for a view (Decoder::update_view) holds every id of the stream: the faces of
+// nodes not applied are degenerate and their vertices unused. Drops both (a mesh without such
+// faces is left as it is).
+inline void drop_unused_ids(IndexedMesh& m) {
+  std::vector<uint32_t>& ix = m.indices;
+  size_t kept = 0;
+  for (size_t f = 0; f + 2 < ix.size(); f += 3)
+    if (ix[f] != ix[f + 1]) {
+      std::copy_n(&ix[f], 3, &ix[kept]);
+      kept += 3;
+    }
+  if (kept == ix.size()) return;
+  ix.resize(kept);
+  std::vector<uint32_t> remap(m.vertex_count(), UINT32_MAX);
+  std::vector<float> positions;
+  for (uint32_t& v : ix) {
+    if (remap[v] == UINT32_MAX) {
+      remap[v] = uint32_t(positions.size() / 3);
+      positions.insert(positions.end(), &m.positions[size_t(v) * 3],
+                       &m.positions[size_t(v) * 3 + 3]);
+    }
+    v = remap[v];
+  }
+  m.positions = std::move(positions);
+}
+
 inline IndexedMesh decoded_mesh(const Decoder& d) {
   IndexedMesh m;
   const uint32_t nv = d.vertex_count(), nf = d.face_count(), nw = d.wedge_count();
@@ -37,6 +63,7 @@ inline IndexedMesh decoded_mesh(const Decoder& d) {
     std::copy(in.base_color, in.base_color + 4, out.base_color);
   }
   a.material_library = d.material_library();
+  if (!nw) drop_unused_ids(m);
   return m;
 }
 

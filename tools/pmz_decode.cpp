@@ -7,7 +7,9 @@
 // OpenMesh.
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -19,6 +21,89 @@
 
 namespace app_support = pmz::app_support;
 namespace tool = pmz::tool;
+
+namespace {
+
+// --camera: the stream read as a view-dependent client reads it over HTTP, here by file ranges:
+// in order up to its node table, then the ranges of the nodes the view needs, until it has all.
+int decode_view(const std::string& input, const pmz::View& view, uint32_t threads,
+                app_support::OutputFile& out, const std::string& format) {
+  std::ifstream file(input, std::ios::binary);
+  std::string error;
+  if (!file) {
+    app_support::print_error(input, "cannot open");
+    return app_support::kExitFailure;
+  }
+  file.seekg(0, std::ios::end);
+  const uint64_t total = uint64_t(file.tellg());
+  file.seekg(0);
+  pmz::Decoder d;
+  d.set_threads(threads);
+  uint64_t read = 0;
+  std::vector<uint8_t> buffer;
+  const auto read_range = [&](uint64_t offset, uint64_t size) {
+    buffer.resize(size);
+    file.clear();
+    file.seekg(std::streamoff(offset));
+    file.read(reinterpret_cast<char*>(buffer.data()), std::streamsize(size));
+    read += uint64_t(file.gcount());
+    return uint64_t(file.gcount()) == size;
+  };
+  // In order (small reads: the node table is near the front) until the table or the end.
+  constexpr uint64_t kSlice = 16384;
+  uint64_t in_order = 0;
+  while (d.status() == pmz::Status::ok && !d.info().nodes && !d.info().complete &&
+         in_order < total) {
+    const uint64_t n = std::min(kSlice, total - in_order);
+    if (!read_range(in_order, n)) break;
+    d.feed(buffer.data(), n);
+    in_order += n;
+  }
+  while (d.status() == pmz::Status::ok) {
+    d.update_view(view);
+    if (d.status() != pmz::Status::ok || d.view_complete()) break;
+    const std::vector<uint32_t> fetch = d.nodes_to_fetch();
+    if (fetch.empty()) {  // refining in file order (no node table): read on
+      if (in_order >= total) break;
+      const uint64_t n = std::min<uint64_t>(1 << 20, total - in_order);
+      if (!read_range(in_order, n)) break;
+      d.feed(buffer.data(), n);
+      in_order += n;
+      continue;
+    }
+    for (uint32_t k : fetch) {
+      uint64_t offset = 0, size = 0;
+      if (!d.node_range(k, offset, size)) continue;
+      if (offset + size > total || !read_range(offset, size)) {
+        app_support::print_error(input,
+                                 "node " + std::to_string(k) + " lies past the end of the file");
+        return app_support::kExitFailure;
+      }
+      if (d.feed_node(k, buffer.data(), size) != pmz::Status::ok) break;
+    }
+  }
+  if (d.status() != pmz::Status::ok || !d.info().base_done) {
+    app_support::print_error(
+        input, d.info().base_done ? d.error_message() : "the file does not hold a base mesh");
+    return app_support::kExitFailure;
+  }
+  if (!d.view_complete())
+    app_support::print_error(input, "warning: the file ends before every part the view needs");
+  const pmz::IndexedMesh level = tool::decoded_mesh(d);
+  if (!tool::write_mesh_into(out, format, level, error) || !out.commit(error)) {
+    app_support::print_error(error);
+    return app_support::kExitFailure;
+  }
+  std::fprintf(stderr,
+               "pmz-decode: %u faces, %u vertices; %u of %llu nodes; read %llu of %llu bytes "
+               "(%.1f%%)\n",
+               level.face_count(), level.vertex_count(), d.nodes_applied(),
+               (unsigned long long)std::max<uint64_t>(d.info().nodes, 1), (unsigned long long)read,
+               (unsigned long long)total, total ? 100.0 * double(read) / double(total) : 0.0);
+  return app_support::kExitOk;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   app_support::init("pmz-decode");
@@ -52,6 +137,24 @@ int main(int argc, char** argv) {
   app.add_flag("--salvage", salvage,
                "on a damaged or truncated stream, still write its last good level (exit 1 even "
                "so)");
+  std::string camera, size = "1920x1080";
+  float pixel_error = 1, fov = 60;
+  auto* oc = app.add_option("--camera", camera,
+                            "EX,EY,EZ,TX,TY,TZ: only what a camera at EX,EY,EZ looking at TX,TY,TZ "
+                            "(y up, the mesh's coordinates) needs, reading the file by ranges");
+  app.add_option("--pixel-error", pixel_error,
+                 "with --camera: refine while a part's error spans more pixels than this")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber)
+      ->needs(oc);
+  app.add_option("--size", size, "with --camera: the viewport, WxH pixels")
+      ->capture_default_str()
+      ->needs(oc);
+  app.add_option("--fov", fov, "with --camera: vertical field of view, degrees")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 179.0))
+      ->needs(oc);
+  oc->excludes(of)->excludes(orr)->excludes(ov);
   of->excludes(orr)->excludes(ov);
   orr->excludes(ov);
   app_support::set_footer(
@@ -76,6 +179,20 @@ int main(int argc, char** argv) {
   if (!out.open(output, tool::binary_mesh_format(format), error)) {
     app_support::print_error(error);
     return app_support::kExitFailure;
+  }
+  if (oc->count()) {
+    float c[6];
+    unsigned w = 0, h = 0;
+    if (std::sscanf(camera.c_str(), "%f,%f,%f,%f,%f,%f", c, c + 1, c + 2, c + 3, c + 4, c + 5) !=
+            6 ||
+        !std::all_of(c, c + 6, [](float x) { return std::isfinite(x); }))
+      return app_support::usage_error("--camera takes six numbers: EX,EY,EZ,TX,TY,TZ");
+    if (std::sscanf(size.c_str(), "%ux%u", &w, &h) != 2 || !w || !h)
+      return app_support::usage_error("--size takes WxH, e.g. 1920x1080");
+    if (input == "-") return app_support::usage_error("--camera reads a file by ranges, not stdin");
+    const pmz::View view =
+        pmz::look_at(c, c + 3, fov * float(M_PI / 180), w, h, 1e-4f, pixel_error);
+    return decode_view(input, view, threads, out, format);
   }
   std::vector<uint8_t> data;
   if (!app_support::read_input(input, data, error)) {

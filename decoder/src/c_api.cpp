@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 // C API: a thin layer over pmz::Decoder; no exception crosses it.
+#include <algorithm>
 #include <new>
 
 #include "pmz/decoder.hpp"
@@ -49,6 +50,42 @@ PMZ_API const uint32_t* pmz_decoder_indices(const pmz_decoder* d) { return d->de
 PMZ_API const uint32_t* pmz_decoder_split_parents(const pmz_decoder* d) {
   return d->dec.split_parents();
 }
+
+PMZ_API void pmz_view_look_at(pmz_view* out, const float eye[3], const float target[3], float fov_y,
+                              uint32_t width, uint32_t height, float near, float pixel_error) {
+  const pmz::View v = pmz::look_at(eye, target, fov_y, width, height, near, pixel_error);
+  std::copy_n(v.eye, 3, out->eye);
+  std::copy_n(v.view_projection, 16, out->view_projection);
+  out->fov_y = v.fov_y;
+  out->viewport_height = v.viewport_height;
+  out->pixel_error = v.pixel_error;
+}
+PMZ_API uint64_t pmz_decoder_update_view(pmz_decoder* d, const pmz_view* view,
+                                         uint64_t max_splits) {
+  pmz::View v;
+  std::copy_n(view->eye, 3, v.eye);
+  std::copy_n(view->view_projection, 16, v.view_projection);
+  v.fov_y = view->fov_y;
+  v.viewport_height = view->viewport_height;
+  v.pixel_error = view->pixel_error;
+  PMZ_TRY { return d->dec.update_view(v, max_splits); }
+  PMZ_CATCH_BAD_ALLOC { return 0; }
+}
+PMZ_API int pmz_decoder_view_complete(const pmz_decoder* d) { return d->dec.view_complete(); }
+PMZ_API const uint32_t* pmz_decoder_nodes_to_fetch(const pmz_decoder* d, size_t* count) {
+  const std::vector<uint32_t>& f = d->dec.nodes_to_fetch();
+  *count = f.size();
+  return f.data();
+}
+PMZ_API int pmz_decoder_node_range(const pmz_decoder* d, uint32_t k, uint64_t* offset,
+                                   uint64_t* size) {
+  return d->dec.node_range(k, *offset, *size);
+}
+PMZ_API int pmz_decoder_feed_node(pmz_decoder* d, uint32_t k, const void* data, size_t size) {
+  PMZ_TRY { return int(d->dec.feed_node(k, data, size)); }
+  PMZ_CATCH_BAD_ALLOC { return PMZ_ERR_MEMORY; }
+}
+PMZ_API uint32_t pmz_decoder_nodes_applied(const pmz_decoder* d) { return d->dec.nodes_applied(); }
 
 PMZ_API uint32_t pmz_version(void) { return PMZ_VERSION_NUMBER; }
 

@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: MIT
 # The shared decoder library exports the C API and the C++ decoder API, nothing else: every
-# dynamic symbol it defines is a pmz_* C function, pmz::status_name, pmz::version or a member of
+# dynamic symbol it defines is a pmz_* C function, pmz::status_name, pmz::version, pmz::look_at or a member of
 # pmz::Decoder, and every function pmz.h declares and every member decoder.hpp's Decoder
 # declares is there.
 execute_process(COMMAND ${NM} -D -C --defined-only ${LIB} OUTPUT_VARIABLE out RESULT_VARIABLE rc)
@@ -15,7 +15,7 @@ foreach(line IN LISTS lines)
   endif()
   # "<address> <type> <demangled name>"
   string(REGEX REPLACE "^[0-9a-fA-F]* *[A-Za-z] " "" name "${line}")
-  if(NOT name MATCHES "^(pmz_[a-z_]+|pmz::status_name\\(pmz::Status\\)|pmz::version\\(\\)|pmz::Decoder::(~?Decoder|[a-z_]+|operator=)(\\[abi:[a-z0-9]+\\])?\\(.*)$")
+  if(NOT name MATCHES "^(pmz_[a-z_]+|pmz::status_name\\(pmz::Status\\)|pmz::version\\(\\)|pmz::look_at\\(.*\\)|pmz::Decoder::(~?Decoder|[a-z_]+|operator=)(\\[abi:[a-z0-9]+\\])?\\(.*)$")
     message(SEND_ERROR "exported but not API: ${name}")
   endif()
   list(APPEND names "${name}")

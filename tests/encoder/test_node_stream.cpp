@@ -381,6 +381,246 @@ TEST_F(NodeStream, ThreadsChangeNothing) {
 }
 
 // With attributes every node states the wedges it adds, and the decoder holds it to them.
+// ---- view-dependent decoding (Decoder::update_view, feed_node) ----
+
+// A camera on the sphere's axis through `dir` at `distance` from its centre, looking at it.
+pmz::View view_from(const float dir[3], float distance, float pixel_error) {
+  const float eye[3] = {dir[0] * distance, dir[1] * distance, dir[2] * distance};
+  const float target[3] = {0, 0, 0};
+  return pmz::look_at(eye, target, 1.0f, 800, 600, 1e-3f, pixel_error);
+}
+
+// The mesh is closed and crack-free: every directed edge of its faces once, and its opposite
+// too; the vertices of its faces hold the whole stream's positions for their ids (ids are the
+// table's), none unused id referenced.
+void expect_closed(const pmz::Decoder& d, const std::vector<float>& positions,
+                   const std::string& what) {
+  std::vector<std::pair<uint32_t, uint32_t>> edges;
+  const uint32_t* ix = d.indices();
+  size_t faces = 0;
+  for (size_t f = 0; f < d.face_count(); ++f) {
+    const uint32_t* t = ix + f * 3;
+    if (t[0] == t[1] && t[1] == t[2]) continue;  // (a node not applied)
+    ++faces;
+    for (int c = 0; c < 3; ++c) {
+      edges.push_back({t[c], t[(c + 1) % 3]});
+      ASSERT_LT(t[c], d.vertex_count()) << what;
+      EXPECT_EQ(std::vector<float>(d.positions() + t[c] * 3, d.positions() + t[c] * 3 + 3),
+                std::vector<float>(&positions[t[c] * 3], &positions[t[c] * 3 + 3]))
+          << what << ": vertex " << t[c];
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  EXPECT_EQ(std::adjacent_find(edges.begin(), edges.end()), edges.end()) << what;
+  size_t open = 0;
+  for (const auto& [a, b] : edges)
+    open += !std::binary_search(edges.begin(), edges.end(), std::pair(b, a));
+  EXPECT_EQ(open, 0u) << what << ": " << faces << " faces";
+}
+
+// Feeds the stream in order up to its node table (inclusive), as a client reading by ranges.
+void feed_to_table(pmz::Decoder& d, const std::vector<uint8_t>& bytes, const NodeChunk& c) {
+  ASSERT_EQ(d.feed(bytes.data(), c.at + c.size), pmz::Status::ok) << d.error_message();
+  ASSERT_GT(d.info().nodes, 1u);
+}
+
+// Node k's bytes as node_range() places them.
+std::vector<uint8_t> node_bytes(const pmz::Decoder& d, const std::vector<uint8_t>& bytes,
+                                uint32_t k) {
+  uint64_t offset = 0, size = 0;
+  EXPECT_TRUE(d.node_range(k, offset, size)) << k;
+  EXPECT_LE(offset + size, bytes.size());
+  return {bytes.begin() + ptrdiff_t(offset), bytes.begin() + ptrdiff_t(offset + size)};
+}
+
+// The whole stream decoded in order, its NODE chunk, and a decoder fed up to it.
+struct ViewStart {
+  Decoded whole;
+  NodeChunk c;
+  pmz::Decoder d;
+  ViewStart(const std::vector<uint8_t>& bytes, uint64_t splits)
+      : whole(decode(bytes)), c(find_node_chunk(bytes, splits)) {
+    feed_to_table(d, bytes, c);
+  }
+};
+
+// A view of every node (each one's error spans more than -1 pixel).
+pmz::View every_node() {
+  const float dir[3] = {0, 0, 1};
+  return view_from(dir, 20, -1);
+}
+
+TEST_F(NodeStream, AViewOfEveryNodeInAnyOrderIsTheWholeStream) {
+  ViewStart v(*bytes_, seq_->collapses.size());
+  auto& [whole, c, d] = v;
+  const pmz::View all = every_node();
+  d.update_view(all);
+  EXPECT_FALSE(d.view_complete());
+  std::vector<uint32_t> fetch = d.nodes_to_fetch();
+  EXPECT_EQ(fetch.size(), c.table.nodes.size() - 1);
+  // The node ranges tile the stream from the table's end to the END chunk.
+  uint64_t end = c.at + c.size;
+  for (uint32_t k = 1; k < c.table.nodes.size(); ++k) {
+    uint64_t offset = 0, size = 0;
+    ASSERT_TRUE(d.node_range(k, offset, size));
+    EXPECT_EQ(offset, end) << k;
+    end = offset + size;
+  }
+  EXPECT_EQ(end + 6, bytes_->size());  // (END: type, payload size 0, crc)
+  EXPECT_FALSE(d.node_range(0, end, end));
+  // Fed in reverse: each node is applied once its parents are.
+  std::reverse(fetch.begin(), fetch.end());
+  for (uint32_t k : fetch) {
+    const std::vector<uint8_t> b = node_bytes(d, *bytes_, k);
+    ASSERT_EQ(d.feed_node(k, b.data(), b.size()), pmz::Status::ok) << d.error_message();
+    d.update_view(all, 50);  // (small budgets: a node or so per call)
+  }
+  while (!d.view_complete() && d.update_view(all, 50)) {
+  }
+  ASSERT_TRUE(d.view_complete());
+  ASSERT_EQ(d.status(), pmz::Status::ok) << d.error_message();
+  EXPECT_EQ(d.nodes_applied(), c.table.nodes.size());
+  EXPECT_EQ(d.splits_applied(), seq_->collapses.size());
+  EXPECT_EQ(std::vector<uint32_t>(d.indices(), d.indices() + size_t(d.face_count()) * 3),
+            whole.indices);
+  EXPECT_EQ(std::vector<float>(d.positions(), d.positions() + size_t(d.vertex_count()) * 3),
+            whole.positions);
+  // The level of detail calls leave a view's mesh alone.
+  EXPECT_EQ(d.coarsen(10), 0u);
+  EXPECT_EQ(d.refine(), 0u);
+}
+
+TEST_F(NodeStream, ViewsComeAndGoWithoutCracks) {
+  ViewStart v(*bytes_, seq_->collapses.size());
+  auto& [whole, c, d] = v;
+  // Close views from six sides at several errors, then far: nodes come and go.
+  const float dirs[6][3] = {{1, 0, 0},  {0, 1, 0},        {0, 0, 1},
+                            {-1, 0, 0}, {0, -0.6f, 0.8f}, {0.6f, 0, -0.8f}};
+  uint64_t undone = 0, mixed = 0;
+  for (int round = 0; round < 12; ++round) {
+    const pmz::View v =
+        view_from(dirs[round % 6], round < 6 ? 1.6f : 3.0f, round % 3 ? 0.5f : 4.0f);
+    const uint32_t before = d.nodes_applied();
+    for (int step = 0; step < 1000 && d.status() == pmz::Status::ok; ++step) {
+      d.update_view(v, 300);
+      if (d.view_complete()) break;
+      for (uint32_t k : d.nodes_to_fetch()) {
+        const std::vector<uint8_t> b = node_bytes(d, *bytes_, k);
+        ASSERT_EQ(d.feed_node(k, b.data(), b.size()), pmz::Status::ok) << d.error_message();
+      }
+    }
+    ASSERT_TRUE(d.view_complete()) << round;
+    ASSERT_EQ(d.status(), pmz::Status::ok) << d.error_message();
+    if (d.nodes_applied() < before) ++undone;
+    if (d.nodes_applied() > 1 && d.nodes_applied() < c.table.nodes.size()) ++mixed;
+    expect_closed(d, whole.positions, "round " + std::to_string(round));
+  }
+  EXPECT_GT(undone, 0u);  // views that needed fewer nodes than the one before
+  EXPECT_GT(mixed, 3u);   // meshes of nodes of several levels, some not applied
+  // And back to every node: the whole stream, after all that undoing and re-applying.
+  while (!d.view_complete() || d.nodes_applied() < c.table.nodes.size()) {
+    d.update_view(every_node());
+    for (uint32_t k : d.nodes_to_fetch()) {
+      const std::vector<uint8_t> b = node_bytes(d, *bytes_, k);
+      ASSERT_EQ(d.feed_node(k, b.data(), b.size()), pmz::Status::ok);
+    }
+  }
+  EXPECT_EQ(std::vector<uint32_t>(d.indices(), d.indices() + size_t(d.face_count()) * 3),
+            whole.indices);
+}
+
+TEST_F(NodeStream, AViewTakesTheRestOfTheStreamInOrderToo) {
+  ViewStart v(*bytes_, seq_->collapses.size());
+  auto& [whole, c, d] = v;
+  const pmz::View all = every_node();
+  d.update_view(all);
+  // Some nodes by range, the whole rest of the stream in order in small slices (those nodes'
+  // chunks are then skipped), refining as it arrives.
+  const std::vector<uint32_t> fetch = d.nodes_to_fetch();
+  for (size_t i = 0; i < fetch.size(); i += 3) {
+    const std::vector<uint8_t> b = node_bytes(d, *bytes_, fetch[i]);
+    ASSERT_EQ(d.feed_node(fetch[i], b.data(), b.size()), pmz::Status::ok);
+  }
+  for (size_t at = c.at + c.size; at < bytes_->size(); at += 997) {
+    ASSERT_EQ(d.feed(bytes_->data() + at, std::min<size_t>(997, bytes_->size() - at)),
+              pmz::Status::ok)
+        << d.error_message();
+    d.update_view(all, 200);
+  }
+  EXPECT_EQ(d.finish(), pmz::Status::ok);
+  d.update_view(all);
+  EXPECT_TRUE(d.view_complete());
+  EXPECT_EQ(std::vector<uint32_t>(d.indices(), d.indices() + size_t(d.face_count()) * 3),
+            whole.indices);
+}
+
+TEST_F(NodeStream, AViewReportsTheFacesItChanges) {
+  const NodeChunk c = find_node_chunk(*bytes_, seq_->collapses.size());
+  pmz::Decoder d;
+  feed_to_table(d, *bytes_, c);
+  for (uint32_t k = 1; k < c.table.nodes.size(); ++k) {
+    const std::vector<uint8_t> b = node_bytes(d, *bytes_, k);
+    ASSERT_EQ(d.feed_node(k, b.data(), b.size()), pmz::Status::ok);
+  }
+  const float near_dir[3] = {1, 0, 0}, far_dir[3] = {0, 0, 1};
+  std::vector<uint32_t> seen(d.indices(), d.indices() + size_t(d.face_count()) * 3);
+  d.clear_changes();
+  for (const pmz::View& v : {view_from(near_dir, 1.6f, 0.5f), view_from(far_dir, 1.6f, 0.5f),
+                             view_from(far_dir, 6, 2)}) {
+    ASSERT_GT(d.update_view(v), 0u);
+    const pmz::MeshChanges& ch = d.changes();
+    if (ch.all) {
+      seen.assign(d.indices(), d.indices() + size_t(d.face_count()) * 3);
+      d.clear_changes();
+      continue;
+    }
+    std::vector<uint8_t> listed(d.face_count(), 0), used(d.vertex_count(), 0);
+    for (uint32_t f : ch.modified_faces) listed[f] = 1;
+    for (uint32_t x : seen) used[x] = 1;
+    size_t changed = 0;
+    for (uint32_t f = 0; f < d.face_count(); ++f)
+      if (!std::equal(&seen[f * 3], &seen[f * 3 + 3], d.indices() + f * 3)) {
+        ++changed;
+        EXPECT_TRUE(f >= ch.face_begin || listed[f]) << "face " << f << " changed unreported";
+        for (int a = 0; a < 3; ++a)  // a vertex new to the faces: among the new vertices
+          EXPECT_TRUE(used[d.indices()[f * 3 + a]] || d.indices()[f * 3 + a] >= ch.vertex_begin);
+      }
+    EXPECT_GT(changed, 0u);
+    seen.assign(d.indices(), d.indices() + size_t(d.face_count()) * 3);
+    d.clear_changes();
+  }
+}
+
+TEST_F(NodeStream, ANodesBytesAreChecked) {
+  const NodeChunk c = find_node_chunk(*bytes_, seq_->collapses.size());
+  const uint32_t last = uint32_t(c.table.nodes.size() - 1);
+  auto fresh = [&](pmz::Decoder& d) { feed_to_table(d, *bytes_, c); };
+  {  // another node's bytes
+    pmz::Decoder d;
+    fresh(d);
+    const std::vector<uint8_t> b = node_bytes(d, *bytes_, 1);
+    EXPECT_NE(d.feed_node(last, b.data(), b.size()), pmz::Status::ok);
+    EXPECT_NE(d.error_message().find("node " + std::to_string(last)), std::string::npos)
+        << d.error_message();
+    EXPECT_GT(d.face_count(), 0u);  // the mesh stays (node 0's)
+  }
+  {  // cut short, a byte changed, no such node
+    pmz::Decoder d1, d2, d3;
+    fresh(d1);
+    fresh(d2);
+    fresh(d3);
+    std::vector<uint8_t> b = node_bytes(d1, *bytes_, 2);
+    EXPECT_EQ(d1.feed_node(2, b.data(), b.size() - 1), pmz::Status::corrupt);
+    b[b.size() / 2] ^= 0x20;
+    EXPECT_EQ(d2.feed_node(2, b.data(), b.size()), pmz::Status::bad_checksum);
+    EXPECT_EQ(d3.feed_node(last + 1, b.data(), b.size()), pmz::Status::corrupt);
+    for (pmz::Decoder* d : {&d1, &d2, &d3}) {
+      EXPECT_EQ(d->update_view(every_node()), 0u);
+      EXPECT_FALSE(d->view_complete());
+    }
+  }
+}
+
 TEST(NodeStreamAttributes, WedgesPerNodeAreChecked) {
   const IndexedMesh mesh = pmz_test::seamed_grid(60, 23);
   const pmz::CollapseSequence seq = clustered(mesh, 150);

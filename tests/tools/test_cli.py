@@ -15,6 +15,7 @@ Exits 1 listing the failed cases."""
 import json
 import os
 import pty
+import re
 import resource
 import select
 import shutil
@@ -655,6 +656,31 @@ def case_info_nodes():
           run([tool("pmz-info"), SAMPLE_PMZ]).stdout.decode(), f"sample.pmz: {j}")
 
 
+def case_decode_view():
+    # --camera: the nodes a view needs, read by ranges. Seeing the whole grid at a tiny error
+    # gives the whole stream's bytes; a close view of a corner reads less and writes fewer faces.
+    d = fresh("view")
+    pmz = bumpy_grid_pmz(d)
+    whole, every, corner = (os.path.join(d, f"{x}.ply") for x in ("whole", "every", "corner"))
+    r = run([tool("pmz-decode"), pmz, "-o", whole])
+    check(r.returncode == 0, f"pmz-decode: {err_text(r)}")
+    r = run([tool("pmz-decode"), pmz, "-o", every, "--camera", "31,31,300,31,31,0",
+             "--pixel-error", "0.0001"])
+    check(r.returncode == 0, f"pmz-decode --camera (all): {err_text(r)}")
+    with open(whole, "rb") as a, open(every, "rb") as b:
+        check(a.read() == b.read(), "a view of every node wrote other bytes than the stream")
+    r = run([tool("pmz-decode"), pmz, "-o", corner, "--camera", "8,8,6,8,8,0", "--size",
+             "640x480"])
+    m = re.search(r"(\d+) faces.*read (\d+) of (\d+) bytes", err_text(r))
+    check(r.returncode == 0 and m, f"pmz-decode --camera (corner): {err_text(r)}")
+    full = info_json(pmz)["full_faces"]
+    check(int(m.group(1)) < full and int(m.group(2)) < int(m.group(3)),
+          f"a close view of a corner: {err_text(r)}")
+    for bad in (["--camera", "1,2,3"], ["--camera", "0,0,1,0,0,0", "--size", "big"]):
+        r = run([tool("pmz-decode"), pmz, "-o", corner] + bad)
+        check(r.returncode == 2 and "--" in err_text(r), f"{bad}: {err_text(r)}")
+
+
 def case_encode_nodes_by_default():
     # --cluster-vertices auto: a mesh of at least 65,536 vertices is written in nodes, a smaller
     # one as one node; either decodes to its full face count.
@@ -827,9 +853,8 @@ def case_zero_is_the_base_mesh():
 # ---- decoding threads ----
 
 
-def case_decode_threads_same_bytes():
+def bumpy_grid_pmz(d):
     # A bumpy grid in cells of 200 vertices: a stream whose levels hold several nodes each.
-    d = fresh("threads")
     n = 64
     mesh = os.path.join(d, "grid.off")
     with open(mesh, "w") as f:
@@ -846,6 +871,12 @@ def case_decode_threads_same_bytes():
     check(r.returncode == 0, f"pmz-encode --cluster-vertices: {err_text(r)}")
     check(6 in chunk_types(pmz) and info_json(pmz)["split_chunks"] > 8,
           "expected a NODE chunk (type 6) and many nodes' SPLT chunks")
+    return pmz
+
+
+def case_decode_threads_same_bytes():
+    d = fresh("threads")
+    pmz = bumpy_grid_pmz(d)
     outs = {}
     for t in ("1", "2", "3", "0"):
         for target in ([], ["--ratio", "0.6"]):

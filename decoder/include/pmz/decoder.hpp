@@ -98,6 +98,24 @@ struct AttributeBits {
   double bits[kinds] = {};
 };
 
+// A camera, for view-dependent decoding (Decoder::update_view), in the mesh's own coordinates.
+struct View {
+  float eye[3] = {0, 0, 0};
+  // Clip space from the mesh's coordinates (projection times view matrix; column-major, as
+  // OpenGL and three.js keep them): nodes whose bounding sphere lies outside the frustum it
+  // bounds are not refined.
+  float view_projection[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+  float fov_y = 1.0471976f;         // vertical field of view, radians
+  uint32_t viewport_height = 1080;  // pixels
+  // Refine a node while its error bound would span more than this many pixels on screen.
+  float pixel_error = 1;
+};
+
+// A perspective view from `eye` towards `target` (y up) with a viewport of width x height
+// pixels: View's fields from a look-at camera (an infinite far plane; near at `near`, > 0).
+PMZ_API View look_at(const float eye[3], const float target[3], float fov_y, uint32_t width,
+                     uint32_t height, float near, float pixel_error);
+
 class PMZ_API Decoder {
  public:
   // Waits for the stream's first byte. `limits` cap the stream (checked against the header's
@@ -134,6 +152,47 @@ class PMZ_API Decoder {
   // WebAssembly build always uses one). The result is the same for every count: mesh, ids, change
   // report and errors. Never fails; the threads live only during those calls.
   void set_threads(uint32_t n);
+
+  // ---- view-dependent decoding (spec/format.md section 15) ----
+  // A stream with a node table (info().nodes > 0) can be decoded node by node: update_view()
+  // applies the nodes a view needs and undoes those it no longer needs, and a client that fetches
+  // the stream by ranges feeds each node's bytes with feed_node() as they arrive, in any order.
+  // Feed the stream in order up to the node table first (info().nodes becomes > 0 when its
+  // NODE chunk arrived; node 0's chunks come before it). Streams without a node table, or with
+  // attributes, or a decoder refined past node 0 with refine() before its first update_view(),
+  // refine in file order instead (update_view() then refines what has arrived).
+  //
+  // Once update_view() applied a node past node 0, the mesh arrays hold every vertex and face
+  // id of the stream (vertex_count() and face_count() are the full mesh's): the ids of nodes not
+  // applied are unused vertices and degenerate faces (0, 0, 0), which draw nothing. Every mix of
+  // nodes that update_view() makes is a closed set under parents, so the mesh has no cracks:
+  // it is the mesh that decoding those nodes in file order gives. From then on refine(),
+  // coarsen(), set_face_target() and set_split_target() do nothing (return 0): the view decides.
+  // changes() reports the rewritten and removed faces in modified_faces and the new vertices
+  // from vertex_begin on.
+  //
+  // Where node k's bytes are in the stream (k >= 1; node 0's lie before the table): false
+  // before the node table arrived or for k out of range. The ranges assume no chunk of an unknown
+  // type between the nodes' chunks (a writer of this format writes none); otherwise feed_node()
+  // refuses the bytes (corrupt) and the stream must be read in order.
+  bool node_range(uint32_t k, uint64_t& offset, uint64_t& size) const;
+  // Node k's bytes, exactly node_range(k)'s (framed chunks, checked: chunk checksums, the
+  // node's split count and size). A node already arrived, or being fed in order by feed(), is
+  // ignored (ok). An error fails the stream as feed() does (the mesh stays valid).
+  Status feed_node(uint32_t k, const void* data, size_t size);
+  // Moves the mesh towards `view`: undoes the nodes it no longer needs (descendants first), then
+  // applies, largest projected error first, those it needs whose bytes have arrived and whose
+  // parents are applied, whole nodes until about max_splits splits were applied or undone.
+  // A node is needed when its parents are, its bounding sphere meets the frustum and its error
+  // bound spans more than view.pixel_error pixels. Returns the splits applied or undone.
+  uint64_t update_view(const View& view, uint64_t max_splits = UINT64_MAX);
+  // After update_view(): whether every node the view needs is applied (for a stream refined in
+  // file order: whether all its splits are).
+  bool view_complete() const;
+  // After update_view(): the nodes the view needs whose bytes have not arrived, parents before
+  // children and the largest projected error first: what a client fetches next.
+  const std::vector<uint32_t>& nodes_to_fetch() const;
+  uint32_t nodes_applied() const;  // nodes whose splits are in the mesh (node 0 included)
 
   // ---- level of detail ----
   // Each returns the number of splits applied / undone (fewer than asked when no more are

@@ -154,6 +154,30 @@ PMZ_API const uint32_t* pmz_decoder_indices(const pmz_decoder* d); /* 3 indices 
 /* For geomorphs: the vertex each vertex was split from (UINT32_MAX for base vertices). */
 PMZ_API const uint32_t* pmz_decoder_split_parents(const pmz_decoder* d);
 
+/* ---- View-dependent decoding (streams with a node table) ----
+   As pmz::Decoder's update_view, feed_node, node_range, view_complete, nodes_to_fetch and
+   nodes_applied (pmz/decoder.hpp states the contract): feed the stream in order up to its node
+   table, then the byte ranges of the nodes a view needs, in any order. */
+typedef struct pmz_view {
+  float eye[3];              /* the mesh's coordinates */
+  float view_projection[16]; /* column-major clip-from-mesh matrix */
+  float fov_y;               /* radians */
+  uint32_t viewport_height;  /* pixels */
+  float pixel_error;         /* refine while a node's error spans more pixels than this */
+} pmz_view;
+/* Fills *out for a camera at eye looking at target (y up), width x height pixels. */
+PMZ_API void pmz_view_look_at(pmz_view* out, const float eye[3], const float target[3], float fov_y,
+                              uint32_t width, uint32_t height, float near, float pixel_error);
+PMZ_API uint64_t pmz_decoder_update_view(pmz_decoder* d, const pmz_view* view, uint64_t max_splits);
+PMZ_API int pmz_decoder_view_complete(const pmz_decoder* d); /* 1 or 0 */
+/* The nodes to fetch next (*count of them); owned by d, valid until the next update_view. */
+PMZ_API const uint32_t* pmz_decoder_nodes_to_fetch(const pmz_decoder* d, size_t* count);
+/* Node k's byte range: 1, or 0 before the table arrived or for k out of range. */
+PMZ_API int pmz_decoder_node_range(const pmz_decoder* d, uint32_t k, uint64_t* offset,
+                                   uint64_t* size);
+PMZ_API int pmz_decoder_feed_node(pmz_decoder* d, uint32_t k, const void* data, size_t size);
+PMZ_API uint32_t pmz_decoder_nodes_applied(const pmz_decoder* d);
+
 /* ---- Changes, for partial uploads ---- */
 
 /* What changed in the mesh since the last pmz_decoder_clear_changes(): vertices

@@ -102,6 +102,7 @@ class CellBins {
  public:
   void build(const NodeTable& t, uint32_t level, const int32_t* coords, uint32_t count);
   std::vector<uint32_t> take(uint32_t node);
+  std::span<const uint32_t> bin(uint32_t node) const { return bins_[node]; }
 
  private:
   std::vector<std::vector<uint32_t>> bins_;  // per node of the table
