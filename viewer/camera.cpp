@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <pmz/decoder.hpp>
 
 namespace pmzview {
 namespace {
@@ -74,6 +75,17 @@ void Camera::zoom(float steps) {
   distance = std::clamp(distance * std::pow(0.87f, steps), radius * 0.01f, radius * 100.0f);
 }
 
+void Camera::look(const float eye_at[3], const float look_at[3]) {
+  float d[3];
+  for (int i = 0; i < 3; ++i) {
+    target[i] = look_at[i];
+    d[i] = eye_at[i] - look_at[i];
+  }
+  distance = std::max(std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]), 1e-6f);
+  pitch = std::clamp(std::asin(std::clamp(d[1] / distance, -1.0f, 1.0f)), -1.55f, 1.55f);
+  yaw = std::atan2(d[0], d[2]);
+}
+
 void Camera::eye(float out[3]) const {
   out[0] = target[0] + distance * std::cos(pitch) * std::sin(yaw);
   out[1] = target[1] + distance * std::sin(pitch);
@@ -101,6 +113,22 @@ Mat4 Camera::projection(float aspect) const {
   m[11] = -1;
   m[14] = 2 * far_z * near_z / (near_z - far_z);
   return m;
+}
+
+pmz::View decoder_view(const Camera& camera, uint32_t width, uint32_t height, float pixel_error) {
+  pmz::View v;
+  camera.eye(v.eye);
+  const Mat4 p = camera.projection(float(width) / float(std::max(height, 1u))), m = camera.view();
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r) {
+      float sum = 0;
+      for (int k = 0; k < 4; ++k) sum += p[4 * k + r] * m[4 * c + k];
+      v.view_projection[4 * c + r] = sum;
+    }
+  v.fov_y = camera.fovy;
+  v.viewport_height = height;
+  v.pixel_error = pixel_error;
+  return v;
 }
 
 }  // namespace pmzview

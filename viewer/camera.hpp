@@ -2,6 +2,11 @@
 // Orbit camera: yaw/pitch/distance around a target, framed on the mesh's bounding sphere.
 #pragma once
 #include <array>
+#include <cstdint>
+
+namespace pmz {
+struct View;
+}
 
 namespace pmzview {
 
@@ -19,10 +24,15 @@ struct Camera {
   void orbit(float dx_pixels, float dy_pixels);
   void pan(float dx_pixels, float dy_pixels, int viewport_height);
   void zoom(float steps);  // > 0 moves closer
+  // Orbits `target` from `eye` (y up; an eye straight above or below is tilted slightly).
+  void look(const float eye[3], const float target[3]);
 
   void eye(float out[3]) const;
   Mat4 view() const;
   Mat4 projection(float aspect) const;
 };
+
+// The camera as pmz::Decoder::update_view() takes it, for a width x height viewport.
+pmz::View decoder_view(const Camera& camera, uint32_t width, uint32_t height, float pixel_error);
 
 }  // namespace pmzview

@@ -17,6 +17,9 @@ class LodStepper {
   // Applies/undoes splits until the target is met or `budget_seconds` has passed (< 0: no
   // limit). Returns the number of splits applied plus undone. Call with the decoder locked.
   uint64_t step(pmz::Decoder& decoder, const LodTarget& target, double budget_seconds);
+  // Moves the mesh towards `view` (Decoder::update_view) in batches until it needs no more
+  // or `budget_seconds` has passed (< 0: no limit). Returns the splits applied plus undone.
+  uint64_t step_view(pmz::Decoder& decoder, const pmz::View& view, double budget_seconds);
   // True when the last step() left nothing to do for that target and the splits then available.
   bool settled() const { return settled_; }
 

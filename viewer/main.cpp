@@ -3,6 +3,8 @@
 // The worker thread (stream.cpp) reads and feeds the decoder; this thread moves the level of
 // detail within a per-frame time budget, mirrors the changes and uploads only those. A mesh
 // file (OBJ, PLY, glTF, ...) is shown as it is, through the same mirror and renderer.
+// A stream with a node table is decoded for the camera (Decoder::update_view): the worker
+// fetches by ranges only the nodes the view needs.
 #include <epoxy/gl.h>
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
@@ -54,6 +56,9 @@ struct Options {
   bool flat = false, wireframe = false, no_geomorph = false, no_attributes = false;
   float yaw_degrees = 34, pitch_degrees = 20;
   double budget_ms = 6;
+  bool camera = false;  // --camera: eye and target
+  float eye[3] = {0, 0, 0}, target[3] = {0, 0, 0};
+  float pixel_error = 1;
 };
 
 // "pmz-view: message" on stderr, worded as by every tool; the exit status of a failed run.
@@ -126,6 +131,9 @@ double seconds_since(Clock::time_point t0) {
 void read_stats(const pmz::Decoder& decoder, Stats& s, pmz::StreamInfo& info) {
   info = decoder.info();
   s.faces = decoder.face_count();
+  s.nodes = info.nodes;
+  s.nodes_applied = decoder.nodes_applied();
+  s.view_complete = decoder.view_complete();
   s.vertices = decoder.vertex_count();
   s.base_faces = info.base_faces;
   s.full_faces = info.full_faces;
@@ -160,12 +168,29 @@ bool frame_camera(Camera& camera, const pmz::StreamInfo& info, const MeshMirror&
   return true;
 }
 
+// faces: those drawn; nodes=A/B (streams with a node table): A of the B nodes resident.
 void log_line(double t, const Stats& s, const char* note) {
+  char nodes[48] = "";
+  if (s.nodes) std::snprintf(nodes, sizeof nodes, " nodes=%u/%" PRIu64, s.nodes_applied, s.nodes);
   std::fprintf(stderr,
                "t=%.3f bytes=%" PRIu64 " total=%" PRIu64 " faces=%u full=%" PRIu64
-               " vertices=%u splits=%" PRIu64 "/%" PRIu64 " fps=%.0f update_ms=%.1f%s%s\n",
+               " vertices=%u splits=%" PRIu64 "/%" PRIu64 "%s fps=%.0f update_ms=%.1f%s%s\n",
                t, s.bytes, s.bytes_total, s.faces, s.full_faces, s.vertices, s.splits_applied,
-               s.total_splits, s.frames_per_second, s.update_ms, note[0] ? " " : "", note);
+               s.total_splits, nodes, s.frames_per_second, s.update_ms, note[0] ? " " : "", note);
+}
+
+// "EX,EY,EZ,TX,TY,TZ": six finite numbers, the eye apart from the target.
+bool parse_camera(const std::string& text, Options& o) {
+  float c[6];
+  char extra = 0;
+  if (std::sscanf(text.c_str(), "%f,%f,%f,%f,%f,%f%c", c, c + 1, c + 2, c + 3, c + 4, c + 5,
+                  &extra) != 6 ||
+      !std::all_of(c, c + 6, [](float x) { return std::isfinite(x); }) ||
+      (c[0] == c[3] && c[1] == c[4] && c[2] == c[5]))
+    return false;
+  std::copy(c, c + 3, o.eye);
+  std::copy(c + 3, c + 6, o.target);
+  return o.camera = true;
 }
 
 // Encoded in memory, then written like every tool's output (app_support::write_output: a temporary
@@ -225,6 +250,19 @@ int parse(int argc, char** argv, Options& o) {
   app.add_option("--pitch", o.pitch_degrees, "initial view elevation in degrees")
       ->type_name("DEG")
       ->check(CLI::Range(-89.0, 89.0));
+  std::string camera;
+  auto* camera_option =
+      app.add_option("--camera", camera,
+                     "EX,EY,EZ,TX,TY,TZ: view from EX,EY,EZ towards TX,TY,TZ (y up, the mesh's "
+                     "coordinates); a stream with a node table is decoded for that view, only "
+                     "the parts it needs read (by HTTP Range requests for a URL)")
+          ->type_name("EX,EY,EZ,TX,TY,TZ");
+  camera_option->excludes(faces)->excludes(ratio)->excludes(bytes);
+  app.add_option("--pixel-error", o.pixel_error,
+                 "decoding for a view: refine while a part's error spans more pixels than this")
+      ->type_name("P")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   app.add_option("--budget-ms", o.budget_ms,
                  "refinement time per frame in milliseconds (at least 30% of the last frame's)")
       ->type_name("MS")
@@ -233,6 +271,13 @@ int parse(int argc, char** argv, Options& o) {
   if (int rc = pmz::app_support::parse(app, argc, argv); rc >= 0) return rc;
   o.faces_set = faces->count() > 0;
   o.ratio_set = ratio->count() > 0;
+  if (camera_option->count() && !parse_camera(camera, o)) {
+    std::fprintf(stderr,
+                 "pmz-view: --camera wants six numbers EX,EY,EZ,TX,TY,TZ, the eye apart from the "
+                 "target, got '%s'\n",
+                 camera.c_str());
+    return 2;
+  }
   if (!size.empty()) {
     char x = 0;
     char extra = 0;
@@ -257,7 +302,11 @@ class Viewer {
       : o_(o),
         shown_(o.source == "-" ? "stdin" : o.source),
         screenshot_(!o.screenshot.empty()),
-        is_static_(is_mesh_file(o.source)) {}
+        is_static_(is_mesh_file(o.source)),
+        // For a view: --camera's, or the window's orbit camera (not for a fixed level of detail,
+        // nor for a screenshot of the whole stream).
+        by_view_(!is_static_ && !o.faces_set && !o.ratio_set && !o.bytes &&
+                 (o.camera || !screenshot_)) {}
   Viewer(const Viewer&) = delete;
   Viewer& operator=(const Viewer&) = delete;
 
@@ -335,12 +384,14 @@ class Viewer {
       StreamOptions stream_options;
       stream_options.bytes_per_second = o_.rate_kbps * 1000;
       stream_options.byte_limit = o_.bytes;
+      stream_options.by_nodes = by_view_;
       stream_.start(std::move(source_), stream_options);
     }
     t0_ = Clock::now();
     if (is_static_) show_static_mesh();
     const int rc = !screenshot_ ? run_interactive()
                    : is_static_ ? write_screenshot("")
+                   : by_view_   ? screenshot_of_view()
                                 : screenshot_of_stream();
     stream_.stop();
     // A texture fetch (curl) still running ends before the renderer and curl are released.
@@ -384,7 +435,7 @@ class Viewer {
   // One frame of the mirrored mesh into --screenshot; `note` ends the summary line.
   int write_screenshot(const std::string& note) {
     renderer_->upload(mirror_);
-    frame_camera(camera_, info_, mirror_, float(o_.width) / float(o_.height));
+    frame(float(o_.width) / float(o_.height));
     RenderOptions render_options;
     render_options.smooth = state_.smooth;
     render_options.wireframe = state_.wireframe;
@@ -414,12 +465,81 @@ class Viewer {
         stream_materials(decoder, o_.source, stream_material_table_, texture_directory_);
       }
       read_stats(decoder, stats_, info_);
+      count_drawn_faces(decoder);
     }
     use_materials(*renderer_, o_.source, stream_material_table_,
                   read_textures(stream_material_table_, texture_directory_), false);
     stats_.attributes_line = describe_attributes(mirror_, stream_material_table_.size());
     if (!stats_.base_done) return print_failure(no_base_mesh_message());
     return write_screenshot(", " + std::to_string(stream_.bytes_received()) + " bytes read");
+  }
+
+  // Decoded for a view, the mesh holds every face id of the stream, those of the nodes not
+  // applied degenerate (0, 0, 0): stats_.faces counts the faces drawn. Counted again only
+  // when the resident nodes changed.
+  void count_drawn_faces(const pmz::Decoder& decoder) {
+    if (!by_view_ || !stats_.nodes || stats_.nodes_applied < 2) return;
+    if (drawn_.nodes_applied != stats_.nodes_applied || drawn_.moves != loop_.view_moves) {
+      const uint32_t* t = decoder.indices();
+      drawn_.faces = 0;
+      for (uint32_t f = 0; f < decoder.face_count(); ++f, t += 3)
+        drawn_.faces += t[0] != t[1] || t[1] != t[2];
+      drawn_.nodes_applied = stats_.nodes_applied;
+      drawn_.moves = loop_.view_moves;
+    }
+    stats_.faces = drawn_.faces;
+  }
+
+  // Frames the mesh (its bounding sphere sets the clip planes), then takes --camera's view.
+  bool frame(float aspect) {
+    if (!frame_camera(camera_, info_, mirror_, aspect)) return false;
+    if (o_.camera) camera_.look(o_.eye, o_.target);
+    return true;
+  }
+
+  // --camera with --screenshot: every node the view needs, then one frame of it.
+  int screenshot_of_view() {
+    bool framed = false, complete = false;
+    for (;;) {
+      uint64_t moved = 0;
+      {
+        std::lock_guard<std::mutex> lock(stream_.mutex);
+        pmz::Decoder& decoder = stream_.decoder;
+        if (decoder.info().base_done) {
+          mirror_.sync(decoder, 0, 0);
+          read_stats(decoder, stats_, info_);
+          count_drawn_faces(decoder);
+          if (!framed) framed = frame(float(o_.width) / float(o_.height));
+          if (framed) {
+            const pmz::View view =
+                decoder_view(camera_, uint32_t(o_.width), uint32_t(o_.height), o_.pixel_error);
+            moved = stepper_.step_view(decoder, view, 0.05);
+            loop_.view_moves += moved;
+            complete = decoder.view_complete();
+          }
+        }
+      }
+      if (complete) break;
+      if (stream_.done() && !moved) break;  // an error, or the stream ended short
+      if (!moved) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    if (!stream_.error().empty()) return print_failure(shown_ + ": " + stream_.error());
+    {
+      std::lock_guard<std::mutex> lock(stream_.mutex);
+      mirror_.sync(stream_.decoder, 0, 0);
+      read_stats(stream_.decoder, stats_, info_);
+      count_drawn_faces(stream_.decoder);
+    }
+    if (!stats_.base_done) return print_failure(no_base_mesh_message());
+    if (!complete)
+      pmz::app_support::print_error(shown_,
+                                    "warning: the stream ends before every part the view needs");
+    std::string note = ", " + std::to_string(stream_.bytes_received()) + " of " +
+                       std::to_string(stream_.bytes_total()) + " bytes read";
+    if (stats_.nodes)
+      note += ", " + std::to_string(stats_.nodes_applied) + " of " + std::to_string(stats_.nodes) +
+              " nodes";
+    return write_screenshot(note);
   }
 
   std::string no_base_mesh_message() const {
@@ -445,9 +565,11 @@ class Viewer {
       draw_frame(now, morph_seconds);
       measure_window(t);
       const bool finished =
-          is_static_ || (stream_done && stream_.error().empty() && stepper_.settled() &&
-                         (stats_.complete || o_.bytes) &&
-                         (!state_.lod.follow || stats_.splits_applied == stats_.splits_available));
+          is_static_ ||
+          (by_view_ ? stream_.error().empty() && stepper_.settled() && stats_.view_complete
+                    : stream_done && stream_.error().empty() && stepper_.settled() &&
+                          (stats_.complete || o_.bytes) &&
+                          (!state_.lod.follow || stats_.splits_applied == stats_.splits_available));
       if (o_.log && (t >= loop_.next_log || (finished && o_.exit_when_complete))) {
         log_line(t, stats_, finished ? "complete" : "");
         loop_.next_log = t + 0.1;
@@ -486,6 +608,7 @@ class Viewer {
     loop_.window_update_ms = std::max(loop_.window_update_ms, seconds_since(update_start) * 1000);
     stats_.bytes = stream_.bytes_received();
     stats_.bytes_total = stream_.bytes_total();
+    stats_.by_view = by_view_ && stream_.fetching_nodes();
   }
 
   // Refines within the frame's budget and mirrors the decoder's mesh. Never waits on the worker
@@ -508,10 +631,24 @@ class Viewer {
       // meshes): refinement then keeps pace instead of crawling a batch a frame.
       const double budget =
           std::min(std::max(o_.budget_ms / 1000, 0.3 * loop_.last_frame_seconds), 1.0);
-      loop_.window_splits += stepper_.step(decoder, state_.lod, budget);
+      if (!by_view_) {
+        loop_.window_splits += stepper_.step(decoder, state_.lod, budget);
+      } else if (loop_.framed) {  // (the camera needs the mesh framed first)
+        int fb_width = 0, fb_height = 0;
+        glfwGetFramebufferSize(window_, &fb_width, &fb_height);
+        if (fb_width > 0 && fb_height > 0) {
+          const uint64_t moved = stepper_.step_view(
+              decoder,
+              decoder_view(camera_, uint32_t(fb_width), uint32_t(fb_height), o_.pixel_error),
+              budget);
+          loop_.window_splits += moved;
+          loop_.view_moves += moved;
+        }
+      }
       mirror_.sync(decoder, now, morph_seconds);
     }
     read_stats(decoder, stats_, info_);
+    count_drawn_faces(decoder);
     const bool read_materials_now = stats_.base_done && !stream_materials_read_;
     if (read_materials_now)
       stream_materials(decoder, o_.source, stream_material_table_, texture_directory_);
@@ -552,8 +689,11 @@ class Viewer {
     int fb_width = 0, fb_height = 0;
     glfwGetFramebufferSize(window_, &fb_width, &fb_height);
     if ((!loop_.framed || state_.reset_view) && fb_height > 0) {
-      loop_.framed = frame_camera(camera_, info_, mirror_, float(fb_width) / float(fb_height));
-      if (state_.reset_view) reset_camera_angles();
+      loop_.framed = frame(float(fb_width) / float(fb_height));
+      if (state_.reset_view) {
+        reset_camera_angles();
+        if (o_.camera) camera_.look(o_.eye, o_.target);
+      }
       state_.reset_view = false;
     }
     RenderOptions render_options;
@@ -587,8 +727,8 @@ class Viewer {
   // Idle (nothing arriving, refining or gliding): sleeps until input instead of spinning.
   // Otherwise caps at ~60 fps where swaps do not wait for vblank (e.g. Xvfb).
   void wait_for_next_frame(double t, float now, float morph_seconds, bool stream_done) {
-    const bool idle = is_static_ || (stream_done && stepper_.settled() &&
-                                     now - mirror_.last_morph_start > morph_seconds);
+    const bool settled = stepper_.settled() && now - mirror_.last_morph_start > morph_seconds;
+    const bool idle = is_static_ || (settled && (by_view_ ? stats_.view_complete : stream_done));
     const double frame_seconds = seconds_since(t0_) - t;
     if (idle) {
       glfwWaitEventsTimeout(0.25);
@@ -602,6 +742,7 @@ class Viewer {
   const Options& o_;
   const std::string shown_;  // the source as messages name it ("stdin" for -), like every tool
   const bool screenshot_, is_static_;
+  const bool by_view_;  // decoded for a view (--camera or the window's camera)
   std::string error_;
   StaticMesh static_mesh_;
   std::unique_ptr<Source> source_;
@@ -629,7 +770,12 @@ class Viewer {
     uint64_t window_splits = 0, window_frames = 0;
     double window_update_ms = 0;  // slowest decoder step + mirror + upload in the window
     double last_frame_seconds = 0, frame_start = 0;
+    uint64_t view_moves = 0;  // splits applied or undone for the view, in all
   } loop_;
+  struct {
+    uint32_t nodes_applied = 0, faces = 0;
+    uint64_t moves = UINT64_MAX;
+  } drawn_;  // the last count_drawn_faces()
 };
 
 }  // namespace

@@ -162,6 +162,9 @@ void draw_overlay(ViewState& s, const Stats& stats) {
     ImGui::Text("bytes     %s", received);
   }
   ImGui::Text("faces     %u / %" PRIu64, stats.faces, stats.full_faces);
+  if (stats.nodes)
+    ImGui::Text("nodes     %u / %" PRIu64 " resident%s", stats.nodes_applied, stats.nodes,
+                stats.by_view ? (stats.view_complete ? ", view complete" : ", fetching") : "");
   ImGui::Text("vertices  %u", stats.vertices);
   ImGui::Text("splits    %" PRIu64 " applied, %" PRIu64 " received, %" PRIu64 " total",
               stats.splits_applied, stats.splits_available, stats.total_splits);

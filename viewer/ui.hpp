@@ -33,6 +33,11 @@ struct Stats {
   double splits_per_second = 0, frames_per_second = 0;
   double update_ms = 0;  // slowest recent frame's refine + mirror + upload time
   bool base_done = false, complete = false;
+  // View-dependent decoding: nodes resident of those in the stream (0: no node table), and
+  // whether every node the view needs is applied; faces counts only those drawn.
+  uint32_t nodes_applied = 0;
+  uint64_t nodes = 0;
+  bool by_view = false, view_complete = false;
   bool attributes = false;      // the mesh has attribute wedges or materials
   std::string attributes_line;  // e.g. "attributes: texcoords, normals, 2 materials"
   std::string error;

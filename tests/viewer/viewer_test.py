@@ -206,6 +206,13 @@ def far(p, q, tolerance=24):
     return max(abs(a - b) for a, b in zip(p, q)) > tolerance
 
 
+def require_xvfb():
+    """Exits with SKIP when xvfb-run is missing."""
+    if not shutil.which("xvfb-run"):
+        print("SKIP: xvfb-run not found (apt-get install xvfb xauth)")
+        sys.exit(SKIP)
+
+
 def xvfb(args, command, timeout):
     return subprocess.run(["xvfb-run", "-a", "-s", "-screen 0 1280x1024x24"] + command, capture_output=True,
                           text=True, timeout=timeout)
@@ -511,9 +518,7 @@ def main():
     parser.add_argument("--encode")
     parser.add_argument("--workdir", required=True)
     args = parser.parse_args()
-    if not shutil.which("xvfb-run"):
-        print("SKIP: xvfb-run not found (apt-get install xvfb xauth)")
-        sys.exit(SKIP)
+    require_xvfb()
     if args.test in ("screenshots", "streaming") and not args.encode:
         parser.error("--encode is required for " + args.test)
     {"screenshots": test_screenshots, "streaming": test_streaming, "errors": test_errors,
