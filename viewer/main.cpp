@@ -240,7 +240,8 @@ int parse(int argc, char** argv, Options& o) {
   app.add_flag("--log", o.log,
                "print 't=... bytes=... faces=...' lines to stderr ten times per second");
   app.add_flag("--exit-when-complete", o.exit_when_complete,
-               "exit 0 once the whole stream is shown (1 on a stream error)");
+               "exit 0 once the whole stream is shown, or with a node table every part the "
+               "view needs (1 on a stream error)");
   app.add_flag("--flat", o.flat, "start with flat shading");
   app.add_flag("--wireframe", o.wireframe, "start with the wireframe overlay");
   app.add_flag("--no-geomorph", o.no_geomorph, "start with geomorphs off");

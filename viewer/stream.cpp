@@ -127,6 +127,7 @@ std::string Stream::fetch_nodes(const ByteSink& feed, uint64_t in_order, std::st
   at_end = false;
   fetching_nodes_ = true;
   std::vector<uint8_t> asked;  // per node: its range was asked for once
+  uint32_t partial = 0;        // the node the in-order reading stopped in (0: none)
   std::vector<uint32_t> batch;
   std::vector<ByteRange> ranges;
   while (!stop_.load()) {
@@ -143,6 +144,10 @@ std::string Stream::fetch_nodes(const ByteSink& feed, uint64_t in_order, std::st
         ByteRange r;
         if (k >= asked.size() || asked[k] || !decoder.node_range(k, r.offset, r.size)) continue;
         asked[k] = 1;
+        if (r.offset < in_order && in_order < r.offset + r.size) {  // partly read in order
+          partial = k;
+          r = {in_order, r.offset + r.size - in_order};
+        }
         batch.push_back(k);
         ranges.push_back(r);
         if (batch.size() == kNodesPerBatch) break;
@@ -153,6 +158,11 @@ std::string Stream::fetch_nodes(const ByteSink& feed, uint64_t in_order, std::st
       continue;
     }
     const RangeSink node_in = [&](size_t i, const uint8_t* data, size_t size) {
+      if (batch[i] == partial) {  // the rest of the node the in-order reading stopped in
+        const bool fed = feed(data, size) && decode_error.empty();
+        in_order += fed ? size : 0;
+        return fed;
+      }
       pmz::Status status;
       {
         std::lock_guard<std::mutex> lock(mutex);

@@ -7,8 +7,9 @@
 // View-dependent (StreamOptions::by_nodes, a file or URL): the worker reads in order, by
 // ranges, up to the node table; then it fetches the ranges of the nodes the render thread's
 // last Decoder::update_view() listed in nodes_to_fetch() and feeds them with feed_node(),
-// until stopped. A stream without a node table (or with attributes) is read in order to its
-// end; a server that ignores Range has its whole answer read in order.
+// until stopped (the node the in-order reading stopped in is read on in order instead). A stream
+// without a node table (or with attributes) is read in order to its end; a server that ignores
+// Range has its whole answer read in order.
 #pragma once
 #include <atomic>
 #include <cstdint>

@@ -119,6 +119,8 @@ def shot_summary(name, run, png):
     m = re.search(r"(\d+) faces, \d+ vertices, (\d+) of (\d+) bytes read, (\d+) of (\d+) nodes", run.stdout)
     if not m:
         vt.fail("%s: no summary line: %r" % (name, run.stdout))
+    if int(m.group(2)) > int(m.group(3)):
+        vt.fail("%s: more bytes read than the stream has" % name)
     return tuple(int(g) for g in m.groups())
 
 
@@ -196,6 +198,16 @@ def test_ranges(args):
     faces, read, total, nodes, all_nodes = shot_summary("file", shoot(args, pmz, png, CLOSE_CAMERA), png)
     if not (total == size and read < size and 1 < nodes < all_nodes):
         vt.fail("file: a close view should read part of the %d bytes and some of the nodes" % size)
+
+    # Without --camera the window's orbit camera (framing the whole terrain) is the view.
+    orbit = vt.xvfb(args, [args.view, pmz, "--size", SIZE, "--pixel-error", "8", "--log", "--exit-when-complete"],
+                    60)
+    lines = [line for line in orbit.stderr.splitlines() if line.startswith("t=")]
+    print("orbit camera: " + (lines[-1] if lines else orbit.stderr.strip()[-300:]))
+    last = dict(re.findall(r"(\w+)=([\d.]+)", lines[-1])) if lines else {}
+    if orbit.returncode != 0 or not lines[-1].endswith("complete") or not 1 < int(last["nodes"]) < all_nodes or \
+            not int(last["bytes"]) < size:
+        vt.fail("orbit camera: want a complete view from some of the nodes and bytes")
 
     prefix = tempfile.mkdtemp(dir=workdir)
     nginx = Nginx(prefix, www)
