@@ -262,35 +262,43 @@ void ProgressiveMesh::link_new_faces(uint32_t v, uint32_t vl, uint32_t vr, uint3
     if (qr != kNoCorner) opp[qr] = g0 + 1;
   }
 #if defined(__wasm__)
-  if (has_l) {
-    append3(corner_vertex, u, v, vl);
-    append3(opposite, ql, pl, across ? g0 + 2 : kNoCorner);
-  }
-  if (has_r) {
-    append3(corner_vertex, v, u, vr);
-    append3(opposite, pr, qr, across ? f0 + 2 : kNoCorner);
-  }
-#else
-  // Natively both faces at once: one resize per buffer (the decoder reserved the capacity),
-  // then plain stores. Six push_backs out of line cost about 112 instructions per split; inlined,
-  // about 2 KB of the decoder library's size budget.
-  const size_t at = size_t(F) * 3, n = 3 * ((has_l ? 1 : 0) + (has_r ? 1 : 0));
-  if (!owner_) {  // (attached: the owner's arrays hold the faces already)
-    corner_vertex.resize(at + n);
-    opposite.resize(at + n);
-  }
-  uint32_t* c = corner_vertex.data() + at;
-  uint32_t* o = opposite.data() + at;
-  if (has_l) {
-    c[0] = u, c[1] = v, c[2] = vl;
-    o[0] = ql, o[1] = pl, o[2] = across ? g0 + 2 : kNoCorner;
-    c += 3, o += 3;
-  }
-  if (has_r) {
-    c[0] = v, c[1] = u, c[2] = vr;
-    o[0] = pr, o[1] = qr, o[2] = across ? f0 + 2 : kNoCorner;
-  }
+  // The WebAssembly build appends to its own arrays with push_back calls (smaller there); an
+  // attached mesh (a node's worker) stores into the owner's, as natively.
+  if (!owner_) {
+    if (has_l) {
+      append3(corner_vertex, u, v, vl);
+      append3(opposite, ql, pl, across ? g0 + 2 : kNoCorner);
+    }
+    if (has_r) {
+      append3(corner_vertex, v, u, vr);
+      append3(opposite, pr, qr, across ? f0 + 2 : kNoCorner);
+    }
+  } else
 #endif
+  {
+    // Natively both faces at once: one resize per buffer (the decoder reserved the capacity),
+    // then plain stores. Six push_backs out of line cost about 112 instructions per split;
+    // inlined, about 2 KB of the decoder library's size budget.
+    const size_t at = size_t(F) * 3;
+#if !defined(__wasm__)
+    if (!owner_) {  // (attached: the owner's arrays hold the faces already)
+      const size_t n = 3 * ((has_l ? 1 : 0) + (has_r ? 1 : 0));
+      corner_vertex.resize(at + n);
+      opposite.resize(at + n);
+    }
+#endif
+    uint32_t* c = corner_vertex.data() + at;
+    uint32_t* o = opposite.data() + at;
+    if (has_l) {
+      c[0] = u, c[1] = v, c[2] = vl;
+      o[0] = ql, o[1] = pl, o[2] = across ? g0 + 2 : kNoCorner;
+      c += 3, o += 3;
+    }
+    if (has_r) {
+      c[0] = v, c[1] = u, c[2] = vr;
+      o[0] = pr, o[1] = qr, o[2] = across ? f0 + 2 : kNoCorner;
+    }
+  }
   if (owner_) {
     vertex_corner[u] = has_l ? f0 : g0 + 1;
     ++vn_;

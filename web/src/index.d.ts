@@ -129,9 +129,110 @@ export declare class Decoder {
   /** What changed since the last clearChanges(). */
   changes(): MeshChanges;
   clearChanges(): void;
+  /** View-dependent decoding (streams with a node table): moves the mesh towards `view`,
+   * whole nodes until about maxSplits splits (all when absent); returns the splits applied or
+   * undone. Feed the stream in order up to its node table first (nodeRange(1) not null). */
+  updateView(view: PmzView, maxSplits?: number): number;
+  /** After updateView(): every node the view needs is applied. */
+  viewComplete(): boolean;
+  /** After updateView(): the nodes the view needs whose bytes are missing, parents first. */
+  nodesToFetch(): number[];
+  /** Node k's bytes in the file; null before the node table arrived or for k out of range. */
+  nodeRange(k: number): { offset: number; size: number } | null;
+  /** Nodes in the table: 0 before it arrived (or when it holds node 0 alone). */
+  readonly nodeCount: number;
+  /** Node k's bytes, exactly nodeRange(k)'s; a status as feed() returns. */
+  feedNode(k: number, bytes: Uint8Array | ArrayBuffer): PmzStatus;
+  /** Nodes whose splits are in the mesh (node 0 included). */
+  nodesApplied(): number;
+  /** A view for a camera at eye looking at target (y up), as pmz-decode --camera makes. */
+  lookAt(eye: ArrayLike<number>, target: ArrayLike<number>, options?: LookAtOptions): PmzView;
   /** Frees the decoder's WebAssembly memory; the decoder is unusable afterwards. */
   dispose(): void;
 }
+
+/** A camera for Decoder.updateView(), in the mesh's own coordinates. */
+export interface PmzView {
+  eye: ArrayLike<number>;
+  /** Column-major clip-from-mesh matrix: three.js's camera.projectionMatrix x
+   * camera.matrixWorldInverse x mesh.matrixWorld. */
+  viewProjection: ArrayLike<number>;
+  /** Vertical field of view, radians (default 60 degrees). */
+  fovY?: number;
+  /** Pixels (default 1080). */
+  viewportHeight?: number;
+  /** Refine while a node's error spans more pixels than this (default 1). */
+  pixelError?: number;
+}
+
+export interface LookAtOptions {
+  fovY?: number;
+  width?: number;
+  height?: number;
+  near?: number;
+  pixelError?: number;
+}
+
+export interface RangeSourceOptions {
+  /** fetch()'s RequestInit (headers, credentials); Range and signal are set per request. */
+  init?: RequestInit;
+  /** Requests at once (4). */
+  inFlight?: number;
+  /** A request fails when no byte arrives for this long (30000 ms). */
+  timeoutMs?: number;
+  /** The first in-order range (16 KiB); each next one twice as large. */
+  firstBytes?: number;
+  /** Nodes adjacent in the file are asked for in one request up to this size (1 MiB). */
+  mergeBytes?: number;
+  /** After bytes were fed. */
+  onData?: () => void;
+}
+
+/** A .pmz read by byte ranges for view-dependent decoding. */
+export declare class RangeSource {
+  constructor(decoder: Decoder, url: string | URL, options?: RangeSourceOptions);
+  readonly decoder: Decoder;
+  /** Response bytes received. */
+  readonly bytes: number;
+  /** The file's size once a response said it (0 before). */
+  readonly totalBytes: number;
+  readonly requests: number;
+  readonly nodesFetched: number;
+  /** Reading the rest in order (no node table, attributes, or a server that ignores Range). */
+  readonly inOrder: boolean;
+  /** The first failed request or bad response, one line ('' while none). */
+  readonly error: string;
+  /** Nothing in flight, queued or being read in order. */
+  readonly idle: boolean;
+  /** Reads in order up to the node table (or the whole stream without one); rejects on a
+   * failed request or a bad response. */
+  open(): Promise<void>;
+  /** Queues the nodes to fetch (Decoder.nodesToFetch()), most wanted first. */
+  want(ids: readonly number[]): void;
+  /** Resolves once something arrived or failed. */
+  changed(): Promise<void>;
+  /** Stops every request. */
+  close(): void;
+}
+
+export interface LoadViewResult {
+  status: PmzStatus;
+  complete: boolean;
+  bytes: number;
+  totalBytes: number;
+  requests: number;
+  nodesFetched: number;
+  inOrder: boolean;
+}
+
+/** Decodes what `view` needs from url, fetched by ranges; rejects on a failed request or a bad
+ * response (one line). */
+export declare function loadView(
+  decoder: Decoder,
+  url: string | URL,
+  view: PmzView,
+  options?: RangeSourceOptions & { maxSplits?: number },
+): Promise<LoadViewResult>;
 
 export declare function createDecoder(options?: DecoderOptions): Promise<Decoder>;
 

@@ -18,6 +18,7 @@ export const STATUS_NAMES = Object.freeze([
 const ALL = 0xffffffffffffffffn;
 const FEED_SLICE = 1 << 20;  // input copied into the heap at most this much at a time
 const REFINE_BATCH = 16384n;  // splits per call into the instance (see refine())
+const VIEW_BYTES = 88;  // sizeof(pmz_view) in wasm32
 
 let modulePromise = null;
 
@@ -65,7 +66,8 @@ export class Decoder {
     this._dead = null;  // the error line once the WebAssembly instance aborted
     this._ptr = module._pmz_decoder_create(toU64(options.maxVertices ?? 0),
                                            toU64(options.maxFaces ?? 0));
-    // Scratch for pmz_stream_info (104 bytes), pmz_changes (24) and pmz_material (28).
+    // Scratch for pmz_stream_info (104 bytes), pmz_changes (24), pmz_material (28), pmz_view
+    // (88) with lookAt()'s eye and target (24), and nodeRange()'s two uint64.
     this._scratch = module._malloc(128);
     this._input = 0;
     this._inputSize = 0;
@@ -86,18 +88,24 @@ export class Decoder {
     }
   }
 
+  // Room for n input bytes in the heap (false when out of memory).
+  _reserveInput(m, n) {
+    if (this._inputSize < n) {
+      m._free(this._input);
+      this._inputSize = Math.max(n, 4096);
+      this._input = m._malloc(this._inputSize);
+      if (!this._input) { this._inputSize = 0; return false; }
+    }
+    return true;
+  }
+
   feed(bytes) {
     if (!(bytes instanceof Uint8Array)) bytes = new Uint8Array(bytes);
     let status = this._call((m) => m._pmz_decoder_status(this._ptr), 7);
     for (let at = 0; status === 0 && at < bytes.length; at += FEED_SLICE) {
       const piece = bytes.subarray(at, Math.min(bytes.length, at + FEED_SLICE));
       status = this._call((m) => {
-        if (this._inputSize < piece.length) {
-          m._free(this._input);
-          this._inputSize = Math.max(piece.length, 4096);
-          this._input = m._malloc(this._inputSize);
-          if (!this._input) { this._inputSize = 0; return 7; }
-        }
+        if (!this._reserveInput(m, piece.length)) return 7;
         m.HEAPU8.set(piece, this._input);
         return m._pmz_decoder_feed(this._ptr, this._input, piece.length);
       }, 7);
@@ -302,6 +310,100 @@ export class Decoder {
     return total;
   }
 
+  // ---- View-dependent decoding (streams with a node table; pmz.h's pmz_decoder_update_view
+  // and its neighbours, pmz/decoder.hpp states the contract). Feed the stream in order up to
+  // its node table (nodeRange(1) is not null once it arrived), then updateView(view) each
+  // frame: nodesToFetch() lists the nodes the view needs whose bytes are missing, nodeRange(k)
+  // where they are in the file, feedNode(k, bytes) takes exactly those bytes. Streams without
+  // a node table (or with attributes) refine in file order: nodesToFetch() stays empty.
+
+  // view: {eye: [x, y, z], viewProjection: 16 numbers (column-major clip-from-mesh, three.js's
+  // projectionMatrix x matrixWorldInverse x the mesh's matrixWorld), fovY (radians),
+  // viewportHeight (pixels), pixelError}; eye in the mesh's own coordinates. Applies and undoes
+  // whole nodes until about maxSplits splits (all when absent); returns the splits applied or
+  // undone.
+  updateView(view, maxSplits) {
+    return Number(this._call((m) => {
+      const v = new DataView(m.HEAPU8.buffer, this._scratch, VIEW_BYTES);
+      for (let i = 0; i < 3; ++i) v.setFloat32(4 * i, view.eye[i], true);
+      for (let i = 0; i < 16; ++i) v.setFloat32(12 + 4 * i, view.viewProjection[i], true);
+      v.setFloat32(76, view.fovY ?? Math.PI / 3, true);
+      v.setUint32(80, Math.max(1, Math.round(view.viewportHeight ?? 1080)), true);
+      v.setFloat32(84, view.pixelError ?? 1, true);
+      return m._pmz_decoder_update_view(this._ptr, this._scratch, toU64(maxSplits));
+    }, 0n));
+  }
+  // After updateView(): every node the view needs is applied (a stream refined in file order:
+  // every split is).
+  viewComplete() { return this._call((m) => m._pmz_decoder_view_complete(this._ptr) !== 0, false); }
+  // After updateView(): the ids of the nodes the view needs whose bytes are missing, parents
+  // first, the largest projected error first (an Array).
+  nodesToFetch() {
+    return this._call((m) => {
+      const ptr = m._pmz_decoder_nodes_to_fetch(this._ptr, this._scratch);
+      const n = new DataView(m.HEAPU8.buffer, this._scratch, 4).getUint32(0, true);
+      return n ? Array.from(new Uint32Array(m.HEAPU8.buffer, ptr, n)) : [];
+    }, []);
+  }
+  // Node k's bytes in the file: {offset, size}, or null before the node table arrived or for k
+  // out of range (node 0's bytes lie before the table: read in order).
+  nodeRange(k) {
+    return this._call((m) => {
+      if (!(k >= 0 && k <= 0xffffffff) || !m._pmz_decoder_node_range(this._ptr, k >>> 0,
+                                                                    this._scratch, this._scratch + 8))
+        return null;
+      const v = new DataView(m.HEAPU8.buffer, this._scratch, 16);
+      return { offset: Number(v.getBigUint64(0, true)), size: Number(v.getBigUint64(8, true)) };
+    }, null);
+  }
+  // The nodes in the table: 0 before it arrived (or when it holds node 0 alone).
+  get nodeCount() {
+    if (this._nodes) return this._nodes;
+    if (!this.nodeRange(1)) return 0;
+    let lo = 1, hi = 2;  // nodeRange(lo) is a range, nodeRange(hi) not yet known
+    while (this.nodeRange(hi)) { lo = hi; hi *= 2; }
+    while (hi - lo > 1) {
+      const mid = Math.floor((lo + hi) / 2);
+      if (this.nodeRange(mid)) lo = mid; else hi = mid;
+    }
+    return (this._nodes = lo + 1);
+  }
+  // Node k's bytes, exactly nodeRange(k)'s; a status as feed() returns (a node that arrived
+  // already is ignored: 'ok'; wrong bytes fail the stream, the mesh stays valid).
+  feedNode(k, bytes) {
+    if (!(bytes instanceof Uint8Array)) bytes = new Uint8Array(bytes);
+    let status = this._call((m) => m._pmz_decoder_status(this._ptr), 7);
+    if (status === 0) {
+      status = this._call((m) => {
+        if (!this._reserveInput(m, bytes.length)) return 7;
+        m.HEAPU8.set(bytes, this._input);
+        return m._pmz_decoder_feed_node(this._ptr, k >>> 0, this._input, bytes.length);
+      }, 7);
+    }
+    return STATUS_NAMES[status] ?? 'corrupt';
+  }
+  // Nodes whose splits are in the mesh (node 0 included).
+  nodesApplied() { return this._call((m) => m._pmz_decoder_nodes_applied(this._ptr) >>> 0, 0); }
+  // A view for a camera at eye looking at target (y up): pmz_view_look_at. options: fovY
+  // (radians, default 60 degrees), width, height (pixels, 1920 x 1080), near (1e-4),
+  // pixelError (1). The same view pmz-decode --camera makes.
+  lookAt(eye, target, options = {}) {
+    const { fovY = Math.PI / 3, width = 1920, height = 1080, near = 1e-4, pixelError = 1 } = options;
+    return this._call((m) => {
+      const s = this._scratch, at = s + VIEW_BYTES;
+      const v = new DataView(m.HEAPU8.buffer, s, 128);
+      for (let i = 0; i < 3; ++i) {
+        v.setFloat32(VIEW_BYTES + 4 * i, eye[i], true);
+        v.setFloat32(VIEW_BYTES + 12 + 4 * i, target[i], true);
+      }
+      m._pmz_view_look_at(s, at, at + 12, fovY, width >>> 0, height >>> 0, near, pixelError);
+      const r = new DataView(m.HEAPU8.buffer, s, VIEW_BYTES);
+      const f = (o) => r.getFloat32(o, true);
+      return { eye: [f(0), f(4), f(8)], viewProjection: Array.from({ length: 16 }, (_, i) => f(12 + 4 * i)),
+        fovY: f(76), viewportHeight: r.getUint32(80, true), pixelError: f(84) };
+    }, null);
+  }
+
   dispose() {
     if (!this._ptr) return;
     if (!this._dead) {
@@ -351,3 +453,6 @@ export async function fetchInto(decoder, url, onData, init) {
   const total = Number(response.headers.get('content-length')) || 0;
   return feedStream(decoder, response.body, (bytes) => onData && onData(bytes, total));
 }
+
+// Reading a stream by byte ranges for view-dependent decoding (range_source.js).
+export { RangeSource, loadView } from './range_source.js';

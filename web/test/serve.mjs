@@ -1,8 +1,12 @@
 // SPDX-License-Identifier: MIT
 // A static server for web/dist/viewer on 127.0.0.1 whose /stream/NAME responses (streams and
 // the textures beside them) are throttled to `bytesPerSecond` (chunks every 10 ms), with
-// Content-Length. streams[NAME]: a file, or {file, bytesPerSecond (Infinity: at once), delayMs
-// (before the response starts)}; server.requests[NAME]: when each request came (Date.now()).
+// Content-Length. A request with `Range: bytes=a-b` (one range) gets a 206 with that slice and
+// Content-Range, as static servers answer. streams[NAME]: a file, or {file, bytesPerSecond
+// (Infinity: at once), delayMs (before the response starts), range ('honour' the default;
+// 'ignore': a 200 with the whole file; 'wrongrange': the slice asked for, its Content-Range one
+// byte later; 'stall': headers, then no body)}; server.requests[NAME]: when each
+// request came (Date.now()); server.ranges[NAME]: the Range header of each ('' without).
 import { createReadStream, mkdtempSync, readFileSync, rmSync, statSync } from 'node:fs';
 import http from 'node:http';
 import { tmpdir } from 'node:os';
@@ -13,19 +17,39 @@ const TYPES = { '.html': 'text/html', '.js': 'text/javascript', '.mjs': 'text/ja
   '.wasm': 'application/wasm', '.json': 'application/json', '.png': 'image/png' };
 
 export function serveViewer(viewerDir, streams, bytesPerSecond) {
-  const requests = {};
+  const requests = {}, ranges = {};
   const server = http.createServer((req, res) => {
     const url = new URL(req.url, 'http://127.0.0.1');
     const name = decodeURIComponent(url.pathname);
     if (name.startsWith('/stream/') && streams[name.slice(8)]) {
       const entry = streams[name.slice(8)];
-      const { file, bytesPerSecond: rate = bytesPerSecond, delayMs = 0 } =
+      const { file, bytesPerSecond: rate = bytesPerSecond, delayMs = 0, range: mode = 'honour' } =
         typeof entry === 'string' ? { file: entry } : entry;
       (requests[name.slice(8)] ??= []).push(Date.now());
-      const bytes = readFileSync(file);
+      (ranges[name.slice(8)] ??= []).push(req.headers.range ?? '');
+      const whole = readFileSync(file);
+      let bytes = whole, status = 200;
+      const headers = { 'content-type': TYPES[path.extname(name)] || 'application/octet-stream',
+        'cache-control': 'no-store', 'accept-ranges': 'bytes' };
+      const asked = /^bytes=(\d+)-(\d*)$/.exec(req.headers.range ?? '');
+      if (asked && mode !== 'ignore') {
+        const first = Number(asked[1]);
+        const last = Math.min(whole.length - 1, asked[2] === '' ? Infinity : Number(asked[2]));
+        if (first > last) {
+          res.writeHead(416, { 'content-range': `bytes */${whole.length}` }).end();
+          return;
+        }
+        const shift = mode === 'wrongrange' ? 1 : 0;
+        bytes = whole.subarray(first, last + 1);
+        status = 206;
+        headers['content-range'] = `bytes ${first + shift}-${last + shift}/${whole.length}`;
+      }
       const respond = () => {
-        res.writeHead(200, { 'content-type': TYPES[path.extname(name)] || 'application/octet-stream',
-          'content-length': bytes.length, 'cache-control': 'no-store' });
+        res.writeHead(status, { ...headers, 'content-length': bytes.length });
+        if (mode === 'stall') {  // (the client's timeout ends it)
+          res.flushHeaders();
+          return;
+        }
         const tick = 10;
         let at = 0;
         const start = Date.now();
@@ -52,6 +76,7 @@ export function serveViewer(viewerDir, streams, bytesPerSecond) {
     }
   });
   server.requests = requests;
+  server.ranges = ranges;
   return new Promise((resolve) => server.listen(0, '127.0.0.1', () => resolve(server)));
 }
 

@@ -1,0 +1,180 @@
+// SPDX-License-Identifier: MIT
+// View-dependent decoding in the package (node): the decoder's view calls against the native
+// decoder, and RangeSource / loadView reading a stream with a node table by ranges from a local
+// server that honours Range (and from servers that ignore it, lie about it or stall).
+import assert from 'node:assert/strict';
+import { execFileSync } from 'node:child_process';
+import { mkdtempSync, readFileSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import path from 'node:path';
+import { after, before, test } from 'node:test';
+
+import { binDir, importPackage, nativeDecode, rootDir, sameBits } from './common.mjs';
+import { serveViewer } from './serve.mjs';
+
+// A terrain of about 60k faces encoded with a node table (clusters of 1000 vertices: 60 nodes).
+let nodesPmz, server, base;
+const CLOSE = { eye: [0.2, 0.2, 0.15], target: [0.1, 0.1, 0], width: 800, height: 600, pixelError: 1 };
+const FAR = { eye: [0.5, 0.5, 3], target: [0.5, 0.5, 0], pixelError: 0.001 };
+
+before(async () => {
+  const dir = mkdtempSync(path.join(tmpdir(), 'pmz-view-'));
+  const ply = path.join(dir, 'terrain.ply');
+  nodesPmz = path.join(dir, 'terrain.pmz');
+  execFileSync(path.join(binDir, 'pmz-generate'), ['--faces', '60000', '-q', '-o', ply]);
+  execFileSync(path.join(binDir, 'pmz-encode'), [ply, '--cluster-vertices', '1000', '-o', nodesPmz],
+    { stdio: ['ignore', 'ignore', 'inherit'] });
+  // (20 KB: more than the first range)
+  const plain = path.join(rootDir, 'tests', 'conformance', 'vectors', 'torus-speed.pmz');
+  server = await serveViewer(dir, {
+    'nodes.pmz': { file: nodesPmz }, 'ignore.pmz': { file: nodesPmz, range: 'ignore' },
+    'wrong.pmz': { file: nodesPmz, range: 'wrongrange' }, 'stall.pmz': { file: nodesPmz, range: 'stall' },
+    'plain.pmz': { file: plain },
+  }, Infinity);
+  base = `http://127.0.0.1:${server.address().port}/stream/`;
+});
+after(() => {
+  server.closeAllConnections();
+  server.close();
+});
+
+function nativeView(file, v) {
+  return nativeDecode(file, ['--camera', [...v.eye, ...v.target].join(','), '--pixel-error',
+    String(v.pixelError), '--size', `${v.width ?? 1920}x${v.height ?? 1080}`]);
+}
+
+// The decoder's mesh without the faces of nodes not applied (degenerate) and the vertices no
+// face uses, numbered in first use: what pmz-decode --camera writes.
+function dropUnused(d) {
+  const ix = d.indices(), p = d.positions();
+  const indices = [], positions = [], remap = new Map();
+  for (let f = 0; f < ix.length; f += 3) {
+    if (ix[f] === ix[f + 1]) continue;
+    for (let k = 0; k < 3; ++k) {
+      const v = ix[f + k];
+      if (!remap.has(v)) {
+        remap.set(v, positions.length / 3);
+        positions.push(p[3 * v], p[3 * v + 1], p[3 * v + 2]);
+      }
+      indices.push(remap.get(v));
+    }
+  }
+  return { indices: Uint32Array.from(indices), positions: Float32Array.from(positions) };
+}
+
+// The view's mesh by ranges from `name`: checked against pmz-decode --camera's; the result.
+async function closeViewAgainstNative(name) {
+  const { createDecoder, loadView } = await importPackage();
+  const d = await createDecoder();
+  const result = await loadView(d, base + name, await view(d, CLOSE));
+  assert.equal(result.status, 'ok');
+  assert.equal(result.complete, true);
+  const mine = dropUnused(d), native = nativeView(nodesPmz, CLOSE);
+  assert.equal(mine.indices.length, native.indices.length);
+  assert.ok(sameBits(mine.indices, native.indices), 'indices differ');
+  assert.ok(sameBits(mine.positions, native.positions), 'positions differ');
+  result.nodesApplied = d.nodesApplied();
+  d.dispose();
+  return result;
+}
+
+async function view(d, v) {
+  return d.lookAt(v.eye, v.target, { width: v.width, height: v.height, pixelError: v.pixelError });
+}
+
+test('the view calls before and after the node table, and node bytes checked', async () => {
+  const { createDecoder } = await importPackage();
+  const bytes = readFileSync(nodesPmz);
+  const d = await createDecoder();
+  assert.equal(d.nodeRange(1), null);
+  assert.deepEqual(d.nodesToFetch(), []);
+  assert.equal(d.nodeCount, 0);
+  assert.equal(d.nodesApplied(), 0);
+  assert.equal(d.updateView(await view(d, FAR)), 0);  // no base mesh yet
+  assert.equal(d.viewComplete(), false);
+  // In order up to the table: node 1's range starts where the in-order bytes may stop.
+  let at = 0;
+  while (!d.nodeRange(1)) {
+    assert.equal(d.feed(bytes.subarray(at, at + 1024)), 'ok');
+    at += 1024;
+  }
+  assert.equal(d.nodeCount, 60);
+  const r1 = d.nodeRange(1), last = d.nodeRange(59);
+  assert.ok(r1.offset > 0 && r1.size > 0);
+  assert.equal(last.offset + last.size < bytes.length, true);
+  assert.equal(d.nodeRange(60), null);
+  d.updateView(await view(d, FAR));
+  assert.equal(d.nodesApplied(), 1);
+  const want = d.nodesToFetch();
+  assert.ok(want.length > 0 && want.every((k) => k >= 1 && k < 60), String(want));
+  // A node's bytes cut short: the stream fails with a line naming the node; the mesh stays.
+  const k = want[0], r = d.nodeRange(k);
+  assert.equal(d.feedNode(k, bytes.subarray(r.offset, r.offset + r.size - 1)), 'corrupt');
+  assert.match(d.error, /^pmz: .*node/);
+  assert.equal(d.feedNode(k, bytes.subarray(r.offset, r.offset + r.size)), 'corrupt');  // sticky
+  assert.ok(d.faceCount > 0);
+  d.dispose();
+});
+
+test('the all-nodes view by ranges gives the whole stream\'s indices and positions', async () => {
+  const { createDecoder, loadView } = await importPackage();
+  const whole = await createDecoder();
+  assert.equal(whole.feed(readFileSync(nodesPmz)), 'ok');
+  assert.equal(whole.finish(), 'ok');
+  whole.refine();
+  const d = await createDecoder();
+  const result = await loadView(d, base + 'nodes.pmz', await view(d, FAR), { maxSplits: 500 });
+  assert.equal(result.status, 'ok');
+  assert.equal(result.complete, true);
+  assert.equal(result.inOrder, false);
+  assert.equal(d.nodesApplied(), 60);
+  assert.ok(sameBits(d.indices(), whole.indices()), 'indices differ');
+  assert.ok(sameBits(d.positions(), whole.positions()), 'positions differ');
+  assert.ok(server.ranges['nodes.pmz'].every((h) => /^bytes=\d+-\d+$/.test(h)));
+  whole.dispose();
+  d.dispose();
+});
+
+test('a close view fetches part of the file and matches pmz-decode --camera', async () => {
+  const result = await closeViewAgainstNative('nodes.pmz');
+  assert.equal(result.totalBytes, readFileSync(nodesPmz).length);
+  assert.ok(result.bytes < result.totalBytes / 2, `${result.bytes} of ${result.totalBytes} bytes`);
+  assert.ok(result.nodesApplied > 1 && result.nodesApplied < 60);
+});
+
+test('a server that ignores Range: the stream is read in order, same mesh', async () => {
+  const result = await closeViewAgainstNative('ignore.pmz');
+  assert.equal(result.inOrder, true);
+  assert.equal(result.requests, 1);
+  assert.ok(result.bytes >= result.totalBytes);
+});
+
+test('a stream without a node table is read in order to its end', async () => {
+  const { createDecoder, loadView } = await importPackage();
+  const d = await createDecoder();
+  const result = await loadView(d, base + 'plain.pmz', await view(d, FAR));
+  assert.equal(result.status, 'ok');
+  assert.equal(result.inOrder, true);
+  assert.equal(result.complete, true);
+  const native = nativeDecode(path.join(rootDir, 'tests', 'conformance', 'vectors', 'torus-speed.pmz'));
+  assert.ok(sameBits(d.indices(), native.indices), 'indices differ');
+  assert.ok(sameBits(d.positions(), native.positions), 'positions differ');
+  d.dispose();
+});
+
+test('a wrong Content-Range, a stalled body, a missing file: one line, no hang', async () => {
+  const { createDecoder, loadView } = await importPackage();
+  for (const [name, pattern] of [['wrong.pmz', /Content-Range "bytes 1-16384\/\d+"/],
+    ['stall.pmz', /no data for 0\.3 s/], ['missing.pmz', /HTTP 404/]]) {
+    const d = await createDecoder();
+    const t0 = Date.now();
+    await assert.rejects(loadView(d, base + name, await view(d, CLOSE), { timeoutMs: 300 }), (e) => {
+      assert.match(e.message, pattern);
+      assert.ok(e.message.startsWith(`pmz: ${base}${name} (bytes=0-16383): `), e.message);
+      assert.ok(!e.message.includes('\n'));
+      return true;
+    });
+    assert.ok(Date.now() - t0 < 5000);
+    d.dispose();
+  }
+});
