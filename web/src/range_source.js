@@ -110,7 +110,14 @@ export class RangeSource {
     for (const k of ids) {
       if (this._nodes.has(k)) continue;
       const r = this.decoder.nodeRange(k);
-      if (r) this._queue.push({ k, offset: r.offset, size: r.size });
+      if (!r) continue;
+      const end = r.offset + r.size;
+      // The node the in-order reading stopped in: its rest, fed in order (not its whole range
+      // again).
+      if (r.offset < this._fed && this._fed < end)
+        this._queue.push({ k, offset: this._fed, size: end - this._fed, inOrder: true });
+      else
+        this._queue.push({ k, offset: r.offset, size: r.size });
     }
     this._pump();
   }
@@ -157,7 +164,13 @@ export class RangeSource {
     const bytes = await this._read(req, first, end - 1, false);
     for (const q of group) {
       if (this.decoder.status !== 'ok' || this._closed) return;
-      this.decoder.feedNode(q.k, bytes.subarray(q.offset - first, q.offset - first + q.size));
+      const piece = bytes.subarray(q.offset - first, q.offset - first + q.size);
+      if (q.inOrder) {
+        this.decoder.feed(piece);
+        this._fed += piece.length;
+      } else {
+        this.decoder.feedNode(q.k, piece);
+      }
       this._nodes.set(q.k, 'done');
       ++this.nodesFetched;
     }

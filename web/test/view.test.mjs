@@ -127,6 +127,8 @@ test('the all-nodes view by ranges gives the whole stream\'s indices and positio
   assert.equal(result.status, 'ok');
   assert.equal(result.complete, true);
   assert.equal(result.inOrder, false);
+  // No byte twice: the node the in-order reading stopped in is read on from there.
+  assert.ok(result.bytes <= result.totalBytes, `${result.bytes} of ${result.totalBytes} bytes`);
   assert.equal(d.nodesApplied(), 60);
   assert.ok(sameBits(d.indices(), whole.indices()), 'indices differ');
   assert.ok(sameBits(d.positions(), whole.positions()), 'positions differ');
