@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: MIT
-import { BufferGeometry, Loader, LoadingManager, MagnificationTextureFilter, Material,
+import { BufferGeometry, Camera, Loader, LoadingManager, MagnificationTextureFilter, Material,
   MeshStandardMaterial, MeshStandardMaterialParameters, MinificationTextureFilter, Object3D,
   Texture, TextureLoader, Wrapping } from 'three';
-import { Decoder, DecoderOptions, PmzMaterial, PmzStatus, StreamInfo } from './index.js';
+import { Decoder, DecoderOptions, PmzMaterial, PmzStatus, PmzView, RangeSource, RangeSourceOptions,
+  StreamInfo } from './index.js';
 
 export interface PMZOptions extends DecoderOptions {
   /** Keep a pmzMorph attribute (parent position, birth time) for geomorphMaterial(). */
@@ -21,6 +22,17 @@ export interface PMZOptions extends DecoderOptions {
   /** Texture coordinates as glTF's, v down the image (1 - v of the stream's); PMZGLTFPlugin
    * sets it. */
   flipV?: boolean;
+  /** View-dependent decoding: stream(url) gives a PMZViewStream (on this thread) that fetches
+   * by ranges what update(camera) needs; an object sets its pixelError, viewportHeight and
+   * RangeSource options. */
+  view?: boolean | (PMZViewOptions & RangeSourceOptions);
+}
+
+export interface PMZViewOptions {
+  /** Refine while a node's error spans more pixels than this (default 1). */
+  pixelError?: number;
+  /** The viewport's height in pixels (default 1080): the renderer's drawing buffer. */
+  viewportHeight?: number;
 }
 
 /** A copy of the decoder's current mesh. */
@@ -105,6 +117,33 @@ export declare class PMZWorkerStream {
   pauseDecoding(ms: number): void;
 }
 
+/** Decoder.updateView()'s view of a camera for an object (its matrixWorld; null: identity). */
+export declare function cameraView(camera: Camera, object: Object3D | null, viewportHeight: number,
+  pixelError?: number): PmzView;
+
+/** A stream decoded for a camera: in order up to its node table, then only the nodes the
+ * camera needs, fetched by ranges. Call update(camera, object?) each frame. */
+export interface PMZViewStream extends Omit<PMZStreamState, 'update'> {}
+export declare class PMZViewStream {
+  constructor(decoder: Decoder, url: string | URL,
+    options?: PMZOptions & PMZViewOptions & RangeSourceOptions & { init?: RequestInit });
+  readonly decoder: Decoder;
+  readonly source: RangeSource;
+  pixelError: number;
+  viewportHeight: number;
+  /** The mesh drawing the geometry, when update() is given none. */
+  object: Object3D | null;
+  readonly nodesApplied: number;
+  readonly nodeCount: number;
+  /** Moves the mesh towards the camera's view (the last camera's without one) within
+   * budgetMs, fetches what it still needs and uploads what changed; true when the geometry
+   * changed. complete: every node the view needs is applied. */
+  update(camera?: Camera, object?: Object3D | null, budgetMs?: number): boolean;
+  /** Resolves to the decoder's status once the in-order part is in; rejects on a failed
+   * request. */
+  done: Promise<PmzStatus>;
+}
+
 /** Lets new vertices glide from their parent's position; call the result every frame. */
 export declare function geomorphMaterial(
   material: Material,
@@ -146,14 +185,14 @@ export declare class PMZLoader extends Loader<BufferGeometry> {
   options: PMZOptions;
   load(
     url: string,
-    onLoad?: (geometry: BufferGeometry, stream: PMZStream | PMZWorkerStream) => void,
-    onProgress?: (event: { loaded: number; total: number; stream: PMZStream | PMZWorkerStream }) => void,
+    onLoad?: (geometry: BufferGeometry, stream: PMZStream | PMZWorkerStream | PMZViewStream) => void,
+    onProgress?: (event: { loaded: number; total: number; stream: PMZStream | PMZWorkerStream | PMZViewStream }) => void,
     onError?: (error: unknown) => void,
   ): void;
   stream(
     source: string | URL | Response | ReadableStream<Uint8Array> | Blob,
-    onUpdate?: (stream: PMZStream | PMZWorkerStream) => void,
-  ): Promise<(PMZStream | PMZWorkerStream) & { done: Promise<PmzStatus> }>;
+    onUpdate?: (stream: PMZStream | PMZWorkerStream | PMZViewStream) => void,
+  ): Promise<(PMZStream | PMZWorkerStream | PMZViewStream) & { done: Promise<PmzStatus> }>;
 }
 
 /** The part of GLTFLoader's GLTFParser the plugin uses. */

@@ -5,9 +5,9 @@
 // uv1, normal and color attributes beside position, and a group per run of faces of one
 // material when the stream has several (pmzMaterials() makes the three.js materials).
 import { Box3, BufferAttribute, BufferGeometry, Color, DataTexture, DoubleSide, LinearFilter,
-  LinearMipmapLinearFilter, Loader, MeshStandardMaterial, RepeatWrapping, Sphere, SRGBColorSpace,
-  TextureLoader, Vector3 } from 'three';
-import { createDecoder, feedStream } from './index.js';
+  LinearMipmapLinearFilter, Loader, Matrix4, MeshStandardMaterial, RepeatWrapping, Sphere,
+  SRGBColorSpace, TextureLoader, Vector3 } from 'three';
+import { RangeSource, createDecoder, feedStream } from './index.js';
 import { renderArrays, renderUpdate } from './render_update.js';
 
 const RUNS_MAX = 64;  // more rewritten-face runs than this upload as one span
@@ -198,6 +198,18 @@ class GeometryMirror {
   }
 }
 
+// Copies what changed in the decoder since the last call into the mirror's geometry, then
+// clears the change report; true when the geometry changed.
+function syncMirror(d, mirror, state, geomorph) {
+  const u = renderUpdate(d, state, { geomorph });
+  const c = d.changes();
+  const nothing = !c.all && u.vertexBegin >= u.count && u.faceBegin >= u.faces && !u.modified &&
+    u.faces === mirror.faces;
+  const changed = !nothing && mirror.apply([u], d.info());
+  d.clearChanges();
+  return changed;
+}
+
 // The geometry of one stream and the decoder behind it. update() each animation frame.
 export class PMZStream {
   constructor(decoder, options = {}) {
@@ -296,18 +308,119 @@ export class PMZStream {
   }
 
   _sync() {
-    const d = this.decoder;
-    const u = renderUpdate(d, this._renderState, { geomorph: this.geomorph });
-    const c = d.changes();
-    const nothing = !c.all && u.vertexBegin >= u.count && u.faceBegin >= u.faces && !u.modified &&
-      u.faces === this._mirror.faces;
-    const changed = !nothing && this._mirror.apply([u], d.info());
-    d.clearChanges();
-    this._shownVertices = d.vertexCount;
+    const changed = syncMirror(this.decoder, this._mirror, this._renderState, this.geomorph);
+    this._shownVertices = this.decoder.vertexCount;
     return changed;
   }
 
   dispose() {
+    this.decoder.dispose();
+    this.geometry.dispose();
+  }
+}
+
+// Decoder.updateView()'s view of a three.js camera for an object (its matrixWorld; null: the
+// identity) drawn into a viewport viewportHeight pixels high: the eye in the object's own
+// coordinates, projectionMatrix x matrixWorldInverse x matrixWorld, the effective vertical
+// field of view (zoom included; perspective cameras).
+export function cameraView(camera, object, viewportHeight, pixelError = 1) {
+  camera.updateMatrixWorld();
+  const m = new Matrix4().multiplyMatrices(camera.projectionMatrix, camera.matrixWorldInverse);
+  const eye = new Vector3().setFromMatrixPosition(camera.matrixWorld);
+  if (object) {
+    object.updateMatrixWorld();
+    m.multiply(object.matrixWorld);
+    eye.applyMatrix4(new Matrix4().copy(object.matrixWorld).invert());
+  }
+  const fov = camera.isPerspectiveCamera ? camera.getEffectiveFOV() : 60;
+  return { eye: eye.toArray(), viewProjection: m.elements.slice(), fovY: fov * Math.PI / 180,
+    viewportHeight, pixelError };
+}
+
+// A stream decoded for a camera (view-dependent decoding; streams with a node table): the
+// stream's bytes in order up to its node table, then only the nodes the camera needs, fetched
+// by ranges (RangeSource). update(camera, object?) each frame: builds the view from the camera
+// and the object's world matrix (object defaults to this.object), moves the mesh towards it
+// within frameBudgetMs, asks for the nodes still missing and uploads what changed. Faces of
+// nodes not applied are degenerate (they draw nothing). A stream without a node table (or with
+// attributes), or a server that ignores Range, is read in order and refined as it arrives.
+export class PMZViewStream {
+  constructor(decoder, url, options = {}) {
+    this.decoder = decoder;
+    this.url = String(url);
+    this._mirror = new GeometryMirror(false, options.flipV ?? false);
+    this.geometry = this._mirror.geometry;
+    this.frameBudgetMs = options.frameBudgetMs ?? 8;
+    this.pixelError = options.pixelError ?? 1;
+    this.viewportHeight = options.viewportHeight ?? 1080;  // pixels: the renderer's drawing buffer
+    this.object = null;  // the mesh drawing the geometry (its world matrix), when update() has none
+    this.status = 'ok';
+    this.complete = false;  // every node the last view needs is applied
+    this.ended = false;  // failed (status, error say why)
+    this._view = null;
+    this._baseShown = false;
+    this._renderState = { shownVertices: 0 };
+    this._batch = 4096;
+    this.source = new RangeSource(decoder, url, { init: options.init, inFlight: options.inFlight,
+      timeoutMs: options.timeoutMs, firstBytes: options.firstBytes });
+    // Resolves to the decoder's status once the in-order part is in (up to the node table, or
+    // the whole stream without one); rejects on a failed request.
+    this.done = this.source.open().then(() => this.decoder.status);
+  }
+
+  get error() {
+    return this.source.error || (this.decoder.status === 'ok' ? '' : this.decoder.error);
+  }
+  get bytes() { return this.source.bytes; }
+  get totalBytes() { return this.source.totalBytes; }
+  get faceCount() { return this.decoder.faceCount; }
+  get vertexCount() { return this.decoder.vertexCount; }
+  get decodedFaces() { return this.decoder.faceCount; }
+  get splitsApplied() { return this.decoder.splitsApplied; }
+  get nodesApplied() { return this.decoder.nodesApplied(); }
+  get nodeCount() { return this.decoder.nodeCount; }
+  info() { return this.decoder.info(); }
+  materials() { return this.decoder.materials(); }
+  async snapshot() {
+    const d = this.decoder;
+    return { positions: d.positions().slice(), indices: d.indices().slice(), render: renderArrays(d) };
+  }
+
+  // Moves the mesh towards the camera's view within budgetMs (the last camera's without one),
+  // fetches what it still needs and copies what changed into the geometry. True when the
+  // geometry changed. The base mesh is shown before any refinement.
+  update(camera, object = this.object, budgetMs = this.frameBudgetMs) {
+    const d = this.decoder;
+    if (camera) this._view = cameraView(camera, object, this.viewportHeight, this.pixelError);
+    if (this.status === 'ok' && d.status !== 'ok') this.status = d.status;
+    this.ended = this.status !== 'ok' || this.source.error !== '';  // (error says why)
+    if (!d.info().baseDone) return false;
+    if (!this._baseShown) {
+      this._baseShown = true;
+      return this._sync();
+    }
+    if (this._view && d.status === 'ok') {
+      // Batches of splits sized to a quarter of the budget left, as refineFor() does.
+      const start = performance.now();
+      for (;;) {
+        const t0 = performance.now();
+        const n = d.updateView(this._view, this._batch);
+        const now = performance.now();
+        if (n === 0 || d.status !== 'ok') break;
+        const per = (now - t0) / n;
+        this._batch = Math.max(64, Math.min(1 << 20, Math.floor((budgetMs - (now - start)) / 4 / (per || 1e-4))));
+        if (now - start >= budgetMs) break;
+      }
+      if (d.status === 'ok') this.source.want(d.nodesToFetch());
+      this.complete = d.status === 'ok' && d.viewComplete();
+    }
+    return this._sync();
+  }
+
+  _sync() { return syncMirror(this.decoder, this._mirror, this._renderState, false); }
+
+  dispose() {
+    this.source.close();
     this.decoder.dispose();
     this.geometry.dispose();
   }
@@ -578,9 +691,31 @@ export class PMZLoader extends Loader {
     return new Promise((resolve, reject) => this.load(url, resolve, onProgress, reject));
   }
 
+  // options.view: a PMZViewStream for the URL (on this thread). Updated each animation frame
+  // (autoUpdate) until its base mesh is in; from then on the caller's update(camera) drives it.
+  async _viewStream(source, onUpdate, auto) {
+    const opts = this.options;
+    let url = String(source);
+    try {
+      url = new URL(source, typeof location === 'object' ? location.href : undefined).href;
+    } catch (e) { /* a relative URL without a page (node) */ }
+    const s = new PMZViewStream(await createDecoder(opts), url, { ...opts, ...(typeof opts.view === 'object' ? opts.view : {}),
+      init: { headers: this.requestHeader, credentials: this.withCredentials ? 'include' : 'same-origin' } });
+    s.source.onData = () => onUpdate && onUpdate(s);
+    const tick = () => {
+      s.update();
+      if (onUpdate) onUpdate(s);
+      if (!s.ended && !s.info().baseDone) requestAnimationFrame(tick);
+    };
+    if (auto) requestAnimationFrame(tick);
+    return s;
+  }
+
   async stream(source, onUpdate) {
     const opts = this.options;
     const auto = opts.autoUpdate !== false && typeof requestAnimationFrame === 'function';
+    const isUrl = typeof source === 'string' || source instanceof URL;
+    if (opts.view && isUrl) return this._viewStream(source, onUpdate, auto);
     const inWorker = opts.worker && typeof Worker === 'function';
     const s = inWorker ? new PMZWorkerStream(opts) : new PMZStream(await createDecoder(opts), opts);
     // Texture references resolve against it (pmzMaterials()).

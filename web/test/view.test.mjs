@@ -9,7 +9,7 @@ import { tmpdir } from 'node:os';
 import path from 'node:path';
 import { after, before, test } from 'node:test';
 
-import { binDir, importPackage, nativeDecode, rootDir, sameBits } from './common.mjs';
+import { binDir, importPackage, importThreeLoader, nativeDecode, rootDir, sameBits } from './common.mjs';
 import { serveViewer } from './serve.mjs';
 
 // A terrain of about 60k faces encoded with a node table (clusters of 1000 vertices: 60 nodes).
@@ -179,4 +179,65 @@ test('a wrong Content-Range, a stalled body, a missing file: one line, no hang',
     assert.ok(Date.now() - t0 < 5000);
     d.dispose();
   }
+});
+
+// PMZViewStream.update(camera, mesh) until the view is complete (or failed).
+async function follow(s, camera, mesh) {
+  for (let i = 0; i < 2000 && !(s.update(camera, mesh, 50), s.complete || s.ended); ++i)
+    await new Promise((resolve) => setTimeout(resolve, 2));
+  assert.equal(s.error, '');
+  assert.ok(s.complete, 'the view never completed');
+}
+
+// The geometry drawn (the draw range) against the decoder's arrays.
+function assertGeometryIsDecoders(s) {
+  const g = s.geometry, d = s.decoder;
+  assert.equal(g.drawRange.count, 3 * d.faceCount);
+  assert.ok(sameBits(g.getIndex().array.slice(0, 3 * d.faceCount), d.indices()), 'indices differ');
+  assert.ok(sameBits(g.getAttribute('position').array.slice(0, 3 * d.vertexCount), d.positions()),
+    'positions differ');
+}
+
+test('three.js: update(camera, mesh) fetches what a moving camera needs and uploads it', async () => {
+  const THREE = await import(path.join(rootDir, 'web', 'node_modules', 'three', 'build', 'three.module.js'));
+  const { PMZLoader } = await importThreeLoader();
+  const { createDecoder } = await importPackage();
+  const loader = new PMZLoader(undefined, { view: { pixelError: 1, viewportHeight: 600 } });
+  const s = await loader.stream(base + 'nodes.pmz');
+  assert.equal(await s.done, 'ok');
+  // The mesh moved and scaled, the camera with it: the view in the mesh's coordinates is
+  // CLOSE's.
+  const mesh = new THREE.Mesh(s.geometry);
+  mesh.position.set(5, -1, 2);
+  mesh.scale.setScalar(2);
+  mesh.updateMatrixWorld();
+  const camera = new THREE.PerspectiveCamera(60, 800 / 600, 1e-3, 100);
+  const place = (v) => {
+    camera.position.copy(new THREE.Vector3(...v.eye).applyMatrix4(mesh.matrixWorld));
+    camera.lookAt(new THREE.Vector3(...v.target).applyMatrix4(mesh.matrixWorld));
+    camera.updateMatrixWorld();
+  };
+  place(CLOSE);
+  await follow(s, camera, mesh);
+  const close = s.nodesApplied;
+  assert.ok(close > 1 && close < 60, `${close} nodes`);
+  assert.ok(s.bytes < s.totalBytes / 2, `${s.bytes} of ${s.totalBytes} bytes`);
+  assertGeometryIsDecoders(s);
+  // Every node (the whole stream's mesh), then back: nodes undone, the geometry follows.
+  place(FAR);
+  s.pixelError = FAR.pixelError;
+  await follow(s, camera, mesh);
+  assert.equal(s.nodesApplied, 60);
+  assertGeometryIsDecoders(s);
+  const whole = await createDecoder();
+  assert.equal(whole.feed(readFileSync(nodesPmz)), 'ok');
+  whole.refine();
+  assert.ok(sameBits(s.decoder.indices(), whole.indices()), 'indices differ from the whole stream\'s');
+  whole.dispose();
+  place(CLOSE);
+  s.pixelError = CLOSE.pixelError;
+  await follow(s, camera, mesh);
+  assert.equal(s.nodesApplied, close);
+  assertGeometryIsDecoders(s);
+  s.dispose();
 });
