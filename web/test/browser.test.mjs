@@ -6,17 +6,19 @@
 // and the final level both show the object, in the canvas and in screenshots of the page, and
 // differ.
 import assert from 'node:assert/strict';
+import { execFileSync } from 'node:child_process';
 import { mkdtempSync, readFileSync, statSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import path from 'node:path';
 import { after, before, test } from 'node:test';
 
-import { CHECKER_BLUE, CHECKER_RED, demoPmz, encodeNative, importPackage, nativeArrays, nativeDecode,
+import { CHECKER_BLUE, CHECKER_RED, binDir, demoPmz, encodeNative, importPackage, nativeArrays, nativeDecode,
   webDir, writeTexturedTorus, writeTiledPlane } from './common.mjs';
 import { launchChromium, serveViewer } from './serve.mjs';
 
 const RATE = 10 * 1024;  // bytes per second: the 80 KB sample takes about 8 s (frames are slow on a loaded machine)
 let server, browser;
+let nodesPmz;
 
 let textured;  // the seamed textured torus (red / blue checkerboard) as .pmz, checker.png beside it
 // The sample's first TRUNCATED_BYTES bytes (`head -c`): a truncated stream whose last good level
@@ -37,7 +39,14 @@ before(async () => {
   const late = mkdtempSync(path.join(tmpdir(), 'pmz-web-late-'));
   const lateStream = encodeNative(writeTexturedTorus(late, { texture: 'late.png', kd: LATE_KD }),
     path.join(late, 'late.pmz'));
+  // A terrain with a node table (60 nodes): decoded for the camera, fetched by ranges.
+  const terrain = path.join(work, 'terrain.ply');
+  nodesPmz = path.join(work, 'terrain.pmz');
+  execFileSync(path.join(binDir, 'pmz-generate'), ['--faces', '60000', '-q', '-o', terrain]);
+  execFileSync(path.join(binDir, 'pmz-encode'), [terrain, '--cluster-vertices', '1000', '-o', nodesPmz],
+    { stdio: ['ignore', 'ignore', 'inherit'] });
   server = await serveViewer(path.join(webDir, 'dist', 'viewer'), { 'sample.pmz': demoPmz(),
+    'nodes.pmz': { file: nodesPmz, bytesPerSecond: Infinity },
     'textured.pmz': textured, 'checker.png': path.join(work, 'checker.png'),
     // Served at once, as from a local server.
     'truncated.pmz': { file: truncated, bytesPerSecond: Infinity },
@@ -480,3 +489,30 @@ for (const query of ['', '&render=page']) {
     await page.close();
   });
 }
+
+test('a stream with a node table is decoded for ?camera=, its nodes fetched by ranges', async () => {
+  const page = await browser.newPage();
+  const messages = [];
+  page.on('console', (m) => messages.push(m.text()));
+  page.on('pageerror', (e) => messages.push(String(e)));
+  await page.setViewport({ width: 800, height: 600 });
+  const { port } = server.address();
+  await page.goto(`http://127.0.0.1:${port}/index.html?src=/stream/nodes.pmz` +
+    '&camera=0.2,0.2,0.15,0.1,0.1,0&pixelerror=1');
+  await page.waitForFunction(() => window.pmzStatus.complete || window.pmzStatus.error, { timeout: 120000 });
+  const s = await page.evaluate(() => ({ ...window.pmzStatus }));
+  assert.equal(s.error, '', messages.join('\n'));
+  assert.equal(s.totalNodes, 60);
+  assert.ok(s.nodes > 1 && s.nodes < 60, `${s.nodes} nodes`);
+  assert.equal(s.totalBytes, statSync(nodesPmz).size);
+  assert.ok(s.bytes < s.totalBytes / 2, `${s.bytes} of ${s.totalBytes} bytes`);
+  assert.ok(s.faces > 0 && s.faces < s.vertices * 2, `${s.faces} faces`);
+  // Every request for the stream asked for a range (the header probe too).
+  const asked = server.ranges['nodes.pmz'];
+  assert.ok(asked.length >= 3 && asked.every((h) => /^bytes=\d+-\d+$/.test(h)), asked.join(' '));
+  await page.waitForFunction(() => /nodes +\d+ \/ 60 resident/.test(document.getElementById('overlay').textContent),
+    { timeout: 30000 });
+  const shot = await page.evaluate(() => window.pmzSnapshot());
+  assert.ok(shot.coverage > 0.05, `coverage ${shot.coverage}`);
+  await page.close();
+});

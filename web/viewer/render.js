@@ -13,6 +13,7 @@
 //               stream) | {type: 'reply', id, result, error} | {type: 'warn', text}
 // Times posted are this thread's performance.now(); the page adds the clocks' offset.
 import * as THREE from './vendor/three.module.js';
+import { createDecoder } from './pmz/index.js';
 import { PMZLoader, geomorphMaterial, pmzMaterials } from './pmz/three.js';
 
 const REFINE_BUDGET_MS = 8;  // ?worker=0: refinement per frame on this thread
@@ -53,11 +54,39 @@ function bitmapTextureLoader() {
   };
 }
 
+// Whether the stream at url has a node table (and no attributes) and its server answers Range:
+// its header, from the first PROBE_BYTES bytes asked for by a range (a plain stream's header
+// is about 50 bytes). Such a stream is decoded for the camera (PMZViewStream); any other, or any
+// failure here, is streamed in order as before.
+const PROBE_BYTES = 256;
+async function viewDecodable(url) {
+  let d = null;
+  try {
+    const r = await fetch(url, { headers: { Range: `bytes=0-${PROBE_BYTES - 1}` } });
+    const bytes = new Uint8Array(await r.arrayBuffer());
+    if (r.status !== 206 || bytes.length > PROBE_BYTES) return false;
+    d = await createDecoder();
+    d.feed(bytes);
+    const info = d.info();
+    return info.headerDone && (info.flags & 2) !== 0 && (info.flags & 1) === 0;
+  } catch (e) {
+    return false;
+  } finally {
+    if (d) d.dispose();
+  }
+}
+
 // canvas: an OffscreenCanvas (worker) or the page's canvas; width, height in CSS pixels;
 // query: the page's URL parameters (a string); post(message): to the page.
 export function createView({ canvas, width, height, pixelRatio, query, post }) {
   const params = new URLSearchParams(query);
   const useWorker = params.get('worker') !== '0' && typeof Worker === 'function';
+  // View-dependent decoding of streams with a node table (?view=0: streamed in order as others):
+  // ?camera=EX,EY,EZ,TX,TY,TZ (the mesh's coordinates) the first camera, ?pixelerror=P.
+  const viewDecoding = params.get('view') !== '0';
+  const pixelError = Number(params.get('pixelerror')) > 0 ? Number(params.get('pixelerror')) : 1;
+  const cameraParam = (params.get('camera') || '').split(',').map(Number);
+  const startCamera = cameraParam.length === 6 && cameraParam.every(Number.isFinite) ? cameraParam : null;
   const software = softwareRenderer();
   const antialias = params.has('aa') ? params.get('aa') !== '0' : !software;
   const renderer = new THREE.WebGLRenderer({ canvas, antialias, preserveDrawingBuffer: true });
@@ -322,6 +351,8 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
     }
     morphTicks = [];
     Object.assign(status, { faces: 0, vertices: 0, bytes: 0, totalBytes: 0, complete: false, ended: false, error: '' });
+    delete status.nodes;
+    delete status.totalNodes;
     timing = { firstBytes: null, firstObjectFrame: null };
     frames = [];
     attributes = null;
@@ -330,18 +361,23 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
       await shadersReady;  // and the draw calibration: the first face limit
       // Before the first bytes: resizing the drawing buffer at the first object frame delayed it.
       if (DECODE_SCALE !== 1) scaleForDecoding(true);
-      const loader = new PMZLoader(undefined, { geomorph: true, autoUpdate: false, worker: useWorker,
-        faceLimit: faceLimit(0, Infinity) });
+      const byView = viewDecoding && typeof source === 'string' && await viewDecodable(source);
+      const loader = new PMZLoader(undefined, byView ? { autoUpdate: false, view: { pixelError } }
+        : { geomorph: true, autoUpdate: false, worker: useWorker, faceLimit: faceLimit(0, Infinity) });
       const stream = await loader.stream(source, (s) => {
         if (timing.firstBytes === null && s.bytes > 0) timing.firstBytes = performance.now();
         status.bytes = s.bytes;
         status.totalBytes = s.totalBytes;
       });
-      const mesh = new THREE.Mesh(stream.geometry, morphOn ? material : plainMaterial);
+      const mesh = new THREE.Mesh(stream.geometry, morphOn && !byView ? material : plainMaterial);
       mesh.frustumCulled = false;
       scene.add(mesh);
       redraw = true;
-      current = { stream, mesh, fitted: false, materials: null };
+      current = { stream, mesh, fitted: false, materials: null, byView };
+      if (byView) {
+        stream.object = mesh;
+        current.materials = { plain: plainMaterial, morph: plainMaterial };  // (no geomorphs)
+      }
       const result = await stream.done;
       if (result !== 'ok') setError(stream.error || result);
     } catch (e) {
@@ -355,25 +391,44 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
     const min = new THREE.Vector3(...info.bboxMin), max = new THREE.Vector3(...info.bboxMax);
     const center = min.clone().add(max).multiplyScalar(0.5);
     const radius = Math.max(1e-6, max.distanceTo(min) / 2);
-    const distance = radius / Math.sin(THREE.MathUtils.degToRad(camera.fov / 2)) * 1.05;
-    camera.position.copy(center).add(new THREE.Vector3(0.35, 0.3, 1).normalize().multiplyScalar(distance));
-    camera.lookAt(center);
-    camera.near = distance / 100;
-    camera.far = distance * 10;
+    let distance = radius / Math.sin(THREE.MathUtils.degToRad(camera.fov / 2)) * 1.05;
+    let target = center;
+    if (startCamera) {  // ?camera=
+      camera.position.fromArray(startCamera);
+      target = new THREE.Vector3().fromArray(startCamera, 3);
+      distance = Math.max(1e-6, camera.position.distanceTo(target));
+      camera.near = Math.min(distance, radius) / 100;
+      camera.far = (distance + 2 * radius) * 10;
+    } else {
+      camera.position.copy(center).add(new THREE.Vector3(0.35, 0.3, 1).normalize().multiplyScalar(distance));
+      camera.near = distance / 100;
+      camera.far = distance * 10;
+    }
+    camera.lookAt(target);
     camera.updateProjectionMatrix();
-    post({ type: 'fit', position: camera.position.toArray(), target: center.toArray(), near: camera.near, far: camera.far });
+    post({ type: 'fit', position: camera.position.toArray(), target: target.toArray(), near: camera.near, far: camera.far });
   }
 
   function postState(limit) {
     const s = current && current.stream;
     const state = { type: 'state', status, info: s ? s.info() : null, timing, attributes, calibration,
       overlay: s ? { limited: limit !== null && !status.ended, decodedFaces: s.decodedFaces,
-        rate: Math.round(rate.perSecond) } : null };
+        rate: Math.round(rate.perSecond), byView: !!current.byView } : null };
     const text = JSON.stringify(state);
     if (text !== posted) {
       posted = text;
       post(state);
     }
+  }
+
+  // Faces drawn (not degenerate: those of nodes not applied are) in a view stream's geometry.
+  function drawnFaces(g) {
+    const index = g.getIndex(), n = g.drawRange.count;
+    if (!index) return 0;
+    const a = index.array;
+    let faces = 0;
+    for (let i = 0; i < n; i += 3) if (a[i] !== a[i + 1]) ++faces;
+    return faces;
   }
 
   function frame(t) {
@@ -390,12 +445,20 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
         current.fitted = true;
       }
       const before = s.splitsApplied;
-      s.faceTarget = faceTarget;
-      s.faceLimit = limit = faceLimit(s.faceCount, info.headerDone ? info.fullFaces : Infinity);
       const t0 = performance.now();
-      if (s.update(REFINE_BUDGET_MS)) {
-        redraw = true;
-        glideUntil = performance.now() + 1000 * GLIDE_SECONDS + 50;
+      if (current.byView) {  // the nodes this camera needs, fetched by ranges
+        s.viewportHeight = renderer.domElement.height;
+        if (s.update(current.fitted ? camera : null, current.mesh, REFINE_BUDGET_MS)) {
+          redraw = true;
+          current.drawnFaces = drawnFaces(s.geometry);
+        }
+      } else {
+        s.faceTarget = faceTarget;
+        s.faceLimit = limit = faceLimit(s.faceCount, info.headerDone ? info.fullFaces : Infinity);
+        if (s.update(REFINE_BUDGET_MS)) {
+          redraw = true;
+          glideUntil = performance.now() + 1000 * GLIDE_SECONDS + 50;
+        }
       }
       work = performance.now() - t0;
       const g = s.geometry;
@@ -419,8 +482,9 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
       rate.splits += Math.max(0, s.splitsApplied - before);
       if (timing.firstBytes === null && s.firstBytesTime != null) timing.firstBytes = s.firstBytesTime;
       Object.assign(status, { bytes: s.bytes, totalBytes: s.totalBytes });
-      Object.assign(status, { faces: s.faceCount, vertices: s.vertexCount, complete: s.complete,
-        ended: status.ended || s.ended });
+      Object.assign(status, { faces: current.byView ? current.drawnFaces ?? 0 : s.faceCount,
+        vertices: s.vertexCount, complete: s.complete, ended: status.ended || s.ended });
+      if (current.byView) Object.assign(status, { nodes: s.nodesApplied, totalNodes: s.nodeCount });
       if (s.status !== 'ok') setError(s.error);
       const m = current.materials && (morphOn ? current.materials.morph : current.materials.plain);
       if (m && current.mesh.material !== m) {

@@ -177,9 +177,12 @@ function frame(t) {
     ? `faces     ${status.faces.toLocaleString()}` +
       (o.limited ? ` shown (draw budget), ${o.decodedFaces.toLocaleString()} decoded` : '') +
       `\nvertices  ${status.vertices.toLocaleString()}\n` +
-      `bytes     ${kb(status.bytes)} / ${status.totalBytes ? kb(status.totalBytes) : '?'}\n` +
-      `refine    ${o.rate.toLocaleString()} splits/s\n` +
-      (status.error ? `error     ${status.error}` : status.complete ? 'complete' : 'streaming')
+      `bytes     ${kb(status.bytes)} / ${status.totalBytes ? kb(status.totalBytes) : '?'}` +
+      (o.byView ? ' fetched' : '') + '\n' +
+      (o.byView && status.totalNodes ? `nodes     ${status.nodes} / ${status.totalNodes} resident\n`
+        : `refine    ${o.rate.toLocaleString()} splits/s\n`) +
+      (status.error ? `error     ${status.error}` : status.complete ? (o.byView ? 'view complete' : 'complete')
+        : o.byView ? 'fetching for the view' : 'streaming')
     : status.error ? `error     ${status.error}` : overlay.textContent;
   if (text !== overlay.textContent) overlay.textContent = text;  // no layout for an unchanged text
   if (window.pmzFrames.length < 100000)
