@@ -73,10 +73,21 @@ void Stream::run() {
     }
     return !limit_reached;
   };
-  const ByteSink in_order = throttled(feed, options_.bytes_per_second, stop_);
+  // --rate: the bytes in order, and a node's bytes before they are fed, on one clock.
+  const ByteSink* paced_to = &feed;
+  const ByteSink nowhere = [](const uint8_t*, size_t) { return true; };
+  const ByteSink in_order =
+      throttled([&](const uint8_t* data, size_t size) { return (*paced_to)(data, size); },
+                options_.bytes_per_second, stop_);
+  const ByteSink pace = [&](const uint8_t* data, size_t size) {
+    paced_to = &nowhere;
+    const bool go_on = in_order(data, size);
+    paced_to = &feed;
+    return go_on;
+  };
   bool at_end = true;  // read to the end of the stream: the decoder is told so
   std::string error = options_.by_nodes && source_->ranged()
-                          ? run_by_ranges(in_order, decode_error, at_end)
+                          ? run_by_ranges(in_order, pace, decode_error, at_end)
                           : source_->run(in_order, stop_);
   if (error.empty() && decode_error.empty() && !limit_reached && at_end && !stop_.load()) {
     std::lock_guard<std::mutex> lock(mutex);
@@ -92,7 +103,8 @@ void Stream::run() {
   done_ = true;  // publishes error_ (seq_cst store after the write)
 }
 
-std::string Stream::run_by_ranges(const ByteSink& feed, std::string& decode_error, bool& at_end) {
+std::string Stream::run_by_ranges(const ByteSink& feed, const ByteSink& pace,
+                                  std::string& decode_error, bool& at_end) {
   // In order up to the node table: small pieces first (the table is near the front), larger
   // ones for a stream that has none.
   uint64_t offset = 0, piece = 4096;
@@ -102,7 +114,7 @@ std::string Stream::run_by_ranges(const ByteSink& feed, std::string& decode_erro
     return info.nodes > 0 && !(info.flags & kFlagAttributes);
   };
   while (!stop_.load()) {
-    if (nodes_fetchable()) return fetch_nodes(feed, offset, decode_error, at_end);
+    if (nodes_fetchable()) return fetch_nodes(feed, pace, offset, decode_error, at_end);
     const uint64_t total = source_->total_bytes();
     if (total && offset >= total) return "";  // the end of the stream
     bool short_piece = false, go_on = true;
@@ -122,8 +134,8 @@ std::string Stream::run_by_ranges(const ByteSink& feed, std::string& decode_erro
   return "";
 }
 
-std::string Stream::fetch_nodes(const ByteSink& feed, uint64_t in_order, std::string& decode_error,
-                                bool& at_end) {
+std::string Stream::fetch_nodes(const ByteSink& feed, const ByteSink& pace, uint64_t in_order,
+                                std::string& decode_error, bool& at_end) {
   at_end = false;
   fetching_nodes_ = true;
   std::vector<uint8_t> asked;  // per node: its range was asked for once
@@ -163,6 +175,7 @@ std::string Stream::fetch_nodes(const ByteSink& feed, uint64_t in_order, std::st
         in_order += fed ? size : 0;
         return fed;
       }
+      if (!pace(data, size)) return false;
       pmz::Status status;
       {
         std::lock_guard<std::mutex> lock(mutex);

@@ -52,10 +52,12 @@ class Stream {
 
  private:
   void run();
-  // The view-dependent reading (by_nodes); returns the source's error, "" otherwise.
-  std::string run_by_ranges(const ByteSink& feed, std::string& decode_error, bool& at_end);
-  std::string fetch_nodes(const ByteSink& feed, uint64_t in_order, std::string& decode_error,
-                          bool& at_end);
+  // The view-dependent reading (by_nodes); returns the source's error, "" otherwise. `feed`
+  // feeds bytes in order, `pace` only waits for --rate.
+  std::string run_by_ranges(const ByteSink& feed, const ByteSink& pace, std::string& decode_error,
+                            bool& at_end);
+  std::string fetch_nodes(const ByteSink& feed, const ByteSink& pace, uint64_t in_order,
+                          std::string& decode_error, bool& at_end);
 
   std::unique_ptr<Source> source_;
   StreamOptions options_;

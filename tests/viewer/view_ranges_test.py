@@ -25,7 +25,6 @@ import shutil
 import socket
 import subprocess
 import sys
-import tempfile
 import threading
 import time
 
@@ -35,6 +34,7 @@ import viewer_test as vt  # noqa: E402  (PNG decoding, the torus, xvfb-run)
 BACKGROUND = (33, 36, 41)  # viewer/renderer.hpp kBackground, as 8-bit
 CLOSE_CAMERA = "0.2,0.15,0.12,0.2,0.25,0"  # over the terrain's (0, 0)-(1, 1) corner
 SIZE = "320x240"
+KBPS = 40
 
 
 def is_background(p, tolerance=6):
@@ -188,7 +188,10 @@ def test_ranges(args):
         sys.exit(vt.SKIP)
     workdir = args.workdir
     os.makedirs(workdir, exist_ok=True)
-    www = tempfile.mkdtemp(dir=workdir)
+    www, prefix = os.path.join(workdir, "www"), os.path.join(workdir, "nginx")
+    for d in (www, prefix):
+        shutil.rmtree(d, ignore_errors=True)
+        os.makedirs(d)
     pmz = make_terrain(args, www)
     size = os.path.getsize(pmz)
     name = os.path.basename(pmz)
@@ -209,16 +212,16 @@ def test_ranges(args):
             not int(last["bytes"]) < size:
         vt.fail("orbit camera: want a complete view from some of the nodes and bytes")
 
-    prefix = tempfile.mkdtemp(dir=workdir)
     nginx = Nginx(prefix, www)
     try:
         url = "http://127.0.0.1:%d/%s" % (nginx.port, name)
         png = os.path.join(workdir, "nginx.png")
         got = shot_summary("nginx", shoot(args, url, png, CLOSE_CAMERA), png)
         requests = nginx.requests()
-        # The same view decoded interactively, with --log lines to parse.
-        log_run = vt.xvfb(args, [args.view, url, "--camera", CLOSE_CAMERA, "--size", SIZE, "--log",
-                                 "--exit-when-complete"], 60)
+        # The same view decoded interactively, with --log lines to parse, at --rate KBPS: the
+        # nodes' bytes wait their turn too.
+        log_run = vt.xvfb(args, [args.view, url, "--camera", CLOSE_CAMERA, "--size", SIZE, "--log", "--rate",
+                                 str(KBPS), "--exit-when-complete"], 60)
     finally:
         nginx.stop()
     sent = sum(r[1] for r in requests)
@@ -239,6 +242,8 @@ def test_ranges(args):
     if log_run.returncode != 0 or not lines[-1].endswith("complete") or int(last["faces"]) != faces or \
             not int(last["bytes"]) < int(last["total"]) == size or int(last["nodes"]) != nodes:
         vt.fail("--log: the interactive run should end complete at the screenshot's faces and nodes")
+    if float(last["t"]) < 0.95 * read / (KBPS * 1000):  # (the in-order bytes alone take 2/3 of it)
+        vt.fail("--rate %d: %d bytes in %.2f s" % (KBPS, read, float(last["t"])))
 
     # A server that ignores Range: asked with Range, answered 200; read in order, same view.
     RangeIgnoring.ranges = []
