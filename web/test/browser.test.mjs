@@ -47,6 +47,7 @@ before(async () => {
     { stdio: ['ignore', 'ignore', 'inherit'] });
   server = await serveViewer(path.join(webDir, 'dist', 'viewer'), { 'sample.pmz': demoPmz(),
     'nodes.pmz': { file: nodesPmz, bytesPerSecond: Infinity },
+    'front.pmz': { file: nodesPmz, bytesPerSecond: Infinity, range: 'front' },
     'textured.pmz': textured, 'checker.png': path.join(work, 'checker.png'),
     // Served at once, as from a local server.
     'truncated.pmz': { file: truncated, bytesPerSecond: Infinity },
@@ -514,5 +515,17 @@ test('a stream with a node table is decoded for ?camera=, its nodes fetched by r
     { timeout: 30000 });
   const shot = await page.evaluate(() => window.pmzSnapshot());
   assert.ok(shot.coverage > 0.05, `coverage ${shot.coverage}`);
+  await page.close();
+});
+
+test('a node range the server fails is shown as one line', async () => {
+  const page = await browser.newPage();
+  await page.setViewport({ width: 800, height: 600 });
+  const { port } = server.address();
+  await page.goto(`http://127.0.0.1:${port}/index.html?src=/stream/front.pmz&camera=0.2,0.2,0.15,0.1,0.1,0`);
+  await page.waitForFunction(() => window.pmzStatus.complete || window.pmzStatus.error, { timeout: 120000 });
+  const s = await page.evaluate(() => ({ ...window.pmzStatus }));
+  assert.match(s.error, /^pmz: http:\/\/127\.0\.0\.1:\d+\/stream\/front\.pmz \(bytes=\d+-\d+\): HTTP 500$/);
+  assert.equal(s.complete, false);
   await page.close();
 });

@@ -5,7 +5,7 @@
 // Content-Range, as static servers answer. streams[NAME]: a file, or {file, bytesPerSecond
 // (Infinity: at once), delayMs (before the response starts), range ('honour' the default;
 // 'ignore': a 200 with the whole file; 'wrongrange': the slice asked for, its Content-Range one
-// byte later; 'stall': headers, then no body)}; server.requests[NAME]: when each
+// byte later; 'stall': headers, then no body; 'front': ranges from byte 0 only, a 500 for others)}; server.requests[NAME]: when each
 // request came (Date.now()); server.ranges[NAME]: the Range header of each ('' without).
 import { createReadStream, mkdtempSync, readFileSync, rmSync, statSync } from 'node:fs';
 import http from 'node:http';
@@ -34,6 +34,10 @@ export function serveViewer(viewerDir, streams, bytesPerSecond) {
       const asked = /^bytes=(\d+)-(\d*)$/.exec(req.headers.range ?? '');
       if (asked && mode !== 'ignore') {
         const first = Number(asked[1]);
+        if (mode === 'front' && first > 0) {
+          res.writeHead(500).end();
+          return;
+        }
         const last = Math.min(whole.length - 1, asked[2] === '' ? Infinity : Number(asked[2]));
         if (first > last) {
           res.writeHead(416, { 'content-range': `bytes */${whole.length}` }).end();

@@ -485,7 +485,7 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
       Object.assign(status, { faces: current.byView ? current.drawnFaces ?? 0 : s.faceCount,
         vertices: s.vertexCount, complete: s.complete, ended: status.ended || s.ended });
       if (current.byView) Object.assign(status, { nodes: s.nodesApplied, totalNodes: s.nodeCount });
-      if (s.status !== 'ok') setError(s.error);
+      if (s.status !== 'ok' || s.error) setError(s.error);  // (a view stream's failed request too)
       const m = current.materials && (morphOn ? current.materials.morph : current.materials.plain);
       if (m && current.mesh.material !== m) {
         current.mesh.material = m;
