@@ -366,6 +366,7 @@ export class PMZViewStream {
     // Resolves to the decoder's status once the in-order part is in (up to the node table, or
     // the whole stream without one); rejects on a failed request.
     this.done = this.source.open().then(() => this.decoder.status);
+    this.done.catch(() => {});  // (kept in error too: a caller need not await done)
   }
 
   get error() {

@@ -241,3 +241,15 @@ test('three.js: update(camera, mesh) fetches what a moving camera needs and uplo
   assertGeometryIsDecoders(s);
   s.dispose();
 });
+
+test('three.js: a view stream whose request fails ends with one line, done unawaited', async () => {
+  const { PMZLoader } = await importThreeLoader();
+  const s = await new PMZLoader(undefined, { view: true }).stream(base + 'missing.pmz');
+  for (let i = 0; i < 500 && !s.ended; ++i) {
+    await new Promise((resolve) => setTimeout(resolve, 5));
+    s.update();
+  }
+  assert.equal(s.ended, true);
+  assert.match(s.error, /^pmz: .*missing\.pmz \(bytes=0-16383\): HTTP 404$/);
+  s.dispose();
+});
