@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstring>
 #include <iterator>
+#include <limits>
 #include <memory>
 
 #include "attr_writer.hpp"
@@ -20,6 +21,7 @@
 #include "pmz/progressive_mesh.hpp"
 #include "pmz/speed_level.hpp"
 #include "pmz/split_chunk.hpp"
+#include "pmz/triangle_distance.hpp"
 #include "pmz/vertex_choice.hpp"
 #include "survivors.hpp"
 
@@ -309,6 +311,9 @@ class SplitCoder {
   uint64_t node_bytes(size_t k, size_t node) const { return node_bytes_[k][node]; }
   uint64_t node_faces(size_t node) const { return node_faces_[node]; }
   uint64_t node_wedges(size_t node) const { return node_wedges_[node]; }
+  // With a node table: per split in coding order, the distance from u to v's fan before it (the
+  // surface u was collapsed onto), in the input's units.
+  const std::vector<float>& deviations() const { return deviation_; }
 
   // The candidate with the fewest split bytes (the first of equals).
   size_t best() const {
@@ -386,6 +391,19 @@ class SplitCoder {
     }
     ++node_;
   }
+  // After gather_ring(v): the distance from vertex u to v's fan (its faces (v, ring[j],
+  // ring[j + 1])), at the input's positions (a collapse moves no vertex).
+  float fan_distance(uint32_t v, uint32_t u) const {
+    const auto at = [&](uint32_t x) { return &seq_.mesh.positions[size_t(plan_.input_of[x]) * 3]; };
+    const std::span<const uint32_t> ring = pm_.ring();
+    const size_t faces = pm_.ring_closed() ? ring.size() : ring.size() - 1;
+    const double p[3] = {at(u)[0], at(u)[1], at(u)[2]};
+    double best = std::numeric_limits<double>::infinity();
+    for (size_t j = 0; j < faces; ++j)
+      best = std::min(
+          best, point_triangle_distance2(p, at(v), at(ring[j]), at(ring[(j + 1) % ring.size()])));
+    return faces ? float(std::sqrt(best)) : 0.0f;
+  }
   // With a node table: v, its ring and u lie in the node's cell (spec/format.md section 15.4).
   bool in_node(uint32_t v, uint32_t u) const {
     if (!nodes_ || whole_) return true;
@@ -411,6 +429,7 @@ class SplitCoder {
       return error =
                  "a split reaches outside its node's cell (levels made at other position bits?)",
              false;
+    if (nodes_) deviation_.push_back(fan_distance(v, pm_.vertex_count()));
     SplitSymbols code;
     code.v = v;
     code.wedge_context = wedge_context(uint32_t(pm_.ring().size()), pm_.ring_closed());
@@ -520,6 +539,7 @@ class SplitCoder {
   std::vector<uint64_t> node_bytes_[kMaxCandidates];
   uint64_t node_start_faces_ = 0, node_start_wedges_ = 0;
   std::vector<uint64_t> node_faces_, node_wedges_;
+  std::vector<float> deviation_;
   std::unique_ptr<SplitModels> first_models_[kMaxCandidates];
   AttributeModels first_attribute_models_;
 };
@@ -590,9 +610,8 @@ bool check_full_decode(const IndexedMesh& mesh, const ProgressiveMesh& pm, const
 }  // namespace
 
 // The node table of a sequence made in levels of cells (SimplifyOptions::clusters): its grids,
-// and per node of `plan` its level, cell, split count, sphere and error (the largest |u - v| of
-// its collapses, raised to its descendants' so that a parent's bound covers its children's).
-// Faces and bytes are filled once the splits are coded.
+// and per node of `plan` its level, cell, split count and sphere. Faces, bytes and error bounds
+// are filled once the splits are coded.
 NodeTable node_table_of(const CollapseSequence& seq, const ClusterPlan& plan) {
   NodeTable t;
   for (const CollapseSequence::Level& l : seq.levels) {
@@ -601,7 +620,6 @@ NodeTable node_table_of(const CollapseSequence& seq, const ClusterPlan& plan) {
     std::copy(l.grid.origin, l.grid.origin + 3, g.origin);
     t.levels.push_back(g);
   }
-  const std::vector<float>& p = seq.mesh.positions;
   for (const ClusterNode& c : plan.nodes) {
     NodeEntry n;
     n.level = c.level;
@@ -609,21 +627,39 @@ NodeTable node_table_of(const CollapseSequence& seq, const ClusterPlan& plan) {
     n.splits = c.count;
     std::copy(c.center, c.center + 3, n.center);
     n.radius = c.radius;
-    for (uint64_t i = 0; i < c.count; ++i) {
-      const HalfEdgeCollapse& h = seq.collapses[plan.collapses[c.first + i]];
-      double d2 = 0;
-      for (int a = 0; a < 3; ++a) {
-        const double d = double(p[size_t(h.u) * 3 + a]) - p[size_t(h.v) * 3 + a];
-        d2 += d * d;
-      }
-      n.error = std::max(n.error, float(std::sqrt(d2)));
-    }
     t.nodes.push_back(n);
   }
-  for (size_t k = plan.nodes.size(); k-- > 0;)
-    for (uint32_t q : plan.nodes[k].parents)
-      t.nodes[q].error = std::max(t.nodes[q].error, t.nodes[k].error);
   return t;
+}
+
+// The nodes' error bounds (spec/format.md section 15.2), from each split's deviation (how far u
+// lies from the fan it collapses onto, SplitCoder::deviations) in coding order. Undone in reverse
+// (the collapse order), a collapse u -> v moves what u had absorbed by then as far as u's
+// deviation further: a vertex's bound is the largest over what it absorbed, a node's the largest
+// over its collapses, raised to its descendants' so that a parent's bound covers its children's.
+void bound_node_errors(const CollapseSequence& seq, const Plan& plan,
+                       const std::vector<float>& deviation, NodeTable& t) {
+  std::vector<float> absorbed(seq.mesh.vertex_count(), 0);
+  std::vector<uint64_t> first;
+  uint64_t at = 0;
+  for (NodeEntry& n : t.nodes) {
+    first.push_back(at);
+    at += n.splits;
+    n.error = 0;
+  }
+  size_t k = t.nodes.size() - 1;
+  for (size_t i = deviation.size(); i-- > 0;) {
+    while (k > 0 && i < first[k]) --k;
+    const HalfEdgeCollapse& c = seq.collapses[plan.order[i]];
+    const float e = absorbed[plan.decoded_id[c.u]] + deviation[i];
+    float& v = absorbed[plan.decoded_id[c.v]];
+    v = std::max(v, e);
+    t.nodes[k].error = std::max(t.nodes[k].error, e);
+  }
+  const NodeIndex index(t);
+  for (size_t n = t.nodes.size(); n-- > 0;)
+    for (uint32_t q : index.parents(uint32_t(n)))
+      t.nodes[q].error = std::max(t.nodes[q].error, t.nodes[n].error);
 }
 
 // A sequence made in levels of cells: its node table, the collapses node by node and each
@@ -676,6 +712,7 @@ bool write_pmz(const CollapseSequence& seq_in, const WriteOptions& opt, std::vec
       nodes->nodes[k].faces = splits.node_faces(k);
       nodes->nodes[k].wedges = splits.node_wedges(k);
     }
+  if (nodes) bound_node_errors(seq, plan, splits.deviations(), *nodes);
   h.curvature = kCurvatureCandidates[best].curvature;
   h.fine_curvature = kCurvatureCandidates[best].fine;
   WriteStats st = splits.stats(best);

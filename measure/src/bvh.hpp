@@ -42,8 +42,4 @@ class TriangleBvh {
   std::vector<uint32_t> faces_;   // input face of each triangle, in leaf order
 };
 
-// Squared distance from p to triangle (a, b, c), closest point by Voronoi regions (Ericson,
-// Real-Time Collision Detection, 5.1.5); degenerate triangles fall back to their edges.
-double point_triangle_distance2(const double p[3], const float* a, const float* b, const float* c);
-
 }  // namespace pmz
