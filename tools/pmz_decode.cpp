@@ -143,9 +143,10 @@ int main(int argc, char** argv) {
                             "EX,EY,EZ,TX,TY,TZ: only what a camera at EX,EY,EZ looking at TX,TY,TZ "
                             "(y up, the mesh's coordinates) needs, reading the file by ranges");
   app.add_option("--pixel-error", pixel_error,
-                 "with --camera: refine while a part's error spans more pixels than this")
+                 "with --camera: refine while a part's error spans more pixels than this (0: "
+                 "every part in view)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber)
+      ->check(CLI::NonNegativeNumber)
       ->needs(oc);
   app.add_option("--size", size, "with --camera: the viewport, WxH pixels")
       ->capture_default_str()

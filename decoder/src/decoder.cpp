@@ -1493,7 +1493,7 @@ uint64_t Decoder::Impl::update_view(const View& v, uint64_t budget) {
   want[0] = 1;
   for (size_t k = 1; k < total; ++k) {  // (parents come first in file order)
     sel.priority[k] = projected_error(v, table[k]);
-    bool w = sel.priority[k] > v.pixel_error;
+    bool w = sel.priority[k] > v.pixel_error || (v.pixel_error <= 0 && sel.priority[k] >= 0);
     for (uint32_t p : sel.parents[k]) w = w && want[p];
     want[k] = w;
   }

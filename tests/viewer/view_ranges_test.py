@@ -203,7 +203,7 @@ def test_ranges(args):
         vt.fail("file: a close view should read part of the %d bytes and some of the nodes" % size)
 
     # Without --camera the window's orbit camera (framing the whole terrain) is the view.
-    orbit = vt.xvfb(args, [args.view, pmz, "--size", SIZE, "--pixel-error", "8", "--log", "--exit-when-complete"],
+    orbit = vt.xvfb(args, [args.view, pmz, "--size", SIZE, "--pixel-error", "0.5", "--log", "--exit-when-complete"],
                     60)
     lines = [line for line in orbit.stderr.splitlines() if line.startswith("t=")]
     print("orbit camera: " + (lines[-1] if lines else orbit.stderr.strip()[-300:]))
@@ -315,7 +315,7 @@ def test_cracks(args):
     # nodes of several levels resident.
     for name, camera in (("ring", "0,0.25,-3,0,0,0"), ("tube", "0,0.2,-1.7,0,0,-1")):
         png = os.path.join(workdir, name + ".png")
-        faces, read, total, nodes, all_nodes = shot_summary(name, shoot(args, pmz, png, camera, "4"), png)
+        faces, read, total, nodes, all_nodes = shot_summary(name, shoot(args, pmz, png, camera, "0.25"), png)
         if not 1 < nodes < all_nodes:
             vt.fail("%s: the view should need some of the %d nodes, not %d" % (name, all_nodes, nodes))
         width, height, px = vt.pixels(png)

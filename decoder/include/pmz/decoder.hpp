@@ -107,7 +107,8 @@ struct View {
   float view_projection[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
   float fov_y = 1.0471976f;         // vertical field of view, radians
   uint32_t viewport_height = 1080;  // pixels
-  // Refine a node while its error bound would span more than this many pixels on screen.
+  // Refine a node while its error bound would span more than this many pixels on screen (0:
+  // every node in view, those that move nothing too).
   float pixel_error = 1;
 };
 
