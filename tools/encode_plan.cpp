@@ -46,7 +46,7 @@ struct In {
     get(n);
     if (!ok || n > uint64_t(end - p) / sizeof(T)) return void(ok = false);
     v.resize(n);
-    std::memcpy(v.data(), p, n * sizeof(T)), p += n * sizeof(T);
+    if (n) std::memcpy(v.data(), p, n * sizeof(T)), p += n * sizeof(T);  // (data() may be null)
   }
   void get(std::string& s) {
     std::vector<char> c;
