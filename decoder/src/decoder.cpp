@@ -276,6 +276,7 @@ struct Decoder::Impl {
   PMZ_COLD bool first_apply_node(uint32_t k);
   PMZ_COLD void reapply_node(uint32_t k);
   PMZ_COLD void undo_node(uint32_t k);
+  PMZ_COLD void clear_node_faces(uint32_t k);
   PMZ_COLD Status node_bytes(uint32_t k, const uint8_t* p, size_t n);
   PMZ_COLD bool selection(uint64_t budget, uint64_t& n);
   PMZ_COLD uint64_t update_view(const View& v, uint64_t budget);
@@ -1360,6 +1361,7 @@ bool Decoder::Impl::first_apply_node(uint32_t k) {
   }
   if (w.decoded != last || w.view.face_count() != w.face_end) {
     undo_worker(w, first);
+    clear_node_faces(k);
     std::string what = w.message;
     Status st = w.status;
     if (st == Status::ok) {
@@ -1408,6 +1410,12 @@ void Decoder::Impl::undo_node(uint32_t k) {
     sel.walker.undo_resplit(x.v, x.a, x.b, side & kHasLeft, side & kHasRight);
     note_rewritten(sel.walker.sector_faces(), level.mesh.face_count());
   }
+  clear_node_faces(k);
+}
+
+// Node k's face numbers, not applied: degenerate faces (0, 0, 0), reported as changed.
+void Decoder::Impl::clear_node_faces(uint32_t k) {
+  const NodeEntry& e = nodes.table.nodes[k];
   note_face_range(sel.first_face[k], e.faces);
   const size_t c0 = size_t(sel.first_face[k]) * 3, c1 = c0 + size_t(e.faces) * 3;
   std::fill(level.mesh.corner_vertex.begin() + ptrdiff_t(c0),

@@ -619,6 +619,34 @@ TEST_F(NodeStream, ANodesBytesAreChecked) {
       EXPECT_FALSE(d->view_complete());
     }
   }
+  {  // damage past the checksums (repaired): found as the node is first applied, part way
+     // through its splits; those it applied are taken back and its faces left degenerate
+    const Decoded whole = decode(*bytes_);
+    int refused = 0;
+    for (uint32_t k = 1; k <= last; ++k) {
+      pmz::Decoder d;
+      fresh(d);
+      std::vector<uint8_t> b = node_bytes(d, *bytes_, k);
+      pmz::ChunkFrame f;
+      ASSERT_EQ(pmz::parse_chunk_frame(b.data(), b.size(), f), pmz::FrameStatus::ok);
+      b[f.header_size + size_t(f.payload_size) * 3 / 4] ^= 0x5a;
+      pmz::repair_chunk_crc(b.data(), f);
+      d.update_view(every_node());
+      if (d.feed_node(k, b.data(), b.size()) != pmz::Status::ok) continue;  // (its tables)
+      for (int round = 0; round < 50 && !d.view_complete() && d.status() == pmz::Status::ok;
+           ++round) {
+        for (uint32_t j : d.nodes_to_fetch()) {
+          const std::vector<uint8_t> other = node_bytes(d, *bytes_, j);
+          d.feed_node(j, other.data(), other.size());
+        }
+        d.update_view(every_node(), 200);
+      }
+      if (d.status() == pmz::Status::ok) continue;  // (a change that decodes)
+      ++refused;
+      expect_closed(d, whole.positions, "node " + std::to_string(k) + " damaged");
+    }
+    EXPECT_GT(refused, 0);
+  }
 }
 
 TEST(NodeStreamAttributes, WedgesPerNodeAreChecked) {

@@ -95,7 +95,7 @@ def main():
     if os.path.exists(sample):
         files['sample'] = open(sample, 'rb').read()
     # Streams with attributes (format 8.0: HEAD attribute fields, ATTR chunks), committed.
-    for name in ('seamed-coarse', 'seamed-lossless'):
+    for name in ('seamed-coarse', 'seamed-lossless', 'terrain-nodes'):
         vector = os.path.join(root, 'tests', 'conformance', 'vectors', name + '.pmz')
         if os.path.exists(vector):
             files[name] = open(vector, 'rb').read()
@@ -128,7 +128,7 @@ def main():
     if not files:
         sys.exit('make_seeds: no seed: neither tests/data/sample.pmz nor a working pmz-encode')
 
-    for sub in ('decoder', 'container', 'coding'):
+    for sub in ('decoder', 'container', 'coding', 'view'):
         os.makedirs(os.path.join(out_dir, sub), exist_ok=True)
 
     def put(sub, name, data):
@@ -137,6 +137,9 @@ def main():
 
     for name, data in files.items():
         put('container', name, data)
+        # fuzz_view: [how][stream]: whole nodes, small budgets, wrong ranges, the rest in order.
+        for how in (0, 0x21, 0x46, 0x8b):
+            put('view', '%s-%02x' % (name, how), bytes([how]) + data)
         # fuzz_decoder: [n][n (slice, op) pairs][stream]. One call; byte-by-byte with refines;
         # mixed slices with coarsen/face-target/round-trip moves.
         put('decoder', name + '-whole', b'\x00' + data)

@@ -16,7 +16,7 @@ set -euo pipefail
 cd "$(dirname "$0")/../.."
 seconds=${1:-60}
 build=${PMZ_FUZZ_BUILD:-build-fuzz}
-targets=${PMZ_FUZZ_TARGETS:-fuzz_decoder fuzz_container fuzz_coding fuzz_mesh_obj fuzz_mesh_off
+targets=${PMZ_FUZZ_TARGETS:-fuzz_decoder fuzz_container fuzz_coding fuzz_view fuzz_mesh_obj fuzz_mesh_off
   fuzz_mesh_ply fuzz_mesh_stl fuzz_mesh_gltf fuzz_mesh_repair}
 
 if ! command -v clang++-14 >/dev/null; then
