@@ -3,7 +3,8 @@
 // (a file, or - for stdout), or many with --out-dir encoded by -j worker threads (one line per
 // asset; a failing asset does not stop the others). A .glb output (or --glb) carries the stream in
 // a binary glTF as docs/gltf-binding.md says: the base mesh as an ordinary primitive, materials
-// and their texture files kept.
+// and their texture files kept; a glTF scene of several mesh nodes keeps its nodes, a stream per
+// mesh.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
@@ -47,33 +48,94 @@ bool glb_output(const std::string& output, const EncodeSettings& settings) {
   return settings.glb || app_support::extension(output) == "glb";
 }
 
-// The stream in a binary glTF: its base mesh, decoded from the stream itself (the binding
-// wants the stream's level 0 exactly), as the primitive; a glTF input's own images and texture
-// files beside the input are embedded. Textures that cannot be embedded are named on stderr and
-// stay URIs.
-bool wrap_in_glb(const std::vector<uint8_t>& stream, const std::string& input, std::string& glb,
-                 std::string& error) {
+// What a GLB carries of a stream: its HEAD's fields and its base mesh, decoded from the stream
+// itself (the binding wants the stream's level 0 exactly).
+bool glb_stream(const std::vector<uint8_t>& stream, pmz::GlbStream& s, pmz::IndexedMesh& base,
+                std::string& error) {
   pmz::Decoder decoder;
   decoder.feed(stream.data(), stream.size());
   if (decoder.finish() != pmz::Status::ok || !decoder.info().base_done)
     return error = "the written stream does not decode: " + decoder.error_message(), false;
   const pmz::StreamInfo& info = decoder.info();
-  pmz::GlbStream s;
   s.bytes = {reinterpret_cast<const char*>(stream.data()), stream.size()};
   s.version = std::to_string(info.version_major) + "." + std::to_string(info.version_minor);
   s.full_vertices = info.full_vertices, s.full_faces = info.full_faces;
   std::copy(info.bbox_min, info.bbox_min + 3, s.bbox_min);
   std::copy(info.bbox_max, info.bbox_max + 3, s.bbox_max);
+  base = pmz::tool::decoded_mesh(decoder);
+  return true;
+}
+
+// The stream in a binary glTF: its base mesh as the primitive; a glTF input's own images and
+// texture files beside the input are embedded. Textures that cannot be embedded are named on
+// stderr and stay URIs.
+bool wrap_in_glb(const std::vector<uint8_t>& stream, const std::string& input, std::string& glb,
+                 std::string& error) {
+  pmz::GlbStream s;
+  pmz::IndexedMesh base;
+  if (!glb_stream(stream, s, base, error)) return false;
   pmz::GlbTextures textures;
   textures.dir = input == "-" ? "." : std::filesystem::path(input).parent_path().string();
   const std::string ext = app_support::extension(input);
   if ((ext == "gltf" || ext == "glb") && !pmz::read_gltf_images(input, textures.images, error))
     return false;
-  if (!pmz::write_progressive_glb(pmz::tool::decoded_mesh(decoder), s, textures, glb, error))
-    return false;
+  if (!pmz::write_progressive_glb(base, s, textures, glb, error)) return false;
   for (const std::string& why : textures.not_embedded)
     app_support::print_error(input, "texture not embedded (kept as a URI): " + why);
   return true;
+}
+
+// A glTF input whose default scene has several mesh nodes, as a GLB that keeps the scene
+// (docs/gltf-binding.md, "Scenes"): each mesh read in its own coordinates, repaired, simplified
+// and written with the settings one mesh gets, its stream carried by its glTF mesh. `line` is
+// the summary; errors name the input.
+bool encode_scene(const pmz::GltfScene& scene, const std::string& input,
+                  const EncodeSettings& settings, app_support::Progress* progress, std::string& glb,
+                  std::string& line, std::string& error) {
+  const size_t n = scene.mesh_count();
+  std::vector<std::vector<uint8_t>> bytes(n);
+  std::vector<pmz::GlbStream> streams(n);
+  std::vector<pmz::IndexedMesh> bases(n);
+  uint64_t faces = 0, vertices = 0, total = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const std::string which = scene.mesh_name(i);
+    pmz::PolygonSoup soup;
+    if (!scene.read_mesh(i, soup, error)) return false;
+    pmz::IndexedMesh mesh;
+    pmz::MeshRepairStats stats;
+    pmz::repair_mesh(soup, mesh, stats);
+    if (mesh.face_count() == 0)
+      return error = input + ": " + which + ": no usable faces (all degenerate)", false;
+    if (const std::string summary = stats.summary(); !summary.empty())
+      app_support::print_error(input, which + ": " + summary);
+    pmz::SimplifyOptions sopt = settings.simplify;
+    settings.simplifier.apply_clusters(sopt, mesh.vertex_count());
+    if (progress)
+      sopt.progress = [&](double f) { progress->update("simplifying", (double(i) + f) / n); };
+    pmz::CollapseSequence seq;
+    if (!pmz::simplify(mesh, sopt, seq, error) ||
+        !pmz::write_pmz(seq, settings.write, bytes[i], error) ||
+        !glb_stream(bytes[i], streams[i], bases[i], error))
+      return error = input + ": " + which + ": " + error, false;
+    faces += seq.mesh.face_count(), vertices += seq.mesh.vertex_count(), total += bytes[i].size();
+  }
+  std::vector<std::string> not_embedded;
+  if (!scene.write_glb(bases, streams, not_embedded, glb, error))
+    return error = input + ": " + error, false;
+  for (const std::string& why : not_embedded)
+    app_support::print_error(input, "texture not embedded (kept as a URI): " + why);
+  line = std::to_string(n) + " meshes (" + std::to_string(scene.mesh_nodes()) + " nodes), " +
+         std::to_string(faces) + " faces, " + std::to_string(vertices) + " vertices -> " +
+         std::to_string(total) + " bytes of streams; in a GLB of " + std::to_string(glb.size()) +
+         " bytes";
+  return true;
+}
+
+// The scene of a .gltf or .glb input (read whole: a malformed one fails here), for a GLB output.
+bool read_scene(const std::string& input, pmz::GltfScene& scene, std::string& error) {
+  std::vector<uint8_t> data;
+  return app_support::read_input(input, data, error) &&
+         scene.read(input, {reinterpret_cast<const char*>(data.data()), data.size()}, error);
 }
 
 // Encodes one asset; on success `line` is its summary line, else `error` is one line naming
@@ -87,6 +149,27 @@ bool encode(const std::string& input, const std::string& output, const EncodeSet
   // on error and on SIGINT/SIGTERM) exists while the work runs.
   app_support::OutputFile out;
   if (!out.open(output, true, error)) return false;
+  const bool as_glb = glb_output(output, settings);
+  const std::string ext = app_support::extension(input);
+  if (as_glb && settings.plan_dir.empty() && input != "-" && (ext == "gltf" || ext == "glb")) {
+    pmz::GltfScene scene;
+    std::string glb;
+    if (!read_scene(input, scene, error)) return false;
+    // One mesh node: the single-stream GLB below (the node's transform applied).
+    if (scene.mesh_nodes() > 1) {
+      const bool ok = encode_scene(scene, input, settings, progress, glb, line, error);
+      if (progress) progress->clear();
+      if (!ok) return false;
+      out.write(glb.data(), glb.size());
+      if (!out.commit(error)) return false;
+      const double secs =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      char buf[64];
+      std::snprintf(buf, sizeof buf, ", %.2fs", secs);
+      line = (output == "-" ? "stdout" : output) + ": " + line + buf;
+      return true;
+    }
+  }
   pmz::IndexedMesh mesh;
   const tool::EncodePlan plan{settings.plan_dir};
   if (plan.dir.empty() ? !tool::read_mesh_input(input, settings.stdin_format, mesh, error, progress)
@@ -108,7 +191,6 @@ bool encode(const std::string& input, const std::string& output, const EncodeSet
   if (ok && progress) progress->update("writing", 1);
   ok = ok && pmz::write_pmz(seq, settings.write, bytes, error, &st);
   std::string glb;
-  const bool as_glb = glb_output(output, settings);
   ok = ok && (!as_glb || wrap_in_glb(bytes, input, glb, error));
   if (progress) progress->clear();
   if (!ok)
@@ -284,10 +366,12 @@ int main(int argc, char** argv) {
       "write each input's NAME.pmz (NAME.glb with --glb) into this folder (several inputs; made if "
       "missing)");
   out_opt->excludes(dir_opt);
-  app.add_flag("--glb", settings.glb,
-               "write binary glTF: the base mesh as a primitive, the stream in the "
-               "PMZ_progressive_mesh extension, materials and textures kept (docs/gltf-binding.md; "
-               "implied by -o NAME.glb)");
+  app.add_flag(
+      "--glb", settings.glb,
+      "write binary glTF: the base mesh as a primitive, the stream in the "
+      "PMZ_progressive_mesh extension, materials and textures kept; a glTF scene of several "
+      "mesh nodes keeps its nodes, a stream per mesh (docs/gltf-binding.md; implied by "
+      "-o NAME.glb)");
   app.add_option("-j,--jobs", jobs, "assets encoded at once with --out-dir (default: cores)")
       ->check(CLI::Range(1u, 1024u))
       ->capture_default_str();

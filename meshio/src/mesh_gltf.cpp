@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <set>
 #include <sstream>
 
 #include "mesh_formats.hpp"
@@ -123,18 +124,50 @@ size_t component_size(int type) {
   }
 }
 
+int hex_digit(char c) {
+  return c >= '0' && c <= '9'   ? c - '0'
+         : c >= 'a' && c <= 'f' ? c - 'a' + 10
+         : c >= 'A' && c <= 'F' ? c - 'A' + 10
+                                : -1;
+}
+
+// glTF URIs are percent-encoded (tinygltf hands them over as written).
+std::string uri_decode(const std::string& s) {
+  std::string r;
+  for (size_t i = 0; i < s.size(); ++i) {
+    int hi, lo;
+    if (s[i] == '%' && i + 2 < s.size() && (hi = hex_digit(s[i + 1])) >= 0 &&
+        (lo = hex_digit(s[i + 2])) >= 0) {
+      r += char(hi * 16 + lo);
+      i += 2;
+    } else {
+      r += s[i];
+    }
+  }
+  return r;
+}
+
 class Reader {
  public:
-  Reader(const std::string& path, const tinygltf::Model& model, PolygonSoup& out)
-      : path_(path), model_(model), out_(out) {}
+  // With `only_mesh`, that mesh alone in its own coordinates.
+  Reader(const std::string& path, const tinygltf::Model& model, PolygonSoup& out,
+         int only_mesh = -1)
+      : path_(path), model_(model), out_(out), only_mesh_(only_mesh) {}
+
+  // The default scene's nodes in the order the walk reached them, and its meshes in the order
+  // it first reached them.
+  std::vector<int> node_order, mesh_order;
 
   bool run(std::string& error) {
     const tinygltf::Model& m = model_;
-    if (!m.scenes.empty()) {
+    if (only_mesh_ >= 0) {
+      if (!mesh(only_mesh_, identity(), error)) return false;
+    } else if (!m.scenes.empty()) {
       int scene = m.defaultScene >= 0 ? m.defaultScene : 0;
       if (size_t(scene) >= m.scenes.size())
         return fail("default scene " + std::to_string(scene) + " does not exist", error);
       visited_.assign(m.nodes.size(), 0);
+      mesh_seen_.assign(m.meshes.size(), 0);
       for (int n : m.scenes[size_t(scene)].nodes)
         if (!node(n, identity(), error)) return false;
     } else {
@@ -142,9 +175,10 @@ class Reader {
         if (!mesh(int(i), identity(), error)) return false;
     }
     if (out_.face_count() == 0 && skipped_primitives_) {
-      return fail(
-          "has no triangles (" + std::to_string(skipped_primitives_) + " point or line primitives)",
-          error);
+      return fail(std::string(only_mesh_ >= 0 ? "mesh " + std::to_string(only_mesh_) + " " : "") +
+                      "has no triangles (" + std::to_string(skipped_primitives_) +
+                      " point or line primitives)",
+                  error);
     }
     finish();
     return true;
@@ -169,6 +203,9 @@ class Reader {
     if (!local_transform(n, local))
       return fail("node " + std::to_string(index) + " has a malformed transform", error);
     Matrix world = multiply(parent, local);
+    node_order.push_back(index);
+    if (n.mesh >= 0 && size_t(n.mesh) < model_.meshes.size() && !mesh_seen_[size_t(n.mesh)]++)
+      mesh_order.push_back(n.mesh);
     if (n.mesh >= 0 && !mesh(n.mesh, world, error)) return false;
     for (int c : n.children)
       if (!node(c, world, error)) return false;
@@ -430,32 +467,11 @@ class Reader {
     return im.uri.empty() || im.uri.starts_with("data:") ? im.name : uri_decode(im.uri);
   }
 
-  // glTF URIs are percent-encoded (tinygltf hands them over as written).
-  static std::string uri_decode(const std::string& s) {
-    std::string r;
-    for (size_t i = 0; i < s.size(); ++i) {
-      int hi, lo;
-      if (s[i] == '%' && i + 2 < s.size() && (hi = hex(s[i + 1])) >= 0 &&
-          (lo = hex(s[i + 2])) >= 0) {
-        r += char(hi * 16 + lo);
-        i += 2;
-      } else {
-        r += s[i];
-      }
-    }
-    return r;
-  }
-  static int hex(char c) {
-    return c >= '0' && c <= '9'   ? c - '0'
-           : c >= 'a' && c <= 'f' ? c - 'a' + 10
-           : c >= 'A' && c <= 'F' ? c - 'A' + 10
-                                  : -1;
-  }
-
   const std::string& path_;
   const tinygltf::Model& model_;
   PolygonSoup& out_;
-  std::vector<uint8_t> visited_;
+  const int only_mesh_;
+  std::vector<uint8_t> visited_, mesh_seen_;
   uint64_t vertex_total_ = 0, total_corners_ = 0, skipped_primitives_ = 0;
   std::vector<std::vector<float>> texcoords_;
   std::vector<std::vector<uint8_t>> has_texcoord_;
@@ -581,28 +597,129 @@ bool texture_image(GlbTextures& t, const std::string& name, std::string& data) {
   return false;
 }
 
-// Adds the PMZ_progressive_mesh extension (docs/gltf-binding.md) to every primitive, the
-// stream as the buffer's last view.
-void add_stream(tinygltf::Model& model, const GlbStream& stream) {
+// A buffer view of `data` at the buffer's end (4-byte aligned), no target: its index.
+int add_bytes(tinygltf::Model& model, std::string_view data) {
   std::vector<unsigned char>& buffer = model.buffers[0].data;
   buffer.resize((buffer.size() + 3) & ~size_t(3));
   tinygltf::BufferView bv;
-  bv.buffer = 0, bv.byteOffset = buffer.size(), bv.byteLength = stream.bytes.size();
-  buffer.insert(buffer.end(), stream.bytes.begin(), stream.bytes.end());
+  bv.buffer = 0, bv.byteOffset = buffer.size(), bv.byteLength = data.size();
+  buffer.insert(buffer.end(), data.begin(), data.end());
   model.bufferViews.push_back(bv);
+  return int(model.bufferViews.size() - 1);
+}
+
+// Adds the PMZ_progressive_mesh extension (docs/gltf-binding.md) to every primitive of mesh
+// `mesh`, the stream as the buffer's last view.
+void add_stream(tinygltf::Model& model, size_t mesh, const GlbStream& stream) {
+  const int view = add_bytes(model, stream.bytes);
   using tinygltf::Value;
   auto vec3 = [](const float* v) {
     return Value(Value::Array{Value(double(v[0])), Value(double(v[1])), Value(double(v[2]))});
   };
   Value::Object bounds{{"min", vec3(stream.bbox_min)}, {"max", vec3(stream.bbox_max)}};
-  Value::Object ext{{"bufferView", Value(int(model.bufferViews.size() - 1))},
+  Value::Object ext{{"bufferView", Value(view)},
                     {"version", Value(stream.version)},
                     {"fullVertexCount", Value(int(stream.full_vertices))},
                     {"fullFaceCount", Value(int(stream.full_faces))},
                     {"fullBounds", Value(bounds)}};
-  for (tinygltf::Primitive& prim : model.meshes[0].primitives)
+  for (tinygltf::Primitive& prim : model.meshes[mesh].primitives)
     prim.extensions[kProgressiveExtension] = Value(ext);
-  model.extensionsUsed.push_back(kProgressiveExtension);
+  auto& used = model.extensionsUsed;
+  if (std::find(used.begin(), used.end(), kProgressiveExtension) == used.end())
+    used.push_back(kProgressiveExtension);
+}
+
+// An accessor of `count` 4-byte components (floats, else unsigned ints) in a view of its own,
+// 4-byte aligned (embedded images between views have any length).
+int add_accessor(tinygltf::Model& model, const void* src, size_t count, bool floats, int type,
+                 int target) {
+  std::vector<unsigned char>& buffer = model.buffers[0].data;
+  size_t offset = (buffer.size() + 3) & ~size_t(3);
+  size_t size = count * 4;
+  buffer.resize(offset + size);
+  if (size) std::memcpy(buffer.data() + offset, src, size);
+  tinygltf::BufferView bv;
+  bv.buffer = 0, bv.byteOffset = offset, bv.byteLength = size, bv.target = target;
+  model.bufferViews.push_back(bv);
+  tinygltf::Accessor acc;
+  acc.bufferView = int(model.bufferViews.size() - 1);
+  acc.componentType = floats ? TINYGLTF_COMPONENT_TYPE_FLOAT : TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
+  acc.type = type;
+  acc.count = count / (type == TINYGLTF_TYPE_SCALAR ? 1 : size_t(type));
+  model.accessors.push_back(acc);
+  return int(model.accessors.size() - 1);
+}
+
+// The vertex accessors of `mesh` (one vertex per wedge when it has attributes) by attribute.
+std::map<std::string, int> add_vertices(tinygltf::Model& model, const IndexedMesh& mesh) {
+  const MeshAttributes& a = mesh.attributes;
+  const bool wedges = a.has_wedges();
+  const uint32_t nv = wedges ? a.wedge_count() : mesh.vertex_count();
+  auto vertex_of = [&](uint32_t v) { return wedges ? a.wedge_vertices[v] : v; };
+  auto add = [&](const std::vector<float>& values, int type) {
+    return add_accessor(model, values.data(), values.size(), true, type,
+                        TINYGLTF_TARGET_ARRAY_BUFFER);
+  };
+  std::vector<float> values(size_t(nv) * 3);
+  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (uint32_t v = 0; v < nv; ++v)
+    for (int k = 0; k < 3; ++k) {
+      float x = mesh.positions[size_t(vertex_of(v)) * 3 + k];
+      values[size_t(v) * 3 + k] = x;
+      lo[k] = std::min(lo[k], double(x)), hi[k] = std::max(hi[k], double(x));
+    }
+  std::map<std::string, int> attributes;
+  attributes["POSITION"] = add(values, TINYGLTF_TYPE_VEC3);
+  model.accessors.back().minValues.assign(lo, lo + 3);
+  model.accessors.back().maxValues.assign(hi, hi + 3);
+  if (!a.normals.empty()) {
+    for (uint32_t v = 0; v < nv; ++v) {
+      const float* n = &a.normals[size_t(v) * 3];
+      double len = std::sqrt(double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2]);
+      for (int k = 0; k < 3; ++k)
+        values[size_t(v) * 3 + k] = len > 0 ? float(n[k] / len) : k == 2 ? 1.0f : 0.0f;
+    }
+    attributes["NORMAL"] = add(values, TINYGLTF_TYPE_VEC3);
+  }
+  for (size_t s = 0; s < a.texcoords.size(); ++s) {
+    values.assign(a.texcoords[s].begin(), a.texcoords[s].end());
+    for (size_t i = 1; i < values.size(); i += 2) values[i] = 1.0f - values[i];  // v down
+    attributes["TEXCOORD_" + std::to_string(s)] = add(values, TINYGLTF_TYPE_VEC2);
+  }
+  if (a.color_components) {
+    values.resize(a.colors.size());
+    for (size_t i = 0; i < a.colors.size(); ++i) values[i] = std::clamp(a.colors[i], 0.0f, 1.0f);
+    attributes["COLOR_0"] =
+        add(values, a.color_components == 4 ? TINYGLTF_TYPE_VEC4 : TINYGLTF_TYPE_VEC3);
+  }
+  return attributes;
+}
+
+// The primitives of `mesh` sharing `attributes`: one per material with faces (faces in file
+// order within each), glTF material k for the mesh's material k.
+tinygltf::Mesh add_primitives(tinygltf::Model& model, const IndexedMesh& mesh,
+                              const std::map<std::string, int>& attributes) {
+  const MeshAttributes& a = mesh.attributes;
+  const bool wedges = a.has_wedges();
+  tinygltf::Mesh gmesh;
+  const size_t groups = a.face_materials.empty() ? 1 : a.materials.size();
+  std::vector<std::vector<uint32_t>> indices(groups);
+  for (uint32_t f = 0; f < mesh.face_count(); ++f) {
+    std::vector<uint32_t>& out = indices[a.face_materials.empty() ? 0 : a.face_materials[f]];
+    for (int k = 0; k < 3; ++k)
+      out.push_back(wedges ? a.corner_wedges[f * 3 + k] : mesh.indices[f * 3 + k]);
+  }
+  for (size_t g = 0; g < groups; ++g) {
+    if (indices[g].empty()) continue;
+    tinygltf::Primitive prim;
+    prim.attributes = attributes;
+    prim.mode = TINYGLTF_MODE_TRIANGLES;
+    prim.material = a.face_materials.empty() ? -1 : int(g);
+    prim.indices = add_accessor(model, indices[g].data(), indices[g].size(), false,
+                                TINYGLTF_TYPE_SCALAR, TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
+    gmesh.primitives.push_back(prim);
+  }
+  return gmesh;
 }
 
 // The model of write_glb's layout; with `textures`, texture files found relative to
@@ -615,71 +732,10 @@ bool build_model(const IndexedMesh& mesh, GlbTextures* textures, tinygltf::Model
     return false;
   }
   model = {};
-  const bool wedges = a.has_wedges();
-  const uint32_t nv = wedges ? a.wedge_count() : mesh.vertex_count();
-  auto vertex_of = [&](uint32_t v) { return wedges ? a.wedge_vertices[v] : v; };
   model.asset.version = "2.0";
   model.asset.generator = "pmz";
   model.buffers.resize(1);
-  std::vector<unsigned char>& buffer = model.buffers[0].data;
-  // One buffer view per accessor, 4-byte aligned (every component here is 4 bytes; embedded
-  // images between them have any length).
-  auto add_accessor = [&](const std::vector<float>* floats, const std::vector<uint32_t>* ints,
-                          int type, int target) {
-    size_t offset = (buffer.size() + 3) & ~size_t(3);
-    const void* src = floats ? static_cast<const void*>(floats->data()) : ints->data();
-    size_t size = (floats ? floats->size() : ints->size()) * 4;
-    buffer.resize(offset + size);
-    if (size) std::memcpy(buffer.data() + offset, src, size);
-    tinygltf::BufferView bv;
-    bv.buffer = 0, bv.byteOffset = offset, bv.byteLength = size, bv.target = target;
-    model.bufferViews.push_back(bv);
-    tinygltf::Accessor acc;
-    acc.bufferView = int(model.bufferViews.size() - 1);
-    acc.componentType =
-        floats ? TINYGLTF_COMPONENT_TYPE_FLOAT : TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
-    acc.type = type;
-    acc.count = (floats ? floats->size() : ints->size()) /
-                (type == TINYGLTF_TYPE_SCALAR ? 1 : size_t(type));
-    model.accessors.push_back(acc);
-    return int(model.accessors.size() - 1);
-  };
-  std::vector<float> values(size_t(nv) * 3);
-  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-  for (uint32_t v = 0; v < nv; ++v)
-    for (int k = 0; k < 3; ++k) {
-      float x = mesh.positions[size_t(vertex_of(v)) * 3 + k];
-      values[size_t(v) * 3 + k] = x;
-      lo[k] = std::min(lo[k], double(x)), hi[k] = std::max(hi[k], double(x));
-    }
-  std::map<std::string, int> attributes;
-  attributes["POSITION"] =
-      add_accessor(&values, nullptr, TINYGLTF_TYPE_VEC3, TINYGLTF_TARGET_ARRAY_BUFFER);
-  model.accessors.back().minValues.assign(lo, lo + 3);
-  model.accessors.back().maxValues.assign(hi, hi + 3);
-  if (!a.normals.empty()) {
-    for (uint32_t v = 0; v < nv; ++v) {
-      const float* n = &a.normals[size_t(v) * 3];
-      double len = std::sqrt(double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2]);
-      for (int k = 0; k < 3; ++k)
-        values[size_t(v) * 3 + k] = len > 0 ? float(n[k] / len) : k == 2 ? 1.0f : 0.0f;
-    }
-    attributes["NORMAL"] =
-        add_accessor(&values, nullptr, TINYGLTF_TYPE_VEC3, TINYGLTF_TARGET_ARRAY_BUFFER);
-  }
-  for (size_t s = 0; s < a.texcoords.size(); ++s) {
-    values.assign(a.texcoords[s].begin(), a.texcoords[s].end());
-    for (size_t i = 1; i < values.size(); i += 2) values[i] = 1.0f - values[i];  // v down
-    attributes["TEXCOORD_" + std::to_string(s)] =
-        add_accessor(&values, nullptr, TINYGLTF_TYPE_VEC2, TINYGLTF_TARGET_ARRAY_BUFFER);
-  }
-  if (a.color_components) {
-    values.resize(a.colors.size());
-    for (size_t i = 0; i < a.colors.size(); ++i) values[i] = std::clamp(a.colors[i], 0.0f, 1.0f);
-    attributes["COLOR_0"] = add_accessor(
-        &values, nullptr, a.color_components == 4 ? TINYGLTF_TYPE_VEC4 : TINYGLTF_TYPE_VEC3,
-        TINYGLTF_TARGET_ARRAY_BUFFER);
-  }
+  const std::map<std::string, int> attributes = add_vertices(model, mesh);
   // Materials, their textures and images (URIs, or with `textures` the images embedded), one
   // texture per file name.
   std::map<std::string, int> texture_of;
@@ -696,15 +752,9 @@ bool build_model(const IndexedMesh& mesh, GlbTextures* textures, tinygltf::Model
       std::string data;
       if (textures && texture_image(*textures, file, data)) {
         // The image's bytes in the buffer, after the mesh's; named as the material names it.
-        std::vector<unsigned char>& buffer = model.buffers[0].data;
-        buffer.resize((buffer.size() + 3) & ~size_t(3));
-        tinygltf::BufferView bv;
-        bv.buffer = 0, bv.byteOffset = buffer.size(), bv.byteLength = data.size();
-        buffer.insert(buffer.end(), data.begin(), data.end());
-        model.bufferViews.push_back(bv);
         image.uri.clear();
         image.name = utf8_name(file);
-        image.bufferView = int(model.bufferViews.size() - 1);
+        image.bufferView = add_bytes(model, data);
         image.mimeType = image_mime_type(data);
       }
       model.images.push_back(image);
@@ -718,25 +768,7 @@ bool build_model(const IndexedMesh& mesh, GlbTextures* textures, tinygltf::Model
     if (!m.normal_texture.empty()) gm.normalTexture.index = texture(m.normal_texture);
     model.materials.push_back(gm);
   }
-  // One primitive per material (faces in file order within each).
-  tinygltf::Mesh gmesh;
-  const size_t groups = a.face_materials.empty() ? 1 : a.materials.size();
-  std::vector<std::vector<uint32_t>> indices(groups);
-  for (uint32_t f = 0; f < mesh.face_count(); ++f) {
-    std::vector<uint32_t>& out = indices[a.face_materials.empty() ? 0 : a.face_materials[f]];
-    for (int k = 0; k < 3; ++k)
-      out.push_back(wedges ? a.corner_wedges[f * 3 + k] : mesh.indices[f * 3 + k]);
-  }
-  for (size_t g = 0; g < groups; ++g) {
-    if (indices[g].empty()) continue;
-    tinygltf::Primitive prim;
-    prim.attributes = attributes;
-    prim.mode = TINYGLTF_MODE_TRIANGLES;
-    prim.material = a.face_materials.empty() ? -1 : int(g);
-    prim.indices = add_accessor(nullptr, &indices[g], TINYGLTF_TYPE_SCALAR,
-                                TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
-    gmesh.primitives.push_back(prim);
-  }
+  tinygltf::Mesh gmesh = add_primitives(model, mesh, attributes);
   model.meshes.push_back(gmesh);
   tinygltf::Node node;
   node.mesh = 0;
@@ -766,6 +798,13 @@ bool serialise_glb(const tinygltf::Model& model, std::string& bytes, std::string
   return true;
 }
 
+// The image's bytes as the file has them (the loader is given them undecoded).
+bool keep_image_bytes(tinygltf::Image* image, const int, std::string*, std::string*, int, int,
+                      const unsigned char* bytes, int size, void*) {
+  image->image.assign(bytes, bytes + size);
+  return true;
+}
+
 }  // namespace
 
 bool read_gltf_images(const std::string& path, std::map<std::string, std::string>& images,
@@ -773,14 +812,7 @@ bool read_gltf_images(const std::string& path, std::map<std::string, std::string
   std::string data;
   if (!read_file(path, data, error)) return false;
   tinygltf::TinyGLTF loader;
-  // The image's bytes as the file has them (the loader is given them undecoded).
-  loader.SetImageLoader(
-      [](tinygltf::Image* image, const int, std::string*, std::string*, int, int,
-         const unsigned char* bytes, int size, void*) {
-        image->image.assign(bytes, bytes + size);
-        return true;
-      },
-      nullptr);
+  loader.SetImageLoader(keep_image_bytes, nullptr);
   tinygltf::Model model;
   if (!load_model(path, data, loader, model, error)) return false;
   for (const tinygltf::Image& im : model.images)
@@ -798,7 +830,174 @@ bool write_progressive_glb(const IndexedMesh& base, const GlbStream& stream, Glb
                            std::string& bytes, std::string& error) {
   tinygltf::Model model;
   if (!build_model(base, &textures, model, error)) return false;
-  add_stream(model, stream);
+  add_stream(model, 0, stream);
+  return serialise_glb(model, bytes, error);
+}
+
+struct GltfScene::State {
+  std::string path;
+  tinygltf::Model model;
+  int scene = -1;
+  std::vector<int> node_order, mesh_order;
+};
+
+GltfScene::GltfScene() : state_(std::make_unique<State>()) {}
+GltfScene::~GltfScene() = default;
+
+bool GltfScene::read(const std::string& path, std::string_view data, std::string& error) {
+  state_ = std::make_unique<State>();
+  State& s = *state_;
+  s.path = path;
+  tinygltf::TinyGLTF loader;
+  loader.SetImageLoader(keep_image_bytes, nullptr);
+  if (!load_model(path, data, loader, s.model, error)) return false;
+  // Read whole as read_gltf reads it: every accessor checked before anything is encoded.
+  PolygonSoup whole;
+  whole.face_offsets.push_back(0);
+  Reader reader(s.path, s.model, whole);
+  if (!reader.run(error)) return false;
+  if (!s.model.scenes.empty()) s.scene = std::max(s.model.defaultScene, 0);
+  s.node_order = std::move(reader.node_order);
+  s.mesh_order = std::move(reader.mesh_order);
+  return true;
+}
+
+size_t GltfScene::mesh_nodes() const {
+  const State& s = *state_;
+  return size_t(std::count_if(s.node_order.begin(), s.node_order.end(),
+                              [&](int n) { return s.model.nodes[size_t(n)].mesh >= 0; }));
+}
+
+size_t GltfScene::mesh_count() const { return state_->mesh_order.size(); }
+
+std::string GltfScene::mesh_name(size_t i) const {
+  const int index = state_->mesh_order[i];
+  const std::string& name = state_->model.meshes[size_t(index)].name;
+  return "mesh " + std::to_string(index) + (name.empty() ? "" : " \"" + name + "\"");
+}
+
+bool GltfScene::read_mesh(size_t i, PolygonSoup& out, std::string& error) const {
+  const State& s = *state_;
+  out = PolygonSoup();
+  out.face_offsets.push_back(0);
+  Reader reader(s.path, s.model, out, s.mesh_order[i]);
+  if (!reader.run(error)) return false;
+  if (out.face_count() == 0) {
+    error = s.path + ": mesh " + std::to_string(s.mesh_order[i]) + " has no faces";
+    return false;
+  }
+  return true;
+}
+
+namespace {
+
+// The names of the extensions a material uses, on itself and on its textures.
+void material_extensions(const tinygltf::Material& m, std::set<std::string>& names) {
+  const tinygltf::ExtensionMap* maps[] = {
+      &m.extensions,
+      &m.pbrMetallicRoughness.extensions,
+      &m.pbrMetallicRoughness.baseColorTexture.extensions,
+      &m.pbrMetallicRoughness.metallicRoughnessTexture.extensions,
+      &m.normalTexture.extensions,
+      &m.occlusionTexture.extensions,
+      &m.emissiveTexture.extensions};
+  for (const tinygltf::ExtensionMap* map : maps)
+    for (const auto& entry : *map) names.insert(entry.first);
+}
+
+// The input's image in the output: its own bytes, or the file its URI names beside the input,
+// embedded; else its URI, with a line saying why in `not_embedded`.
+tinygltf::Image scene_image(tinygltf::Model& model, const tinygltf::Image& in,
+                            const std::string& dir, std::vector<std::string>& not_embedded) {
+  tinygltf::Image out;
+  out.name = in.name, out.extras = in.extras, out.extensions = in.extensions;
+  std::string data(in.image.begin(), in.image.end()), why;
+  const bool external = !in.uri.empty() && !in.uri.starts_with("data:");
+  if (data.empty() && external &&
+      !read_file(texture_path(dir, uri_decode(in.uri)).string(), data, why))
+    not_embedded.push_back(why);
+  const std::string mime = !in.mimeType.empty() ? in.mimeType : image_mime_type(data);
+  if (!data.empty() && mime.empty())
+    not_embedded.push_back(uri_decode(in.uri) + ": not a PNG or JPEG image");
+  if (data.empty() || mime.empty()) {
+    out.uri = in.uri;
+    return out;
+  }
+  out.bufferView = add_bytes(model, data);
+  out.mimeType = mime;
+  return out;
+}
+
+}  // namespace
+
+bool GltfScene::write_glb(const std::vector<IndexedMesh>& bases,
+                          const std::vector<GlbStream>& streams,
+                          std::vector<std::string>& not_embedded, std::string& bytes,
+                          std::string& error) const {
+  const State& s = *state_;
+  const tinygltf::Model& in = s.model;
+  if (bases.size() != s.mesh_order.size() || streams.size() != bases.size() || s.scene < 0) {
+    error = "the scene's meshes and streams do not match";
+    return false;
+  }
+  tinygltf::Model model;
+  model.asset.version = "2.0";
+  model.asset.generator = "pmz";
+  model.buffers.resize(1);
+  // Every base first, then the images, then the streams: a reader of the file front to back
+  // can draw the whole scene coarse before any stream arrives.
+  size_t table = 0;
+  for (size_t i = 0; i < bases.size(); ++i) {
+    if (bases[i].face_count() == 0) {
+      error = "no faces to write";
+      return false;
+    }
+    tinygltf::Mesh mesh = add_primitives(model, bases[i], add_vertices(model, bases[i]));
+    mesh.name = in.meshes[size_t(s.mesh_order[i])].name;
+    model.meshes.push_back(std::move(mesh));
+    table = std::max(table, bases[i].attributes.materials.size());
+  }
+  model.materials = in.materials;
+  if (table > in.materials.size()) {  // the streams' material for primitives without one
+    model.materials.emplace_back();
+    model.materials.back().name = "default";
+  }
+  model.textures = in.textures;
+  model.samplers = in.samplers;
+  const std::string dir = std::filesystem::path(s.path).parent_path().string();
+  for (const tinygltf::Image& im : in.images)
+    model.images.push_back(scene_image(model, im, dir, not_embedded));
+  // The input's extensions these use stay listed (those of what is not kept do not).
+  std::set<std::string> names;
+  auto used = [&](const auto& list) {
+    for (const auto& item : list)
+      for (const auto& entry : item.extensions) names.insert(entry.first);
+  };
+  for (const tinygltf::Material& m : model.materials) material_extensions(m, names);
+  used(model.textures), used(model.samplers), used(model.images);
+  for (const std::string& e : in.extensionsUsed)
+    if (names.count(e)) model.extensionsUsed.push_back(e);
+  for (const std::string& e : in.extensionsRequired)
+    if (names.count(e)) model.extensionsRequired.push_back(e);
+  for (size_t i = 0; i < streams.size(); ++i) add_stream(model, i, streams[i]);
+  // The nodes the default scene reaches, numbered in the order of the walk that read them.
+  std::vector<int> node_index(in.nodes.size(), -1), mesh_index(in.meshes.size(), -1);
+  for (size_t k = 0; k < s.node_order.size(); ++k) node_index[size_t(s.node_order[k])] = int(k);
+  for (size_t i = 0; i < s.mesh_order.size(); ++i) mesh_index[size_t(s.mesh_order[i])] = int(i);
+  for (int index : s.node_order) {
+    const tinygltf::Node& n = in.nodes[size_t(index)];
+    tinygltf::Node node;
+    node.name = n.name, node.extras = n.extras, node.matrix = n.matrix;
+    node.translation = n.translation, node.rotation = n.rotation, node.scale = n.scale;
+    node.mesh = n.mesh >= 0 ? mesh_index[size_t(n.mesh)] : -1;
+    for (int c : n.children) node.children.push_back(node_index[size_t(c)]);
+    model.nodes.push_back(std::move(node));
+  }
+  tinygltf::Scene scene;
+  scene.name = in.scenes[size_t(s.scene)].name;
+  for (int n : in.scenes[size_t(s.scene)].nodes) scene.nodes.push_back(node_index[size_t(n)]);
+  model.scenes.push_back(std::move(scene));
+  model.defaultScene = 0;
   return serialise_glb(model, bytes, error);
 }
 

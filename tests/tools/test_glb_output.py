@@ -211,13 +211,18 @@ def main():
     check(r.returncode != 0 and not os.path.exists(bad) and len(r.stderr.strip().splitlines()) == 1,
           f"a missing input: rc {r.returncode}, stderr {r.stderr.strip()!r}")
 
+    validate(validator, [glb, plain], "test_glb_output")
+
+
+def validate(validator, files, test):
+    """The Khronos validator's verdict on each file (0 errors), when it is installed."""
     if validator and os.path.exists(os.path.join(validator, "node_modules", "gltf-validator")):
-        for f in (glb, plain):
+        for f in files:
             r = run(["node", os.path.join(ROOT, "tests", "meshio", "validate_gltf.js"), validator, f])
             check(r.returncode == 0 and "errors 0" in r.stdout,
                   f"validator on {f}:\n{r.stdout}{r.stderr}")
     else:
-        print("test_glb_output: gltf-validator not installed, not validated")
+        print(f"{test}: gltf-validator not installed, not validated")
 
 
 if __name__ == "__main__":

@@ -3,6 +3,7 @@
 #pragma once
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -38,5 +39,39 @@ bool read_gltf_images(const std::string& path, std::map<std::string, std::string
 // Textures are embedded as images (named as the materials name them) before the stream.
 bool write_progressive_glb(const IndexedMesh& base, const GlbStream& stream, GlbTextures& textures,
                            std::string& bytes, std::string& error);
+
+// A glTF input whose scene is kept in a GLB (docs/gltf-binding.md, "Scenes"): each mesh its own
+// stream, the nodes, materials, textures, samplers and images as the input has them.
+class GltfScene {
+ public:
+  GltfScene();
+  ~GltfScene();
+  // Parses a .gltf or .glb (`data`; external buffers and images beside `path`) and reads its
+  // default scene whole, as read_mesh would: false with one line naming the file where it is
+  // malformed.
+  bool read(const std::string& path, std::string_view data, std::string& error);
+  // The nodes of the default scene that name a mesh (a mesh two nodes name counts twice).
+  size_t mesh_nodes() const;
+  // The meshes the default scene names, in the order a depth-first walk of it first reaches them.
+  size_t mesh_count() const;
+  // Mesh `i` in its own coordinates (no node transform applied); its material table, when any of
+  // its primitives names a material, is the asset's whole table (material k is glTF material k,
+  // then "default" for primitives without one).
+  bool read_mesh(size_t i, PolygonSoup& out, std::string& error) const;
+  // "mesh K" (its index in the input) and its name, if any, for messages.
+  std::string mesh_name(size_t i) const;
+  // A binary glTF of the scene: mesh i's primitives hold bases[i] (as write_progressive_glb
+  // writes one base) and carry streams[i]; the nodes the default scene reaches (depth-first
+  // order), the materials, textures, samplers and images (embedded: the input's own, or the
+  // files its URIs name; one that cannot be read stays a URI, named in not_embedded). The buffer
+  // holds every base mesh, then the images, then the streams in mesh order.
+  bool write_glb(const std::vector<IndexedMesh>& bases, const std::vector<GlbStream>& streams,
+                 std::vector<std::string>& not_embedded, std::string& bytes,
+                 std::string& error) const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
 
 }  // namespace pmz
