@@ -203,11 +203,14 @@ export interface PMZGLTFParser {
 }
 
 /** GLTFLoader plugin for PMZ_progressive_mesh (docs/gltf-binding.md):
- * `gltfLoader.register((parser) => new PMZGLTFPlugin(parser, options))`. Each mesh that carries
- * the extension shows its glTF base, then takes the stream's geometry, which refines in place
- * (`mesh.userData.pmzStream`); with several materials its primitives become one mesh with a
- * material array. The loaded glTF's `userData.pmzStreams` lists the streams and
- * `userData.pmzReady` resolves once each shows its base (or has failed, the base kept). */
+ * `gltfLoader.register((parser) => new PMZGLTFPlugin(parser, options))`, then `load` by URL or
+ * `parse` of an ArrayBuffer. Each glTF mesh that carries the extension (a scene may have several,
+ * each with its own stream and decoder, shared by the nodes that instance it) shows its glTF
+ * base, then takes the stream's geometry, which refines in place (`mesh.userData.pmzStream`);
+ * with several materials its primitives become one mesh with a material array. Primitives
+ * without the extension are left as GLTFLoader made them. The loaded glTF's
+ * `userData.pmzStreams` lists the streams and `userData.pmzReady` resolves once each shows its
+ * base (or has failed, the base kept). */
 export declare class PMZGLTFPlugin {
   constructor(parser: PMZGLTFParser, options?: PMZOptions);
   readonly name: 'PMZ_progressive_mesh';

@@ -772,15 +772,16 @@ export class PMZLoader extends Loader {
 
 // GLTFLoader plugin for PMZ_progressive_mesh (docs/gltf-binding.md, draft):
 //   loader.register((parser) => new PMZGLTFPlugin(parser, options));
-// GLTFLoader builds each primitive's base mesh as usual; once the scene is built, the stream in
-// the extension's buffer view goes through PMZLoader.stream() (options: PMZLoader's, worker
-// included) and the base's three.js meshes take the stream's geometry, which refines in place.
-// One stream per glTF mesh, shared by the nodes that use it. With several materials the mesh's
-// primitives (one per material) become one three.js mesh whose material array follows the
-// stream's material table (glTF material k is the stream's material k). Each mesh's
-// userData.pmzStream is its stream; the plugin's `streams` (the loaded glTF's
-// userData.pmzStreams) lists them all (GLTFLoader's onLoad comes once they exist), and `ready`
-// (userData.pmzReady) resolves once each shows its base or has failed (a stream the decoder
+// GLTFLoader builds each primitive's base mesh as usual; once the scene is built, the stream in the
+// extension's buffer view goes through PMZLoader.stream() (options: PMZLoader's, worker included)
+// and the base's three.js meshes take the stream's geometry, which refines in place. One stream and
+// decoder per glTF mesh that carries the extension (a scene GLB has several), shared by the nodes
+// that use it; primitives without it are left alone. Works alike for load by URL and parse of an
+// ArrayBuffer. With several materials the mesh's primitives (one per material) become one three.js
+// mesh whose material array follows the stream's material table (glTF material k is the stream's
+// material k). Each mesh's userData.pmzStream is its stream; the plugin's `streams` (the loaded
+// glTF's userData.pmzStreams) lists them all (GLTFLoader's onLoad comes once they exist), and
+// `ready` (userData.pmzReady) resolves once each shows its base or has failed (a stream the decoder
 // refuses leaves the glTF base in place).
 export class PMZGLTFPlugin {
   constructor(parser, options = {}) {

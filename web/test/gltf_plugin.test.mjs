@@ -6,13 +6,13 @@
 // coordinates flipped to glTF's v down) and one material per glTF material; it draws.
 import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
-import { copyFileSync, cpSync, mkdirSync, mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
+import { copyFileSync, mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import path from 'node:path';
 import { after, before, test } from 'node:test';
 
 import { binDir, pngBytes, rootDir, webDir } from './common.mjs';
-import { launchChromium, serveViewer } from './serve.mjs';
+import { gltfLoaderSite, launchChromium, pageErrors, serveViewer } from './serve.mjs';
 
 let server, browser, site;
 const glbs = {};  // name: the GLB's JSON
@@ -30,18 +30,8 @@ before(async () => {
   writeFileSync(path.join(work, 'paint.png'), pngBytes(8, 8, () => [200, 40, 40]));
   writeFileSync(path.join(work, 'metal.png'), pngBytes(8, 8, (x) => (x % 2 ? [90, 90, 110] : [160, 160, 180])));
   writeFileSync(path.join(work, 'metal_n.png'), pngBytes(8, 8, () => [128, 128, 255]));
-  // A static site: the package (three resolved by the page's import map), three and its
-  // GLTFLoader with the relative import it makes.
   site = path.join(work, 'site');
-  const three = path.join(webDir, 'node_modules', 'three');
-  mkdirSync(path.join(site, 'jsm', 'loaders'), { recursive: true });
-  mkdirSync(path.join(site, 'jsm', 'utils'), { recursive: true });
-  cpSync(path.join(webDir, 'dist', 'pkg'), path.join(site, 'pmz'), { recursive: true });
-  copyFileSync(path.join(three, 'build', 'three.module.js'), path.join(site, 'three.module.js'));
-  for (const f of ['loaders/GLTFLoader.js', 'utils/BufferGeometryUtils.js'])
-    copyFileSync(path.join(three, 'examples', 'jsm', f), path.join(site, 'jsm', f));
-  writeFileSync(path.join(site, 'index.html'), '<!doctype html><script type="importmap">' +
-    '{"imports": {"three": "/three.module.js"}}</script><canvas width="64" height="64"></canvas>\n');
+  gltfLoaderSite(site, webDir);
   // Simplified as far as possible the base is one triangle of one material (one primitive);
   // with --base-faces 100 it has faces of both (two primitives).
   for (const [name, args] of [['seamed.glb', []], ['seamed100.glb', ['--base-faces', '100']]]) {
@@ -62,14 +52,7 @@ for (const [file, worker] of [['seamed100.glb', false], ['seamed100.glb', true],
   test(`GLTFLoader + PMZGLTFPlugin refines ${file}'s mesh to its full face count (worker ${worker})`, async () => {
     const json = glbs[file], ext = json.meshes[0].primitives[0].extensions.PMZ_progressive_mesh;
     const page = await browser.newPage();
-    const errors = [];
-    page.on('pageerror', (e) => errors.push(String(e)));
-    page.on('console', (m) => {
-      if (m.type() === 'error' && !m.text().startsWith('Failed to load resource')) errors.push(m.text());
-    });
-    page.on('response', (r) => {
-      if (r.status() >= 400 && !r.url().endsWith('/favicon.ico')) errors.push(`${r.status()} ${r.url()}`);
-    });
+    const errors = pageErrors(page);
     await page.goto(`http://127.0.0.1:${server.address().port}/index.html`);
     const r = await page.evaluate(async (file, worker) => {
       const THREE = await import('three');

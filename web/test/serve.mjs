@@ -7,7 +7,8 @@
 // 'ignore': a 200 with the whole file; 'wrongrange': the slice asked for, its Content-Range one
 // byte later; 'stall': headers, then no body; 'front': ranges from byte 0 only, a 500 for others)}; server.requests[NAME]: when each
 // request came (Date.now()); server.ranges[NAME]: the Range header of each ('' without).
-import { createReadStream, mkdtempSync, readFileSync, rmSync, statSync } from 'node:fs';
+import { copyFileSync, cpSync, createReadStream, mkdirSync, mkdtempSync, readFileSync, rmSync, statSync,
+  writeFileSync } from 'node:fs';
 import http from 'node:http';
 import { tmpdir } from 'node:os';
 import path from 'node:path';
@@ -101,4 +102,33 @@ export async function launchChromium() {
     rmSync(profile, { recursive: true, force: true });
   };
   return browser;
+}
+
+// A static site in `site` for three's GLTFLoader in a page: the package in /pmz/ (three resolved
+// by the page's import map), three, GLTFLoader and the relative import it makes in /jsm/, and an
+// index.html with a 64 x 64 canvas. `webDir`: web/ (its dist/pkg and node_modules).
+export function gltfLoaderSite(site, webDir) {
+  const three = path.join(webDir, 'node_modules', 'three');
+  mkdirSync(path.join(site, 'jsm', 'loaders'), { recursive: true });
+  mkdirSync(path.join(site, 'jsm', 'utils'), { recursive: true });
+  cpSync(path.join(webDir, 'dist', 'pkg'), path.join(site, 'pmz'), { recursive: true });
+  copyFileSync(path.join(three, 'build', 'three.module.js'), path.join(site, 'three.module.js'));
+  for (const f of ['loaders/GLTFLoader.js', 'utils/BufferGeometryUtils.js'])
+    copyFileSync(path.join(three, 'examples', 'jsm', f), path.join(site, 'jsm', f));
+  writeFileSync(path.join(site, 'index.html'), '<!doctype html><script type="importmap">' +
+    '{"imports": {"three": "/three.module.js"}}</script><canvas width="64" height="64"></canvas>\n');
+}
+
+// The page's uncaught errors, console errors (but failed resource loads) and HTTP errors (but
+// /favicon.ico), as they come.
+export function pageErrors(page) {
+  const errors = [];
+  page.on('pageerror', (e) => errors.push(String(e)));
+  page.on('console', (m) => {
+    if (m.type() === 'error' && !m.text().startsWith('Failed to load resource')) errors.push(m.text());
+  });
+  page.on('response', (r) => {
+    if (r.status() >= 400 && !r.url().endsWith('/favicon.ico')) errors.push(`${r.status()} ${r.url()}`);
+  });
+  return errors;
 }
