@@ -30,8 +30,8 @@ struct Camera {
 
 // The fraction of the area of `mesh` that `cam` shows.
 double visible_fraction(const pmz::IndexedMesh& mesh, const Camera& cam) {
-  const pmz::View view = pmz::look_at(cam.eye, cam.target, cam.fov * float(M_PI / 180),
-                                      cam.width, cam.height, 1e-4f, 1);
+  const pmz::View view = pmz::look_at(cam.eye, cam.target, cam.fov * float(M_PI / 180), cam.width,
+                                      cam.height, 1e-4f, 1);
   const float* m = view.view_projection;
   const int w = int(std::max(1u, cam.width / 4)), h = int(std::max(1u, cam.height / 4));
   const size_t nv = mesh.positions.size() / 3, nf = mesh.indices.size() / 3;
@@ -107,8 +107,8 @@ double visible_fraction(const pmz::IndexedMesh& mesh, const Camera& cam) {
                          e1[0] * e2[1] - e1[1] * e2[0]};
     const double area = 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
     total += area;
-    const double toward = n[0] * (cam.eye[0] - a[0]) + n[1] * (cam.eye[1] - a[1]) +
-                          n[2] * (cam.eye[2] - a[2]);
+    const double toward =
+        n[0] * (cam.eye[0] - a[0]) + n[1] * (cam.eye[1] - a[1]) + n[2] * (cam.eye[2] - a[2]);
     if (toward <= 0) continue;
     float x, y, cw;
     centroid(f, x, y, cw);
@@ -137,9 +137,8 @@ bool parse_floats(const char* text, float* out, int n) {
 
 int main(int argc, char** argv) {
   if (argc < 3) {
-    std::fprintf(stderr,
-                 "usage: %s MESH EX,EY,EZ,TX,TY,TZ [--surface F] [--size WxH] [--fov DEG]\n",
-                 kTool);
+    std::fprintf(
+        stderr, "usage: %s MESH EX,EY,EZ,TX,TY,TZ [--surface F] [--size WxH] [--fov DEG]\n", kTool);
     return 2;
   }
   Camera cam;
