@@ -125,11 +125,14 @@ std::string EncodePlan::file(const std::string& name) const {
   return (std::filesystem::path(dir) / name).string();
 }
 
+bool EncodePlan::exists() const {
+  std::error_code ec;
+  return std::filesystem::exists(file("tasks"), ec);
+}
+
 bool EncodePlan::write(const IndexedMesh& mesh, const std::vector<std::string>& args,
                        uint32_t tasks, std::string& error) const {
-  std::error_code ec;
-  if (std::filesystem::exists(file("tasks"), ec))
-    return error = dir + ": holds a plan already (give a new or empty folder)", false;
+  if (exists()) return error = dir + ": holds a plan already (give a new or empty folder)", false;
   std::vector<uint8_t> bytes;
   mesh_to_bytes(mesh, bytes);
   if (!app_support::write_output(file("mesh"), bytes.data(), bytes.size(), error)) return false;

@@ -3,6 +3,8 @@
 // process or machine seeing the folder can run. The folder holds
 //   mesh     the mesh as read (after repair), exactly: every task and the assembly start from it
 //   options  the command line given to --plan (NUL-separated): its options are every step's
+//   ID.region  a task's input, its cell's region (pmz::cell_regions): all a task reads of the
+//            mesh (none for a mesh with attributes: its tasks read `mesh`)
 //   tasks    the task ids, one a line: 0 to N-1, one per cell of the first cell level
 //   ID.cell  a task's result (pmz::simplify_cell), written whole or not at all
 // and is written in that order, `tasks` last: a runner never sees tasks without their inputs.
@@ -25,6 +27,9 @@ struct EncodePlan {
 
   std::string file(const std::string& name) const;  // dir/name
   std::string result(const std::string& id) const { return file(id + ".cell"); }
+  std::string region(const std::string& id) const { return file(id + ".region"); }
+  // Whether the folder holds a plan (its `tasks`): a new plan is refused there.
+  bool exists() const;
 
   // Writes mesh, options and the ids of `tasks` tasks. Refuses a folder that holds a plan
   // already (its results would not be this plan's). Errors name the file.

@@ -279,11 +279,26 @@ int write_plan(const std::string& input, const tool::EncodePlan& plan,
   pmz::SimplifyOptions sopt = settings.simplify;
   settings.simplifier.apply_clusters(sopt, mesh.vertex_count());
   uint32_t tasks = 0;
-  if (ok && !pmz::cell_tasks(mesh, sopt, tasks, error))
-    ok = false, error = (input == "-" ? "stdin" : input) + ": " + error;
+  if (ok && plan.exists())
+    ok = false, error = plan.dir + ": holds a plan already (give a new or empty folder)";
   ok = ok && make_output_folder(plan.dir);
+  // Each cell's region written as the engine reaches the first level's cells (a mesh with
+  // attributes has none: its tasks read the whole mesh).
+  std::vector<std::string> written;
+  bool unwritten = false;  // a region could not be written (the error names it)
+  const pmz::CellRegionSink sink = [&](uint32_t cell, const std::vector<uint8_t>& region,
+                                       std::string& e) {
+    written.push_back(plan.region(std::to_string(cell)));
+    unwritten = !app_support::write_output(written.back(), region.data(), region.size(), e);
+    return !unwritten;
+  };
+  if (ok && !(mesh.attributes.empty() ? pmz::cell_regions(mesh, sopt, sink, tasks, error)
+                                      : pmz::cell_tasks(mesh, sopt, tasks, error)))
+    ok = false, error = unwritten ? error : (input == "-" ? "stdin" : input) + ": " + error;
   if (ok && !plan.write(mesh, args, tasks, error)) ok = false;
   if (!ok) {
+    std::error_code ec;
+    for (const std::string& f : written) std::filesystem::remove(f, ec);
     if (!error.empty()) app_support::print_error(error);
     return app_support::kExitFailure;
   }
@@ -300,17 +315,26 @@ int run_task(const tool::EncodePlan& plan, const std::string& id, const EncodeSe
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<std::string> ids;
   std::string error;
-  pmz::IndexedMesh mesh;
   bool ok = plan.read_tasks(ids, error);
   if (ok && (std::find(ids.begin(), ids.end(), id) == ids.end() || id.size() > 9 ||
              id.find_first_not_of("0123456789") != std::string::npos))
     ok = false, error = plan.file("tasks") + ": lists no task " + id;
-  ok = ok && plan.read_mesh(mesh, error);
-  pmz::SimplifyOptions sopt = settings.simplify;
-  settings.simplifier.apply_clusters(sopt, mesh.vertex_count());
   std::vector<uint8_t> result;
-  if (ok && !pmz::simplify_cell(mesh, sopt, uint32_t(std::stoul(id)), result, error))
-    ok = false, error = plan.dir + ": task " + id + ": " + error;
+  std::error_code ec;
+  if (ok && std::filesystem::exists(plan.region(id), ec)) {
+    // The cell's region: all the task reads of the mesh.
+    std::vector<uint8_t> region;
+    ok = app_support::read_input(plan.region(id), region, error);
+    if (ok && !pmz::simplify_cell_region(region, uint32_t(std::stoul(id)), result, error))
+      ok = false, error = plan.region(id) + ": " + error;
+  } else if (ok) {
+    pmz::IndexedMesh mesh;
+    ok = plan.read_mesh(mesh, error);
+    pmz::SimplifyOptions sopt = settings.simplify;
+    settings.simplifier.apply_clusters(sopt, mesh.vertex_count());
+    if (ok && !pmz::simplify_cell(mesh, sopt, uint32_t(std::stoul(id)), result, error))
+      ok = false, error = plan.dir + ": task " + id + ": " + error;
+  }
   ok = ok && app_support::write_output(plan.result(id), result.data(), result.size(), error);
   if (!ok) {
     app_support::print_error(error);

@@ -237,13 +237,22 @@ struct EngineData {
   std::vector<uint8_t> inner;
   std::vector<float> region_bound;
 
-  // f(array) for every array above: what a cell's collapses can change (a cell run apart hands
-  // over the elements it changed: CellResult).
+  // What an array's elements are kept per (a vertex, a half-edge slot, a face; `other`: the
+  // attribute terms) and which ids its values are (none, vertex ids or half-edge slots).
+  enum class Per : uint8_t { vertex, slot, face, other };
+  enum class Ids : uint8_t { none, vertex, slot };
+  // f(array, per, ids) for every array above: what a cell's collapses can change (a cell run
+  // apart hands over the elements it changed: CellResult), and what a cell's region holds of
+  // them (CellRegion).
   template <class F>
   void for_each_array(F&& f) {
-    f(m.pos), f(m.vert), f(m.twin), f(m.out), f(feat.face), f(feat.vertex), f(quad);
-    f(accumulated), f(self_error), f(witness), f(attr.wedge), f(attr.material), f(attr.values);
-    f(target), f(stale), f(cell), f(key), f(inner), f(region_bound);
+    constexpr Per V = Per::vertex;
+    constexpr Ids N = Ids::none;
+    f(m.pos, V, N), f(m.vert, Per::slot, Ids::vertex), f(m.twin, Per::slot, Ids::slot);
+    f(m.out, V, Ids::slot), f(feat.face, Per::face, N), f(feat.vertex, V, N), f(quad, V, N);
+    f(accumulated, V, N), f(self_error, V, N), f(witness, V, N), f(attr.wedge, Per::other, N);
+    f(attr.material, Per::other, N), f(attr.values, Per::other, N), f(target, V, Ids::vertex);
+    f(stale, V, N), f(cell, V, N), f(key, V, N), f(inner, V, N), f(region_bound, V, N);
   }
 };
 
@@ -1238,6 +1247,42 @@ void merge_by_cost(const std::vector<std::vector<HalfEdgeCollapse>>& records,
   }
 }
 
+// v's bytes appended to out (the cell results and regions: host byte order).
+template <class T>
+void put(std::vector<uint8_t>& out, const T& v) {
+  static_assert(std::is_trivially_copyable_v<T>);
+  const auto* b = reinterpret_cast<const uint8_t*>(&v);
+  out.insert(out.end(), b, b + sizeof v);
+}
+
+// A cell's region (CellRegion) numbers its vertices and faces apart, ascending in the whole
+// mesh's numbers: vertex i of the region is vertices[i] of the mesh, face j is faces[j].
+struct RegionIds {
+  std::vector<uint32_t> vertices, faces;
+  std::vector<uint64_t> sizes;  // the whole mesh's size of each array (for_each_array's order)
+
+  uint32_t vertex(uint32_t x) const { return vertices[x]; }
+  uint32_t slot(uint32_t h) const { return faces[h >> 2] * 4 + (h & 3); }
+  uint32_t id(EngineData::Ids ids, uint32_t x) const {
+    if (x == kNone) return x;
+    return ids == EngineData::Ids::vertex ? vertex(x) : slot(x);
+  }
+  size_t units(EngineData::Per per) const {
+    return per == EngineData::Per::vertex ? vertices.size()
+           : per == EngineData::Per::slot ? faces.size() * 4
+           : per == EngineData::Per::face ? faces.size()
+                                          : 0;
+  }
+  // The mesh's index of element i of an array of `size` elements of the region.
+  uint64_t element(EngineData::Per per, size_t size, uint64_t i) const {
+    const uint64_t k = size / units(per), unit = i / k;
+    const uint64_t g = per == EngineData::Per::vertex ? vertices[unit]
+                       : per == EngineData::Per::slot ? slot(uint32_t(unit))
+                                                      : faces[unit];
+    return g * k + i % k;
+  }
+};
+
 // A cell of the first level simplified apart (simplify_cell): its collapses, the faces they
 // removed, and every element of the engine's arrays they changed (the cells of a level write
 // disjoint elements), as bytes: "PMZCELL1", the cell and the level's cell count (u32), removed
@@ -1251,28 +1296,43 @@ class CellResult {
   // The state of `data` before the cell runs.
   void snapshot(EngineData& data) {
     before_.clear();
-    data.for_each_array([&](const auto& a) {
+    data.for_each_array([&](const auto& a, auto...) {
       const auto* p = reinterpret_cast<const uint8_t*>(a.data());
       before_.emplace_back(p, p + a.size() * sizeof(a[0]));
     });
   }
-  // The result of cell `cell` of `cells` after it ran (snapshot() before).
+  // The result of cell `cell` of `cells` after it ran (snapshot() before). With `region`, `data`
+  // holds a cell's region (CellRegion) and the result is written in the whole mesh's numbers.
   void write(EngineData& data, uint32_t cell, uint32_t cells, uint64_t removed,
-             const std::vector<HalfEdgeCollapse>& record, std::vector<uint8_t>& out) const {
+             const std::vector<HalfEdgeCollapse>& record, std::vector<uint8_t>& out,
+             const RegionIds* region = nullptr) const {
+    auto vertex = [&](uint32_t x) { return region && x != kNone ? region->vertex(x) : x; };
     out.assign(kMagic, kMagic + 8);
     put(out, cell), put(out, cells), put(out, removed), put(out, uint64_t(record.size()));
     for (const HalfEdgeCollapse& c : record)
-      put(out, c.u), put(out, c.v), put(out, c.vl), put(out, c.vr), put(out, c.cost);
+      put(out, vertex(c.u)), put(out, vertex(c.v)), put(out, vertex(c.vl)), put(out, vertex(c.vr)),
+          put(out, c.cost);
     size_t k = 0;
-    data.for_each_array([&](const auto& a) {
+    data.for_each_array([&](const auto& a, EngineData::Per per, EngineData::Ids ids) {
       using T = std::decay_t<decltype(a[0])>;
       static_assert(std::is_trivially_copyable_v<T>);
-      const uint8_t* was = before_[k++].data();
+      const uint8_t* was = before_[k].data();
       std::vector<uint32_t> changed;
       for (uint32_t i = 0; i < a.size(); ++i)
         if (std::memcmp(&a[i], was + size_t(i) * sizeof(T), sizeof(T)) != 0) changed.push_back(i);
-      put(out, uint64_t(a.size())), put(out, uint64_t(changed.size()));
-      for (uint32_t i : changed) put(out, i), put(out, a[i]);
+      put(out, region ? region->sizes[k] : uint64_t(a.size())), put(out, uint64_t(changed.size()));
+      ++k;
+      for (uint32_t i : changed) {
+        if (!region) {
+          put(out, i), put(out, a[i]);
+          continue;
+        }
+        put(out, uint32_t(region->element(per, a.size(), i)));
+        if constexpr (std::is_same_v<T, uint32_t>)
+          put(out, ids == EngineData::Ids::none ? a[i] : region->id(ids, a[i]));
+        else
+          put(out, a[i]);
+      }
     });
   }
   // Reads a result of cell `cell` of `cells` into `data`, `record` and `removed`; false with
@@ -1300,7 +1360,7 @@ class CellResult {
     record.resize(count);
     for (HalfEdgeCollapse& r : record) get(r.u), get(r.v), get(r.vl), get(r.vr), get(r.cost);
     bool ok = true;
-    data.for_each_array([&](auto& a) {
+    data.for_each_array([&](auto& a, auto...) {
       uint64_t size = 0, changed = 0;
       if (!ok || !get(size) || !get(changed) || size != a.size()) return void(ok = false);
       for (uint64_t j = 0; j < changed && ok; ++j) {
@@ -1313,21 +1373,210 @@ class CellResult {
   }
 
  private:
-  template <class T>
-  static void put(std::vector<uint8_t>& out, const T& v) {
-    const auto* b = reinterpret_cast<const uint8_t*>(&v);
-    out.insert(out.end(), b, b + sizeof v);
-  }
   std::vector<std::vector<uint8_t>> before_;
 };
 
+// A first-level cell as a task that reads nothing else (simplify_cell_region): the engine's
+// terms for the cell's vertices, their neighbours and the faces around both, numbered apart
+// (RegionIds), with the settings and the level's threshold and goal. A cell's collapses read and
+// write only its own vertices' faces and the vertices of those faces, so the region holds what
+// its run needs and one ring more; an id that leads out of the region is kept as kOutside, and a
+// run that changes such an element fails instead of handing over a wrong result. As bytes:
+// "PMZREGN1", the cell and the level's cell count (u32), the cell's faces and its goal (u64),
+// the threshold (f64), the settings, the region's vertex and face numbers in the mesh and the
+// cell's live vertices in the region (each a u32 count and u32s), then per array of
+// EngineData::for_each_array its size in the mesh and in the region (u64) and the region's
+// elements. Host byte order, as CellResult.
+class CellRegion {
+ public:
+  static constexpr char kMagic[8] = {'P', 'M', 'Z', 'R', 'E', 'G', 'N', '1'};
+  static constexpr uint32_t kOutside = 0xFFFFFFFEu;
+
+  uint32_t cell = 0, cells = 0;
+  uint64_t cell_faces = 0, goal = 0;
+  double max_cost = -1;
+  RegionIds ids;
+  std::vector<uint32_t> members;  // the cell's live vertices, ascending (region numbers)
+
+  // The region of the cell whose live vertices are members[0, count) (ascending), from the
+  // engine at the start of the first level's cells. vertex_local and face_local: scratch of the
+  // mesh's vertex and face counts, all kNone, left so.
+  static void write(Engine& engine, const uint32_t* members, size_t count, uint32_t cell,
+                    uint32_t cells, uint64_t cell_faces, uint64_t goal, double max_cost,
+                    std::vector<uint32_t>& vertex_local, std::vector<uint32_t>& face_local,
+                    std::vector<uint8_t>& out) {
+    const HalfEdgeMesh& m = engine.m;
+    std::vector<uint32_t> verts(members, members + count), faces;
+    for (uint32_t v : verts) vertex_local[v] = kOutside;
+    for (size_t i = 0; i < count; ++i)
+      for_each_neighbour(m, members[i], [&](uint32_t w, uint32_t) {
+        if (vertex_local[w] == kNone) vertex_local[w] = kOutside, verts.push_back(w);
+      });
+    for (size_t i = 0, near = verts.size(); i < near; ++i)
+      for_each_outgoing(m, verts[i], [&](uint32_t h) {
+        const uint32_t f = HalfEdgeMesh::face(h);
+        if (face_local[f] == kNone) face_local[f] = 0, faces.push_back(f);
+      });
+    for (uint32_t f : faces)
+      for (uint32_t k = 0; k < 3; ++k)
+        if (const uint32_t w = m.vert[HalfEdgeMesh::half_edge(f, k)]; vertex_local[w] == kNone)
+          vertex_local[w] = kOutside, verts.push_back(w);
+    std::sort(verts.begin(), verts.end());
+    std::sort(faces.begin(), faces.end());
+    for (uint32_t i = 0; i < verts.size(); ++i) vertex_local[verts[i]] = i;
+    for (uint32_t j = 0; j < faces.size(); ++j) face_local[faces[j]] = j;
+    auto local = [&](EngineData::Ids kind, uint32_t x) {
+      if (x == kNone) return x;
+      if (kind == EngineData::Ids::vertex)
+        return vertex_local[x] == kNone ? kOutside : vertex_local[x];
+      const uint32_t f = face_local[HalfEdgeMesh::face(x)];
+      return f == kNone ? kOutside : f * 4 + HalfEdgeMesh::corner(x);
+    };
+    out.assign(kMagic, kMagic + 8);
+    put(out, cell), put(out, cells), put(out, cell_faces), put(out, goal), put(out, max_cost);
+    put(out, uint8_t(engine.metric)), put(out, uint8_t(engine.guard));
+    const MetricParams& p = engine.params;
+    for (float f :
+         {p.epsilon, p.quadric_floor, p.torsion_weight, p.boundary_weight, p.quadric_memory,
+          p.guard_slack, p.guard_penalty_cap, p.attribute_weight, engine.feat.epsilon})
+      put(out, f);
+    put(out, engine.unit), put(out, engine.inv_unit4);
+    put_list(out, verts), put_list(out, faces);
+    put(out, uint32_t(count));
+    for (size_t i = 0; i < count; ++i) put(out, vertex_local[members[i]]);
+    RegionIds region;
+    region.vertices = std::move(verts), region.faces = std::move(faces);
+    const uint64_t mesh_units[3] = {m.vertex_count(), m.slot_count(), m.face_count()};
+    engine.data()->for_each_array([&](const auto& a, EngineData::Per per, EngineData::Ids kind) {
+      const uint64_t units = per == EngineData::Per::other ? 0 : mesh_units[int(per)];
+      const uint64_t k = units ? a.size() / units : 0, n = region.units(per);
+      put(out, uint64_t(a.size())), put(out, k * n);
+      for (uint64_t i = 0; i < n * k; ++i) {
+        const auto& e = a[region.element(per, n * k, i)];
+        if constexpr (std::is_same_v<std::decay_t<decltype(e)>, uint32_t>)
+          put(out, kind == EngineData::Ids::none ? e : local(kind, e));
+        else
+          put(out, e);
+      }
+    });
+    for (uint32_t v : region.vertices) vertex_local[v] = kNone;
+    for (uint32_t f : region.faces) face_local[f] = kNone;
+  }
+
+  // Reads a region into `engine` (a fresh one); false with `error` on bytes that are not one
+  // the engine can run on. Every id is checked to lie in the region, and the half-edges to pair
+  // up, so that no walk leaves the arrays or goes round for ever.
+  bool read(const std::vector<uint8_t>& bytes, Engine& engine, std::string& error) {
+    const uint8_t *p = bytes.data(), *end = p + bytes.size();
+    bool ok = true;
+    auto get = [&](auto& v) {
+      if (!ok || size_t(end - p) < sizeof v) return void(ok = false);
+      std::memcpy(&v, p, sizeof v), p += sizeof v;
+    };
+    auto get_list = [&](std::vector<uint32_t>& list, uint64_t below) {
+      uint32_t n = 0;
+      get(n);
+      if (!ok || n > size_t(end - p) / 4) return void(ok = false);
+      list.resize(n);
+      for (uint32_t i = 0; i < n && ok; ++i) {
+        get(list[i]);
+        ok = list[i] < below && (i == 0 || list[i - 1] < list[i]);
+      }
+    };
+    if (bytes.size() < 8 || std::memcmp(p, kMagic, 8) != 0)
+      return error = "not a cell region", false;
+    p += 8;
+    uint8_t metric = 0, guard = 0;
+    MetricParams& q = engine.params;
+    get(cell), get(cells), get(cell_faces), get(goal), get(max_cost), get(metric), get(guard);
+    for (float* f :
+         {&q.epsilon, &q.quadric_floor, &q.torsion_weight, &q.boundary_weight, &q.quadric_memory,
+          &q.guard_slack, &q.guard_penalty_cap, &q.attribute_weight, &engine.feat.epsilon})
+      get(*f);
+    get(engine.unit), get(engine.inv_unit4);
+    if (!ok) return error = "cut short", false;
+    if (metric > uint8_t(Metric::guarded) || guard > 1 || cell >= cells || std::isnan(max_cost))
+      return error = "damaged (its settings)", false;
+    engine.metric = Metric(metric), engine.guard = guard;
+    get_list(ids.vertices, kNone), get_list(ids.faces, kNone / 4), get_list(members, kNone);
+    const uint32_t nv = uint32_t(ids.vertices.size()), slots = uint32_t(ids.faces.size()) * 4;
+    for (uint32_t v : members) ok = ok && v < nv;
+    if (!ok) return error = "damaged (its vertices and faces)", false;
+    // Per array of for_each_array: elements per vertex, slot or face, and when it may be empty.
+    const bool multifeature = engine.metric == Metric::multifeature;
+    const uint64_t per_unit[19] = {3, 1, 1, 1, 1, 1, 1, 1, 1, 3 * kWitnesses,
+                                   0, 0, 0, 1, 1, 1, 1, 1, 1};
+    const bool may_be_empty[19] = {false,         false, false, false,        !multifeature,
+                                   !multifeature, false, true,  false,        !engine.guard,
+                                   true,          true,  true,  false,        false,
+                                   false,         false, false, !engine.guard};
+    size_t k = 0;
+    ids.sizes.clear();
+    engine.data()->for_each_array([&](auto& a, EngineData::Per per, EngineData::Ids kind) {
+      using T = std::decay_t<decltype(a[0])>;
+      uint64_t size = 0, local = 0;
+      get(size), get(local);
+      const uint64_t want = per_unit[k] * ids.units(per);
+      ok = ok && (local == want || (local == 0 && may_be_empty[k])) &&
+           local <= size_t(end - p) / sizeof(T) && (local == 0) == (size == 0) && size < kNone;
+      ++k;
+      if (!ok) return;
+      ids.sizes.push_back(size);
+      a.resize(local);
+      if (local) std::memcpy(a.data(), p, local * sizeof(T)), p += local * sizeof(T);
+      if constexpr (std::is_same_v<T, uint32_t>) {
+        if (kind == EngineData::Ids::none) return;
+        const uint32_t below = kind == EngineData::Ids::vertex ? nv : slots;
+        for (uint32_t i = 0; i < a.size() && ok; ++i) {
+          uint32_t& x = a[i];
+          if (x == kOutside && (kind == EngineData::Ids::slot || per == EngineData::Per::vertex))
+            outside_.push_back({k - 1, i}), x = kNone;
+          ok = x == kNone || (x < below && (kind == EngineData::Ids::vertex || (x & 3) != 3));
+        }
+      } else if constexpr (std::is_floating_point_v<T>) {
+        for (const T& x : a) ok = ok && !std::isnan(x);
+      }
+    });
+    if (!ok || p != end) return error = "damaged (its arrays)", false;
+    // The half-edges pair up, and every vertex's out-edge starts at it.
+    const HalfEdgeMesh& m = engine.m;
+    for (uint32_t h = 0; h < slots && ok; ++h)
+      if (const uint32_t t = m.twin[h]; t != kNone) ok = m.twin[t] == h && (h & 3) != 3;
+    for (uint32_t v = 0; v < nv && ok; ++v) ok = m.out[v] == kNone || m.vert[m.out[v]] == v;
+    if (!ok) return error = "damaged (its half-edges do not pair up)", false;
+    engine.stats_enabled = false;
+    return true;
+  }
+
+  // Whether the run left every element that leads out of the region as it was.
+  bool stayed_inside(EngineData& data) const {
+    bool inside = true;
+    size_t k = 0;
+    data.for_each_array([&](const auto& a, auto...) {
+      if constexpr (std::is_same_v<std::decay_t<decltype(a[0])>, uint32_t>)
+        for (const auto& [array, i] : outside_) inside &= array != k || a[i] == kNone;
+      ++k;
+    });
+    return inside;
+  }
+
+ private:
+  static void put_list(std::vector<uint8_t>& out, const std::vector<uint32_t>& list) {
+    put(out, uint32_t(list.size()));
+    for (uint32_t x : list) put(out, x);
+  }
+  std::vector<std::pair<size_t, uint32_t>> outside_;  // (array, element): held kOutside
+};
+
 // What run_cell_levels does with the first level's cells: simplify them all here (run), only
-// count them (count: `cells`), simplify cell `cell` alone and stop (one: `result`), or take
-// every cell's result from SimplifyOptions::clusters.first_level (when set, in mode run).
+// count them (count: `cells`), simplify cell `cell` alone and stop (one: `result`), hand each
+// cell's region to `region` and stop (regions: `cells`), or take every cell's result from
+// SimplifyOptions::clusters.first_level (when set, in mode run).
 struct FirstLevel {
-  enum Mode { run, count, one } mode = run;
+  enum Mode { run, count, one, regions } mode = run;
   uint32_t cell = 0, cells = 0;
   std::vector<uint8_t>* result = nullptr;
+  const CellRegionSink* region = nullptr;
 };
 
 // The levels of a hierarchical simplification (SimplifyOptions::clusters), finest first. Each
@@ -1465,6 +1714,18 @@ bool run_cell_levels(Engine& engine, const SimplifyOptions& options,
       removed[c] = cell_faces[c] - lane.faces;
     };
     const bool first_level = levels.size() == 1;
+    if (first_level && first.mode == FirstLevel::regions) {
+      std::vector<uint32_t> vertex_local(n, kNone), face_local(engine.m.face_count(), kNone);
+      std::vector<uint8_t> bytes;
+      first.cells = uint32_t(cells);
+      for (uint32_t c = 0; c < cells; ++c) {
+        CellRegion::write(engine, &members[start[c]], start[c + 1] - start[c], c, uint32_t(cells),
+                          cell_faces[c], uint64_t(double(cell_faces[c]) * ratio), level.max_cost,
+                          vertex_local, face_local, bytes);
+        if (!(*first.region)(c, bytes, error)) return false;
+      }
+      return true;
+    }
     if (first_level && first.mode == FirstLevel::one) {
       if (first.cell >= cells)
         return error = "there is no cell " + std::to_string(first.cell) + " (the first level has " +
@@ -1593,6 +1854,42 @@ bool cell_tasks(const IndexedMesh& input, const SimplifyOptions& options, uint32
   CollapseSequence unused;
   if (!simplify_levels(input, options, first, unused, error)) return false;
   count = first.cells;
+  return true;
+}
+
+bool cell_regions(const IndexedMesh& input, const SimplifyOptions& options,
+                  const CellRegionSink& sink, uint32_t& count, std::string& error) {
+  count = 0;
+  if (!input.attributes.empty()) return true;
+  FirstLevel first;
+  first.mode = FirstLevel::regions;
+  first.region = &sink;
+  CollapseSequence unused;
+  if (!simplify_levels(input, options, first, unused, error)) return false;
+  count = first.cells;
+  return true;
+}
+
+bool simplify_cell_region(const std::vector<uint8_t>& region, uint32_t cell,
+                          std::vector<uint8_t>& result, std::string& error) {
+  Engine engine;
+  CellRegion r;
+  if (!r.read(region, engine, error)) return false;
+  if (r.cell != cell)
+    return error = "the region of cell " + std::to_string(r.cell) + ", not of cell " +
+                   std::to_string(cell),
+           false;
+  CellResult diff;
+  diff.snapshot(*engine.data());
+  std::vector<HalfEdgeCollapse> record;
+  Engine lane(engine, Engine::Lane{});
+  lane.record = &record;
+  SimplifyOptions level;
+  level.max_cost = r.max_cost;
+  lane.run_cell(r.members.data(), r.members.size(), r.cell_faces, r.goal, level);
+  if (!r.stayed_inside(*engine.data()))
+    return error = "the cell's collapses reached beyond its region", false;
+  diff.write(*engine.data(), r.cell, r.cells, r.cell_faces - lane.faces, record, result, &r.ids);
   return true;
 }
 

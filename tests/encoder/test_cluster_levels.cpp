@@ -285,6 +285,66 @@ TEST(ClusterLevels, CellsSimplifiedApartGiveTheSameSequence) {
   EXPECT_EQ(cells, 0u);
 }
 
+TEST(ClusterLevels, ACellsRegionGivesTheResultOfTheWholeMesh) {
+  // Each cell's region (cell_regions) simplified alone gives the bytes simplify_cell gives with
+  // the whole mesh, under each metric; a mesh with attributes has no regions.
+  const IndexedMesh mesh = bumpy_sphere(5);
+  for (pmz::Metric metric : {pmz::Metric::guarded, pmz::Metric::multifeature, pmz::Metric::qem}) {
+    pmz::SimplifyOptions options = clustered(200);
+    options.metric = metric;
+    std::vector<std::vector<uint8_t>> regions;
+    uint32_t cells = 0;
+    std::string error;
+    const pmz::CellRegionSink keep = [&](uint32_t c, const std::vector<uint8_t>& r, std::string&) {
+      EXPECT_EQ(c, regions.size());
+      regions.push_back(r);
+      return true;
+    };
+    ASSERT_TRUE(pmz::cell_regions(mesh, options, keep, cells, error)) << error;
+    ASSERT_EQ(cells, regions.size());
+    EXPECT_GT(cells, 8u);
+    for (uint32_t c = 0; c < cells; ++c) {
+      std::vector<uint8_t> whole, alone;
+      ASSERT_TRUE(pmz::simplify_cell(mesh, options, c, whole, error)) << error;
+      ASSERT_TRUE(pmz::simplify_cell_region(regions[c], c, alone, error)) << error;
+      EXPECT_TRUE(whole == alone) << "cell " << c << " of " << cells;
+      // Each region is a small part of the mesh.
+      EXPECT_LT(regions[c].size() * 4, regions.size() * regions[0].size());
+    }
+    if (metric != pmz::Metric::guarded) continue;
+    // Damaged regions are refused with a message, whatever the damage; another cell's too.
+    std::vector<uint8_t> result;
+    EXPECT_FALSE(pmz::simplify_cell_region(regions[1], 2, result, error));
+    EXPECT_NE(error.find("the region of cell 1, not of cell 2"), std::string::npos) << error;
+    const std::vector<uint8_t>& r = regions[3];
+    for (size_t cut = 0; cut < r.size(); cut += 1 + cut / 3) {
+      std::vector<uint8_t> part(r.begin(), r.begin() + long(cut));
+      EXPECT_FALSE(pmz::simplify_cell_region(part, 3, result, error)) << cut;
+    }
+    uint32_t seed = 1;
+    for (int round = 0; round < 300; ++round) {
+      std::vector<uint8_t> bad = r;
+      for (int k = 0; k < 1 + round % 4; ++k) {
+        seed = seed * 1664525u + 1013904223u;
+        bad[8 + seed % (bad.size() - 8)] ^= uint8_t(1u << (seed >> 29));
+      }
+      error.clear();
+      const bool ran = pmz::simplify_cell_region(bad, 3, result, error);
+      EXPECT_TRUE(ran || !error.empty());
+    }
+  }
+  const IndexedMesh seamed = pmz_test::seamed_grid(60, 23);
+  uint32_t cells = 1;
+  std::string error;
+  bool called = false;
+  const pmz::CellRegionSink none = [&](uint32_t, const std::vector<uint8_t>&, std::string&) {
+    return called = true;
+  };
+  EXPECT_TRUE(pmz::cell_regions(seamed, clustered(150), none, cells, error));
+  EXPECT_EQ(cells, 0u);
+  EXPECT_FALSE(called);
+}
+
 TEST(ClusterLevels, ACellsCollapsesDependOnlyOnTheCell) {
   // Two bumpy spheres far apart; the second is mirrored in y (and its faces turned over, so
   // they face out): the bounding box, the edge lengths and so the metric's unit stay the same,

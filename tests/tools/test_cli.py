@@ -731,7 +731,8 @@ def case_encode_plan_tasks_assemble():
     with open(os.path.join(plan, "0.cell"), "rb") as f:
         check(f.read() == first, "the first cell run twice wrote different results")
     check(sorted(os.listdir(plan)) == sorted(["mesh", "options", "tasks"] +
-                                             [i + ".cell" for i in ids]),
+                                             [i + ".cell" for i in ids] +
+                                             [i + ".region" for i in ids]),
           f"the plan holds more: {sorted(os.listdir(plan))}")
     r = run([tool("pmz-encode"), "--assemble", plan, "-o", out])
     check(r.returncode == 0, f"--assemble: {err_text(r)}")
@@ -740,6 +741,52 @@ def case_encode_plan_tasks_assemble():
     r = run(["cmp", one, out])
     check(r.returncode == 0, f"assembled and one-process streams differ: {r.stdout}")
     check(info_json(out)["nodes"] > len(ids), "the stream has no more nodes than cells")
+
+
+def peak_kb(args):
+    """Runs args; (exit status, its peak resident set in KB)."""
+    p = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    _, status, usage = os.wait4(p.pid, 0)
+    p.returncode = os.waitstatus_to_exitcode(status)
+    return p.returncode, usage.ru_maxrss
+
+
+def case_encode_task_reads_its_region():
+    # A task of a plan reads its cell's region, not the mesh: it runs with the plan's mesh file
+    # gone, in a fraction of the memory of the plan (which holds the whole mesh), and writes
+    # the result a task reading the whole mesh writes (a plan without regions: the tasks of a
+    # mesh with attributes). A damaged region: one line naming it, exit 1, no result.
+    d = fresh("encode_region")
+    ply, plan, bare = (os.path.join(d, n) for n in ("t.ply", "plan", "bare"))
+    r = run([tool("pmz-generate"), "--faces", "300000", "-o", ply, "-q"])
+    check(r.returncode == 0, f"pmz-generate: {err_text(r)}")
+    rc, plan_kb = peak_kb([tool("pmz-encode"), ply, "--plan", plan, "--cluster-vertices", "4096"])
+    check(rc == 0, f"--plan: exit {rc}")
+    shutil.copytree(plan, bare)
+    for name in os.listdir(bare):
+        if name.endswith(".region"):
+            os.remove(os.path.join(bare, name))
+    os.rename(os.path.join(plan, "mesh"), os.path.join(d, "mesh"))
+    rc, task_kb = peak_kb([tool("pmz-encode"), "--task", plan, "5"])
+    check(rc == 0, f"--task 5 without the mesh: exit {rc}")
+    check(task_kb * 4 < plan_kb, f"a task took {task_kb} KB, the plan {plan_kb} KB")
+    r = run([tool("pmz-encode"), "--task", bare, "5"])
+    check(r.returncode == 0, f"--task 5 on the whole mesh: {err_text(r)}")
+    with open(os.path.join(plan, "5.cell"), "rb") as a, open(os.path.join(bare, "5.cell"), "rb") as b:
+        check(a.read() == b.read(), "the region's result differs from the whole mesh's")
+    region = os.path.join(plan, "6.region")
+    data = open(region, "rb").read()
+    for cut in (data[:len(data) // 2], data[:20], data[:-1], b"PMZREGN1" + b"\xff" * 64):
+        open(region, "wb").write(cut)
+        r = run([tool("pmz-encode"), "--task", plan, "6"])
+        lines = err_text(r).strip().splitlines()
+        check(r.returncode == 1 and len(lines) == 1 and region in lines[0] and
+              not os.path.exists(os.path.join(plan, "6.cell")),
+              f"a damaged region: rc={r.returncode} {lines}")
+    os.rename(os.path.join(plan, "5.region"), region)
+    r = run([tool("pmz-encode"), "--task", plan, "6"])
+    check(r.returncode == 1 and "the region of cell 5, not of cell 6" in err_text(r),
+          f"another cell's region: rc={r.returncode} {err_text(r)}")
 
 
 def case_info_texcoords_only():

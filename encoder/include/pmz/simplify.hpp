@@ -180,6 +180,21 @@ bool cell_tasks(const IndexedMesh& input, const SimplifyOptions& options, uint32
 bool simplify_cell(const IndexedMesh& input, const SimplifyOptions& options, uint32_t cell,
                    std::vector<uint8_t>& result, std::string& error);
 
+// The first level's cells as tasks that need no more than their cell: cell_regions() hands
+// sink(cell, region, error) each cell's region, the engine's terms of the cell's vertices, their
+// neighbours and the faces around them (a sink returning false stops it with its error), and
+// counts the cells; simplify_cell_region() simplifies cell `cell` from its region and gives the
+// bytes simplify_cell() gives for it, holding the region only. A mesh with attributes has no
+// regions (count 0, sink not called: its tasks take the whole mesh). Regions are bytes of this
+// build of the library on machines of one kind; simplify_cell_region() fails with one line on bytes
+// that are not one.
+using CellRegionSink =
+    std::function<bool(uint32_t cell, const std::vector<uint8_t>& region, std::string& error)>;
+bool cell_regions(const IndexedMesh& input, const SimplifyOptions& options,
+                  const CellRegionSink& sink, uint32_t& count, std::string& error);
+bool simplify_cell_region(const std::vector<uint8_t>& region, uint32_t cell,
+                          std::vector<uint8_t>& result, std::string& error);
+
 // The mesh after the first k collapses (faces in input ids compacted to the vertices left), with
 // its attributes when seq.mesh has them: the wedges the collapse rule leaves
 // (encoder/src/attr_collapse.hpp), compacted in input order, and the surviving faces' materials.
