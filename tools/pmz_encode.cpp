@@ -119,6 +119,7 @@ bool encode_scene(const pmz::GltfScene& scene, const std::string& input,
       return error = input + ": " + which + ": " + error, false;
     faces += seq.mesh.face_count(), vertices += seq.mesh.vertex_count(), total += bytes[i].size();
   }
+  for (const std::string& why : scene.meshes_left_out()) app_support::print_error(input, why);
   std::vector<std::string> not_embedded;
   if (!scene.write_glb(bases, streams, not_embedded, glb, error))
     return error = input + ": " + error, false;

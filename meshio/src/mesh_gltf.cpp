@@ -839,6 +839,7 @@ struct GltfScene::State {
   tinygltf::Model model;
   int scene = -1;
   std::vector<int> node_order, mesh_order;
+  std::vector<std::string> left_out;
 };
 
 GltfScene::GltfScene() : state_(std::make_unique<State>()) {}
@@ -858,14 +859,28 @@ bool GltfScene::read(const std::string& path, std::string_view data, std::string
   if (!reader.run(error)) return false;
   if (!s.model.scenes.empty()) s.scene = std::max(s.model.defaultScene, 0);
   s.node_order = std::move(reader.node_order);
-  s.mesh_order = std::move(reader.mesh_order);
+  for (int m : reader.mesh_order) {
+    const std::vector<tinygltf::Primitive>& prims = s.model.meshes[size_t(m)].primitives;
+    if (std::any_of(prims.begin(), prims.end(), [](const tinygltf::Primitive& p) {
+          return p.mode == TINYGLTF_MODE_TRIANGLES || p.mode == TINYGLTF_MODE_TRIANGLE_STRIP ||
+                 p.mode == TINYGLTF_MODE_TRIANGLE_FAN;
+        }))
+      s.mesh_order.push_back(m);
+    else
+      s.left_out.push_back("mesh " + std::to_string(m) +
+                           " has no triangles (points or lines): not carried");
+  }
   return true;
 }
 
+const std::vector<std::string>& GltfScene::meshes_left_out() const { return state_->left_out; }
+
 size_t GltfScene::mesh_nodes() const {
   const State& s = *state_;
-  return size_t(std::count_if(s.node_order.begin(), s.node_order.end(),
-                              [&](int n) { return s.model.nodes[size_t(n)].mesh >= 0; }));
+  return size_t(std::count_if(s.node_order.begin(), s.node_order.end(), [&](int n) {
+    const int m = s.model.nodes[size_t(n)].mesh;
+    return m >= 0 && std::count(s.mesh_order.begin(), s.mesh_order.end(), m) > 0;
+  }));
 }
 
 size_t GltfScene::mesh_count() const { return state_->mesh_order.size(); }

@@ -179,6 +179,22 @@ def main():
         g, _ = glb_parts(open(out, "rb").read())
         check(g["nodes"] == [{"mesh": 0}] and len(g["meshes"]) == 1, f"one mesh node: nodes {g['nodes']}")
 
+    # A mesh of points only: left out with a line saying so, its node kept without a mesh.
+    dots = json.loads(json.dumps(src))
+    dots["meshes"].append({"name": "dots", "primitives": [
+        {"attributes": dict(src["meshes"][2]["primitives"][0]["attributes"]), "mode": 0}]})
+    dots["nodes"].append({"name": "dots-node", "mesh": 3})
+    dots["nodes"][0]["children"].append(6)
+    with open(os.path.join(work, "dots.gltf"), "w") as f:
+        json.dump(dots, f)
+    out = os.path.join(work, "dots.glb")
+    r = run([encode, os.path.join(work, "dots.gltf"), "-o", out, "--quiet"])
+    if check(r.returncode == 0, f"pmz-encode dots.gltf: {r.stderr.strip()}"):
+        check("mesh 3 has no triangles" in r.stderr, f"the points mesh is not named: {r.stderr.strip()!r}")
+        g, _ = glb_parts(open(out, "rb").read())
+        check(len(g["meshes"]) == 3 and g["nodes"][-1] == {"name": "dots-node"},
+              f"points mesh: {len(g['meshes'])} meshes, last node {g['nodes'][-1]}")
+
     # Malformed scenes: one line naming the file, a non-zero exit, nothing written.
     bad_cases = {
         "missing-mesh": lambda g: g["nodes"][3].update(mesh=7),

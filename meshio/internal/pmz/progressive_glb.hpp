@@ -50,10 +50,15 @@ class GltfScene {
   // default scene whole, as read_mesh would: false with one line naming the file where it is
   // malformed.
   bool read(const std::string& path, std::string_view data, std::string& error);
-  // The nodes of the default scene that name a mesh (a mesh two nodes name counts twice).
+  // The nodes of the default scene that name a mesh with triangles (a mesh two nodes name counts
+  // twice).
   size_t mesh_nodes() const;
-  // The meshes the default scene names, in the order a depth-first walk of it first reaches them.
+  // The meshes with triangles the default scene names, in the order a depth-first walk of it
+  // first reaches them.
   size_t mesh_count() const;
+  // One line for each mesh the scene names that has no triangles (points or lines only): it is
+  // not carried, and its nodes name no mesh.
+  const std::vector<std::string>& meshes_left_out() const;
   // Mesh `i` in its own coordinates (no node transform applied); its material table, when any of
   // its primitives names a material, is the asset's whole table (material k is glTF material k,
   // then "default" for primitives without one).
