@@ -75,6 +75,7 @@ cxxflags=(-std=c++20 -flto -fno-exceptions "${features[@]}" -Wall -Wextra
 # before the link).
 ldflags=($link_opt -flto "${features[@]}" --no-entry -sSTANDALONE_WASM=1 -sFILESYSTEM=0
   -sALLOW_MEMORY_GROWTH=1 -sWASM_BIGINT=1 -sMALLOC=${PMZ_WASM_MALLOC:-emmalloc}
+  --js-library "$root/web/wasm_imports.js"
   -sEXPORTED_FUNCTIONS="[$exports,\"_malloc\",\"_free\"]")
 
 # The wasm is built by ninja (web/build/build.ninja, written here): each source compiled on its
@@ -148,7 +149,7 @@ done
     echo "  opt = $level"
     echo "  src = $f"
   done
-  echo "build pmz_wasm.link.wasm: link $(printf '%s ' "${objects[@]}")| toolchain.txt"
+  echo "build pmz_wasm.link.wasm: link $(printf '%s ' "${objects[@]}")| toolchain.txt $(ninja_path "$root/web/wasm_imports.js")"
   echo "  flags = $(ninja_words "${ldflags[@]}")"
   echo "build pmz_wasm.wasm: post pmz_wasm.link.wasm | toolchain.txt"
   echo "default pmz_wasm.wasm"

@@ -8,7 +8,8 @@ export default async function createModule(options = {}) {
     wasi_snapshot_preview1: {
       proc_exit(code) { throw new Error(`pmz: the WebAssembly instance aborted (exit ${code})`); },
     },
-    env: { emscripten_notify_memory_growth() {} },  // HEAPU8 notices by itself
+    // (HEAPU8 notices memory growth by itself; pmz_host_tan: web/wasm_imports.js)
+    env: { emscripten_notify_memory_growth() {}, pmz_host_tan: Math.tan },
   };
   let source;
   if (options.wasmBinary) {
