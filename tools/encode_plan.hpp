@@ -4,7 +4,7 @@
 //   mesh     the mesh as read (after repair), exactly: every task and the assembly start from it
 //   options  the command line given to --plan (NUL-separated): its options are every step's
 //   ID.region  a task's input, its cell's region (pmz::cell_regions): all a task reads of the
-//            mesh (none for a mesh with attributes: its tasks read `mesh`)
+//            mesh (a plan without regions, made before they were, has its tasks read `mesh`)
 //   tasks    the task ids, one a line: 0 to N-1, one per cell of the first cell level
 //   ID.cell  a task's result (pmz::simplify_cell), written whole or not at all
 // and is written in that order, `tasks` last: a runner never sees tasks without their inputs.

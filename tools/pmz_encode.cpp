@@ -283,8 +283,7 @@ int write_plan(const std::string& input, const tool::EncodePlan& plan,
   if (ok && plan.exists())
     ok = false, error = plan.dir + ": holds a plan already (give a new or empty folder)";
   ok = ok && make_output_folder(plan.dir);
-  // Each cell's region written as the engine reaches the first level's cells (a mesh with
-  // attributes has none: its tasks read the whole mesh).
+  // Each cell's region written as the engine reaches the first level's cells.
   std::vector<std::string> written;
   bool unwritten = false;  // a region could not be written (the error names it)
   const pmz::CellRegionSink sink = [&](uint32_t cell, const std::vector<uint8_t>& region,
@@ -293,8 +292,7 @@ int write_plan(const std::string& input, const tool::EncodePlan& plan,
     unwritten = !app_support::write_output(written.back(), region.data(), region.size(), e);
     return !unwritten;
   };
-  if (ok && !(mesh.attributes.empty() ? pmz::cell_regions(mesh, sopt, sink, tasks, error)
-                                      : pmz::cell_tasks(mesh, sopt, tasks, error)))
+  if (ok && !pmz::cell_regions(mesh, sopt, sink, tasks, error))
     ok = false, error = unwritten ? error : (input == "-" ? "stdin" : input) + ": " + error;
   if (ok && !plan.write(mesh, args, tasks, error)) ok = false;
   if (!ok) {

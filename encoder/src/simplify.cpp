@@ -237,10 +237,10 @@ struct EngineData {
   std::vector<uint8_t> inner;
   std::vector<float> region_bound;
 
-  // What an array's elements are kept per (a vertex, a half-edge slot, a face; `other`: the
-  // attribute terms) and which ids its values are (none, vertex ids or half-edge slots).
-  enum class Per : uint8_t { vertex, slot, face, other };
-  enum class Ids : uint8_t { none, vertex, slot };
+  // What an array's elements are kept per (a vertex, a half-edge slot, a face, an attribute
+  // wedge) and which ids its values are (none, vertex ids, half-edge slots or wedges).
+  enum class Per : uint8_t { vertex, slot, face, wedge };
+  enum class Ids : uint8_t { none, vertex, slot, wedge };
   // f(array, per, ids) for every array above: what a cell's collapses can change (a cell run
   // apart hands over the elements it changed: CellResult), and what a cell's region holds of
   // them (CellRegion).
@@ -250,8 +250,9 @@ struct EngineData {
     constexpr Ids N = Ids::none;
     f(m.pos, V, N), f(m.vert, Per::slot, Ids::vertex), f(m.twin, Per::slot, Ids::slot);
     f(m.out, V, Ids::slot), f(feat.face, Per::face, N), f(feat.vertex, V, N), f(quad, V, N);
-    f(accumulated, V, N), f(self_error, V, N), f(witness, V, N), f(attr.wedge, Per::other, N);
-    f(attr.material, Per::other, N), f(attr.values, Per::other, N), f(target, V, Ids::vertex);
+    f(accumulated, V, N), f(self_error, V, N), f(witness, V, N),
+        f(attr.wedge, Per::slot, Ids::wedge);
+    f(attr.material, Per::face, N), f(attr.values, Per::wedge, N), f(target, V, Ids::vertex);
     f(stale, V, N), f(cell, V, N), f(key, V, N), f(inner, V, N), f(region_bound, V, N);
   }
 };
@@ -1255,30 +1256,34 @@ void put(std::vector<uint8_t>& out, const T& v) {
   out.insert(out.end(), b, b + sizeof v);
 }
 
-// A cell's region (CellRegion) numbers its vertices and faces apart, ascending in the whole
-// mesh's numbers: vertex i of the region is vertices[i] of the mesh, face j is faces[j].
+// A cell's region (CellRegion) numbers its vertices, faces and attribute wedges apart, ascending
+// in the whole mesh's numbers: vertex i of the region is vertices[i] of the mesh, face j is
+// faces[j], wedge k is wedges[k].
 struct RegionIds {
-  std::vector<uint32_t> vertices, faces;
+  std::vector<uint32_t> vertices, faces, wedges;
   std::vector<uint64_t> sizes;  // the whole mesh's size of each array (for_each_array's order)
 
   uint32_t vertex(uint32_t x) const { return vertices[x]; }
   uint32_t slot(uint32_t h) const { return faces[h >> 2] * 4 + (h & 3); }
   uint32_t id(EngineData::Ids ids, uint32_t x) const {
     if (x == kNone) return x;
-    return ids == EngineData::Ids::vertex ? vertex(x) : slot(x);
+    return ids == EngineData::Ids::vertex ? vertex(x)
+           : ids == EngineData::Ids::slot ? slot(x)
+                                          : wedges[x];
   }
   size_t units(EngineData::Per per) const {
     return per == EngineData::Per::vertex ? vertices.size()
            : per == EngineData::Per::slot ? faces.size() * 4
            : per == EngineData::Per::face ? faces.size()
-                                          : 0;
+                                          : wedges.size();
   }
   // The mesh's index of element i of an array of `size` elements of the region.
   uint64_t element(EngineData::Per per, size_t size, uint64_t i) const {
     const uint64_t k = size / units(per), unit = i / k;
     const uint64_t g = per == EngineData::Per::vertex ? vertices[unit]
                        : per == EngineData::Per::slot ? slot(uint32_t(unit))
-                                                      : faces[unit];
+                       : per == EngineData::Per::face ? faces[unit]
+                                                      : wedges[unit];
     return g * k + i % k;
   }
 };
@@ -1398,14 +1403,29 @@ class CellRegion {
   RegionIds ids;
   std::vector<uint32_t> members;  // the cell's live vertices, ascending (region numbers)
 
+  // Per vertex, face and attribute wedge of the mesh: its number in the region being written
+  // (kNone outside it).
+  struct Scratch {
+    std::vector<uint32_t> vertex_local, face_local, wedge_local;
+    uint64_t wedges = 0;  // of the mesh
+    explicit Scratch(Engine& engine)
+        : vertex_local(engine.m.vertex_count(), kNone), face_local(engine.m.face_count(), kNone) {
+      for (uint32_t w : engine.attr.wedge)
+        if (w != kNone) wedges = std::max<uint64_t>(wedges, uint64_t(w) + 1);
+      wedge_local.assign(wedges, kNone);
+    }
+  };
+
   // The region of the cell whose live vertices are members[0, count) (ascending), from the
-  // engine at the start of the first level's cells. vertex_local and face_local: scratch of the
-  // mesh's vertex and face counts, all kNone, left so.
+  // engine at the start of the first level's cells.
   static void write(Engine& engine, const uint32_t* members, size_t count, uint32_t cell,
                     uint32_t cells, uint64_t cell_faces, uint64_t goal, double max_cost,
-                    std::vector<uint32_t>& vertex_local, std::vector<uint32_t>& face_local,
-                    std::vector<uint8_t>& out) {
+                    Scratch& scratch, std::vector<uint8_t>& out) {
     const HalfEdgeMesh& m = engine.m;
+    const AttributeField& attr = engine.attr;
+    std::vector<uint32_t>& vertex_local = scratch.vertex_local;
+    std::vector<uint32_t>& face_local = scratch.face_local;
+    std::vector<uint32_t>& wedge_local = scratch.wedge_local;
     std::vector<uint32_t> verts(members, members + count), faces;
     for (uint32_t v : verts) vertex_local[v] = kOutside;
     for (size_t i = 0; i < count; ++i)
@@ -1421,14 +1441,25 @@ class CellRegion {
       for (uint32_t k = 0; k < 3; ++k)
         if (const uint32_t w = m.vert[HalfEdgeMesh::half_edge(f, k)]; vertex_local[w] == kNone)
           vertex_local[w] = kOutside, verts.push_back(w);
+    std::vector<uint32_t> wedges;  // those of the region's corners
+    if (!attr.wedge.empty())
+      for (uint32_t f : faces)
+        for (uint32_t k = 0; k < 3; ++k)
+          if (const uint32_t w = attr.wedge[HalfEdgeMesh::half_edge(f, k)];
+              w != kNone && wedge_local[w] == kNone)
+            wedge_local[w] = kOutside, wedges.push_back(w);
     std::sort(verts.begin(), verts.end());
     std::sort(faces.begin(), faces.end());
+    std::sort(wedges.begin(), wedges.end());
     for (uint32_t i = 0; i < verts.size(); ++i) vertex_local[verts[i]] = i;
     for (uint32_t j = 0; j < faces.size(); ++j) face_local[faces[j]] = j;
+    for (uint32_t k = 0; k < wedges.size(); ++k) wedge_local[wedges[k]] = k;
     auto local = [&](EngineData::Ids kind, uint32_t x) {
       if (x == kNone) return x;
-      if (kind == EngineData::Ids::vertex)
-        return vertex_local[x] == kNone ? kOutside : vertex_local[x];
+      if (kind != EngineData::Ids::slot) {
+        const uint32_t i = (kind == EngineData::Ids::vertex ? vertex_local : wedge_local)[x];
+        return i == kNone ? kOutside : i;
+      }
       const uint32_t f = face_local[HalfEdgeMesh::face(x)];
       return f == kNone ? kOutside : f * 4 + HalfEdgeMesh::corner(x);
     };
@@ -1441,14 +1472,19 @@ class CellRegion {
           p.guard_slack, p.guard_penalty_cap, p.attribute_weight, engine.feat.epsilon})
       put(out, f);
     put(out, engine.unit), put(out, engine.inv_unit4);
-    put_list(out, verts), put_list(out, faces);
+    put(out, uint8_t(attr.active)), put(out, uint8_t(attr.cost_term));
+    put(out, uint8_t(attr.priced)), put(out, attr.dims), put(out, attr.scale);
+    put(out, attr.seam_scale);
+    put_list(out, verts), put_list(out, faces), put_list(out, wedges);
     put(out, uint32_t(count));
     for (size_t i = 0; i < count; ++i) put(out, vertex_local[members[i]]);
     RegionIds region;
     region.vertices = std::move(verts), region.faces = std::move(faces);
-    const uint64_t mesh_units[3] = {m.vertex_count(), m.slot_count(), m.face_count()};
+    region.wedges = std::move(wedges);
+    const uint64_t mesh_units[4] = {m.vertex_count(), m.slot_count(), m.face_count(),
+                                    scratch.wedges};
     engine.data()->for_each_array([&](const auto& a, EngineData::Per per, EngineData::Ids kind) {
-      const uint64_t units = per == EngineData::Per::other ? 0 : mesh_units[int(per)];
+      const uint64_t units = mesh_units[int(per)];
       const uint64_t k = units ? a.size() / units : 0, n = region.units(per);
       put(out, uint64_t(a.size())), put(out, k * n);
       for (uint64_t i = 0; i < n * k; ++i) {
@@ -1461,6 +1497,7 @@ class CellRegion {
     });
     for (uint32_t v : region.vertices) vertex_local[v] = kNone;
     for (uint32_t f : region.faces) face_local[f] = kNone;
+    for (uint32_t w : region.wedges) wedge_local[w] = kNone;
   }
 
   // Reads a region into `engine` (a fresh one); false with `error` on bytes that are not one
@@ -1494,21 +1531,29 @@ class CellRegion {
           &q.guard_slack, &q.guard_penalty_cap, &q.attribute_weight, &engine.feat.epsilon})
       get(*f);
     get(engine.unit), get(engine.inv_unit4);
+    AttributeField& attr = engine.attr;
+    uint8_t active = 0, cost_term = 0, priced = 0;
+    get(active), get(cost_term), get(priced), get(attr.dims), get(attr.scale), get(attr.seam_scale);
     if (!ok) return error = "cut short", false;
-    if (metric > uint8_t(Metric::guarded) || guard > 1 || cell >= cells || std::isnan(max_cost))
+    if (metric > uint8_t(Metric::guarded) || guard > 1 || cell >= cells || std::isnan(max_cost) ||
+        active > 1 || cost_term > 1 || priced > 1 || attr.dims > 64)
       return error = "damaged (its settings)", false;
     engine.metric = Metric(metric), engine.guard = guard;
-    get_list(ids.vertices, kNone), get_list(ids.faces, kNone / 4), get_list(members, kNone);
+    attr.active = active, attr.cost_term = cost_term, attr.priced = priced;
+    get_list(ids.vertices, kNone), get_list(ids.faces, kNone / 4), get_list(ids.wedges, kNone);
+    get_list(members, kNone);
     const uint32_t nv = uint32_t(ids.vertices.size()), slots = uint32_t(ids.faces.size()) * 4;
+    const uint32_t wedges = uint32_t(ids.wedges.size());
     for (uint32_t v : members) ok = ok && v < nv;
     if (!ok) return error = "damaged (its vertices and faces)", false;
-    // Per array of for_each_array: elements per vertex, slot or face, and when it may be empty.
+    // Per array of for_each_array: elements per vertex, slot, face or wedge, and when it may be
+    // empty (the attribute field's wedges must be there when it is active: it reads them).
     const bool multifeature = engine.metric == Metric::multifeature;
-    const uint64_t per_unit[19] = {3, 1, 1, 1, 1, 1, 1, 1, 1, 3 * kWitnesses,
-                                   0, 0, 0, 1, 1, 1, 1, 1, 1};
+    const uint64_t per_unit[19] = {3, 1, 1,         1, 1, 1, 1, 1, 1, 3 * kWitnesses,
+                                   1, 1, attr.dims, 1, 1, 1, 1, 1, 1};
     const bool may_be_empty[19] = {false,         false, false, false,        !multifeature,
                                    !multifeature, false, true,  false,        !engine.guard,
-                                   true,          true,  true,  false,        false,
+                                   !attr.active,  true,  false, false,        false,
                                    false,         false, false, !engine.guard};
     size_t k = 0;
     ids.sizes.clear();
@@ -1526,12 +1571,15 @@ class CellRegion {
       if (local) std::memcpy(a.data(), p, local * sizeof(T)), p += local * sizeof(T);
       if constexpr (std::is_same_v<T, uint32_t>) {
         if (kind == EngineData::Ids::none) return;
-        const uint32_t below = kind == EngineData::Ids::vertex ? nv : slots;
+        const uint32_t below = kind == EngineData::Ids::vertex ? nv
+                               : kind == EngineData::Ids::slot ? slots
+                                                               : wedges;
+        // Ids that may lead out of the region: twins, out-edges, targets, wedges.
+        const bool may_leave = kind != EngineData::Ids::vertex || per == EngineData::Per::vertex;
         for (uint32_t i = 0; i < a.size() && ok; ++i) {
           uint32_t& x = a[i];
-          if (x == kOutside && (kind == EngineData::Ids::slot || per == EngineData::Per::vertex))
-            outside_.push_back({k - 1, i}), x = kNone;
-          ok = x == kNone || (x < below && (kind == EngineData::Ids::vertex || (x & 3) != 3));
+          if (x == kOutside && may_leave) outside_.push_back({k - 1, i}), x = kNone;
+          ok = x == kNone || (x < below && (kind != EngineData::Ids::slot || (x & 3) != 3));
         }
       } else if constexpr (std::is_floating_point_v<T>) {
         for (const T& x : a) ok = ok && !std::isnan(x);
@@ -1715,13 +1763,13 @@ bool run_cell_levels(Engine& engine, const SimplifyOptions& options,
     };
     const bool first_level = levels.size() == 1;
     if (first_level && first.mode == FirstLevel::regions) {
-      std::vector<uint32_t> vertex_local(n, kNone), face_local(engine.m.face_count(), kNone);
+      CellRegion::Scratch scratch(engine);
       std::vector<uint8_t> bytes;
       first.cells = uint32_t(cells);
       for (uint32_t c = 0; c < cells; ++c) {
         CellRegion::write(engine, &members[start[c]], start[c + 1] - start[c], c, uint32_t(cells),
                           cell_faces[c], uint64_t(double(cell_faces[c]) * ratio), level.max_cost,
-                          vertex_local, face_local, bytes);
+                          scratch, bytes);
         if (!(*first.region)(c, bytes, error)) return false;
       }
       return true;
@@ -1860,7 +1908,6 @@ bool cell_tasks(const IndexedMesh& input, const SimplifyOptions& options, uint32
 bool cell_regions(const IndexedMesh& input, const SimplifyOptions& options,
                   const CellRegionSink& sink, uint32_t& count, std::string& error) {
   count = 0;
-  if (!input.attributes.empty()) return true;
   FirstLevel first;
   first.mode = FirstLevel::regions;
   first.region = &sink;

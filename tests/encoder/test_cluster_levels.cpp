@@ -287,11 +287,28 @@ TEST(ClusterLevels, CellsSimplifiedApartGiveTheSameSequence) {
 
 TEST(ClusterLevels, ACellsRegionGivesTheResultOfTheWholeMesh) {
   // Each cell's region (cell_regions) simplified alone gives the bytes simplify_cell gives with
-  // the whole mesh, under each metric; a mesh with attributes has no regions.
-  const IndexedMesh mesh = bumpy_sphere(5);
-  for (pmz::Metric metric : {pmz::Metric::guarded, pmz::Metric::multifeature, pmz::Metric::qem}) {
-    pmz::SimplifyOptions options = clustered(200);
+  // the whole mesh, under each metric, and with seams and texture coordinates in each attribute
+  // mode.
+  const IndexedMesh sphere = bumpy_sphere(5), seamed = pmz_test::seamed_grid(60, 23);
+  using pmz::AttributeMode;
+  using pmz::Metric;
+  struct Case {
+    Metric metric;
+    AttributeMode attributes;
+    bool with_seams;
+  };
+  for (const Case& t : {Case{Metric::guarded, AttributeMode::full, false},
+                        Case{Metric::multifeature, AttributeMode::full, false},
+                        Case{Metric::qem, AttributeMode::full, false},
+                        Case{Metric::guarded, AttributeMode::full, true},
+                        Case{Metric::guarded, AttributeMode::seams, true},
+                        Case{Metric::qem, AttributeMode::geometry_only, true}}) {
+    const Metric metric = t.metric;
+    const bool with_seams = t.with_seams;
+    const IndexedMesh& mesh = with_seams ? seamed : sphere;
+    pmz::SimplifyOptions options = clustered(with_seams ? 60 : 200);
     options.metric = metric;
+    options.attributes = t.attributes;
     std::vector<std::vector<uint8_t>> regions;
     uint32_t cells = 0;
     std::string error;
@@ -311,7 +328,7 @@ TEST(ClusterLevels, ACellsRegionGivesTheResultOfTheWholeMesh) {
       // Each region is a small part of the mesh.
       EXPECT_LT(regions[c].size() * 4, regions.size() * regions[0].size());
     }
-    if (metric != pmz::Metric::guarded) continue;
+    if (metric != Metric::guarded || with_seams) continue;
     // Damaged regions are refused with a message, whatever the damage; another cell's too.
     std::vector<uint8_t> result;
     EXPECT_FALSE(pmz::simplify_cell_region(regions[1], 2, result, error));
@@ -333,16 +350,6 @@ TEST(ClusterLevels, ACellsRegionGivesTheResultOfTheWholeMesh) {
       EXPECT_TRUE(ran || !error.empty());
     }
   }
-  const IndexedMesh seamed = pmz_test::seamed_grid(60, 23);
-  uint32_t cells = 1;
-  std::string error;
-  bool called = false;
-  const pmz::CellRegionSink none = [&](uint32_t, const std::vector<uint8_t>&, std::string&) {
-    return called = true;
-  };
-  EXPECT_TRUE(pmz::cell_regions(seamed, clustered(150), none, cells, error));
-  EXPECT_EQ(cells, 0u);
-  EXPECT_FALSE(called);
 }
 
 TEST(ClusterLevels, ACellsCollapsesDependOnlyOnTheCell) {

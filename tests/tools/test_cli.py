@@ -787,6 +787,28 @@ def case_encode_task_reads_its_region():
     r = run([tool("pmz-encode"), "--task", plan, "6"])
     check(r.returncode == 1 and "the region of cell 5, not of cell 6" in err_text(r),
           f"another cell's region: rc={r.returncode} {err_text(r)}")
+    # With texture coordinates, normals and materials: the tasks from regions assemble to the
+    # one-process encode's bytes.
+    obj, splan, one, out = (os.path.join(d, n) for n in ("s.obj", "splan", "one.pmz", "out.pmz"))
+    for name in ("seamed.obj", "seamed.mtl"):
+        shutil.copy(os.path.join(SEAMED, "meshes", name), d)
+    os.rename(os.path.join(d, "seamed.obj"), obj)
+    opts = ["--cluster-vertices", "24"]
+    r = run([tool("pmz-encode"), obj, "--plan", splan] + opts)
+    check(r.returncode == 0, f"--plan {obj}: {err_text(r)}")
+    ids = open(os.path.join(splan, "tasks")).read().split()
+    check(len(ids) > 2 and all(os.path.exists(os.path.join(splan, i + ".region")) for i in ids),
+          f"{obj}: tasks {ids}, {sorted(os.listdir(splan))}")
+    os.rename(os.path.join(splan, "mesh"), os.path.join(d, "smesh"))  # the tasks do without
+    for i in ids:
+        r = run([tool("pmz-encode"), "--task", splan, i])
+        check(r.returncode == 0, f"--task {i} of {obj}: {err_text(r)}")
+    os.rename(os.path.join(d, "smesh"), os.path.join(splan, "mesh"))
+    r = run([tool("pmz-encode"), "--assemble", splan, "-o", out])
+    check(r.returncode == 0, f"--assemble {obj}: {err_text(r)}")
+    r = run([tool("pmz-encode"), obj, "-o", one, "-q"] + opts)
+    check(r.returncode == 0 and run(["cmp", one, out]).returncode == 0,
+          f"{obj}: the assembled stream is not the one-process encode's")
 
 
 def case_info_texcoords_only():

@@ -184,10 +184,9 @@ bool simplify_cell(const IndexedMesh& input, const SimplifyOptions& options, uin
 // sink(cell, region, error) each cell's region, the engine's terms of the cell's vertices, their
 // neighbours and the faces around them (a sink returning false stops it with its error), and
 // counts the cells; simplify_cell_region() simplifies cell `cell` from its region and gives the
-// bytes simplify_cell() gives for it, holding the region only. A mesh with attributes has no
-// regions (count 0, sink not called: its tasks take the whole mesh). Regions are bytes of this
-// build of the library on machines of one kind; simplify_cell_region() fails with one line on bytes
-// that are not one.
+// bytes simplify_cell() gives for it, holding the region only. Regions are bytes of this build of
+// the library on machines of one kind; simplify_cell_region() fails with one line on bytes that
+// are not one.
 using CellRegionSink =
     std::function<bool(uint32_t cell, const std::vector<uint8_t>& region, std::string& error)>;
 bool cell_regions(const IndexedMesh& input, const SimplifyOptions& options,
