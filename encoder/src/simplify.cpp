@@ -638,6 +638,9 @@ bool Engine::legal(uint32_t u, uint32_t v, uint32_t ha, uint32_t hb) {
     return false;
   }
   if (!boundary_edge && valence_u == 3 && valence_v == 3) return false;  // a tetrahedron stays
+  // Two faces on the same three vertices (a closed two-face component) stay: the collapse would
+  // delete both, each the other's outer twin, and leave v without a face.
+  if (!boundary_edge && vl == vr) return false;
   // Geometry of the faces that survive around u, with u moved onto v.
   const uint32_t fa = ha != kNone ? HalfEdgeMesh::face(ha) : kNone,
                  fb = hb != kNone ? HalfEdgeMesh::face(hb) : kNone;

@@ -112,6 +112,24 @@ TEST(Simplify, SphereGoesDownToATetrahedron) {
   EXPECT_EQ(seq.base_indices.size(), 4u * 3);
 }
 
+// Two faces on the same three vertices, one each way round (a closed two-face component, as a
+// glTF base mesh simplified again can be), stay as they are: collapsing one of their edges
+// would delete both faces at once.
+TEST(Simplify, ClosedTwoFaceComponentStays) {
+  pmz::IndexedMesh mesh;
+  mesh.positions = {0.6f, 0.8f, 0, -0.6f, 0, 0, -1, 0, 0};
+  mesh.indices = {0, 1, 2, 1, 0, 2};
+  for (auto metric : {pmz::Metric::guarded, pmz::Metric::multifeature, pmz::Metric::qem}) {
+    pmz::SimplifyOptions options;
+    options.metric = metric;
+    pmz::CollapseSequence seq;
+    std::string error;
+    ASSERT_TRUE(pmz::simplify(mesh, options, seq, error)) << error;
+    EXPECT_TRUE(seq.collapses.empty());
+    EXPECT_EQ(sorted_faces(seq.base_indices), sorted_faces(mesh.indices));
+  }
+}
+
 TEST(Simplify, TorusKeepsItsHandle) {
   const auto mesh = pmz_test::torus(24, 12);
   for (auto metric : {pmz::Metric::guarded, pmz::Metric::multifeature, pmz::Metric::qem})
