@@ -408,7 +408,7 @@ uint64_t Decoder::Impl::refine(uint64_t max_splits, uint64_t face_target) {
       const uint64_t capacity = record.sides.capacity();
       uint64_t room =
           target <= capacity ? target
-          : info.total_splits <= kHeaderTrust * target
+          : header_trusted(target)
               ? std::max(target, info.total_splits)
               : std::max(target, std::min<uint64_t>(info.total_splits,
                                                     std::max(std::bit_ceil(target), 2 * capacity)));

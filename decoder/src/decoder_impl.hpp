@@ -81,6 +81,14 @@ struct Decoder::Impl {
   // most kHeaderTrust times what the decoded input holds (so a lying header cannot make the
   // decoder reserve more than a bounded multiple of its input).
   static constexpr uint64_t kHeaderTrust = 16;
+  // Whether buffers holding `splits` splits may grow to the header's count at once (above):
+  // in a stream with nodes, not up to the end of node 0, where a view-dependent client leaves
+  // file order to hold only the ids of the nodes it applies (WebAssembly memory, once grown, is
+  // never given back).
+  bool header_trusted(uint64_t splits) const {
+    return info.total_splits <= kHeaderTrust * splits &&
+           (!(info.flags & kFlagNodes) || (nodes.present && splits > nodes.first_split[1]));
+  }
   struct Record {
     BigVector<Split> splits;
     BigVector<uint8_t> sides;   // per split below frontier.decoded: kHasLeft | kHasRight
@@ -235,6 +243,7 @@ struct Decoder::Impl {
     std::vector<uint32_t> fetch;  // see Decoder::nodes_to_fetch
     uint64_t available = 0, applied_splits = 0, ring_work = 0;
     uint32_t applied_nodes = 0;
+    uint32_t id_nodes = 0;  // the mesh arrays hold the ids of nodes [0, id_nodes)
     bool complete = false;
     ProgressiveMesh walker;  // re-applies and undoes nodes (attached; keeps its ring scratch)
   } sel;
@@ -242,6 +251,7 @@ struct Decoder::Impl {
     return uint32_t(info.base_vertices + nodes.first_split[k]);
   }
   PMZ_COLD bool enter_selection();
+  PMZ_COLD bool cover_node_ids(uint32_t k);
   PMZ_COLD std::vector<uint32_t> cell_list(uint32_t k);
   PMZ_COLD bool first_apply_node(uint32_t k);
   PMZ_COLD void reapply_node(uint32_t k);

@@ -319,7 +319,7 @@ Status Decoder::Impl::split_chunk(const uint8_t* p, size_t n) {
   const size_t size = record.splits.size() + r.split_count();
   // As refine() grows the mesh buffers: room for every split of the header once the decoded ones
   // are at least 1 / kHeaderTrust of them, instead of doubling (a copy and page faults each).
-  if (size > record.splits.capacity() && info.total_splits <= kHeaderTrust * size) {
+  if (size > record.splits.capacity() && header_trusted(size)) {
     record.splits.reserve(info.total_splits);
   }
   const size_t first = record.splits.size();

@@ -8,14 +8,15 @@
 
 namespace pmz {
 
-// Node 0 is applied and nothing after it: the mesh arrays take every id of the stream, the chunks
-// that arrived in order go to their nodes' readers, and the nodes' parents and cells are set up.
+// Node 0 is applied and nothing after it: the chunks that arrived in order go to their nodes'
+// readers, and the nodes' parents and cells are set up. The mesh arrays grow as a view wants
+// nodes (cover_node_ids): a view of a large stream that needs its coarse nodes only, which come
+// first in file order, holds their ids only.
 bool Decoder::Impl::enter_selection() {
   const std::vector<NodeEntry>& table = nodes.table.nodes;
   const size_t total = table.size();
   if (!node_counts_match(0))
     return refuse(Status::corrupt, "node 0 added other faces or wedges than its table entry");
-  const uint64_t nv = info.full_vertices, nf = info.full_faces;
   PMZ_TRY {
     sel.parents.assign(total, {});
     sel.children.assign(total, {});
@@ -33,18 +34,9 @@ bool Decoder::Impl::enter_selection() {
     for (uint32_t l = 0; l < nodes.table.levels.size(); ++l)
       if (nodes.table.levels[l].side > 0)
         sel.bins[l].build(nodes.table, l, record.coords.data(), node_first_vertex(1));
-    // Room first, so that nothing below fails half way.
-    level.mesh.reserve(nv, nf);
-    record.coords.reserve(nv * 3);
-    record.positions.reserve(nv * 3);
-    record.parents.reserve(nv);
-    record.sides.reserve(info.total_splits);
-    record.splits.reserve(info.total_splits);
-    frontier.choice.reserve_vertices(nv);
-    frontier.choice.resize_vertices(nv);
   }
   PMZ_CATCH_BAD_ALLOC {
-    fail(Status::out_of_memory, "allocation failed for the whole mesh's ids");
+    fail(Status::out_of_memory, "allocation failed for the node graph");
     return false;
   }
   // The chunks that arrived in order, node after node from node 1 on.
@@ -58,18 +50,55 @@ bool Decoder::Impl::enter_selection() {
     sel.arrival[k] = k < nodes.arriving ? Selection::whole : Selection::partial;
     if (k < nodes.arriving) sel.available += table[k].splits;
   }
+  sel.id_nodes = 1;
+  nodes.first_models = std::move(nodes.models[0]);
+  sel.applied_nodes = 1;
+  sel.on = true;
+  level.changes.all = true;
+  return true;
+}
+
+// The mesh arrays through node k's ids (those of the nodes before it in file order unused:
+// degenerate faces), grown by half again at least so that a camera moving in small steps does
+// not copy them each time. False when that fails (the mesh is as it was).
+bool Decoder::Impl::cover_node_ids(uint32_t k) {
+  if (k < sel.id_nodes) return true;
+  const std::vector<NodeEntry>& table = nodes.table.nodes;
+  const uint64_t splits = nodes.first_split[k] + table[k].splits;
+  const uint64_t nv = node_first_vertex(k) + table[k].splits;
+  const uint64_t nf = sel.first_face[k] + table[k].faces;
+  const uint64_t f0 = level.mesh.face_count(), v0 = level.mesh.vertex_count();
+  auto room = [](auto& v, uint64_t n, uint64_t full) {
+    if (n > v.capacity())
+      v.reserve(size_t(std::min(full, std::max<uint64_t>(n, v.capacity() + v.capacity() / 2))));
+  };
+  PMZ_TRY {
+    room(level.mesh.corner_vertex, nf * 3, info.full_faces * 3);
+    room(level.mesh.opposite, nf * 3, info.full_faces * 3);
+    room(level.mesh.vertex_corner, nv, info.full_vertices);
+    room(record.coords, nv * 3, info.full_vertices * 3);
+    room(record.positions, nv * 3, info.full_vertices * 3);
+    room(record.parents, nv, info.full_vertices);
+    room(record.sides, splits, info.total_splits);
+    room(record.splits, splits, info.total_splits);
+    frontier.choice.reserve_vertices(level.mesh.vertex_corner.capacity());
+  }
+  PMZ_CATCH_BAD_ALLOC {
+    fail(Status::out_of_memory, "allocation failed for node " + PMZ_DECIMAL(k) + "'s ids");
+    return false;
+  }
   level.mesh.corner_vertex.resize(nf * 3, 0);
   level.mesh.opposite.resize(nf * 3, kNoCorner);
   level.mesh.vertex_corner.resize(nv, kNoCorner);
   record.coords.resize(nv * 3);
   record.positions.resize(nv * 3);
   record.parents.resize(nv, 0xFFFFFFFFu);
-  record.sides.resize(info.total_splits);
-  record.splits.resize(info.total_splits, {kNoCorner, kNoRank, kNoRank});
-  nodes.first_models = std::move(nodes.models[0]);
-  sel.applied_nodes = 1;
-  sel.on = true;
-  level.changes.all = true;
+  record.sides.resize(splits);
+  record.splits.resize(splits, {kNoCorner, kNoRank, kNoRank});
+  frontier.choice.resize_vertices(nv);
+  level.changes.face_begin = std::min(level.changes.face_begin, uint32_t(f0));
+  level.changes.vertex_begin = std::min(level.changes.vertex_begin, uint32_t(v0));
+  sel.id_nodes = k + 1;
   return true;
 }
 
@@ -94,6 +123,7 @@ std::vector<uint32_t> Decoder::Impl::cell_list(uint32_t k) {
 bool Decoder::Impl::first_apply_node(uint32_t k) {
   const NodeEntry& e = nodes.table.nodes[k];
   const uint64_t first = nodes.first_split[k], last = first + e.splits;
+  if (!cover_node_ids(k)) return false;
   auto owned = std::make_unique<Frontier>();
   Frontier& w = *owned;
   start_worker(w, k, node_first_vertex(k), sel.first_face[k],
@@ -208,7 +238,10 @@ Status Decoder::Impl::node_bytes(uint32_t k, const uint8_t* p, size_t n) {
   }
   if (got != e.splits) return bad(Status::corrupt, "fewer splits than its table entry");
   const uint64_t first = nodes.first_split[k];
-  std::fill_n(record.splits.begin() + ptrdiff_t(first), e.splits,
+  // (Those past the arrays' end: cover_node_ids fills them so.)
+  const uint64_t held = std::min<uint64_t>(record.splits.size(), first + e.splits);
+  if (first < held)
+    std::fill(record.splits.begin() + ptrdiff_t(first), record.splits.begin() + ptrdiff_t(held),
               Split{kNoCorner, kNoRank, kNoRank});
   sel.readers[k] = std::move(readers);
   nodes.models[k] = std::move(models);
@@ -253,6 +286,13 @@ uint64_t Decoder::Impl::update_view(const View& v, uint64_t budget) {
     for (uint32_t p : sel.parents[k]) w = w && want[p];
     want[k] = w;
   }
+  // Room for the ids of every node the view wants at once: grown node by node, the arrays' old
+  // copies would add up (WebAssembly memory keeps its high-water mark).
+  for (size_t k = total; k-- > 1;)
+    if (want[k]) {
+      if (!cover_node_ids(uint32_t(k))) return n;
+      break;
+    }
   PMZ_TRY {
     // What the view no longer needs, children first (they follow their parents in file order).
     for (size_t k = total; k-- > 1 && n < budget;)

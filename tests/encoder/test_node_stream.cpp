@@ -579,7 +579,8 @@ TEST_F(NodeStream, AViewReportsTheFacesItChanges) {
     for (uint32_t x : seen) used[x] = 1;
     size_t changed = 0;
     for (uint32_t f = 0; f < d.face_count(); ++f)
-      if (!std::equal(&seen[f * 3], &seen[f * 3 + 3], d.indices() + f * 3)) {
+      if (f * 3 >= seen.size() ||
+          !std::equal(&seen[f * 3], &seen[f * 3 + 3], d.indices() + f * 3)) {
         ++changed;
         EXPECT_TRUE(f >= ch.face_begin || listed[f]) << "face " << f << " changed unreported";
         for (int a = 0; a < 3; ++a)  // a vertex new to the faces: among the new vertices
@@ -589,6 +590,48 @@ TEST_F(NodeStream, AViewReportsTheFacesItChanges) {
     seen.assign(d.indices(), d.indices() + size_t(d.face_count()) * 3);
     d.clear_changes();
   }
+}
+
+// The mesh arrays hold the ids up to the last node in file order applied: a view of coarse
+// nodes holds fewer than the stream's, they grow (reported as new) for finer ones, and the view
+// of every node holds them all.
+TEST_F(NodeStream, AViewHoldsTheIdsOfTheNodesItApplied) {
+  ViewStart v(*bytes_, seq_->collapses.size());
+  auto& [whole, c, d] = v;
+  const float dir[3] = {0, 0, 1};
+  const pmz::View coarse = view_from(dir, 6, 2);
+  for (int step = 0; step < 100 && !d.view_complete(); ++step) {
+    d.update_view(coarse);
+    for (uint32_t k : d.nodes_to_fetch()) {
+      const std::vector<uint8_t> b = node_bytes(d, *bytes_, k);
+      ASSERT_EQ(d.feed_node(k, b.data(), b.size()), pmz::Status::ok) << d.error_message();
+    }
+  }
+  ASSERT_TRUE(d.view_complete());
+  ASSERT_LT(d.nodes_applied(), c.table.nodes.size());
+  // Through the last node applied: the faces of the nodes up to it, in file order.
+  uint64_t faces = whole.indices.size() / 3, vertices = whole.positions.size() / 3;
+  for (size_t k = c.table.nodes.size(); k-- > 1 && faces > d.face_count();) {
+    faces -= c.table.nodes[k].faces;
+    vertices -= c.table.nodes[k].splits;
+  }
+  EXPECT_EQ(d.face_count(), faces);
+  EXPECT_EQ(d.vertex_count(), vertices);
+  EXPECT_LT(d.face_count(), whole.indices.size() / 3);
+  expect_closed(d, whole.positions, "coarse");
+  const uint32_t held = d.face_count(), held_vertices = d.vertex_count();
+  d.clear_changes();
+  while (!d.view_complete() || d.nodes_applied() < c.table.nodes.size()) {
+    d.update_view(every_node());
+    for (uint32_t k : d.nodes_to_fetch()) {
+      const std::vector<uint8_t> b = node_bytes(d, *bytes_, k);
+      ASSERT_EQ(d.feed_node(k, b.data(), b.size()), pmz::Status::ok) << d.error_message();
+    }
+  }
+  EXPECT_LE(d.changes().face_begin, held);
+  EXPECT_LE(d.changes().vertex_begin, held_vertices);
+  EXPECT_EQ(std::vector<uint32_t>(d.indices(), d.indices() + size_t(d.face_count()) * 3),
+            whole.indices);
 }
 
 TEST_F(NodeStream, ANodesBytesAreChecked) {

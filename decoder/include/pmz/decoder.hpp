@@ -163,9 +163,12 @@ class PMZ_API Decoder {
   // attributes, or a decoder refined past node 0 with refine() before its first update_view(),
   // refine in file order instead (update_view() then refines what has arrived).
   //
-  // Once update_view() applied a node past node 0, the mesh arrays hold every vertex and face
-  // id of the stream (vertex_count() and face_count() are the full mesh's): the ids of nodes not
-  // applied are unused vertices and degenerate faces (0, 0, 0), which draw nothing. Every mix of
+  // Once update_view() applied a node past node 0, the mesh arrays hold the vertex and face ids
+  // of every node up to the last one in file order applied so far: they grow when a later node
+  // is applied (changes() reports the new ids from vertex_begin and face_begin on) and never
+  // shrink; the ids of nodes not applied are unused vertices and degenerate faces (0, 0, 0),
+  // which draw nothing. A view that needs only coarse nodes, which come first in file order,
+  // holds their ids only. Every mix of
   // nodes that update_view() makes is a closed set under parents, so the mesh has no cracks:
   // it is the mesh that decoding those nodes in file order gives. From then on refine(),
   // coarsen(), set_face_target() and set_split_target() do nothing (return 0): the view decides.
