@@ -1589,10 +1589,19 @@ class CellRegion {
       }
     });
     if (!ok || p != end) return error = "damaged (its arrays)", false;
-    // The half-edges pair up, and every vertex's out-edge starts at it.
+    // A face is live (three corners) or deleted (none, no twins), its padding slot empty; a
+    // live half-edge's twin runs the other way along the same edge of a live face; every
+    // vertex's out-edge starts at it. Walks then stay on live faces and come round or stop.
     const HalfEdgeMesh& m = engine.m;
-    for (uint32_t h = 0; h < slots && ok; ++h)
-      if (const uint32_t t = m.twin[h]; t != kNone) ok = m.twin[t] == h && (h & 3) != 3;
+    for (uint32_t h = 0; h < slots && ok; ++h) {
+      const uint32_t t = m.twin[h], first = m.vert[h & ~3u];
+      if ((h & 3) == 3 || first == kNone) {
+        ok = m.vert[h] == kNone && t == kNone;
+        continue;
+      }
+      ok = m.vert[h] != kNone &&
+           (t == kNone || (m.twin[t] == h && m.vert[t] == m.dest(h) && m.dest(t) == m.vert[h]));
+    }
     for (uint32_t v = 0; v < nv && ok; ++v) ok = m.out[v] == kNone || m.vert[m.out[v]] == v;
     if (!ok) return error = "damaged (its half-edges do not pair up)", false;
     engine.stats_enabled = false;

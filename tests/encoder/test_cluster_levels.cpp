@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <set>
 #include <string>
@@ -338,12 +339,37 @@ TEST(ClusterLevels, ACellsRegionGivesTheResultOfTheWholeMesh) {
       std::vector<uint8_t> part(r.begin(), r.begin() + long(cut));
       EXPECT_FALSE(pmz::simplify_cell_region(part, 3, result, error)) << cut;
     }
+    // A live face left with a corner kNone (its vertex cut off) is refused, not walked: the
+    // region's corners (vert) follow its header (117 bytes), its four lists and its positions.
+    auto u32 = [&](size_t at) {
+      uint32_t v = 0;
+      std::memcpy(&v, &r[at], 4);
+      return v;
+    };
+    size_t at = 117;
+    for (int list = 0; list < 4; ++list) at += 4 + 4 * size_t(u32(at));
+    uint64_t positions = 0;
+    std::memcpy(&positions, &r[at + 8], 8);
+    at += 16 + 4 * positions + 16;  // the corners' first element
+    int refused = 0;
+    for (size_t h = 0; h < 64; ++h) {
+      if (h % 4 == 3 || u32(at + 4 * h) == 0xFFFFFFFFu) continue;
+      std::vector<uint8_t> bad = r;
+      std::fill(bad.begin() + long(at + 4 * h), bad.begin() + long(at + 4 * h + 4), uint8_t(0xFF));
+      EXPECT_FALSE(pmz::simplify_cell_region(bad, 3, result, error)) << "corner " << h;
+      refused += error.find("damaged") != std::string::npos;
+    }
+    EXPECT_GT(refused, 20);
     uint32_t seed = 1;
-    for (int round = 0; round < 300; ++round) {
+    for (int round = 0; round < 600; ++round) {
       std::vector<uint8_t> bad = r;
       for (int k = 0; k < 1 + round % 4; ++k) {
         seed = seed * 1664525u + 1013904223u;
-        bad[8 + seed % (bad.size() - 8)] ^= uint8_t(1u << (seed >> 29));
+        const size_t at = 8 + seed % (bad.size() - 12);
+        if (round % 2)  // a bit flipped, or an id made kNone (a face left with two corners)
+          bad[at] ^= uint8_t(1u << (seed >> 29));
+        else
+          std::fill(bad.begin() + long(at), bad.begin() + long(at) + 4, uint8_t(0xFF));
       }
       error.clear();
       const bool ran = pmz::simplify_cell_region(bad, 3, result, error);
