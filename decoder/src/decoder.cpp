@@ -190,6 +190,18 @@ bool Decoder::Impl::first_apply(Frontier& f, uint64_t i, bool resume) {
   return true;
 }
 
+// A worker's first applications up to split `last` or its first failure (decoding a node for a
+// view): here, with the refinement loop's code, not with the once-per-node code around it.
+void Decoder::Impl::first_apply_worker(Frontier& w, uint64_t last) {
+  while (w.decoded < last && !w.lazy.empty()) {
+    const uint64_t ahead = w.decoded + FanPrefetcher::kWalkers;
+    w.fans.step(level.mesh, record.coords.data(), record.coords.size(),
+                ahead < last ? record.splits[ahead].v : kNoCorner, frontier.choice.degrees(),
+                frontier.choice.sums_bytes());
+    if (!first_apply(w, w.decoded)) break;
+  }
+}
+
 // Several nodes of one level whose bytes all arrived, at once (threads > 1, a stream with nodes
 // and without attributes, at a node's start): each on a worker with its own view of the mesh and
 // vertex choice, writing the vertex, face and split ids the table gives it (nodes of a level touch

@@ -281,6 +281,7 @@ struct Decoder::Impl {
   PMZ_COLD bool refuse(Status s, const std::string& what);
   // resume: a worker paused before the split (see Frontier::paused) goes on from there.
   bool first_apply(Frontier& f, uint64_t i, bool resume = false);
+  void first_apply_worker(Frontier& w, uint64_t last);
   static constexpr const char* kValences = "vertex valences beyond what a mesh needs";
   // Decoding threads (set_threads; 1: serial) and the level-wise parallel first applications.
   uint32_t threads = 1;

@@ -130,13 +130,7 @@ bool Decoder::Impl::first_apply_node(uint32_t k) {
                frontier.choice.take_epochs(e.splits + 1), cell_list(k), sel.ring_work);
   w.lazy = std::move(sel.readers[k]);
   nodes.models[k]->inherit(*nodes.first_models);
-  while (w.decoded < last && !w.lazy.empty()) {
-    const uint64_t ahead = w.decoded + FanPrefetcher::kWalkers;
-    w.fans.step(level.mesh, record.coords.data(), record.coords.size(),
-                ahead < last ? record.splits[ahead].v : kNoCorner, frontier.choice.degrees(),
-                frontier.choice.sums_bytes());
-    if (!first_apply(w, w.decoded)) break;
-  }
+  first_apply_worker(w, last);
   if (w.decoded != last || w.view.face_count() != w.face_end) {
     undo_worker(w, first);
     clear_node_faces(k);
