@@ -11,10 +11,10 @@ import { test } from 'node:test';
 
 import { rootDir, webDir } from './common.mjs';
 
-function buildRun() {
+function buildRun(env = {}, status = 0) {
   const r = spawnSync('bash', [path.join(rootDir, 'scripts', 'web.sh'), 'build'],
-    { cwd: rootDir, encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'] });
-  assert.equal(r.status, 0, `scripts/web.sh build failed:\n${r.stdout}${r.stderr}`);
+    { cwd: rootDir, encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'], env: { ...process.env, ...env } });
+  assert.equal(r.status, status, `scripts/web.sh build exited ${r.status}:\n${r.stdout}${r.stderr}`);
   return r;
 }
 
@@ -49,4 +49,17 @@ test('a second scripts/web.sh run with no change rebuilds nothing and says so', 
   assert.ok(lines.some((l) => /^web: viewer: up to date/.test(l)), again.stderr);
   assert.doesNotMatch(again.stderr, /em\+\+|wasm-opt|packed/);
   assert.equal(again.stdout, '');
+});
+
+test('scripts/web.sh fails when the module and its loader pass the size ceiling', () => {
+  const size = (r) => {
+    const m = r.stderr.match(/^web: size: wasm (\d+) \+ glue (\d+) bytes \((\d+) gzip -9\)$/m);
+    assert.ok(m, r.stderr);
+    return { bytes: Number(m[1]) + Number(m[2]), gzip: Number(m[3]) };
+  };
+  const { bytes, gzip } = size(buildRun());
+  buildRun({ PMZ_WASM_MAX_BYTES: String(bytes), PMZ_WASM_MAX_GZIP: String(gzip) });
+  const over = buildRun({ PMZ_WASM_MAX_BYTES: String(bytes - 1) }, 1);
+  assert.match(over.stderr, new RegExp(`^web: size: ${bytes} bytes \\(${gzip} gzip -9\\) above the ceiling of ${bytes - 1} `, 'm'));
+  assert.match(buildRun({ PMZ_WASM_MAX_GZIP: String(gzip - 1) }, 1).stderr, /above the ceiling/);
 });
