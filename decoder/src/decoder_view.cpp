@@ -274,11 +274,15 @@ uint64_t Decoder::Impl::update_view(const View& v, uint64_t budget) {
   const size_t total = table.size();
   std::vector<uint8_t> want(total, 0);
   want[0] = 1;
-  for (size_t k = 1; k < total; ++k) {  // (parents come first in file order)
+  // The nodes the view sees in enough detail, and their parents whatever their own spheres and
+  // errors (a node's cell meets up to eight parents' on each coarser level; the parents come
+  // first in file order, so one pass from the last node up reaches every ancestor).
+  for (size_t k = total; k-- > 1;) {
     sel.priority[k] = projected_error(v, table[k]);
-    bool w = sel.priority[k] > v.pixel_error || (v.pixel_error <= 0 && sel.priority[k] >= 0);
-    for (uint32_t p : sel.parents[k]) w = w && want[p];
-    want[k] = w;
+    if (sel.priority[k] > v.pixel_error || (v.pixel_error <= 0 && sel.priority[k] >= 0))
+      want[k] = 1;
+    if (want[k])
+      for (uint32_t p : sel.parents[k]) want[p] = 1;
   }
   // Room for the ids of every node the view wants at once: grown node by node, the arrays' old
   // copies would add up (WebAssembly memory keeps its high-water mark).

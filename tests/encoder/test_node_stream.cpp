@@ -18,6 +18,7 @@
 #include "pmz/writer.hpp"
 #include "seamed_grid.hpp"
 #include "simplify_test_meshes.hpp"
+#include "view_select.hpp"  // (decoder/src: the selection's own test of a node against a view)
 
 namespace {
 
@@ -632,6 +633,55 @@ TEST_F(NodeStream, AViewHoldsTheIdsOfTheNodesItApplied) {
   EXPECT_LE(d.changes().vertex_begin, held_vertices);
   EXPECT_EQ(std::vector<uint32_t>(d.indices(), d.indices() + size_t(d.face_count()) * 3),
             whole.indices);
+}
+
+// Every node whose own sphere meets the view and whose error bound spans more than the pixel
+// error is applied once the view is complete, with its parents, even those whose spheres lie
+// outside the frustum or whose errors are smaller on screen (a node's cell meets up to eight
+// parents' per coarser level).
+TEST_F(NodeStream, AViewAppliesEveryNodeItSeesWithItsParents) {
+  ViewStart v(*bytes_, seq_->collapses.size());
+  auto& [whole, c, d] = v;
+  const std::vector<pmz::NodeEntry>& table = c.table.nodes;
+  std::vector<uint64_t> first_face(table.size());
+  uint64_t faces = d.info().base_faces;
+  for (size_t k = 0; k < table.size(); ++k) {
+    first_face[k] = faces;
+    faces += table[k].faces;
+  }
+  const float dirs[4][3] = {{1, 0, 0}, {0, 0.6f, 0.8f}, {-0.8f, 0, -0.6f}, {0, -1, 0}};
+  size_t seen = 0, parent_unseen = 0;
+  for (int round = 0; round < 8; ++round) {
+    const pmz::View view = view_from(dirs[round % 4], 1.2f, round < 4 ? 0 : 0.5f);
+    for (int step = 0; step < 1000; ++step) {
+      d.update_view(view);
+      if (d.view_complete()) break;
+      for (uint32_t k : d.nodes_to_fetch()) {
+        const std::vector<uint8_t> b = node_bytes(d, *bytes_, k);
+        ASSERT_EQ(d.feed_node(k, b.data(), b.size()), pmz::Status::ok) << d.error_message();
+      }
+    }
+    ASSERT_TRUE(d.view_complete()) << round;
+    std::vector<uint8_t> needed(table.size(), 0);
+    for (size_t k = table.size(); k-- > 1;) {
+      const float e = pmz::projected_error(view, table[k]);
+      needed[k] = needed[k] || e > view.pixel_error || (view.pixel_error <= 0 && e >= 0);
+      seen += needed[k] && e >= 0;
+      if (!needed[k]) continue;
+      for (uint32_t p : pmz::NodeIndex(c.table).parents(uint32_t(k))) {
+        parent_unseen += !needed[p] && pmz::projected_error(view, table[p]) < 0;
+        needed[p] = 1;
+      }
+    }
+    for (size_t k = 1; k < table.size(); ++k) {
+      const uint32_t* t = d.indices() + first_face[k] * 3;
+      const bool applied = first_face[k] < d.face_count() && !(t[0] == t[1] && t[1] == t[2]);
+      EXPECT_EQ(applied, bool(needed[k])) << "round " << round << ", node " << k;
+    }
+    expect_closed(d, whole.positions, "round " + std::to_string(round));
+  }
+  EXPECT_GT(seen, 0u);
+  EXPECT_GT(parent_unseen, 0u);  // (the case this is about did occur)
 }
 
 TEST_F(NodeStream, ANodesBytesAreChecked) {

@@ -187,8 +187,9 @@ class PMZ_API Decoder {
   // Moves the mesh towards `view`: undoes the nodes it no longer needs (descendants first), then
   // applies, largest projected error first, those it needs whose bytes have arrived and whose
   // parents are applied, whole nodes until about max_splits splits were applied or undone.
-  // A node is needed when its parents are, its bounding sphere meets the frustum and its error
-  // bound spans more than view.pixel_error pixels. Returns the splits applied or undone.
+  // A node is needed when its bounding sphere meets the frustum and its error bound spans more
+  // than view.pixel_error pixels, and so are its parents, whatever their own spheres and errors.
+  // Returns the splits applied or undone.
   uint64_t update_view(const View& view, uint64_t max_splits = UINT64_MAX);
   // After update_view(): whether every node the view needs is applied (for a stream refined in
   // file order: whether all its splits are).
