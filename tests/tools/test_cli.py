@@ -768,10 +768,10 @@ def case_encode_task_reads_its_region():
             os.remove(os.path.join(bare, name))
     os.rename(os.path.join(plan, "mesh"), os.path.join(d, "mesh"))
     rc, task_kb = peak_kb([tool("pmz-encode"), "--task", plan, "5"])
-    check(rc == 0, f"--task 5 without the mesh: exit {rc}")
+    check(rc == 0, f"the task of cell 5 without the mesh: exit {rc}")
     check(task_kb * 4 < plan_kb, f"a task took {task_kb} KB, the plan {plan_kb} KB")
     r = run([tool("pmz-encode"), "--task", bare, "5"])
-    check(r.returncode == 0, f"--task 5 on the whole mesh: {err_text(r)}")
+    check(r.returncode == 0, f"the task of cell 5 on the whole mesh: {err_text(r)}")
     with open(os.path.join(plan, "5.cell"), "rb") as a, open(os.path.join(bare, "5.cell"), "rb") as b:
         check(a.read() == b.read(), "the region's result differs from the whole mesh's")
     region = os.path.join(plan, "6.region")
