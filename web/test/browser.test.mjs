@@ -506,7 +506,7 @@ test('a stream with a node table is decoded for ?camera=, its nodes fetched by r
   assert.equal(s.totalNodes, 60);
   assert.ok(s.nodes > 1 && s.nodes < 60, `${s.nodes} nodes`);
   assert.equal(s.totalBytes, statSync(nodesPmz).size);
-  assert.ok(s.bytes < s.totalBytes / 2, `${s.bytes} of ${s.totalBytes} bytes`);
+  assert.ok(s.bytes < s.totalBytes * 0.6, `${s.bytes} of ${s.totalBytes} bytes`);  // (view.test.mjs)
   assert.ok(s.faces > 0 && s.faces < s.vertices * 2, `${s.faces} faces`);
   // Every request for the stream asked for a range (the header probe too).
   const asked = server.ranges['nodes.pmz'];
