@@ -12,8 +12,9 @@ with a 60-degree field of view:
            until it shows a tenth of MESH's surface (bench-view-surface --surface 0.1).
 For each, `pmz-decode --camera ... --pixel-error P` reads the file by ranges at P = 1 and P = 0
 (every node in view) and its bytes read are given as a fraction of the file's. With --compare,
-each P = 1 result is measured against MESH by pmz-compare: its largest distance, in pixels at the
-target's depth (how far from the full resolution the view is where it looks).
+each P = 1 result is measured against MESH by pmz-compare: its largest distance anywhere, in view
+or not, in pixels at the target's depth (a bound of how far from the full resolution the view is
+where it looks; the parts out of view stay coarse and may set it).
 One JSON line per view, then the medians.
 """
 import argparse
