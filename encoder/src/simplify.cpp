@@ -306,6 +306,11 @@ class Engine : public EngineSettings, public EngineLane {
   Engine(const Engine& o)
       : EngineSettings(o), EngineLane(o), data_(std::make_shared<EngineData>(*o.data_)) {}
   Engine& operator=(const Engine&) = delete;
+  // Whether vertex v, queued for a cell's run (run_cell), has a collapse target below
+  // `vertices` (a cell's region read from bytes is held to it: the run reads the target).
+  bool queued_with_target(uint32_t v, uint32_t vertices) const {
+    return !data_->inner[v] || !(data_->stale[v] & kQueued) || data_->target[v] < vertices;
+  }
   // A lane of `o` for one thread of a cell level: o's data and settings, its own heap and
   // scratch.
   struct Lane {};
@@ -1604,6 +1609,9 @@ class CellRegion {
     }
     for (uint32_t v = 0; v < nv && ok; ++v) ok = m.out[v] == kNone || m.vert[m.out[v]] == v;
     if (!ok) return error = "damaged (its half-edges do not pair up)", false;
+    // The vertices run_cell queues have a collapse target in the region (the run reads it).
+    for (uint32_t v : members) ok = ok && engine.queued_with_target(v, nv);
+    if (!ok) return error = "damaged (a queued vertex without a target)", false;
     engine.stats_enabled = false;
     return true;
   }

@@ -125,15 +125,36 @@ def main():
                     else:
                         print('make_seeds: %s %s: %s' % (name, tag, (r.stderr or r.stdout).strip()),
                               file=sys.stderr)
+    # fuzz_region: [u32 cell][region]: the regions `pmz-encode --plan` writes for its tasks.
+    regions = {}
+    if encoder and os.access(encoder, os.X_OK):
+        with tempfile.TemporaryDirectory() as tmp:
+            for name, mesh in (('sphere', sphere(12, 16, 0.2)), ('grid', grid(12))):
+                off = os.path.join(tmp, name + '.off')
+                write_off(off, mesh)
+                plan = os.path.join(tmp, name + '-plan')
+                r = subprocess.run([encoder, off, '--cluster-vertices', '16', '--plan', plan, '-q'],
+                                   capture_output=True, text=True)
+                if r.returncode != 0:
+                    print('make_seeds: %s --plan: %s' % (name, r.stderr.strip()), file=sys.stderr)
+                    continue
+                for f in sorted(os.listdir(plan)):
+                    if f.endswith('.region'):
+                        cell = int(f[:-len('.region')])
+                        data = open(os.path.join(plan, f), 'rb').read()
+                        regions['%s-%d' % (name, cell)] = struct.pack('<I', cell) + data
     if not files:
         sys.exit('make_seeds: no seed: neither tests/data/sample.pmz nor a working pmz-encode')
 
-    for sub in ('decoder', 'container', 'coding', 'view'):
+    for sub in ('decoder', 'container', 'coding', 'view', 'region'):
         os.makedirs(os.path.join(out_dir, sub), exist_ok=True)
 
     def put(sub, name, data):
         with open(os.path.join(out_dir, sub, name), 'wb') as out:
             out.write(data)
+
+    for name, data in regions.items():
+        put('region', name, data)
 
     for name, data in files.items():
         put('container', name, data)
