@@ -25,9 +25,10 @@ namespace tool = pmz::tool;
 namespace {
 
 // --camera: the stream read as a view-dependent client reads it over HTTP, here by file ranges:
-// in order up to its node table, then the ranges of the nodes the view needs, until it has all.
+// in order up to its node table, then the ranges of the nodes the view needs, until it has all
+// (within max_faces, Decoder::set_view_face_budget: 0, none).
 int decode_view(const std::string& input, const pmz::View& view, uint32_t threads,
-                app_support::OutputFile& out, const std::string& format) {
+                uint64_t max_faces, app_support::OutputFile& out, const std::string& format) {
   std::ifstream file(input, std::ios::binary);
   std::string error;
   if (!file) {
@@ -39,6 +40,7 @@ int decode_view(const std::string& input, const pmz::View& view, uint32_t thread
   file.seekg(0);
   pmz::Decoder d;
   d.set_threads(threads);
+  d.set_view_face_budget(max_faces);
   uint64_t read = 0;
   std::vector<uint8_t> buffer;
   const auto read_range = [&](uint64_t offset, uint64_t size) {
@@ -89,15 +91,19 @@ int decode_view(const std::string& input, const pmz::View& view, uint32_t thread
   }
   if (!d.view_complete())
     app_support::print_error(input, "warning: the file ends before every part the view needs");
+  if (max_faces && !d.info().nodes)
+    app_support::print_error(input, "warning: no node table: --max-faces does not apply");
   const pmz::IndexedMesh level = tool::decoded_mesh(d);
   if (!tool::write_mesh_into(out, format, level, error) || !out.commit(error)) {
     app_support::print_error(error);
     return app_support::kExitFailure;
   }
   std::fprintf(stderr,
-               "pmz-decode: %u faces, %u vertices; %u of %llu nodes; read %llu of %llu bytes "
+               "pmz-decode: %u faces%s, %u vertices; %u of %llu nodes; read %llu of %llu bytes "
                "(%.1f%%)\n",
-               level.face_count(), level.vertex_count(), d.nodes_applied(),
+               level.face_count(),
+               max_faces ? (" (budget " + std::to_string(max_faces) + ")").c_str() : "",
+               level.vertex_count(), d.nodes_applied(),
                (unsigned long long)std::max<uint64_t>(d.info().nodes, 1), (unsigned long long)read,
                (unsigned long long)total, total ? 100.0 * double(read) / double(total) : 0.0);
   return app_support::kExitOk;
@@ -155,6 +161,12 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(1.0, 179.0))
       ->needs(oc);
+  uint64_t max_faces = 0;
+  app.add_option("--max-faces", max_faces,
+                 "with --camera: a face budget; the parts the view needs most come first, those "
+                 "that would bring the mesh past N faces are neither read nor applied (0: none)")
+      ->capture_default_str()
+      ->needs(oc);
   oc->excludes(of)->excludes(orr)->excludes(ov);
   of->excludes(orr)->excludes(ov);
   orr->excludes(ov);
@@ -193,7 +205,7 @@ int main(int argc, char** argv) {
     if (input == "-") return app_support::usage_error("--camera reads a file by ranges, not stdin");
     const pmz::View view =
         pmz::look_at(c, c + 3, fov * float(M_PI / 180), w, h, 1e-4f, pixel_error);
-    return decode_view(input, view, threads, out, format);
+    return decode_view(input, view, threads, max_faces, out, format);
   }
   std::vector<uint8_t> data;
   if (!app_support::read_input(input, data, error)) {

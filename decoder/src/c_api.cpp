@@ -71,6 +71,9 @@ PMZ_API uint64_t pmz_decoder_update_view(pmz_decoder* d, const pmz_view* view,
   PMZ_TRY { return d->dec.update_view(v, max_splits); }
   PMZ_CATCH_BAD_ALLOC { return 0; }
 }
+PMZ_API void pmz_decoder_set_view_face_budget(pmz_decoder* d, uint64_t faces) {
+  d->dec.set_view_face_budget(faces);
+}
 PMZ_API int pmz_decoder_view_complete(const pmz_decoder* d) { return d->dec.view_complete(); }
 PMZ_API const uint32_t* pmz_decoder_nodes_to_fetch(const pmz_decoder* d, size_t* count) {
   const std::vector<uint32_t>& f = d->dec.nodes_to_fetch();

@@ -243,7 +243,8 @@ struct Decoder::Impl {
     std::vector<uint32_t> fetch;  // see Decoder::nodes_to_fetch
     uint64_t available = 0, applied_splits = 0, ring_work = 0;
     uint32_t applied_nodes = 0;
-    uint32_t id_nodes = 0;  // the mesh arrays hold the ids of nodes [0, id_nodes)
+    uint32_t id_nodes = 0;     // the mesh arrays hold the ids of nodes [0, id_nodes)
+    uint64_t face_budget = 0;  // see Decoder::set_view_face_budget (0: none)
     bool complete = false;
     ProgressiveMesh walker;  // re-applies and undoes nodes (attached; keeps its ring scratch)
   } sel;
@@ -260,6 +261,7 @@ struct Decoder::Impl {
   PMZ_COLD Status node_bytes(uint32_t k, const uint8_t* p, size_t n);
   PMZ_COLD bool selection(uint64_t budget, uint64_t& n);
   PMZ_COLD uint64_t update_view(const View& v, uint64_t budget);
+  PMZ_COLD void within_face_budget(std::vector<uint8_t>& want);
 
   // Error paths and the once-per-file HEAD are cold: kept small, out of the hot code's way
   // (the stripped library has a 200 KB budget).

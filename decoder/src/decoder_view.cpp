@@ -244,6 +244,37 @@ Status Decoder::Impl::node_bytes(uint32_t k, const uint8_t* p, size_t n) {
   return Status::ok;
 }
 
+// The nodes the face budget admits (Decoder::set_view_face_budget) of those a view wants: the
+// ones it sees (want 2) by projected error, largest first, then file order, each with its parents
+// not yet taken, while the faces stay within the budget. want keeps those taken (1).
+void Decoder::Impl::within_face_budget(std::vector<uint8_t>& want) {
+  const std::vector<NodeEntry>& table = nodes.table.nodes;
+  std::vector<std::pair<float, uint32_t>> order;
+  for (uint32_t k = 1; k < want.size(); ++k)
+    if (want[k] == 2) order.push_back({-sel.priority[k], k});
+  std::sort(order.begin(), order.end());
+  std::vector<uint8_t> taken(want.size(), 0);
+  std::vector<uint32_t> group;
+  taken[0] = 1;
+  uint64_t faces = info.base_faces + table[0].faces;
+  for (const auto& [minus_error, k] : order) {
+    if (taken[k] || faces + table[k].faces > sel.face_budget) continue;
+    group.assign(1, k);  // k and its ancestors not taken (marked while the group is open)
+    taken[k] = 1;
+    uint64_t more = 0;
+    for (size_t i = 0; i < group.size(); ++i) {
+      more += table[group[i]].faces;
+      for (uint32_t p : sel.parents[group[i]])
+        if (!taken[p]) taken[p] = 1, group.push_back(p);
+    }
+    if (faces + more <= sel.face_budget)
+      faces += more;
+    else
+      for (uint32_t x : group) taken[x] = 0;
+  }
+  want.swap(taken);
+}
+
 // Whether nodes are applied one by one (see Selection): entered once node 0 is applied (refined
 // first, within budget; n counts those splits).
 bool Decoder::Impl::selection(uint64_t budget, uint64_t& n) {
@@ -280,10 +311,11 @@ uint64_t Decoder::Impl::update_view(const View& v, uint64_t budget) {
   for (size_t k = total; k-- > 1;) {
     sel.priority[k] = projected_error(v, table[k]);
     if (sel.priority[k] > v.pixel_error || (v.pixel_error <= 0 && sel.priority[k] >= 0))
-      want[k] = 1;
+      want[k] = 2;  // (seen; 1: a parent only)
     if (want[k])
       for (uint32_t p : sel.parents[k]) want[p] = 1;
   }
+  if (sel.face_budget) within_face_budget(want);
   // Room for the ids of every node the view wants at once: grown node by node, the arrays' old
   // copies would add up (WebAssembly memory keeps its high-water mark).
   for (size_t k = total; k-- > 1;)
@@ -367,6 +399,7 @@ Status Decoder::feed_node(uint32_t k, const void* data, size_t size) {
 uint64_t Decoder::update_view(const View& view, uint64_t max_splits) {
   return impl_->update_view(view, max_splits);
 }
+void Decoder::set_view_face_budget(uint64_t faces) { impl_->sel.face_budget = faces; }
 bool Decoder::view_complete() const { return impl_->sel.complete; }
 const std::vector<uint32_t>& Decoder::nodes_to_fetch() const { return impl_->sel.fetch; }
 uint32_t Decoder::nodes_applied() const {

@@ -684,6 +684,149 @@ TEST_F(NodeStream, AViewAppliesEveryNodeItSeesWithItsParents) {
   EXPECT_GT(parent_unseen, 0u);  // (the case this is about did occur)
 }
 
+// The faces drawn: those of the nodes applied (the others' are degenerate).
+uint64_t drawn_faces(const pmz::Decoder& d) {
+  uint64_t n = 0;
+  for (size_t f = 0; f < d.face_count(); ++f) {
+    const uint32_t* t = d.indices() + f * 3;
+    n += !(t[0] == t[1] && t[1] == t[2]);
+  }
+  return n;
+}
+
+// update_view() until the view is complete, feeding what nodes_to_fetch() lists; the nodes
+// fetched.
+std::vector<uint32_t> settle(pmz::Decoder& d, const std::vector<uint8_t>& bytes,
+                             const pmz::View& view) {
+  std::vector<uint32_t> fetched;
+  for (int step = 0; step < 1000 && d.status() == pmz::Status::ok; ++step) {
+    d.update_view(view);
+    if (d.view_complete()) break;
+    for (uint32_t k : d.nodes_to_fetch()) {
+      const std::vector<uint8_t> b = node_bytes(d, bytes, k);
+      EXPECT_EQ(d.feed_node(k, b.data(), b.size()), pmz::Status::ok) << d.error_message();
+      fetched.push_back(k);
+    }
+  }
+  EXPECT_TRUE(d.view_complete());
+  EXPECT_EQ(d.status(), pmz::Status::ok) << d.error_message();
+  return fetched;
+}
+
+// A face budget (set_view_face_budget): the nodes a view applies keep the faces within it, are
+// closed under parents and are among those the view needs without it; each node the view sees
+// that is left out would have brought the faces past the budget with its parents not applied;
+// only nodes the budget admits are fetched; a lower budget undoes nodes; 0 is no budget.
+TEST_F(NodeStream, AFaceBudgetBoundsTheFacesAViewApplies) {
+  ViewStart v(*bytes_, seq_->collapses.size());
+  auto& [whole, c, d] = v;
+  const std::vector<pmz::NodeEntry>& table = c.table.nodes;
+  const pmz::NodeIndex index(c.table);
+  std::vector<uint64_t> first_face(table.size());
+  uint64_t faces = d.info().base_faces;
+  for (size_t k = 0; k < table.size(); ++k) {
+    first_face[k] = faces;
+    faces += table[k].faces;
+  }
+  const auto applied = [&](const pmz::Decoder& x) {
+    std::vector<uint8_t> out(table.size(), 0);
+    out[0] = 1;
+    for (size_t k = 1; k < table.size(); ++k) {
+      const uint32_t* t = x.indices() + first_face[k] * 3;
+      out[k] = first_face[k] < x.face_count() && !(t[0] == t[1] && t[1] == t[2]);
+    }
+    return out;
+  };
+  // The views without a budget, on a decoder whose budget was set and then set to 0.
+  const float dirs[4][3] = {{1, 0, 0}, {0, 0.6f, 0.8f}, {-0.8f, 0, -0.6f}, {0, -1, 0}};
+  std::vector<pmz::View> views;
+  for (int round = 0; round < 4; ++round)
+    views.push_back(view_from(dirs[round], 1.2f, round % 2 ? 0.5f : 0));
+  pmz::Decoder free;
+  feed_to_table(free, *bytes_, c);
+  free.set_view_face_budget(100);
+  free.set_view_face_budget(0);
+  std::vector<std::vector<uint8_t>> wanted;
+  uint64_t least = UINT64_MAX;
+  for (const pmz::View& view : views) {
+    settle(free, *bytes_, view);
+    wanted.push_back(applied(free));
+    least = std::min(least, drawn_faces(free));
+  }
+  const uint64_t budget = least * 6 / 10;
+  ASSERT_GT(budget, d.info().base_faces + table[0].faces);
+  d.set_view_face_budget(budget);
+  size_t left_out = 0;
+  for (int round = 0; round < 8; ++round) {
+    const pmz::View& view = views[round % 4];
+    const std::vector<uint32_t> fetched = settle(d, *bytes_, view);
+    const std::vector<uint8_t> now = applied(d);
+    const std::string what = "round " + std::to_string(round);
+    uint64_t sum = d.info().base_faces;
+    for (size_t k = 0; k < table.size(); ++k) {
+      if (!now[k]) continue;
+      sum += table[k].faces;
+      EXPECT_TRUE(wanted[round % 4][k]) << what << ": node " << k << " is not needed";
+      for (uint32_t p : index.parents(uint32_t(k)))
+        EXPECT_TRUE(now[p]) << what << ": node " << k << " without its parent " << p;
+    }
+    EXPECT_EQ(drawn_faces(d), sum) << what;
+    EXPECT_LE(sum, budget) << what;
+    EXPECT_GT(sum, d.info().base_faces + table[0].faces) << what;
+    for (uint32_t k : fetched) EXPECT_TRUE(now[k]) << what << ": node " << k << " fetched, unused";
+    for (size_t k = 1; k < table.size(); ++k) {  // (a parent only is taken with a child)
+      const float e = pmz::projected_error(view, table[k]);
+      const bool seen = e > view.pixel_error || (view.pixel_error <= 0 && e >= 0);
+      if (!seen || now[k]) continue;
+      ++left_out;
+      std::vector<uint8_t> taken = now;  // k with its parents not applied
+      std::vector<uint32_t> stack = {uint32_t(k)};
+      uint64_t more = 0;
+      taken[k] = 1;
+      while (!stack.empty()) {
+        const uint32_t x = stack.back();
+        stack.pop_back();
+        more += table[x].faces;
+        for (uint32_t p : index.parents(x))
+          if (!taken[p]) stack.push_back(p), taken[p] = 1;
+      }
+      EXPECT_GT(sum + more, budget) << what << ": node " << k << " fits, left out";
+    }
+    expect_closed(d, whole.positions, what);
+  }
+  EXPECT_GT(left_out, 0u);  // (the budget did leave nodes out)
+  // A lower budget undoes nodes; one below node 0's faces leaves node 0 alone.
+  const std::vector<uint8_t> before = applied(d);
+  d.set_view_face_budget(budget / 2);
+  EXPECT_GT(d.update_view(views[3]), 0u);
+  EXPECT_LE(drawn_faces(d), budget / 2);
+  const std::vector<uint8_t> lower = applied(d);
+  size_t undone = 0;
+  for (size_t k = 1; k < table.size(); ++k) undone += before[k] && !lower[k];
+  EXPECT_GT(undone, 0u);
+  settle(d, *bytes_, views[3]);
+  EXPECT_LE(drawn_faces(d), budget / 2);
+  expect_closed(d, whole.positions, "half the budget");
+  d.set_view_face_budget(1);
+  d.update_view(views[3]);
+  EXPECT_TRUE(d.view_complete());
+  EXPECT_TRUE(d.nodes_to_fetch().empty());
+  EXPECT_EQ(d.nodes_applied(), 1u);
+  // No budget again: the view's nodes without one, the free decoder's faces.
+  d.set_view_face_budget(0);
+  settle(d, *bytes_, views[3]);
+  EXPECT_EQ(applied(d), wanted[3]);
+  const auto drawn = [](const pmz::Decoder& x) {
+    std::vector<std::array<uint32_t, 4>> out;
+    for (uint32_t f = 0; f < x.face_count(); ++f) {
+      const uint32_t* t = x.indices() + size_t(f) * 3;
+      if (!(t[0] == t[1] && t[1] == t[2])) out.push_back({f, t[0], t[1], t[2]});
+    }
+    return out;
+  };
+  EXPECT_EQ(drawn(d), drawn(free));
+}
+
 TEST_F(NodeStream, ANodesBytesAreChecked) {
   const NodeChunk c = find_node_chunk(*bytes_, seq_->collapses.size());
   const uint32_t last = uint32_t(c.table.nodes.size() - 1);

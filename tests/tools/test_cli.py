@@ -681,6 +681,35 @@ def case_decode_view():
         check(r.returncode == 2 and "--" in err_text(r), f"{bad}: {err_text(r)}")
 
 
+def case_decode_view_face_budget():
+    # --max-faces with --camera: the mesh written has at most N faces, from fewer nodes than
+    # without the budget; --help shows the option with its default (0: no budget).
+    d = fresh("view_budget")
+    pmz = bumpy_grid_pmz(d)
+    camera = ["--camera", "8,8,6,8,8,0", "--size", "640x480", "--pixel-error", "0.5"]
+    summary = r"(\d+) faces.* (\d+) of \d+ nodes"
+    free, tight = (os.path.join(d, f"{x}.ply") for x in ("free", "tight"))
+    r = run([tool("pmz-decode"), pmz, "-o", free] + camera)
+    m = re.search(summary, err_text(r))
+    check(r.returncode == 0 and m, f"pmz-decode --camera: {err_text(r)}")
+    faces, nodes = int(m.group(1)), int(m.group(2))
+    budget = faces // 2
+    r = run([tool("pmz-decode"), pmz, "-o", tight, "--max-faces", str(budget)] + camera)
+    m = re.search(summary, err_text(r))
+    check(r.returncode == 0 and m, f"pmz-decode --camera --max-faces: {err_text(r)}")
+    with open(tight, "rb") as f:
+        header = f.read(4096).split(b"end_header")[0].decode(errors="replace")
+    written = re.search(r"element face (\d+)", header)
+    check(written and int(written.group(1)) == int(m.group(1)) and
+          info_json(pmz)["base_faces"] < int(m.group(1)) <= budget and 1 < int(m.group(2)) < nodes,
+          f"--max-faces {budget} ({faces} faces from {nodes} nodes without): {err_text(r)}")
+    r = run([tool("pmz-decode"), pmz, "-o", tight, "--max-faces", "10"])
+    check(r.returncode == 2 and "--camera" in err_text(r), f"--max-faces alone: {err_text(r)}")
+    h = run([tool("pmz-decode"), "--help"]).stdout.decode()
+    line = next((l for l in h.splitlines() if "--max-faces" in l), "")
+    check("=0" in line, f"pmz-decode --help: --max-faces without its default: {line!r}")
+
+
 def case_encode_nodes_by_default():
     # --cluster-vertices auto: a mesh of at least 65,536 vertices is written in nodes, a smaller
     # one as one node; either decodes to its full face count.

@@ -191,11 +191,25 @@ class PMZ_API Decoder {
   // than view.pixel_error pixels, and so are its parents, whatever their own spheres and errors.
   // Returns the splits applied or undone.
   uint64_t update_view(const View& view, uint64_t max_splits = UINT64_MAX);
-  // After update_view(): whether every node the view needs is applied (for a stream refined in
-  // file order: whether all its splits are).
+  // A face budget for the nodes update_view() applies, bounding the mesh's memory (0, the
+  // default: none). From the next update_view() on, the view's nodes are taken largest projected
+  // error first (file order among equals), each with its parents not yet taken: one that would
+  // bring the faces past `faces` (BASE's, node 0's and the table's `faces` of every node taken)
+  // is left out, and so are the nodes after it in that order that need it. The nodes needed are
+  // those taken: nodes_to_fetch() lists only them, view_complete() is true once they are all
+  // applied, and nodes applied that the budget no longer admits (a lower budget, another view)
+  // are undone, descendants first. Node 0 is always applied, even past the budget. Then
+  // face_count() less the degenerate faces of nodes not applied is at most `faces` once the
+  // nodes left out are undone (at once with max_splits unbounded). The choice depends on the
+  // view, the table and the budget only, not on what has arrived. Streams refined in file order
+  // (see above) do not use it. Never fails.
+  void set_view_face_budget(uint64_t faces);
+  // After update_view(): whether every node the view needs (within the face budget) is applied
+  // (for a stream refined in file order: whether all its splits are).
   bool view_complete() const;
-  // After update_view(): the nodes the view needs whose bytes have not arrived, parents before
-  // children and the largest projected error first: what a client fetches next.
+  // After update_view(): the nodes the view needs (within the face budget) whose bytes have not
+  // arrived, parents before children and the largest projected error first: what a client
+  // fetches next.
   const std::vector<uint32_t>& nodes_to_fetch() const;
   uint32_t nodes_applied() const;  // nodes whose splits are in the mesh (node 0 included)
 

@@ -169,6 +169,9 @@ typedef struct pmz_view {
 PMZ_API void pmz_view_look_at(pmz_view* out, const float eye[3], const float target[3], float fov_y,
                               uint32_t width, uint32_t height, float near, float pixel_error);
 PMZ_API uint64_t pmz_decoder_update_view(pmz_decoder* d, const pmz_view* view, uint64_t max_splits);
+/* A face budget for the nodes update_view applies, from the next call on (0, the default: none):
+   as pmz::Decoder's set_view_face_budget, which states what it admits. */
+PMZ_API void pmz_decoder_set_view_face_budget(pmz_decoder* d, uint64_t faces);
 PMZ_API int pmz_decoder_view_complete(const pmz_decoder* d); /* 1 or 0 */
 /* The nodes to fetch next (*count of them); owned by d, valid until the next update_view. */
 PMZ_API const uint32_t* pmz_decoder_nodes_to_fetch(const pmz_decoder* d, size_t* count);
