@@ -261,7 +261,7 @@ struct Decoder::Impl {
   PMZ_COLD Status node_bytes(uint32_t k, const uint8_t* p, size_t n);
   PMZ_COLD bool selection(uint64_t budget, uint64_t& n);
   PMZ_COLD uint64_t update_view(const View& v, uint64_t budget);
-  PMZ_COLD void within_face_budget(std::vector<uint8_t>& want);
+  PMZ_COLD void within_face_budget(std::vector<uint8_t>& want, const std::vector<uint32_t>& order);
 
   // Error paths and the once-per-file HEAD are cold: kept small, out of the hot code's way
   // (the stripped library has a 200 KB budget).

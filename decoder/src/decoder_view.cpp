@@ -245,20 +245,17 @@ Status Decoder::Impl::node_bytes(uint32_t k, const uint8_t* p, size_t n) {
 }
 
 // The nodes the face budget admits (Decoder::set_view_face_budget) of those a view wants: the
-// ones it sees (want 2) by projected error, largest first, then file order, each with its parents
-// not yet taken, while the faces stay within the budget. want keeps those taken (1).
-void Decoder::Impl::within_face_budget(std::vector<uint8_t>& want) {
+// ones it sees (want 2) in `order`, each with its parents not yet taken, while the faces stay
+// within the budget. want keeps those taken (1).
+void Decoder::Impl::within_face_budget(std::vector<uint8_t>& want,
+                                       const std::vector<uint32_t>& order) {
   const std::vector<NodeEntry>& table = nodes.table.nodes;
-  std::vector<std::pair<float, uint32_t>> order;
-  for (uint32_t k = 1; k < want.size(); ++k)
-    if (want[k] == 2) order.push_back({-sel.priority[k], k});
-  std::sort(order.begin(), order.end());
   std::vector<uint8_t> taken(want.size(), 0);
   std::vector<uint32_t> group;
   taken[0] = 1;
   uint64_t faces = info.base_faces + table[0].faces;
-  for (const auto& [minus_error, k] : order) {
-    if (taken[k] || faces + table[k].faces > sel.face_budget) continue;
+  for (uint32_t k : order) {
+    if (want[k] != 2 || taken[k] || faces + table[k].faces > sel.face_budget) continue;
     group.assign(1, k);  // k and its ancestors not taken (marked while the group is open)
     taken[k] = 1;
     uint64_t more = 0;
@@ -315,15 +312,22 @@ uint64_t Decoder::Impl::update_view(const View& v, uint64_t budget) {
     if (want[k])
       for (uint32_t p : sel.parents[k]) want[p] = 1;
   }
-  if (sel.face_budget) within_face_budget(want);
-  // Room for the ids of every node the view wants at once: grown node by node, the arrays' old
-  // copies would add up (WebAssembly memory keeps its high-water mark).
-  for (size_t k = total; k-- > 1;)
-    if (want[k]) {
-      if (!cover_node_ids(uint32_t(k))) return n;
-      break;
-    }
   PMZ_TRY {
+    // The nodes it wants, the largest projected error first (file order among equals): the
+    // order the face budget takes them in and, level by level, the order to fetch them in.
+    std::vector<uint32_t> order;
+    std::priority_queue<std::pair<float, uint32_t>> heap;
+    for (uint32_t k = 1; k < total; ++k)
+      if (want[k]) heap.push({sel.priority[k], ~k});
+    for (; !heap.empty(); heap.pop()) order.push_back(~heap.top().second);
+    if (sel.face_budget) within_face_budget(want, order);
+    // Room for the ids of every node the view wants at once: grown node by node, the arrays'
+    // old copies would add up (WebAssembly memory keeps its high-water mark).
+    for (size_t k = total; k-- > 1;)
+      if (want[k]) {
+        if (!cover_node_ids(uint32_t(k))) return n;
+        break;
+      }
     // What the view no longer needs, children first (they follow their parents in file order).
     for (size_t k = total; k-- > 1 && n < budget;)
       if (sel.applied[k] && !want[k]) {
@@ -341,7 +345,6 @@ uint64_t Decoder::Impl::update_view(const View& v, uint64_t budget) {
         if (!sel.applied[p]) return false;
       return true;
     };
-    std::priority_queue<std::pair<float, uint32_t>> heap;
     for (uint32_t k = 1; k < total; ++k)
       if (ready(k)) heap.push({sel.priority[k], k});
     while (!heap.empty() && n < budget) {
@@ -362,15 +365,12 @@ uint64_t Decoder::Impl::update_view(const View& v, uint64_t budget) {
         if (ready(c)) heap.push({sel.priority[c], c});
     }
     sel.complete = true;
-    for (uint32_t k = 1; k < total; ++k) {
-      if (!want[k] || sel.applied[k]) continue;
-      sel.complete = false;
-      if (!sel.decoded[k] && sel.arrival[k] != Selection::whole) sel.fetch.push_back(k);
-    }
-    std::sort(sel.fetch.begin(), sel.fetch.end(), [&](uint32_t a, uint32_t b) {
-      if (table[a].level != table[b].level) return table[a].level > table[b].level;
-      return sel.priority[a] > sel.priority[b];
-    });
+    for (uint32_t l = uint32_t(nodes.table.levels.size()); l-- > 0;)  // (parents' levels first)
+      for (uint32_t k : order) {
+        if (table[k].level != l || !want[k] || sel.applied[k]) continue;
+        sel.complete = false;
+        if (!sel.decoded[k] && sel.arrival[k] != Selection::whole) sel.fetch.push_back(k);
+      }
   }
   PMZ_CATCH_BAD_ALLOC { fail(Status::out_of_memory, "allocation failed while refining"); }
   return n;
