@@ -59,6 +59,7 @@ struct Options {
   bool camera = false;  // --camera: eye and target
   float eye[3] = {0, 0, 0}, target[3] = {0, 0, 0};
   float pixel_error = 1;
+  uint64_t max_faces = 0;  // --max-faces: the view's face budget (0: none)
 };
 
 // "pmz-view: message" on stderr, worded as by every tool; the exit status of a failed run.
@@ -168,15 +169,19 @@ bool frame_camera(Camera& camera, const pmz::StreamInfo& info, const MeshMirror&
   return true;
 }
 
-// faces: those drawn; nodes=A/B (streams with a node table): A of the B nodes resident.
+// faces: those drawn; nodes=A/B (streams with a node table): A of the B nodes resident;
+// budget=N: --max-faces.
 void log_line(double t, const Stats& s, const char* note) {
-  char nodes[48] = "";
+  char nodes[48] = "", budget[32] = "";
   if (s.nodes) std::snprintf(nodes, sizeof nodes, " nodes=%u/%" PRIu64, s.nodes_applied, s.nodes);
+  if (s.nodes && s.face_budget)
+    std::snprintf(budget, sizeof budget, " budget=%" PRIu64, s.face_budget);
   std::fprintf(stderr,
                "t=%.3f bytes=%" PRIu64 " total=%" PRIu64 " faces=%u full=%" PRIu64
-               " vertices=%u splits=%" PRIu64 "/%" PRIu64 "%s fps=%.0f update_ms=%.1f%s%s\n",
+               " vertices=%u splits=%" PRIu64 "/%" PRIu64 "%s%s fps=%.0f update_ms=%.1f%s%s\n",
                t, s.bytes, s.bytes_total, s.faces, s.full_faces, s.vertices, s.splits_applied,
-               s.total_splits, nodes, s.frames_per_second, s.update_ms, note[0] ? " " : "", note);
+               s.total_splits, nodes, budget, s.frames_per_second, s.update_ms, note[0] ? " " : "",
+               note);
 }
 
 // "EX,EY,EZ,TX,TY,TZ": six finite numbers, the eye apart from the target.
@@ -264,6 +269,12 @@ int parse(int argc, char** argv, Options& o) {
       ->type_name("P")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  app.add_option("--max-faces", o.max_faces,
+                 "decoding for a view: a face budget; the parts the view needs most come first, "
+                 "those that would bring the mesh past N faces are neither fetched nor applied "
+                 "(0: none)")
+      ->type_name("N")
+      ->capture_default_str();
   app.add_option("--budget-ms", o.budget_ms,
                  "refinement time per frame in milliseconds (at least 30% of the last frame's)")
       ->type_name("MS")
@@ -386,6 +397,8 @@ class Viewer {
       stream_options.bytes_per_second = o_.rate_kbps * 1000;
       stream_options.byte_limit = o_.bytes;
       stream_options.by_nodes = by_view_;
+      stream_.decoder.set_view_face_budget(o_.max_faces);  // (before the worker starts)
+      stats_.face_budget = by_view_ ? o_.max_faces : 0;
       stream_.start(std::move(source_), stream_options);
     }
     t0_ = Clock::now();
@@ -540,6 +553,8 @@ class Viewer {
     if (stats_.nodes)
       note += ", " + std::to_string(stats_.nodes_applied) + " of " + std::to_string(stats_.nodes) +
               " nodes";
+    if (stats_.nodes && stats_.face_budget)
+      note += ", budget " + std::to_string(stats_.face_budget) + " faces";
     return write_screenshot(note);
   }
 

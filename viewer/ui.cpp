@@ -161,7 +161,11 @@ void draw_overlay(ViewState& s, const Stats& stats) {
   } else {
     ImGui::Text("bytes     %s", received);
   }
-  ImGui::Text("faces     %u / %" PRIu64, stats.faces, stats.full_faces);
+  if (stats.nodes && stats.face_budget)
+    ImGui::Text("faces     %u / %" PRIu64 ", budget %" PRIu64, stats.faces, stats.full_faces,
+                stats.face_budget);
+  else
+    ImGui::Text("faces     %u / %" PRIu64, stats.faces, stats.full_faces);
   if (stats.nodes)
     ImGui::Text("nodes     %u / %" PRIu64 " resident%s", stats.nodes_applied, stats.nodes,
                 stats.by_view ? (stats.view_complete ? ", view complete" : ", fetching") : "");

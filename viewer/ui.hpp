@@ -37,6 +37,7 @@ struct Stats {
   // whether every node the view needs is applied; faces counts only those drawn.
   uint32_t nodes_applied = 0;
   uint64_t nodes = 0;
+  uint64_t face_budget = 0;  // --max-faces (0: none)
   bool by_view = false, view_complete = false;
   bool attributes = false;      // the mesh has attribute wedges or materials
   std::string attributes_line;  // e.g. "attributes: texcoords, normals, 2 materials"

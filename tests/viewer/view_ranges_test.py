@@ -8,7 +8,7 @@
 ranges: a generated terrain encoded in nodes, served by nginx (127.0.0.1, a free port, a
 temporary prefix; no root needed), shown with --camera close to the ground: the screenshot shows
 the ground, fewer bytes than the file went over the wire (nginx's access log) and they were
-asked with Range. Then the same from a server that ignores Range (200 with the whole body: the
+asked with Range; from the file with --max-faces, at most that many faces. Then the same from a server that ignores Range (200 with the whole body: the
 viewer reads it in order and shows the same faces), and from servers that answer a node's range
 with other bytes or too few: one line naming the URL and the reason, exit 1, no PNG, no hang.
 cracks: a closed mesh (the bumpy torus) encoded in small nodes, seen so that nodes of several
@@ -201,6 +201,16 @@ def test_ranges(args):
     faces, read, total, nodes, all_nodes = shot_summary("file", shoot(args, pmz, png, CLOSE_CAMERA), png)
     if not (total == size and read < size and 1 < nodes < all_nodes):
         vt.fail("file: a close view should read part of the %d bytes and some of the nodes" % size)
+    # --max-faces: within half the faces, from fewer nodes and bytes; the summary names it.
+    budget = faces // 2
+    png = os.path.join(workdir, "budget.png")
+    run = vt.xvfb(args, [args.view, pmz, "--camera", CLOSE_CAMERA, "--size", SIZE, "--max-faces", str(budget),
+                         "--screenshot", png, "--exit-when-complete"], 60)
+    got = shot_summary("--max-faces %d" % budget, run, png)
+    if not (got[0] <= budget and got[1] < read and 1 < got[3] < nodes and
+            "budget %d faces" % budget in run.stdout):
+        vt.fail("--max-faces %d: want at most that many faces from fewer bytes and nodes than %s: %s" %
+                (budget, (faces, read, nodes), run.stdout.strip()))
 
     # Without --camera the window's orbit camera (framing the whole terrain) is the view.
     orbit = vt.xvfb(args, [args.view, pmz, "--size", SIZE, "--pixel-error", "0.5", "--log", "--exit-when-complete"],

@@ -133,7 +133,12 @@ export declare class Decoder {
    * whole nodes until about maxSplits splits (all when absent); returns the splits applied or
    * undone. Feed the stream in order up to its node table first (nodeRange(1) not null). */
   updateView(view: PmzView, maxSplits?: number): number;
-  /** After updateView(): every node the view needs is applied. */
+  /** A face budget for the nodes updateView() applies, from the next call on (0, null or
+   * absent: none): the view's nodes largest projected error first, each with its parents, while
+   * the mesh's faces stay within it; nodesToFetch() and viewComplete() count those only, and
+   * applied nodes it no longer admits are undone. Node 0 is always applied. */
+  setViewFaceBudget(faces?: number | null): void;
+  /** After updateView(): every node the view needs (within the face budget) is applied. */
   viewComplete(): boolean;
   /** After updateView(): the nodes the view needs whose bytes are missing, parents first. */
   nodesToFetch(): number[];
@@ -231,7 +236,7 @@ export declare function loadView(
   decoder: Decoder,
   url: string | URL,
   view: PmzView,
-  options?: RangeSourceOptions & { maxSplits?: number },
+  options?: RangeSourceOptions & { maxSplits?: number; maxFaces?: number },
 ): Promise<LoadViewResult>;
 
 export declare function createDecoder(options?: DecoderOptions): Promise<Decoder>;

@@ -333,11 +333,19 @@ export class Decoder {
       return m._pmz_decoder_update_view(this._ptr, this._scratch, toU64(maxSplits));
     }, 0n));
   }
-  // After updateView(): every node the view needs is applied (a stream refined in file order:
-  // every split is).
+  // A face budget for the nodes updateView() applies, from the next call on (0, null or
+  // absent: none; pmz_decoder_set_view_face_budget, pmz/decoder.hpp states the contract): the
+  // view's nodes largest projected error first, each with its parents, as long as the mesh's
+  // faces stay within it; nodesToFetch() lists and viewComplete() waits for those only, and
+  // applied nodes it no longer admits are undone. Node 0 is always applied.
+  setViewFaceBudget(faces) {
+    this._call((m) => m._pmz_decoder_set_view_face_budget(this._ptr, toU64(faces ?? 0)), undefined);
+  }
+  // After updateView(): every node the view needs (within the face budget) is applied (a stream
+  // refined in file order: every split is).
   viewComplete() { return this._call((m) => m._pmz_decoder_view_complete(this._ptr) !== 0, false); }
-  // After updateView(): the ids of the nodes the view needs whose bytes are missing, parents
-  // first, the largest projected error first (an Array).
+  // After updateView(): the ids of the nodes the view needs (within the face budget) whose
+  // bytes are missing, parents first, the largest projected error first (an Array).
   nodesToFetch() {
     return this._call((m) => {
       const ptr = m._pmz_decoder_nodes_to_fetch(this._ptr, this._scratch);

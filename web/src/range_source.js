@@ -333,7 +333,8 @@ export class RangeSource {
 }
 
 // Decodes what `view` (Decoder.updateView()'s argument) needs from the .pmz at url, fetched by
-// ranges (see RangeSource; options are its options and maxSplits, the splits per updateView()).
+// ranges (see RangeSource; options are its options, maxSplits, the splits per updateView(), and
+// maxFaces, the face budget: Decoder.setViewFaceBudget(), 0 or absent: none).
 // Resolves to {status (the decoder's), complete (every node the view needs is applied), bytes
 // (received), totalBytes, requests, nodesFetched, inOrder}; rejects on a failed request or a
 // bad response.
@@ -341,6 +342,7 @@ export async function loadView(decoder, url, view, options = {}) {
   const source = new RangeSource(decoder, url, options);
   try {
     await source.open();
+    decoder.setViewFaceBudget(options.maxFaces);
     for (;;) {
       if (source.error) throw new Error(source.error);
       const moved = decoder.updateView(view, options.maxSplits);

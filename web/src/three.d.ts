@@ -23,8 +23,8 @@ export interface PMZOptions extends DecoderOptions {
    * sets it. */
   flipV?: boolean;
   /** View-dependent decoding: stream(url) gives a PMZViewStream (on this thread) that fetches
-   * by ranges what update(camera) needs; an object sets its pixelError, viewportHeight and
-   * RangeSource options. */
+   * by ranges what update(camera) needs; an object sets its pixelError, viewportHeight,
+   * maxFaces (the view's face budget, not the decoder limit above) and RangeSource options. */
   view?: boolean | (PMZViewOptions & RangeSourceOptions);
 }
 
@@ -33,6 +33,10 @@ export interface PMZViewOptions {
   pixelError?: number;
   /** The viewport's height in pixels (default 1080): the renderer's drawing buffer. */
   viewportHeight?: number;
+  /** A face budget (default 0: none; Decoder.setViewFaceBudget()): the nodes the view needs
+   * most, with their parents, as long as the mesh stays within maxFaces faces; those left out
+   * are not fetched. */
+  maxFaces?: number;
 }
 
 /** A copy of the decoder's current mesh. */
@@ -131,6 +135,8 @@ export declare class PMZViewStream {
   readonly source: RangeSource;
   pixelError: number;
   viewportHeight: number;
+  /** The face budget, read at each update() (0: none). */
+  maxFaces: number;
   /** The mesh drawing the geometry, when update() is given none. */
   object: Object3D | null;
   readonly nodesApplied: number;

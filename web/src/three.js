@@ -352,6 +352,9 @@ export class PMZViewStream {
     this.geometry = this._mirror.geometry;
     this.frameBudgetMs = options.frameBudgetMs ?? 8;
     this.pixelError = options.pixelError ?? 1;
+    // A face budget (Decoder.setViewFaceBudget(), at each update(); 0 or null: none): the nodes
+    // the view needs most, with their parents, as long as the mesh stays within maxFaces faces.
+    this.maxFaces = options.maxFaces ?? 0;
     this.viewportHeight = options.viewportHeight ?? 1080;  // pixels: the renderer's drawing buffer
     this.object = null;  // the mesh drawing the geometry (its world matrix), when update() has none
     this.status = 'ok';
@@ -401,6 +404,7 @@ export class PMZViewStream {
       return this._sync();
     }
     if (this._view && d.status === 'ok') {
+      d.setViewFaceBudget(this.maxFaces);
       // Batches of splits sized to a quarter of the budget left, as refineFor() does.
       const start = performance.now();
       for (;;) {
@@ -700,7 +704,9 @@ export class PMZLoader extends Loader {
     try {
       url = new URL(source, typeof location === 'object' ? location.href : undefined).href;
     } catch (e) { /* a relative URL without a page (node) */ }
-    const s = new PMZViewStream(await createDecoder(opts), url, { ...opts, ...(typeof opts.view === 'object' ? opts.view : {}),
+    // (opts.maxFaces is the decoder's limit, createDecoder()'s: the view's budget is view.maxFaces.)
+    const view = typeof opts.view === 'object' ? opts.view : {};
+    const s = new PMZViewStream(await createDecoder(opts), url, { ...opts, ...view, maxFaces: view.maxFaces ?? 0,
       init: { headers: this.requestHeader, credentials: this.withCredentials ? 'include' : 'same-origin' } });
     s.source.onData = () => onUpdate && onUpdate(s);
     const tick = () => {

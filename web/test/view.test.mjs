@@ -38,9 +38,9 @@ after(() => {
   server.close();
 });
 
-function nativeView(file, v) {
+function nativeView(file, v, more = []) {
   return nativeDecode(file, ['--camera', [...v.eye, ...v.target].join(','), '--pixel-error',
-    String(v.pixelError), '--size', `${v.width ?? 1920}x${v.height ?? 1080}`]);
+    String(v.pixelError), '--size', `${v.width ?? 1920}x${v.height ?? 1080}`, ...more]);
 }
 
 // The decoder's mesh without the faces of nodes not applied (degenerate) and the vertices no
@@ -143,6 +143,61 @@ test('a close view fetches part of the file and matches pmz-decode --camera', as
   // (A corner of the terrain in view: its nodes and all their parents, about half of the bytes.)
   assert.ok(result.bytes < result.totalBytes * 0.6, `${result.bytes} of ${result.totalBytes} bytes`);
   assert.ok(result.nodesApplied > 1 && result.nodesApplied < 60);
+});
+
+test('maxFaces bounds the faces a view applies and fetches, as pmz-decode --max-faces', async () => {
+  const { createDecoder, loadView } = await importPackage();
+  const free = await createDecoder();
+  const all = await loadView(free, base + 'nodes.pmz', await view(free, CLOSE));
+  const faces = dropUnused(free).indices.length / 3;
+  free.dispose();
+  const budget = Math.floor(faces / 2);
+  const d = await createDecoder();
+  const result = await loadView(d, base + 'nodes.pmz', await view(d, CLOSE), { maxFaces: budget });
+  assert.equal(result.status, 'ok');
+  assert.equal(result.complete, true);
+  const mine = dropUnused(d);
+  assert.ok(mine.indices.length / 3 <= budget, `${mine.indices.length / 3} faces, budget ${budget}`);
+  assert.ok(mine.indices.length / 3 > d.info().baseFaces, 'nothing refined');
+  assert.ok(result.bytes < all.bytes, `${result.bytes} bytes, ${all.bytes} without the budget`);
+  const native = nativeView(nodesPmz, CLOSE, ['--max-faces', String(budget)]);
+  assert.ok(sameBits(mine.indices, native.indices), 'indices differ from pmz-decode --max-faces');
+  assert.ok(sameBits(mine.positions, native.positions), 'positions differ');
+  // A lower budget undoes nodes; 0 is none again: the view's whole mesh.
+  const applied = d.nodesApplied();
+  d.setViewFaceBudget(Math.floor(budget / 2));
+  d.updateView(await view(d, CLOSE));
+  assert.ok(d.nodesApplied() < applied && dropUnused(d).indices.length / 3 <= budget / 2);
+  assert.equal(d.viewComplete(), true);
+  const again = await loadView(d, base + 'nodes.pmz', await view(d, CLOSE), { maxFaces: 0 });
+  assert.equal(again.complete, true);
+  assert.equal(dropUnused(d).indices.length / 3, faces);
+  d.dispose();
+});
+
+test('three.js: view.maxFaces bounds the faces update(camera) draws', async () => {
+  const THREE = await import(path.join(rootDir, 'web', 'node_modules', 'three', 'build', 'three.module.js'));
+  const { PMZLoader } = await importThreeLoader();
+  const loader = new PMZLoader(undefined, { view: { pixelError: 1, viewportHeight: 600, maxFaces: 1 } });
+  const s = await loader.stream(base + 'nodes.pmz');
+  assert.equal(await s.done, 'ok');
+  assert.equal(s.maxFaces, 1);
+  const camera = new THREE.PerspectiveCamera(60, 800 / 600, 1e-3, 100);
+  camera.position.set(...CLOSE.eye);
+  camera.lookAt(new THREE.Vector3(...CLOSE.target));
+  const drawn = () => dropUnused(s.decoder).indices.length / 3;
+  await follow(s, camera, null);
+  assert.equal(s.nodesApplied, 1);  // node 0 alone, whatever the budget
+  const floor = drawn();
+  s.maxFaces = 0;
+  await follow(s, camera, null);
+  const all = drawn(), nodes = s.nodesApplied;
+  const budget = Math.floor((floor + all) / 2);
+  s.maxFaces = budget;
+  await follow(s, camera, null);
+  assert.ok(drawn() > floor && drawn() <= budget && s.nodesApplied < nodes,
+    `${drawn()} faces from ${s.nodesApplied} nodes; budget ${budget}, ${all} faces from ${nodes} nodes without`);
+  s.dispose();
 });
 
 test('a server that ignores Range: the stream is read in order, same mesh', async () => {

@@ -82,7 +82,8 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
   const params = new URLSearchParams(query);
   const useWorker = params.get('worker') !== '0' && typeof Worker === 'function';
   // View-dependent decoding of streams with a node table (?view=0: streamed in order as others):
-  // ?camera=EX,EY,EZ,TX,TY,TZ (the mesh's coordinates) the first camera, ?pixelerror=P.
+  // ?camera=EX,EY,EZ,TX,TY,TZ (the mesh's coordinates) the first camera, ?pixelerror=P;
+  // ?maxfaces=N (MAX_FACES below) is their face budget (PMZViewStream.maxFaces).
   const viewDecoding = params.get('view') !== '0';
   const pixelError = Number(params.get('pixelerror')) > 0 ? Number(params.get('pixelerror')) : 1;
   const cameraParam = (params.get('camera') || '').split(',').map(Number);
@@ -155,6 +156,7 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
   // taken off the drawn frames' gaps first. ?maxfaces=N caps the faces shown while decoding.
   const DRAW_BUDGET_MS = params.has('drawms') ? Number(params.get('drawms')) : 30;
   const MAX_FACES = params.has('maxfaces') ? Number(params.get('maxfaces')) : Infinity;
+  const maxFaces = MAX_FACES > 0 && MAX_FACES < Infinity ? Math.floor(MAX_FACES) : 0;  // (0: none)
   const SLOW_FRAME_MS = 25;
   const MIN_SAMPLE_FACES = 1000;
   const VSYNC_MS = 1000 / 60;
@@ -353,6 +355,7 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
     Object.assign(status, { faces: 0, vertices: 0, bytes: 0, totalBytes: 0, complete: false, ended: false, error: '' });
     delete status.nodes;
     delete status.totalNodes;
+    delete status.maxFaces;
     timing = { firstBytes: null, firstObjectFrame: null };
     frames = [];
     attributes = null;
@@ -362,7 +365,7 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
       // Before the first bytes: resizing the drawing buffer at the first object frame delayed it.
       if (DECODE_SCALE !== 1) scaleForDecoding(true);
       const byView = viewDecoding && typeof source === 'string' && await viewDecodable(source);
-      const loader = new PMZLoader(undefined, byView ? { autoUpdate: false, view: { pixelError } }
+      const loader = new PMZLoader(undefined, byView ? { autoUpdate: false, view: { pixelError, maxFaces } }
         : { geomorph: true, autoUpdate: false, worker: useWorker, faceLimit: faceLimit(0, Infinity) });
       const stream = await loader.stream(source, (s) => {
         if (timing.firstBytes === null && s.bytes > 0) timing.firstBytes = performance.now();
@@ -484,7 +487,7 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
       Object.assign(status, { bytes: s.bytes, totalBytes: s.totalBytes });
       Object.assign(status, { faces: current.byView ? current.drawnFaces ?? 0 : s.faceCount,
         vertices: s.vertexCount, complete: s.complete, ended: status.ended || s.ended });
-      if (current.byView) Object.assign(status, { nodes: s.nodesApplied, totalNodes: s.nodeCount });
+      if (current.byView) Object.assign(status, { nodes: s.nodesApplied, totalNodes: s.nodeCount, maxFaces });
       if (s.status !== 'ok' || s.error) setError(s.error);  // (a view stream's failed request too)
       const m = current.materials && (morphOn ? current.materials.morph : current.materials.plain);
       if (m && current.mesh.material !== m) {

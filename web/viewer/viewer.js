@@ -175,6 +175,7 @@ function frame(t) {
   const o = overlayState;
   const text = o
     ? `faces     ${status.faces.toLocaleString()}` +
+      (o.byView && status.maxFaces ? ` (budget ${status.maxFaces.toLocaleString()})` : '') +
       (o.limited ? ` shown (draw budget), ${o.decodedFaces.toLocaleString()} decoded` : '') +
       `\nvertices  ${status.vertices.toLocaleString()}\n` +
       `bytes     ${kb(status.bytes)} / ${status.totalBytes ? kb(status.totalBytes) : '?'}` +
