@@ -516,6 +516,20 @@ test('a stream with a node table is decoded for ?camera=, its nodes fetched by r
   const shot = await page.evaluate(() => window.pmzSnapshot());
   assert.ok(shot.coverage > 0.05, `coverage ${shot.coverage}`);
   await page.close();
+  // ?maxfaces=N: the same view within N faces, from fewer nodes and bytes; the overlay names it.
+  const budget = Math.floor(s.faces / 2);
+  const tight = await browser.newPage();
+  await tight.setViewport({ width: 800, height: 600 });
+  await tight.goto(`http://127.0.0.1:${port}/index.html?src=/stream/nodes.pmz` +
+    `&camera=0.2,0.2,0.15,0.1,0.1,0&pixelerror=1&maxfaces=${budget}`);
+  await tight.waitForFunction(() => window.pmzStatus.complete || window.pmzStatus.error, { timeout: 120000 });
+  const t = await tight.evaluate(() => ({ ...window.pmzStatus }));
+  assert.equal(t.error, '');
+  assert.ok(t.faces > 0 && t.faces <= budget && t.nodes < s.nodes && t.bytes < s.bytes,
+    `${t.faces} faces, ${t.nodes} nodes, ${t.bytes} bytes; ${s.faces}, ${s.nodes}, ${s.bytes} without ?maxfaces=${budget}`);
+  await tight.waitForFunction((n) => document.getElementById('overlay').textContent
+    .includes(`(budget ${n.toLocaleString()})`), { timeout: 30000 }, budget);
+  await tight.close();
 });
 
 test('a node range the server fails is shown as one line', async () => {
