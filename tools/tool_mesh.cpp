@@ -9,6 +9,7 @@
 
 #include "pmz/app_support.hpp"
 #include "pmz/mesh_file_formats.hpp"
+#include "pmz/mesh_stream.hpp"
 
 namespace pmz::tool {
 
@@ -47,20 +48,29 @@ bool read_mesh_input(const std::string& path, const std::string& stdin_format, I
     progress->update("reading", 0);
     read_progress = [progress](double f) { progress->update("reading", f); };
   }
-  // Read here (the bar follows the bytes), parsed from memory. The parsers go by the path's
-  // extension and look for the files it refers to (MTL, glTF buffers) beside it: stdin goes
-  // through a temporary file named accordingly, and messages say "stdin" instead of its name.
+  // A file is parsed as it is read (the bar follows the bytes). The parsers go by the path's
+  // extension and look for the files it refers to (MTL, glTF buffers) beside it: stdin is read
+  // whole and goes through a temporary file named accordingly, and messages say "stdin" instead
+  // of its name.
   ScratchFile scratch;
   PolygonSoup soup;
-  bool ok =
-      app_support::read_input(path, bytes, error, read_progress) &&
-      (!from_stdin || (no_external_gltf_buffers(stdin_format, bytes, error) &&
-                       scratch.create(bytes, app_support::name(), "." + stdin_format, error)));
+  bool ok = true;
+  if (from_stdin) {
+    ok = app_support::read_input(path, bytes, error, read_progress) &&
+         no_external_gltf_buffers(stdin_format, bytes, error) &&
+         scratch.create(bytes, app_support::name(), "." + stdin_format, error) &&
+         parse_polygon_soup(
+             scratch.path(),
+             std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()), soup,
+             error);
+    bytes = std::vector<uint8_t>();
+  } else if (FILE* file = app_support::open_input(path, error)) {
+    ok = read_polygon_soup(path, file, soup, error, read_progress);
+    std::fclose(file);
+  } else {
+    ok = false;
+  }
   const std::string parsed = from_stdin ? scratch.path() : path;
-  ok =
-      ok && parse_polygon_soup(
-                parsed, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()),
-                soup, error);
   MeshRepairStats stats;
   if (ok) {
     repair_mesh(soup, mesh, stats);

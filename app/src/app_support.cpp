@@ -105,17 +105,27 @@ std::string errno_message(const std::string& path, const char* action, int err) 
   return path + ": " + action + ": " + std::strerror(err);
 }
 
+FILE* open_input(const std::string& path, std::string& error) {
+  const bool from_stdin = path == "-";
+  const std::string shown = from_stdin ? "stdin" : path;
+  FILE* f = from_stdin ? stdin : std::fopen(path.c_str(), "rb");
+  if (!f) return error = errno_message(shown, "cannot read", errno), nullptr;
+  struct stat st = {};
+  if (::fstat(::fileno(f), &st) == 0 && S_ISDIR(st.st_mode)) {
+    if (!from_stdin) std::fclose(f);
+    return error = shown + ": cannot read: Is a directory", nullptr;
+  }
+  return f;
+}
+
 bool read_input(const std::string& path, std::vector<uint8_t>& out, std::string& error,
                 const std::function<void(double)>& progress) {
   const bool from_stdin = path == "-";
   const std::string shown = from_stdin ? "stdin" : path;
-  FILE* f = from_stdin ? stdin : std::fopen(path.c_str(), "rb");
-  if (!f) return error = errno_message(shown, "cannot read", errno), false;
+  FILE* f = open_input(path, error);
+  if (!f) return false;
   struct stat st = {};
-  if (::fstat(::fileno(f), &st) == 0 && S_ISDIR(st.st_mode)) {
-    if (!from_stdin) std::fclose(f);
-    return error = shown + ": cannot read: Is a directory", false;
-  }
+  ::fstat(::fileno(f), &st);
   out.clear();
   const uint64_t size = S_ISREG(st.st_mode) ? uint64_t(st.st_size) : 0;
   if (size) out.reserve(size);

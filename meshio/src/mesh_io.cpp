@@ -7,7 +7,9 @@
 // OFF reader hangs on huge counts and reads `nan` as garbage indices), while pmz must keep every
 // face; repair_mesh does the repair instead.
 #include <cctype>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <functional>
 #include <string_view>
@@ -15,6 +17,7 @@
 #include "mesh_formats.hpp"
 #include "pmz/mesh.hpp"
 #include "pmz/mesh_file_formats.hpp"
+#include "pmz/mesh_stream.hpp"
 #include "pmz/output_file.hpp"
 #include "reader_support.hpp"
 #include "writer_support.hpp"
@@ -82,31 +85,88 @@ static bool check_attribute_indices(const std::string& path, const PolygonSoup& 
   return true;
 }
 
-bool parse_polygon_soup(const std::string& path, std::string_view data, PolygonSoup& out,
-                        std::string& error) {
+namespace {
+
+// The format's reader on `in`, then the checks of what every reader returns. `read_failure`
+// words a failed read of the file (the source ends where it failed).
+bool parse_source(const std::string& path, const std::string& ext, ByteSource& in, PolygonSoup& out,
+                  std::string& error, const std::function<std::string(int)>& read_failure) {
   out = PolygonSoup();
   out.face_offsets.push_back(0);
-  std::string ext = lower_extension(path);
-  if (!known_input(ext)) {
-    error = unknown_format(path, ext, false);
-    return false;
-  }
-  if (data.empty()) {
+  bool ok = false;
+  if (in.peek(1).empty())
     error = path + ": empty file";
-    return false;
-  }
-  bool ok = ext == ".obj"   ? read_obj(path, data, out, error)
-            : ext == ".off" ? read_off(path, data, out, error)
-            : ext == ".ply" ? read_ply(path, data, out, error)
-            : ext == ".stl" ? read_stl(path, data, out, error)
-                            : read_gltf(path, data, out, error);
+  else if (ext == ".obj")
+    ok = read_obj(path, in, out, error);
+  else if (ext == ".off")
+    ok = read_off(path, in, out, error);
+  else if (ext == ".ply")
+    ok = read_ply(path, in, out, error);
+  else if (ext == ".stl")
+    ok = read_stl(path, in, out, error);
+  else
+    ok = read_gltf(path, in.rest(), out, error);
   if (ok && out.face_count() == 0) {
     error = path + ": mesh has no faces";
     ok = false;
   }
   if (ok) ok = check_attribute_indices(path, out, error);
+  if (in.read_errno()) error = read_failure(in.read_errno()), ok = false;
   if (!ok) out = PolygonSoup();
   return ok;
+}
+
+// Streams `file` from its position when it can tell its size (a regular file); reads it whole
+// into memory otherwise (a pipe).
+bool read_open_file(const std::string& path, const std::string& ext, std::FILE* file,
+                    PolygonSoup& out, std::string& error,
+                    const std::function<void(double)>& progress, size_t window,
+                    const std::function<std::string(int)>& read_failure) {
+  const long at = std::ftell(file);
+  long end = -1;
+  if (at >= 0 && std::fseek(file, 0, SEEK_END) == 0) end = std::ftell(file);
+  if (end >= at && at >= 0 && std::fseek(file, at, SEEK_SET) == 0) {
+    ByteSource in(file, uint64_t(end - at), window, progress);
+    return parse_source(path, ext, in, out, error, read_failure);
+  }
+  std::clearerr(file);
+  std::string data;
+  char buf[1 << 16];
+  size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, file)) > 0) data.append(buf, n);
+  if (std::ferror(file)) {
+    error = read_failure(errno ? errno : EIO);
+    return false;
+  }
+  ByteSource in(data);
+  return parse_source(path, ext, in, out, error, read_failure);
+}
+
+}  // namespace
+
+bool parse_polygon_soup(const std::string& path, std::string_view data, PolygonSoup& out,
+                        std::string& error) {
+  out = PolygonSoup();
+  std::string ext = lower_extension(path);
+  if (!known_input(ext)) {
+    error = unknown_format(path, ext, false);
+    return false;
+  }
+  ByteSource in(data);
+  return parse_source(path, ext, in, out, error, [&](int) { return path + ": read error"; });
+}
+
+bool read_polygon_soup(const std::string& path, std::FILE* file, PolygonSoup& out,
+                       std::string& error, const std::function<void(double)>& progress,
+                       size_t window) {
+  out = PolygonSoup();
+  std::string ext = lower_extension(path);
+  if (!known_input(ext)) {
+    error = unknown_format(path, ext, false);
+    return false;
+  }
+  return read_open_file(path, ext, file, out, error, progress, window,
+                        [&](int err) { return path + ": cannot read: " + std::strerror(err); });
 }
 
 bool read_polygon_soup(const std::string& path, PolygonSoup& out, std::string& error) {
@@ -116,9 +176,12 @@ bool read_polygon_soup(const std::string& path, PolygonSoup& out, std::string& e
     error = unknown_format(path, ext, false);
     return false;
   }
-  std::string data;
-  if (!read_file(path, data, error)) return false;
-  return parse_polygon_soup(path, data, out, error);
+  std::FILE* file = open_file(path, error);
+  if (!file) return false;
+  const bool ok = read_open_file(path, ext, file, out, error, {}, kReadWindow,
+                                 [&](int) { return path + ": read error"; });
+  std::fclose(file);
+  return ok;
 }
 
 bool read_mesh(const std::string& path, IndexedMesh& out, MeshRepairStats& stats,

@@ -36,7 +36,8 @@ void read_mtl(const std::string& obj_path, const std::string& library,
   std::string data, ignored;
   std::filesystem::path mtl = std::filesystem::path(obj_path).parent_path() / library;
   if (!read_file(mtl.string(), data, ignored)) return;
-  Lines lines{data, 0, '#'};
+  ByteSource in(data);
+  Lines lines{in, 0, '#'};
   std::string_view line;
   Material* m = nullptr;
   while (lines.next(line)) {
@@ -73,8 +74,7 @@ bool parse_floats(std::string_view& line, float* v, int count) {
 
 }  // namespace
 
-bool read_obj(const std::string& path, std::string_view data, PolygonSoup& out,
-              std::string& error) {
+bool read_obj(const std::string& path, ByteSource& data, PolygonSoup& out, std::string& error) {
   Lines lines{data, 0, '#'};
   std::string_view line;
   // Positive indices are checked once all vertices are known; remember where faces came from.

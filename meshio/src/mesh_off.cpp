@@ -25,15 +25,15 @@ uint32_t load_u32(const char* p, bool big_endian) {
 // count and the int32 indices. Geomview's definition is big endian with a colour count (and that
 // many floats) after each face; OpenMesh writes little endian without it. The first layout that
 // reads the whole data is taken.
-bool read_off_binary_layout(const std::string& path, std::string_view data, uint32_t extra,
+bool read_off_binary_layout(const std::string& path, ByteSource& data, uint32_t extra,
                             bool big_endian, bool face_colors, PolygonSoup& out,
                             std::string& error) {
   out.positions.clear(), out.corners.clear(), out.face_offsets.assign(1, 0);
-  size_t pos = 0;
   auto u32 = [&](uint32_t& v) {
-    if (data.size() - pos < 4) return false;
-    v = load_u32(data.data() + pos, big_endian);
-    pos += 4;
+    std::string_view b = data.peek(4);
+    if (b.size() < 4) return false;
+    v = load_u32(b.data(), big_endian);
+    data.skip(4);
     return true;
   };
   uint32_t nv, nf, ne;
@@ -42,23 +42,28 @@ bool read_off_binary_layout(const std::string& path, std::string_view data, uint
     return false;
   }
   const uint64_t vertex_bytes = uint64_t(3 + extra) * 4;
-  if (nv >= kMaxVertices || uint64_t(nv) * vertex_bytes > data.size() - pos ||
-      uint64_t(nf) * 8 > data.size() - pos - uint64_t(nv) * vertex_bytes) {
+  if (nv >= kMaxVertices || uint64_t(nv) * vertex_bytes > data.remaining() ||
+      uint64_t(nf) * 8 > data.remaining() - uint64_t(nv) * vertex_bytes) {
     error = path + ": binary OFF declares " + std::to_string(nv) + " vertices and " +
             std::to_string(nf) + " faces, more than the file holds";
     return false;
   }
   out.positions.reserve(size_t(nv) * 3);
   for (uint32_t v = 0; v < nv; ++v) {
+    std::string_view b = data.peek(size_t(vertex_bytes));
+    if (b.size() < vertex_bytes) {
+      error = path + ": binary OFF ends or is malformed in vertex " + std::to_string(v);
+      return false;
+    }
     float p[3];
     for (int k = 0; k < 3; ++k)
-      p[k] = std::bit_cast<float>(load_u32(data.data() + pos + size_t(k) * 4, big_endian));
-    pos += size_t(vertex_bytes);
+      p[k] = std::bit_cast<float>(load_u32(b.data() + size_t(k) * 4, big_endian));
+    data.skip(size_t(vertex_bytes));
     if (!push_vertex(out, p, path, 0, error)) return false;
   }
   for (uint32_t f = 0; f < nf; ++f) {
     uint32_t n, ix = 0, colors = 0;
-    if (!u32(n) || n > (data.size() - pos) / 4) {
+    if (!u32(n) || n > data.remaining() / 4) {
       error = path + ": binary OFF ends or is malformed in face " + std::to_string(f);
       return false;
     }
@@ -70,28 +75,34 @@ bool read_off_binary_layout(const std::string& path, std::string_view data, uint
       }
       out.corners.push_back(ix);
     }
-    if (face_colors && (!u32(colors) || colors > 4 || colors * 4 > data.size() - pos)) {
+    if (face_colors && (!u32(colors) || colors > 4 || colors * 4 > data.remaining())) {
       error = path + ": binary OFF ends or is malformed in face " + std::to_string(f);
       return false;
     }
-    pos += colors * 4;
+    data.peek(colors * 4);
+    data.skip(colors * 4);
     end_face(out);
   }
-  if (pos != data.size()) {
-    error = path + ": binary OFF has " + std::to_string(data.size() - pos) +
+  if (data.remaining() != 0) {
+    error = path + ": binary OFF has " + std::to_string(data.remaining()) +
             " bytes after its last face";
     return false;
   }
   return true;
 }
 
-bool read_off_binary(const std::string& path, std::string_view data, uint32_t extra,
-                     PolygonSoup& out, std::string& error) {
+bool read_off_binary(const std::string& path, ByteSource& data, uint32_t extra, PolygonSoup& out,
+                     std::string& error) {
   // The reported failure: the first layout whose counts fit the file (else the first one's).
   std::string reported;
   bool counts_fit = false;
+  const uint64_t start = data.offset();
   for (int layout = 0; layout < 4; ++layout) {
     bool big_endian = layout == 1 || layout == 2, face_colors = layout == 1 || layout == 3;
+    if (!data.seek(start)) {
+      error = path + ": read error";
+      return false;
+    }
     if (read_off_binary_layout(path, data, extra, big_endian, face_colors, out, error)) return true;
     bool fit = error.find("more than the file holds") == std::string::npos &&
                error.find("inside its counts") == std::string::npos;
@@ -103,8 +114,7 @@ bool read_off_binary(const std::string& path, std::string_view data, uint32_t ex
 
 }  // namespace
 
-bool read_off(const std::string& path, std::string_view data, PolygonSoup& out,
-              std::string& error) {
+bool read_off(const std::string& path, ByteSource& data, PolygonSoup& out, std::string& error) {
   Lines lines{data, 0, '#'};
   std::string_view line;
   if (!lines.next_nonblank(line)) {
@@ -130,7 +140,7 @@ bool read_off(const std::string& path, std::string_view data, PolygonSoup& out,
     if (flags.starts_with("ST")) extra += 2, flags.remove_prefix(2);
     if (flags.starts_with("C")) extra += 4, flags.remove_prefix(1);
     if (flags.starts_with("N")) extra += 3;
-    return read_off_binary(path, lines.rest, extra, out, error);
+    return read_off_binary(path, data, extra, out, error);
   }
   if (probe = counts, next_token(probe).empty() && !lines.next_nonblank(counts)) {
     error = path + ": OFF header has no vertex and face counts";
@@ -147,9 +157,9 @@ bool read_off(const std::string& path, std::string_view data, PolygonSoup& out,
     return false;
   }
   // Each vertex line needs at least 6 bytes, each face line at least 8.
-  out.positions.reserve(plausible(uint64_t(nv), lines.rest.size(), 6) * 3);
-  out.face_offsets.reserve(plausible(uint64_t(nf), lines.rest.size(), 8) + 1);
-  out.corners.reserve(plausible(uint64_t(nf), lines.rest.size(), 8) * 3);
+  out.positions.reserve(plausible(uint64_t(nv), data.remaining(), 6) * 3);
+  out.face_offsets.reserve(plausible(uint64_t(nf), data.remaining(), 8) + 1);
+  out.corners.reserve(plausible(uint64_t(nf), data.remaining(), 8) * 3);
   for (int64_t v = 0; v < nv; ++v) {
     if (!lines.next_nonblank(line)) {
       error = path + ": file ends after " + std::to_string(v) + " of " + std::to_string(nv) +

@@ -54,16 +54,12 @@ struct PlyElement {
 
 // Reads one value of the body, ascii or binary; false when the data ends or is malformed.
 struct PlyBody {
-  std::string_view data;
-  size_t pos = 0;
+  ByteSource& in;
   bool ascii, big_endian;
 
   bool read(PlyType t, double& v) {
     if (ascii) {
-      std::string_view rest = data.substr(pos);
-      size_t before = rest.size();
-      std::string_view tok = next_token(rest);
-      pos += before - rest.size();
+      std::string_view tok = next_token(in);
       if (t == PlyType::f32 || t == PlyType::f64) {
         float f;
         if (!parse_float(tok, f)) return false;
@@ -76,10 +72,11 @@ struct PlyBody {
       return true;
     }
     size_t n = ply_size(t);
-    if (data.size() - pos < n) return false;
+    std::string_view bytes = in.peek(n);
+    if (bytes.size() < n) return false;
     unsigned char b[8];
-    std::memcpy(b, data.data() + pos, n);
-    pos += n;
+    std::memcpy(b, bytes.data(), n);
+    in.skip(n);
     if (big_endian != (std::endian::native == std::endian::big)) std::reverse(b, b + n);
     switch (t) {
       case PlyType::i8:
@@ -129,7 +126,7 @@ struct PlyBody {
     }
     return true;
   }
-  size_t remaining() const { return data.size() - pos; }
+  uint64_t remaining() const { return in.remaining(); }
 };
 
 // Scale of an integer colour channel (uchar 0..255, ushort 0..65535); floats are 0..1 already.
@@ -472,14 +469,13 @@ bool check_corner_vertices(const std::string& path, const PolygonSoup& out, std:
 
 }  // namespace
 
-bool read_ply(const std::string& path, std::string_view data, PolygonSoup& out,
-              std::string& error) {
+bool read_ply(const std::string& path, ByteSource& data, PolygonSoup& out, std::string& error) {
   Lines lines{data, 0, 0};
   std::vector<PlyElement> elements;
   PlyFormat format = PlyFormat::ascii;
   if (!read_ply_header(path, lines, elements, format, out.attributes.materials, error))
     return false;
-  PlyBody body{lines.rest, 0, format == PlyFormat::ascii, format == PlyFormat::binary_big_endian};
+  PlyBody body{data, format == PlyFormat::ascii, format == PlyFormat::binary_big_endian};
   bool have_vertices = false, have_faces = false;
   for (const PlyElement& e : elements) {
     if (e.properties.empty()) continue;  // holds no bytes; its count must not drive a loop

@@ -53,13 +53,13 @@ bool add_stl_corner(PolygonSoup& out, std::unordered_map<uint64_t, std::vector<u
 
 }  // namespace
 
-bool read_stl(const std::string& path, std::string_view data, PolygonSoup& out,
-              std::string& error) {
+bool read_stl(const std::string& path, ByteSource& data, PolygonSoup& out, std::string& error) {
   std::unordered_map<uint64_t, std::vector<uint32_t>> buckets;
-  uint32_t declared = data.size() >= 84 ? load_le32(data.data() + 80) : 0;
-  bool size_matches =
-      data.size() >= 84 && (data.size() - 84) / 50 == declared && (data.size() - 84) % 50 == 0;
-  std::string_view head(data.data(), std::min<size_t>(data.size(), 512));
+  const uint64_t size = data.remaining();
+  std::string_view head = data.peek(512);
+  uint32_t declared = size >= 84 && head.size() >= 84 ? load_le32(head.data() + 80) : 0;
+  bool size_matches = size >= 84 && (size - 84) / 50 == declared && (size - 84) % 50 == 0;
+  head = head.substr(0, 512);
   std::string_view first = next_token(head);
   // Binary files may start with "solid" too; an exact size match decides.
   if (!size_matches && first == "solid") {
@@ -95,21 +95,28 @@ bool read_stl(const std::string& path, std::string_view data, PolygonSoup& out,
     }
     return true;
   }
-  if (data.size() < 84) {
+  if (size < 84) {
     error = path + ": not an STL file (too short for binary, no 'solid' header)";
     return false;
   }
-  if ((data.size() - 84) / 50 < declared) {
+  if ((size - 84) / 50 < declared) {
     error = path + ": binary STL declares " + std::to_string(declared) +
-            " triangles but holds only " + std::to_string((data.size() - 84) / 50);
+            " triangles but holds only " + std::to_string((size - 84) / 50);
     return false;
   }
+  data.skip(std::min<size_t>(84, data.peek(84).size()));
   out.positions.reserve(size_t(declared) * 3);  // bounded by the file size, checked above
   out.corners.reserve(size_t(declared) * 3);
   out.face_offsets.reserve(size_t(declared) + 1);
   buckets.reserve(declared);
   for (uint32_t t = 0; t < declared; ++t) {
-    const char* rec = data.data() + 84 + size_t(t) * 50 + 12;  // skip the stored normal
+    std::string_view record = data.peek(50);
+    if (record.size() < 50) {
+      error = path + ": binary STL ends in triangle " + std::to_string(t);
+      return false;
+    }
+    data.skip(50);
+    const char* rec = record.data() + 12;  // skip the stored normal
     for (int c = 0; c < 3; ++c) {
       float p[3];
       for (int k = 0; k < 3; ++k) p[k] = std::bit_cast<float>(load_le32(rec + c * 12 + k * 4));

@@ -3,6 +3,7 @@
 // vertex welding.
 #include "reader_support.hpp"
 
+#include <algorithm>
 #include <bit>
 #include <cerrno>
 #include <cstdio>
@@ -13,21 +14,24 @@
 
 namespace pmz {
 
-bool read_file(const std::string& path, std::string& data, std::string& error) {
+std::FILE* open_file(const std::string& path, std::string& error) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) {
     error = path + ": no such file";
-    return false;
+    return nullptr;
   }
   if (std::filesystem::is_directory(path, ec)) {
     error = path + ": is a directory, not a mesh file";
-    return false;
+    return nullptr;
   }
-  FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) {
-    error = path + ": cannot open: " + std::strerror(errno);
-    return false;
-  }
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) error = path + ": cannot open: " + std::strerror(errno);
+  return f;
+}
+
+bool read_file(const std::string& path, std::string& data, std::string& error) {
+  std::FILE* f = open_file(path, error);
+  if (!f) return false;
   data.clear();
   char buf[1 << 16];
   size_t n;
@@ -43,6 +47,80 @@ bool read_file(const std::string& path, std::string& data, std::string& error) {
     return false;
   }
   return true;
+}
+
+ByteSource::ByteSource(std::FILE* file, uint64_t size, size_t window,
+                       std::function<void(double)> progress)
+    : size_(size),
+      file_(file),
+      start_(std::ftell(file)),
+      window_(std::max<size_t>(window, 1)),
+      progress_(std::move(progress)) {}
+
+std::string_view ByteSource::fill(size_t n) {
+  if (!file_ || eof_) return view();
+  // What is left of the window moves to its front; the rest is read anew.
+  const size_t kept = end_ - pos_;
+  if (pos_ > 0) std::memmove(buffer_.data(), buffer_.data() + pos_, kept);
+  base_ += pos_, pos_ = 0, end_ = kept;
+  if (buffer_.size() < std::max(n, window_))
+    buffer_.resize(std::max({n, window_, buffer_.size() * 2}));
+  while (end_ < n && !eof_) {
+    const size_t got = std::fread(buffer_.data() + end_, 1, buffer_.size() - end_, file_);
+    end_ += got;
+    if (got == 0) {
+      eof_ = true;
+      if (std::ferror(file_)) errno_ = errno ? errno : EIO;
+    }
+  }
+  // The file's true end, should it differ from the size it had when opened.
+  if (eof_ || base_ + end_ > size_) size_ = base_ + end_;
+  data_ = std::string_view(buffer_.data(), end_);
+  if (progress_ && size_) progress_(double(base_ + end_) / double(size_));
+  return view();
+}
+
+std::string_view ByteSource::rest() {
+  while (file_ && !eof_) fill(std::max<size_t>(end_ - pos_, window_ / 2) * 2);
+  return view();
+}
+
+bool ByteSource::seek(uint64_t offset) {
+  if (!file_) {
+    pos_ = size_t(std::min<uint64_t>(offset, end_));
+    return true;
+  }
+  if (offset >= base_ && offset <= base_ + end_) {
+    pos_ = size_t(offset - base_);
+    return true;
+  }
+  if (std::fseek(file_, start_ + long(offset), SEEK_SET) != 0) return false;
+  base_ = offset, pos_ = end_ = 0, eof_ = false;
+  data_ = std::string_view();
+  return true;
+}
+
+std::string_view next_token(ByteSource& in) {
+  std::string_view w = in.peek(1);
+  size_t i = 0;
+  for (;;) {  // spaces and line ends, across refills
+    while (i < w.size() && is_space(w[i])) ++i;
+    if (i < w.size() || w.empty()) break;
+    in.skip(i), i = 0;
+    w = in.peek(1);
+  }
+  in.skip(i);
+  w = in.view();
+  size_t j = 0;
+  for (;;) {  // the token, the window grown until it holds it whole
+    while (j < w.size() && !is_space(w[j])) ++j;
+    if (j < w.size() || w.size() >= in.remaining()) break;
+    const size_t searched = w.size();
+    w = in.peek(searched * 2);
+    if (w.size() == searched) break;  // a read failed
+  }
+  in.skip(j);
+  return w.substr(0, j);
 }
 
 std::string line_error(const std::string& path, uint64_t line, const std::string& what) {

@@ -8,9 +8,12 @@
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <utility>
+#include <vector>
 
 #include "pmz/mesh.hpp"
 
@@ -18,21 +21,70 @@ namespace pmz {
 
 inline constexpr uint64_t kMaxVertices = 0xFFFFFFF0u;  // ids must fit uint32 with room for copies
 
-// The whole file into `data`. error: "path: no such file", "path: empty file", ...
+// The file opened for reading, or null with error "path: no such file", "path: is a
+// directory, not a mesh file" or "path: cannot open: reason".
+std::FILE* open_file(const std::string& path, std::string& error);
+// The whole file into `data`. error: open_file's, "path: empty file", "path: read error".
 bool read_file(const std::string& path, std::string& data, std::string& error);
+
+// The bytes of a mesh file, read forward: from memory (the whole data, never copied) or from an
+// open file through a window refilled as the cursor reaches its end (a line or token longer
+// than the window grows it). A view it returns stays valid until the next peek or seek.
+class ByteSource {
+ public:
+  explicit ByteSource(std::string_view data) : data_(data), end_(data.size()), size_(data.size()) {}
+  // `file` from its current position, which holds `size` bytes from there (a regular file's
+  // size: a file that ends sooner ends the source there). `progress`, if set, is told the
+  // fraction read at each refill.
+  ByteSource(std::FILE* file, uint64_t size, size_t window, std::function<void(double)> progress);
+  // The bytes from the cursor, at least min(n, remaining()) of them (fewer: a read failed).
+  std::string_view peek(size_t n) { return end_ - pos_ >= n ? view() : fill(n); }
+  // What is in the window from the cursor (all of it from memory).
+  std::string_view view() const { return data_.substr(pos_, end_ - pos_); }
+  // Every byte from the cursor to the end of the input (a whole file into the window).
+  std::string_view rest();
+  void skip(size_t n) { pos_ += n; }  // n <= view().size()
+  uint64_t offset() const { return base_ + pos_; }
+  uint64_t remaining() const { return size_ - offset(); }
+  // Back (or on) to `offset` from the start. False when the file cannot seek.
+  bool seek(uint64_t offset);
+  // The errno of a failed read (the source then ends where it failed), or 0.
+  int read_errno() const { return errno_; }
+
+ private:
+  std::string_view fill(size_t n);
+  std::string_view data_;  // the window (from memory: the whole data)
+  size_t pos_ = 0, end_ = 0;
+  uint64_t base_ = 0;  // offset of data_[0]
+  uint64_t size_;
+  std::FILE* file_ = nullptr;
+  long start_ = 0;  // the file's position at offset 0
+  size_t window_ = 0;
+  bool eof_ = false;
+  int errno_ = 0;
+  std::vector<char> buffer_;
+  std::function<void(double)> progress_;
+};
 
 // ---- text scanning ----
 
 struct Lines {
-  std::string_view rest;
+  ByteSource& in;
   uint64_t number = 0;  // 1-based number of the line last returned
   char comment;         // everything from this character to the end of a line is ignored
   // Next line with the comment stripped; false at the end of the data.
   bool next(std::string_view& line) {
-    if (rest.empty()) return false;
-    size_t end = rest.find('\n');
-    line = rest.substr(0, end);
-    rest = end == std::string_view::npos ? std::string_view() : rest.substr(end + 1);
+    std::string_view w = in.peek(1);
+    if (w.empty()) return false;
+    size_t end = w.find('\n');
+    while (end == std::string_view::npos && w.size() < in.remaining()) {
+      const size_t searched = w.size();
+      w = in.peek(searched * 2);
+      if (w.size() == searched) break;  // a read failed
+      end = w.find('\n', searched);
+    }
+    line = w.substr(0, end);
+    in.skip(end == std::string_view::npos ? w.size() : end + 1);
     ++number;
     if (comment) {
       size_t c = line.find(comment);
@@ -61,6 +113,9 @@ inline std::string_view next_token(std::string_view& s) {
   s = s.substr(j);
   return t;
 }
+
+// The next token of a source (spaces and line ends skip); empty at the end of the data.
+std::string_view next_token(ByteSource& in);
 
 // Whole-token parses; a malformed token is an error, NaN/Inf parse (and are refused later).
 inline bool parse_float(std::string_view t, float& v) {
@@ -108,7 +163,7 @@ inline void end_face(PolygonSoup& out) { out.face_offsets.push_back(uint32_t(out
 
 // Capacity to reserve for `declared` items that each take at least `min_bytes` of `available`:
 // a header cannot make us allocate more than the data could possibly hold.
-inline size_t plausible(uint64_t declared, size_t available, size_t min_bytes) {
+inline size_t plausible(uint64_t declared, uint64_t available, size_t min_bytes) {
   return size_t(std::min<uint64_t>(declared, available / min_bytes));
 }
 

@@ -56,6 +56,9 @@ void set_footer(CLI::App& app, const std::string& extra = "");
 // "path: reason" for errno (strerror).
 std::string errno_message(const std::string& path, const char* action, int err);
 
+// Opens a file for reading, stdin for "-" (not to be closed). error: "path: cannot read: reason"
+// (a directory too).
+FILE* open_input(const std::string& path, std::string& error);
 // Reads a whole file, or stdin for "-". error: "path: cannot read: reason". `progress`, if set,
 // is told the fraction of a regular file's size read so far.
 bool read_input(const std::string& path, std::vector<uint8_t>& out, std::string& error,

@@ -117,6 +117,8 @@ void repair_mesh(const PolygonSoup& soup, IndexedMesh& out, MeshRepairStats& sta
 // coordinates or attributes (naming the vertex), out-of-range indices (naming the face), no
 // faces. STL corners with bitwise-equal positions are welded, and so are glTF vertices and PLY
 // vertices with attributes (their files split vertices at seams; pmz keeps seams as wedges).
+// OBJ, OFF, PLY and STL files are parsed as they are read, a window of the file at a time
+// (pmz/mesh_stream.hpp): reading holds the soup, not the file's bytes.
 bool read_polygon_soup(const std::string& path, PolygonSoup& out, std::string& error);
 // The same from bytes in memory; `path` names the format (extension) and the messages. Files a
 // format refers to (OBJ's MTL, glTF's external buffers) are looked up beside `path`.
