@@ -306,11 +306,11 @@ class Engine : public EngineSettings, public EngineLane {
   Engine(const Engine& o)
       : EngineSettings(o), EngineLane(o), data_(std::make_shared<EngineData>(*o.data_)) {}
   Engine& operator=(const Engine&) = delete;
-  // Whether vertex v, queued for a cell's run (run_cell), has a collapse target below
-  // `vertices` (a cell's region read from bytes is held to it: the run reads the target).
-  bool queued_with_target(uint32_t v, uint32_t vertices) const {
-    return !data_->inner[v] || !(data_->stale[v] & kQueued) || data_->target[v] < vertices;
-  }
+  // The first rule of the engine's state that a cell's run (run_cell on `members`, the cell's
+  // live vertices) relies on and the state breaks, nullptr when it keeps them all: a cell's
+  // region read from bytes (CellRegion::read, which has checked the ids and the half-edges'
+  // pairing) is held to them.
+  const char* broken_cell_invariant(const std::vector<uint32_t>& members) const;
   // A lane of `o` for one thread of a cell level: o's data and settings, its own heap and
   // scratch.
   struct Lane {};
@@ -492,6 +492,50 @@ class Engine : public EngineSettings, public EngineLane {
   void update_after(uint32_t u, uint32_t v);
   bool final_boundary_collapse();
 };
+
+const char* Engine::broken_cell_invariant(const std::vector<uint32_t>& members) const {
+  // A collapse rewrites the corners of u's faces and links the outer twins of the two it
+  // deletes: a face with a repeated corner would leave v a face of two corners.
+  for (uint32_t f = 0; f < m.face_count(); ++f) {
+    const uint32_t* c = &m.vert[HalfEdgeMesh::half_edge(f, 0)];
+    if (c[0] != kNone && (c[0] == c[1] || c[1] == c[2] || c[2] == c[0]))
+      return "a face repeats a corner";
+  }
+  const uint32_t n = m.vertex_count();
+  for (uint32_t v = 0; v < n; ++v)
+    if (stale[v] >= 2 * kQueued || inner[v] > 1) return "a vertex's flags are out of range";
+  // A collapse is legal only with u, v and all their neighbours in u's cell, so the vertices
+  // it touches are the cell's exactly when no other vertex has the cell's key.
+  std::vector<uint8_t> in_cell(n, 0);
+  for (uint32_t v : members) in_cell[v] = 1;
+  for (uint32_t v = 0; v < n && !members.empty(); ++v)
+    if ((cell[v] == cell[members[0]]) != bool(in_cell[v]))
+      return "a vertex's cell is not the cell of its vertices";
+  // Each vertex of the cell: its faces are one fan, swept by the walk from out[v] (the
+  // boundary half-edge when it has one, and then flagged kBoundary: fix_out keeps it so), and
+  // it meets every neighbour once. (The walk ends: twins pair up, so a rotation never comes back
+  // to a half-edge but the first.)
+  std::vector<uint32_t> leaving(n, 0), seen(n, kNone);
+  for (uint32_t h = 0; h < m.slot_count(); ++h)
+    if (m.vert[h] != kNone) ++leaving[m.vert[h]];
+  for (uint32_t v : members) {
+    uint32_t swept = 0;
+    bool twice = false;
+    for_each_neighbour(m, v, [&](uint32_t w, uint32_t h) {
+      swept += m.vert[h] == v;
+      twice |= seen[w] == v;
+      seen[w] = v;
+    });
+    if (swept == 0 || swept != leaving[v] || twice)
+      return "the faces round a vertex of the cell are not one fan";
+    if (((stale[v] & kBoundary) != 0) != m.is_boundary(v))
+      return "a vertex of the cell is flagged on the boundary against its faces";
+    // run_cell queues v with its key and target; the collapse reads the target.
+    if (inner[v] && (stale[v] & kQueued) && target[v] >= n)
+      return "a queued vertex without a target";
+  }
+  return nullptr;
+}
 
 void Engine::set_key(uint32_t v, Candidate c) {
   stale[v] &= uint8_t(~kGuardDeferred);
@@ -1264,6 +1308,23 @@ void put(std::vector<uint8_t>& out, const T& v) {
   out.insert(out.end(), b, b + sizeof v);
 }
 
+// Whether the numbers of an engine term (a float, a double, a quadric or a record of floats:
+// FaceTerms, VertexTerms) are finite; with `infinite`, infinity passes too.
+template <class T>
+bool finite_term(const T& x, bool infinite = false) {
+  if constexpr (std::is_floating_point_v<T>) {
+    return infinite ? !std::isnan(x) : std::isfinite(x);
+  } else if constexpr (std::is_same_v<T, Quadric>) {
+    return std::all_of(std::begin(x.a), std::end(x.a), [](double a) { return finite_term(a); });
+  } else {
+    float f[sizeof(T) / sizeof(float)];
+    static_assert(sizeof f == sizeof(T));
+    std::memcpy(f, &x, sizeof f);
+    return std::all_of(std::begin(f), std::end(f),
+                       [&](float a) { return finite_term(a, infinite); });
+  }
+}
+
 // A cell's region (CellRegion) numbers its vertices, faces and attribute wedges apart, ascending
 // in the whole mesh's numbers: vertex i of the region is vertices[i] of the mesh, face j is
 // faces[j], wedge k is wedges[k].
@@ -1509,8 +1570,10 @@ class CellRegion {
   }
 
   // Reads a region into `engine` (a fresh one); false with `error` on bytes that are not one
-  // the engine can run on. Every id is checked to lie in the region, and the half-edges to pair
-  // up, so that no walk leaves the arrays or goes round for ever.
+  // the engine can run on. Every id is checked to lie in the region, every number to be finite
+  // and the half-edges to pair up, so that no walk leaves the arrays or goes round for ever;
+  // then the rules of the engine's state that the cell's run relies on
+  // (Engine::broken_cell_invariant).
   bool read(const std::vector<uint8_t>& bytes, Engine& engine, std::string& error) {
     const uint8_t *p = bytes.data(), *end = p + bytes.size();
     bool ok = true;
@@ -1532,19 +1595,22 @@ class CellRegion {
       return error = "not a cell region", false;
     p += 8;
     uint8_t metric = 0, guard = 0;
+    bool finite = true;  // every number of the settings, then of the terms
     MetricParams& q = engine.params;
     get(cell), get(cells), get(cell_faces), get(goal), get(max_cost), get(metric), get(guard);
     for (float* f :
          {&q.epsilon, &q.quadric_floor, &q.torsion_weight, &q.boundary_weight, &q.quadric_memory,
           &q.guard_slack, &q.guard_penalty_cap, &q.attribute_weight, &engine.feat.epsilon})
-      get(*f);
+      get(*f), finite = finite && finite_term(*f);
     get(engine.unit), get(engine.inv_unit4);
     AttributeField& attr = engine.attr;
     uint8_t active = 0, cost_term = 0, priced = 0;
     get(active), get(cost_term), get(priced), get(attr.dims), get(attr.scale), get(attr.seam_scale);
     if (!ok) return error = "cut short", false;
+    for (double x : {engine.unit, engine.inv_unit4, attr.scale, attr.seam_scale})
+      finite = finite && finite_term(x);
     if (metric > uint8_t(Metric::guarded) || guard > 1 || cell >= cells || std::isnan(max_cost) ||
-        active > 1 || cost_term > 1 || priced > 1 || attr.dims > 64)
+        !finite || active > 1 || cost_term > 1 || priced > 1 || attr.dims > 64)
       return error = "damaged (its settings)", false;
     engine.metric = Metric(metric), engine.guard = guard;
     attr.active = active, attr.cost_term = cost_term, attr.priced = priced;
@@ -1589,11 +1655,14 @@ class CellRegion {
           if (x == kOutside && may_leave) outside_.push_back({k - 1, i}), x = kNone;
           ok = x == kNone || (x < below && (kind != EngineData::Ids::slot || (x & 3) != 3));
         }
-      } else if constexpr (std::is_floating_point_v<T>) {
-        for (const T& x : a) ok = ok && !std::isnan(x);
+      } else if constexpr (!std::is_integral_v<T>) {
+        // Finite terms; a key may be infinity (the cost of a collapse the seam rule forbids).
+        const bool keys = static_cast<const void*>(&a) == &engine.key;
+        for (const T& x : a) finite = finite && finite_term(x, keys);
       }
     });
     if (!ok || p != end) return error = "damaged (its arrays)", false;
+    if (!finite) return error = "damaged (a number that is not finite)", false;
     // A face is live (three corners) or deleted (none, no twins), its padding slot empty; a
     // live half-edge's twin runs the other way along the same edge of a live face; every
     // vertex's out-edge starts at it. Walks then stay on live faces and come round or stop.
@@ -1609,9 +1678,8 @@ class CellRegion {
     }
     for (uint32_t v = 0; v < nv && ok; ++v) ok = m.out[v] == kNone || m.vert[m.out[v]] == v;
     if (!ok) return error = "damaged (its half-edges do not pair up)", false;
-    // The vertices run_cell queues have a collapse target in the region (the run reads it).
-    for (uint32_t v : members) ok = ok && engine.queued_with_target(v, nv);
-    if (!ok) return error = "damaged (a queued vertex without a target)", false;
+    if (const char* broken = engine.broken_cell_invariant(members))
+      return error = std::string("damaged (") + broken + ")", false;
     engine.stats_enabled = false;
     return true;
   }

@@ -13,6 +13,7 @@ usage: test_cli.py BIN_DIR SAMPLE_OBJ SAMPLE_PMZ WORK_DIR [CASE...]
 BIN_DIR holds pmz-encode, pmz-decode, pmz-info, pmz-simplify, pmz-compare (pmz-view optional).
 Exits 1 listing the failed cases."""
 import json
+import math
 import os
 import pty
 import re
@@ -21,6 +22,7 @@ import select
 import shutil
 import signal
 import stat
+import struct
 import subprocess
 import sys
 import time
@@ -841,6 +843,113 @@ def case_encode_task_reads_its_region():
           f"{obj}: the assembled stream is not the one-process encode's")
 
 
+# The arrays of a cell's region in their order (EngineData::for_each_array in
+# encoder/src/simplify.cpp) and the bytes of one element of each.
+REGION_ARRAYS = [("pos", 4), ("vert", 4), ("twin", 4), ("out", 4), ("face_terms", 32),
+                 ("vertex_terms", 32), ("quadric", 80), ("accumulated", 80), ("self_error", 8),
+                 ("witness", 4), ("wedge", 4), ("material", 4), ("values", 4), ("target", 4),
+                 ("stale", 1), ("cell", 8), ("key", 4), ("inner", 1), ("region_bound", 4)]
+ELEMENT = {1: "B", 4: "I", 8: "Q"}
+
+
+class Region:
+    """A cell's region (CellRegion in encoder/src/simplify.cpp) as bytes to damage: its vertex
+    and face lists, the cell's vertices (region numbers), and per array where it starts."""
+
+    def __init__(self, data):
+        self.data = bytearray(data)
+        p = 8 + struct.calcsize("<IIQQdBB9fddBBBIdd")  # the magic, the cell and the settings
+        lists = []
+        for _ in range(4):
+            (n,) = struct.unpack_from("<I", data, p)
+            lists.append(struct.unpack_from(f"<{n}I", data, p + 4))
+            p += 4 + 4 * n
+        self.vertices, self.faces, _, self.members = lists
+        self.at = {}
+        for name, size in REGION_ARRAYS:
+            (local,) = struct.unpack_from("<Q", data, p + 8)
+            self.at[name] = (p + 16, size)
+            p += 16 + local * size
+        check(p == len(data), f"the region's layout: {p} bytes of {len(data)}")
+
+    def get(self, name, i, fmt=None):
+        start, size = self.at[name]
+        return struct.unpack_from("<" + (fmt or ELEMENT[size]), self.data, start + i * size)[0]
+
+    def set(self, name, i, value, fmt=None):
+        start, size = self.at[name]
+        struct.pack_into("<" + (fmt or ELEMENT[size]), self.data, start + i * size, value)
+
+
+def case_encode_task_refuses_broken_engine_state():
+    # A region whose counts and ids are in range and whose half-edges pair up, but whose engine
+    # state breaks a rule a cell's run relies on (fuzz_region found such regions crashing the
+    # engine): one line naming the region and the rule, exit 1, no result. Each damage is one
+    # rule broken in a real region: a 12 x 12 grid's corner cell, with boundary vertices.
+    d = fresh("encode_broken_region")
+    off, plan = os.path.join(d, "grid.off"), os.path.join(d, "plan")
+    n = 12
+    with open(off, "w") as f:
+        f.write(f"OFF\n{(n + 1) ** 2} {2 * n * n} 0\n")
+        for y in range(n + 1):
+            for x in range(n + 1):
+                f.write(f"{x / n} {y / n} {0.2 * math.sin(x) * math.cos(y):.6f}\n")
+        for y in range(n):
+            for x in range(n):
+                a = y * (n + 1) + x
+                f.write(f"3 {a} {a + 1} {a + n + 2}\n3 {a} {a + n + 2} {a + n + 1}\n")
+    r = run([tool("pmz-encode"), off, "--plan", plan, "--cluster-vertices", "16", "-q"])
+    check(r.returncode == 0, f"--plan: {err_text(r)}")
+    region, result = os.path.join(plan, "0.region"), os.path.join(plan, "0.cell")
+    with open(region, "rb") as f:
+        good = f.read()
+    r = run([tool("pmz-encode"), "--task", plan, "0"])
+    check(r.returncode == 0 and os.path.exists(result), f"the undamaged region: {err_text(r)}")
+    os.remove(result)
+    g = Region(good)
+    members = g.members
+    kboundary = 8  # the engine's flag: the vertex is on the boundary
+    b = next(v for v in members if g.get("stale", v) & kboundary)
+    leaving = [h for h in range(4 * len(g.faces)) if h % 4 != 3 and g.get("vert", h) == b]
+    inside = next(v for v in range(len(g.vertices)) if v not in members)
+    # A live face with twins on its last two edges, not its third corner's out-edge.
+    face = next(f for f in range(len(g.faces))
+                if g.get("vert", 4 * f) != 0xFFFFFFFF and
+                all(g.get("twin", 4 * f + k) < 0xFFFFFFF0 for k in (1, 2)) and
+                g.get("out", g.get("vert", 4 * f + 2)) != 4 * f + 2)
+
+    def repeat_corner(r):
+        # Face (a, b, c) made (a, b, b), the twins of its last two edges and theirs cut so that
+        # the half-edges still pair up.
+        r.set("vert", 4 * face + 2, r.get("vert", 4 * face + 1))
+        for k in (1, 2):
+            r.set("twin", r.get("twin", 4 * face + k), 0xFFFFFFFF)
+            r.set("twin", 4 * face + k, 0xFFFFFFFF)
+
+    damages = [
+        ("flagged on the boundary", lambda r: r.set("stale", b, r.get("stale", b) & ~kboundary)),
+        ("not one fan", lambda r: r.set("out", b, next(h for h in leaving
+                                                       if h != r.get("out", b)))),
+        ("not the cell of its vertices",
+         lambda r: r.set("cell", inside, r.get("cell", members[0]))),
+        ("flags are out of range",
+         lambda r: r.set("stale", members[0], r.get("stale", members[0]) | 128)),
+        ("repeats a corner", repeat_corner),
+        ("not finite", lambda r: r.set("quadric", members[0], float("inf"), "d")),
+    ]
+    check(len(leaving) > 1, f"vertex {b} has one face")
+    for reason, damage in damages:
+        r = Region(good)
+        damage(r)
+        with open(region, "wb") as f:
+            f.write(r.data)
+        r = run([tool("pmz-encode"), "--task", plan, "0"])
+        lines = err_text(r).strip().splitlines()
+        check(r.returncode == 1 and len(lines) == 1 and region in lines[0] and
+              reason in lines[0] and not os.path.exists(result),
+              f"a region damaged ({reason}): rc={r.returncode} {lines}")
+
+
 def case_info_texcoords_only():
     d = fresh("info_texcoords")
     obj = os.path.join(d, "uv.obj")
@@ -1119,7 +1228,6 @@ def gltf_json(uri):
 
 def case_gltf_from_stdin():
     import base64
-    import struct
     d = fresh("gltf_stdin")
     glb = os.path.join(d, "s.glb")
     r = run([tool("pmz-decode"), SAMPLE_PMZ, "-o", glb])
