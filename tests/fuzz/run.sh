@@ -11,15 +11,14 @@
 # The corpus grows in $PMZ_FUZZ_BUILD/fuzz/corpus/<target> across runs; crashes land in
 # $PMZ_FUZZ_BUILD/fuzz/artifacts/ and make the script fail. Each crash deserves a regression
 # test in tests/decoder/test_hostile.cpp (the hostile-input suite: the input, as bytes or as the
-# construction that makes it, and what the decoder must answer).
+# construction that makes it, and what the decoder must answer); a crash of fuzz_region, in
+# tests/tools/test_cli.py (a real region damaged in the same way, refused by pmz-encode --task).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 seconds=${1:-60}
 build=${PMZ_FUZZ_BUILD:-build-fuzz}
-# fuzz_region (the cell regions pmz-encode --task reads) is run on demand,
-# PMZ_FUZZ_TARGETS=fuzz_region: damaged regions can still crash the engine (docs/design.md 10).
 targets=${PMZ_FUZZ_TARGETS:-fuzz_decoder fuzz_container fuzz_coding fuzz_view fuzz_mesh_obj fuzz_mesh_off
-  fuzz_mesh_ply fuzz_mesh_stl fuzz_mesh_gltf fuzz_mesh_repair}
+  fuzz_mesh_ply fuzz_mesh_stl fuzz_mesh_gltf fuzz_mesh_repair fuzz_region}
 
 if ! command -v clang++-14 >/dev/null; then
   echo "fuzz: clang++-14 missing (apt-get install clang-14 libclang-rt-14-dev)" >&2
