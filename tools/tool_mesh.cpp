@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <functional>
+#include <utility>
 #include <vector>
 
 #include "pmz/app_support.hpp"
@@ -73,7 +74,7 @@ bool read_mesh_input(const std::string& path, const std::string& stdin_format, I
   const std::string parsed = from_stdin ? scratch.path() : path;
   MeshRepairStats stats;
   if (ok) {
-    repair_mesh(soup, mesh, stats);
+    repair_mesh(std::move(soup), mesh, stats);
     if (mesh.face_count() == 0)
       ok = false, error = parsed + ": no usable faces (all " +
                           std::to_string(stats.degenerate_faces_dropped) +

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <functional>
 #include <string_view>
+#include <utility>
 
 #include "mesh_formats.hpp"
 #include "pmz/mesh.hpp"
@@ -189,7 +190,7 @@ bool read_mesh(const std::string& path, IndexedMesh& out, MeshRepairStats& stats
   PolygonSoup soup;
   stats = MeshRepairStats();
   if (!read_polygon_soup(path, soup, error)) return false;
-  repair_mesh(soup, out, stats);
+  repair_mesh(std::move(soup), out, stats);
   if (out.face_count() == 0) {
     error = path + ": no usable faces (all " + std::to_string(stats.degenerate_faces_dropped) +
             " faces are degenerate: fewer than three distinct vertices)";

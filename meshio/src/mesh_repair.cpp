@@ -18,6 +18,8 @@
 #include <cmath>
 #include <cstring>
 #include <unordered_map>
+#include <utility>
+#include <vector>
 
 #include "pmz/mesh.hpp"
 #include "pmz/progressive_mesh.hpp"  // next_corner, prev_corner
@@ -118,13 +120,26 @@ uint64_t edge_key(uint32_t a, uint32_t b) {
   return a < b ? uint64_t(a) << 32 | b : uint64_t(b) << 32 | a;
 }
 
-// Half-edge h of the triangle list, keyed by its undirected edge, sorted (ties in input order).
-void sort_edges(const std::vector<uint32_t>& tris,
-                std::vector<std::pair<uint64_t, uint32_t>>& edges) {
-  edges.resize(tris.size());
-  for (uint32_t h = 0; h < tris.size(); ++h)
-    edges[h] = {edge_key(tris[h], tris[next_corner(h)]), h};
-  std::sort(edges.begin(), edges.end());
+// The half-edges of `tris` (vertex ids below `vertices`) ordered by their undirected edge's key
+// (edge_key), ties in input order: a counting sort by the smaller vertex, then each vertex's few
+// half-edges sorted by the larger one. 4 bytes a half-edge and 4 a vertex (pairs of a 64-bit key
+// and a half-edge took 16 bytes a half-edge).
+void sort_edges(const std::vector<uint32_t>& tris, uint32_t vertices,
+                std::vector<uint32_t>& edges) {
+  const uint32_t n = uint32_t(tris.size());
+  auto low = [&](uint32_t h) { return std::min(tris[h], tris[next_corner(h)]); };
+  auto high = [&](uint32_t h) { return std::max(tris[h], tris[next_corner(h)]); };
+  std::vector<uint32_t> end(size_t(vertices) + 1, 0);  // then: where each vertex's run ends
+  for (uint32_t h = 0; h < n; ++h) ++end[low(h) + 1];
+  for (uint32_t v = 0; v < vertices; ++v) end[v + 1] += end[v];
+  edges.resize(n);
+  for (uint32_t h = 0; h < n; ++h) edges[end[low(h)]++] = h;
+  for (uint32_t v = 0, begin = 0; v < vertices; begin = end[v++])
+    if (end[v] - begin > 1)
+      std::sort(edges.begin() + begin, edges.begin() + end[v], [&](uint32_t a, uint32_t b) {
+        const uint32_t x = high(a), y = high(b);
+        return x < y || (x == y && a < b);
+      });
 }
 
 struct UnionFind {
@@ -245,7 +260,11 @@ std::string MeshRepairStats::summary() const {
   return s;
 }
 
-void repair_mesh(const PolygonSoup& soup, IndexedMesh& out, MeshRepairStats& stats) {
+namespace {
+
+// `owned`: the soup itself when the caller hands it over, whose arrays are then freed as soon as
+// nothing reads them (its positions become the mesh's).
+void repair(const PolygonSoup& soup, PolygonSoup* owned, IndexedMesh& out, MeshRepairStats& stats) {
   stats = MeshRepairStats();
   stats.input_faces = soup.face_count();
   const uint32_t input_vertices = soup.vertex_count();
@@ -287,40 +306,49 @@ void repair_mesh(const PolygonSoup& soup, IndexedMesh& out, MeshRepairStats& sta
   const uint32_t corner_count = uint32_t(source.size());
   std::vector<uint32_t> tris(corner_count);
   for (uint32_t c = 0; c < corner_count; ++c) tris[c] = soup.corners[source[c]];
+  // The input corners and faces are read again only for attributes and materials.
+  const SoupAttributes& attrs = soup.attributes;
+  if (attrs.texcoords.empty() && attrs.corner_normals.empty() && attrs.corner_colors.empty() &&
+      attrs.face_materials.empty())
+    source = std::vector<uint32_t>(), face_source = std::vector<uint32_t>();
+  if (owned)
+    owned->corners = std::vector<uint32_t>(), owned->face_offsets = std::vector<uint32_t>();
 
   // 2. Glue faces in pairs along each edge.
   std::vector<uint32_t> mate(corner_count, kNone);
-  std::vector<std::pair<uint64_t, uint32_t>> edges;
-  sort_edges(tris, edges);
+  std::vector<uint32_t> edges;
+  sort_edges(tris, input_vertices, edges);
+  auto key = [&](uint32_t h) { return edge_key(tris[h], tris[next_corner(h)]); };
   auto forward = [&](uint32_t h) { return tris[h] < tris[next_corner(h)]; };
   std::vector<uint32_t> open[2];  // unglued half-edges of the current edge, by direction
   for (size_t g = 0; g < edges.size();) {
-    size_t e = g;
-    while (e < edges.size() && edges[e].first == edges[g].first) ++e;
+    const uint64_t group = key(edges[g]);
+    size_t e = g + 1;
+    while (e < edges.size() && key(edges[e]) == group) ++e;
     // Duplicate triangles (same vertex set) are kept; the gluing separates them. Counted once,
     // in the group of the face's smallest edge: a later face whose third vertex matches.
     for (size_t k = g + 1; k < e; ++k) {
-      uint32_t h = edges[k].second, t = h - h % 3;
+      uint32_t h = edges[k], t = h - h % 3;
       uint64_t smallest =
           std::min({edge_key(tris[t], tris[t + 1]), edge_key(tris[t + 1], tris[t + 2]),
                     edge_key(tris[t + 2], tris[t])});
-      if (smallest != edges[g].first) continue;
+      if (smallest != group) continue;
       uint32_t apex = tris[prev_corner(h)];
       for (size_t j = g; j < k; ++j)
-        if (tris[prev_corner(edges[j].second)] == apex) {
+        if (tris[prev_corner(edges[j])] == apex) {
           ++stats.duplicate_faces;
           break;
         }
     }
-    if (e - g == 2 && forward(edges[g].second) != forward(edges[g + 1].second)) {
-      mate[edges[g].second] = edges[g + 1].second;
-      mate[edges[g + 1].second] = edges[g].second;
+    if (e - g == 2 && forward(edges[g]) != forward(edges[g + 1])) {
+      mate[edges[g]] = edges[g + 1];
+      mate[edges[g + 1]] = edges[g];
     } else if (e - g >= 2) {
       ++stats.nonmanifold_edges;
       size_t head[2] = {0, 0};
       open[0].clear(), open[1].clear();
       for (size_t k = g; k < e; ++k) {
-        uint32_t h = edges[k].second;
+        uint32_t h = edges[k];
         int d = forward(h), o = 1 - d;
         if (head[o] < open[o].size()) {
           uint32_t m = open[o][head[o]++];
@@ -332,10 +360,13 @@ void repair_mesh(const PolygonSoup& soup, IndexedMesh& out, MeshRepairStats& sta
     }
     g = e;
   }
+  edges = std::vector<uint32_t>();
 
   // 3 + 4. One vertex per fan; detach faces that still share an edge beyond a manifold pair.
+  // A fan's root is its first corner (unite keeps the smaller root), so corner c meets its fan
+  // first when c is the root, and later corners take the vertex the root got.
   UnionFind fans;
-  std::vector<uint32_t> fan_vertex(corner_count), copy_source;
+  std::vector<uint32_t> copy_source;
   std::vector<uint8_t> claimed;
   out.indices.resize(corner_count);
   for (;;) {
@@ -347,44 +378,46 @@ void repair_mesh(const PolygonSoup& soup, IndexedMesh& out, MeshRepairStats& sta
       }
     claimed.assign(input_vertices, 0);
     copy_source.clear();
-    std::fill(fan_vertex.begin(), fan_vertex.end(), kNone);
     for (uint32_t c = 0; c < corner_count; ++c) {
       uint32_t root = fans.find(c);
-      if (fan_vertex[root] == kNone) {
-        uint32_t v = tris[c];
-        if (!claimed[v]) {
-          claimed[v] = 1;
-          fan_vertex[root] = v;
-        } else {
-          fan_vertex[root] = input_vertices + uint32_t(copy_source.size());
-          copy_source.push_back(v);
-        }
+      if (root != c) {
+        out.indices[c] = out.indices[root];
+        continue;
       }
-      out.indices[c] = fan_vertex[root];
+      uint32_t v = tris[c];
+      if (!claimed[v]) {
+        claimed[v] = 1;
+        out.indices[c] = v;
+      } else {
+        out.indices[c] = input_vertices + uint32_t(copy_source.size());
+        copy_source.push_back(v);
+      }
     }
     // Without a non-manifold edge every edge group was glued or single: nothing to detach.
     if (stats.nonmanifold_edges == 0) break;
-    sort_edges(out.indices, edges);
+    sort_edges(out.indices, input_vertices + uint32_t(copy_source.size()), edges);
+    auto key_out = [&](uint32_t h) {
+      return edge_key(out.indices[h], out.indices[next_corner(h)]);
+    };
     auto forward_out = [&](uint32_t h) { return out.indices[h] < out.indices[next_corner(h)]; };
     bool detached = false;
     for (size_t g = 0; g < edges.size();) {
-      size_t e = g;
-      while (e < edges.size() && edges[e].first == edges[g].first) ++e;
-      if (e - g > 2 ||
-          (e - g == 2 && forward_out(edges[g].second) == forward_out(edges[g + 1].second))) {
+      const uint64_t group = key_out(edges[g]);
+      size_t e = g + 1;
+      while (e < edges.size() && key_out(edges[e]) == group) ++e;
+      if (e - g > 2 || (e - g == 2 && forward_out(edges[g]) == forward_out(edges[g + 1]))) {
         // Keep a glued pair if the group has one (else the first face); detach the others at
         // their start corner, which then forms a fan of its own.
-        uint32_t keep = edges[g].second;
+        uint32_t keep = edges[g];
         for (size_t k = g; k < e; ++k) {
-          uint32_t m = mate[edges[k].second];
-          if (m != kNone &&
-              edge_key(out.indices[m], out.indices[next_corner(m)]) == edges[g].first) {
-            keep = edges[k].second;
+          uint32_t m = mate[edges[k]];
+          if (m != kNone && key_out(m) == group) {
+            keep = edges[k];
             break;
           }
         }
         for (size_t k = g; k < e; ++k) {
-          uint32_t h = edges[k].second;
+          uint32_t h = edges[k];
           if (h == keep || h == mate[keep]) continue;
           for (uint32_t x : {h, prev_corner(h)})
             if (mate[x] != kNone) mate[mate[x]] = kNone, mate[x] = kNone, detached = true;
@@ -394,11 +427,17 @@ void repair_mesh(const PolygonSoup& soup, IndexedMesh& out, MeshRepairStats& sta
     }
     if (!detached) break;
   }
+  edges = std::vector<uint32_t>();
+  fans.parent = std::vector<uint32_t>();
+  mate = std::vector<uint32_t>();
 
-  out.positions.assign(soup.positions.begin(), soup.positions.end());
+  if (owned)
+    out.positions = std::move(owned->positions);
+  else
+    out.positions.assign(soup.positions.begin(), soup.positions.end());
   out.positions.reserve(out.positions.size() + copy_source.size() * 3);
   for (uint32_t v : copy_source)
-    for (int k = 0; k < 3; ++k) out.positions.push_back(soup.positions[size_t(v) * 3 + k]);
+    for (int k = 0; k < 3; ++k) out.positions.push_back(out.positions[size_t(v) * 3 + k]);
   stats.vertices_added = copy_source.size();
   std::vector<uint8_t> split(input_vertices, 0);
   for (uint32_t v : copy_source) stats.nonmanifold_vertices += !split[v], split[v] = 1;
@@ -407,6 +446,17 @@ void repair_mesh(const PolygonSoup& soup, IndexedMesh& out, MeshRepairStats& sta
   stats.isolated_vertices = uint64_t(std::count(used.begin(), used.end(), 0));
   stats.welded_vertices = soup.welded_vertices;
   build_wedges(soup.attributes, source, face_source, out);
+}
+
+}  // namespace
+
+void repair_mesh(const PolygonSoup& soup, IndexedMesh& out, MeshRepairStats& stats) {
+  repair(soup, nullptr, out, stats);
+}
+
+void repair_mesh(PolygonSoup&& soup, IndexedMesh& out, MeshRepairStats& stats) {
+  repair(soup, &soup, out, stats);
+  soup = PolygonSoup();
 }
 
 }  // namespace pmz

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstring>
 #include <string>
+#include <utility>
 
 #include "pmz/mesh.hpp"
 
@@ -60,15 +61,16 @@ int main(int argc, char** argv) {
   pmz::IndexedMesh mesh;
   pmz::MeshRepairStats stats;
   t0 = now();
-  pmz::repair_mesh(soup, mesh, stats);
+  const uint32_t soup_vertices = soup.vertex_count(), soup_faces = soup.face_count();
+  pmz::repair_mesh(std::move(soup), mesh, stats);
   const double repair_s = now() - t0;
   const long repair_peak = status_kb("VmHWM:");
   std::printf(
       "{\"file\": \"%s\", \"soup_vertices\": %u, \"soup_faces\": %u, \"vertices\": %u, "
       "\"faces\": %u, \"read_s\": %.2f, \"read_peak_mb\": %.1f, \"soup_rss_mb\": %.1f, "
       "\"repair_s\": %.2f, \"repair_peak_mb\": %.1f, \"peak_mb\": %.1f}\n",
-      path.c_str(), soup.vertex_count(), soup.face_count(), mesh.vertex_count(), mesh.face_count(),
-      read_s, read_peak / 1024.0, soup_rss / 1024.0, repair_s, repair_peak / 1024.0,
+      path.c_str(), soup_vertices, soup_faces, mesh.vertex_count(), mesh.face_count(), read_s,
+      read_peak / 1024.0, soup_rss / 1024.0, repair_s, repair_peak / 1024.0,
       std::max(read_peak, repair_peak) / 1024.0);
   return 0;
 }

@@ -110,6 +110,10 @@ struct MeshRepairStats {
 // Attributes follow their corners: each output corner keeps its input corner's values, and the
 // corners of one output vertex with equal values share a wedge.
 void repair_mesh(const PolygonSoup& soup, IndexedMesh& out, MeshRepairStats& stats);
+// The same, consuming the soup: its arrays are freed as soon as the repair no longer reads them
+// and its positions become the mesh's, so the repair holds less at its peak. `soup` is left
+// empty.
+void repair_mesh(PolygonSoup&& soup, IndexedMesh& out, MeshRepairStats& stats);
 
 // Parses OBJ/OFF (ascii, binary)/PLY (ascii, binary)/STL (ascii, binary)/glTF (.gltf, .glb) by
 // extension into a soup. Returns false with a one-line message naming the problem:
