@@ -496,14 +496,22 @@ class Engine : public EngineSettings, public EngineLane {
 const char* Engine::broken_cell_invariant(const std::vector<uint32_t>& members) const {
   // A collapse rewrites the corners of u's faces and links the outer twins of the two it
   // deletes: a face with a repeated corner would leave v a face of two corners.
+  // The attribute field reads the values of the wedge of every corner it moves or prices.
   for (uint32_t f = 0; f < m.face_count(); ++f) {
     const uint32_t* c = &m.vert[HalfEdgeMesh::half_edge(f, 0)];
-    if (c[0] != kNone && (c[0] == c[1] || c[1] == c[2] || c[2] == c[0]))
-      return "a face repeats a corner";
+    if (c[0] == kNone) continue;
+    if (c[0] == c[1] || c[1] == c[2] || c[2] == c[0]) return "a face repeats a corner";
+    const uint32_t* w = attr.active ? &attr.wedge[HalfEdgeMesh::half_edge(f, 0)] : nullptr;
+    if (w && (w[0] == kNone || w[1] == kNone || w[2] == kNone))
+      return "a corner without an attribute wedge";
   }
   const uint32_t n = m.vertex_count();
   for (uint32_t v = 0; v < n; ++v)
     if (stale[v] >= 2 * kQueued || inner[v] > 1) return "a vertex's flags are out of range";
+  // T(v) is recomputed from the face and vertex terms, which only the multifeature metric keeps.
+  if (feat.face.empty() || feat.vertex.empty())
+    for (uint32_t v = 0; v < n; ++v)
+      if (stale[v] & kTorsionStale) return "a vertex's torsion is flagged stale without its terms";
   // A collapse is legal only with u, v and all their neighbours in u's cell, so the vertices
   // it touches are the cell's exactly when no other vertex has the cell's key.
   std::vector<uint8_t> in_cell(n, 0);
@@ -1610,7 +1618,8 @@ class CellRegion {
     for (double x : {engine.unit, engine.inv_unit4, attr.scale, attr.seam_scale})
       finite = finite && finite_term(x);
     if (metric > uint8_t(Metric::guarded) || guard > 1 || cell >= cells || std::isnan(max_cost) ||
-        !finite || active > 1 || cost_term > 1 || priced > 1 || attr.dims > 64)
+        !finite || active > 1 || cost_term > 1 || priced > 1 || attr.dims > 64 ||
+        (cost_term && attr.dims == 0))
       return error = "damaged (its settings)", false;
     engine.metric = Metric(metric), engine.guard = guard;
     attr.active = active, attr.cost_term = cost_term, attr.priced = priced;

@@ -125,15 +125,25 @@ def main():
                     else:
                         print('make_seeds: %s %s: %s' % (name, tag, (r.stderr or r.stdout).strip()),
                               file=sys.stderr)
-    # fuzz_region: [u32 cell][region]: the regions `pmz-encode --plan` writes for its tasks.
+    # fuzz_region: [u32 cell][region]: the regions `pmz-encode --plan` writes for its tasks,
+    # under the default metric and QEM (no face and vertex terms), and with attribute wedges and
+    # materials (the conformance suite's seamed mesh).
     regions = {}
     if encoder and os.access(encoder, os.X_OK):
         with tempfile.TemporaryDirectory() as tmp:
-            for name, mesh in (('sphere', sphere(12, 16, 0.2)), ('grid', grid(12))):
-                off = os.path.join(tmp, name + '.off')
-                write_off(off, mesh)
+            seamed = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'conformance',
+                                  'meshes', 'seamed.obj')
+            for name, mesh, args in (('sphere', sphere(12, 16, 0.2), ['--cluster-vertices', '16']),
+                                     ('grid', grid(12), ['--cluster-vertices', '16']),
+                                     ('grid-qem', grid(12), ['--cluster-vertices', '16',
+                                                             '--metric', 'qem']),
+                                     ('seamed', None, ['--cluster-vertices', '24'])):
+                off = seamed
+                if mesh is not None:
+                    off = os.path.join(tmp, name + '.off')
+                    write_off(off, mesh)
                 plan = os.path.join(tmp, name + '-plan')
-                r = subprocess.run([encoder, off, '--cluster-vertices', '16', '--plan', plan, '-q'],
+                r = subprocess.run([encoder, off, '--plan', plan, '-q'] + args,
                                    capture_output=True, text=True)
                 if r.returncode != 0:
                     print('make_seeds: %s --plan: %s' % (name, r.stderr.strip()), file=sys.stderr)

@@ -885,9 +885,10 @@ def case_encode_task_refuses_broken_engine_state():
     # A region whose counts and ids are in range and whose half-edges pair up, but whose engine
     # state breaks a rule a cell's run relies on (fuzz_region found such regions crashing the
     # engine): one line naming the region and the rule, exit 1, no result. Each damage is one
-    # rule broken in a real region: a 12 x 12 grid's corner cell, with boundary vertices.
+    # rule broken in a real region: the corner cell of a 12 x 12 grid (boundary vertices), the
+    # same under QEM (no face and vertex terms), a cell of the seamed mesh (attribute wedges).
     d = fresh("encode_broken_region")
-    off, plan = os.path.join(d, "grid.off"), os.path.join(d, "plan")
+    off, obj = os.path.join(d, "grid.off"), os.path.join(d, "s.obj")
     n = 12
     with open(off, "w") as f:
         f.write(f"OFF\n{(n + 1) ** 2} {2 * n * n} 0\n")
@@ -898,19 +899,40 @@ def case_encode_task_refuses_broken_engine_state():
             for x in range(n):
                 a = y * (n + 1) + x
                 f.write(f"3 {a} {a + 1} {a + n + 2}\n3 {a} {a + n + 2} {a + n + 1}\n")
-    r = run([tool("pmz-encode"), off, "--plan", plan, "--cluster-vertices", "16", "-q"])
-    check(r.returncode == 0, f"--plan: {err_text(r)}")
-    region, result = os.path.join(plan, "0.region"), os.path.join(plan, "0.cell")
-    with open(region, "rb") as f:
-        good = f.read()
-    r = run([tool("pmz-encode"), "--task", plan, "0"])
-    check(r.returncode == 0 and os.path.exists(result), f"the undamaged region: {err_text(r)}")
-    os.remove(result)
+    for name in ("seamed.obj", "seamed.mtl"):
+        shutil.copy(os.path.join(SEAMED, "meshes", name), d)
+    os.rename(os.path.join(d, "seamed.obj"), obj)
+
+    def first_region(name, mesh, args):
+        """The plan's folder and its region of cell 0, which runs as it is."""
+        plan = os.path.join(d, name)
+        r = run([tool("pmz-encode"), mesh, "--plan", plan, "-q"] + args)
+        check(r.returncode == 0, f"--plan {args}: {err_text(r)}")
+        r = run([tool("pmz-encode"), "--task", plan, "0"])
+        check(r.returncode == 0, f"the undamaged region of {name}: {err_text(r)}")
+        os.remove(os.path.join(plan, "0.cell"))
+        with open(os.path.join(plan, "0.region"), "rb") as f:
+            return plan, f.read()
+
+    def refused(plan, good, damage, reason):
+        r = Region(good)
+        damage(r)
+        region = os.path.join(plan, "0.region")
+        with open(region, "wb") as f:
+            f.write(r.data)
+        r = run([tool("pmz-encode"), "--task", plan, "0"])
+        lines = err_text(r).strip().splitlines()
+        check(r.returncode == 1 and len(lines) == 1 and region in lines[0] and
+              reason in lines[0] and not os.path.exists(os.path.join(plan, "0.cell")),
+              f"a region damaged ({reason}): rc={r.returncode} {lines}")
+
+    plan, good = first_region("plan", off, ["--cluster-vertices", "16"])
     g = Region(good)
     members = g.members
     kboundary = 8  # the engine's flag: the vertex is on the boundary
     b = next(v for v in members if g.get("stale", v) & kboundary)
     leaving = [h for h in range(4 * len(g.faces)) if h % 4 != 3 and g.get("vert", h) == b]
+    check(len(leaving) > 1, f"vertex {b} has one face")
     inside = next(v for v in range(len(g.vertices)) if v not in members)
     # A live face with twins on its last two edges, not its third corner's out-edge.
     face = next(f for f in range(len(g.faces))
@@ -926,7 +948,7 @@ def case_encode_task_refuses_broken_engine_state():
             r.set("twin", r.get("twin", 4 * face + k), 0xFFFFFFFF)
             r.set("twin", 4 * face + k, 0xFFFFFFFF)
 
-    damages = [
+    for reason, damage in [
         ("flagged on the boundary", lambda r: r.set("stale", b, r.get("stale", b) & ~kboundary)),
         ("not one fan", lambda r: r.set("out", b, next(h for h in leaving
                                                        if h != r.get("out", b)))),
@@ -936,18 +958,17 @@ def case_encode_task_refuses_broken_engine_state():
          lambda r: r.set("stale", members[0], r.get("stale", members[0]) | 128)),
         ("repeats a corner", repeat_corner),
         ("not finite", lambda r: r.set("quadric", members[0], float("inf"), "d")),
-    ]
-    check(len(leaving) > 1, f"vertex {b} has one face")
-    for reason, damage in damages:
-        r = Region(good)
-        damage(r)
-        with open(region, "wb") as f:
-            f.write(r.data)
-        r = run([tool("pmz-encode"), "--task", plan, "0"])
-        lines = err_text(r).strip().splitlines()
-        check(r.returncode == 1 and len(lines) == 1 and region in lines[0] and
-              reason in lines[0] and not os.path.exists(result),
-              f"a region damaged ({reason}): rc={r.returncode} {lines}")
+    ]:
+        refused(plan, good, damage, reason)
+    # Under QEM: a vertex flagged to recompute its torsion from the terms QEM does not keep.
+    plan, good = first_region("qplan", off, ["--cluster-vertices", "16", "--metric", "qem"])
+    refused(plan, good, lambda r: r.set("stale", r.members[0], r.get("stale", r.members[0]) | 1),
+            "torsion is flagged stale")
+    # With attribute wedges: a live corner's wedge made one outside the region.
+    plan, good = first_region("splan", obj, ["--cluster-vertices", "24"])
+    refused(plan, good, lambda r: r.set("wedge", next(
+        h for h in range(4 * len(r.faces)) if h % 4 != 3 and r.get("vert", h) != 0xFFFFFFFF),
+        0xFFFFFFFE), "without an attribute wedge")
 
 
 def case_info_texcoords_only():
