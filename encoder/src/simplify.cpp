@@ -508,10 +508,12 @@ const char* Engine::broken_cell_invariant(const std::vector<uint32_t>& members) 
   const uint32_t n = m.vertex_count();
   for (uint32_t v = 0; v < n; ++v)
     if (stale[v] >= 2 * kQueued || inner[v] > 1) return "a vertex's flags are out of range";
-  // T(v) is recomputed from the face and vertex terms, which only the multifeature metric keeps.
+  // A stale T(v) or key is recomputed from the face and vertex terms, which only the
+  // multifeature metric keeps.
   if (feat.face.empty() || feat.vertex.empty())
     for (uint32_t v = 0; v < n; ++v)
-      if (stale[v] & kTorsionStale) return "a vertex's torsion is flagged stale without its terms";
+      if (stale[v] & (kTorsionStale | kKeyStale))
+        return "a vertex's torsion or key is flagged stale without its terms";
   // A collapse is legal only with u, v and all their neighbours in u's cell, so the vertices
   // it touches are the cell's exactly when no other vertex has the cell's key.
   std::vector<uint8_t> in_cell(n, 0);

@@ -960,10 +960,13 @@ def case_encode_task_refuses_broken_engine_state():
         ("not finite", lambda r: r.set("quadric", members[0], float("inf"), "d")),
     ]:
         refused(plan, good, damage, reason)
-    # Under QEM: a vertex flagged to recompute its torsion from the terms QEM does not keep.
+    # Under QEM: a vertex flagged to recompute its torsion (1) or its key (2) from the terms QEM
+    # does not keep.
     plan, good = first_region("qplan", off, ["--cluster-vertices", "16", "--metric", "qem"])
-    refused(plan, good, lambda r: r.set("stale", r.members[0], r.get("stale", r.members[0]) | 1),
-            "torsion is flagged stale")
+    for flag in (1, 2):
+        refused(plan, good, lambda r: r.set("stale", r.members[0],
+                                            r.get("stale", r.members[0]) | flag),
+                "torsion or key is flagged stale")
     # With attribute wedges: a live corner's wedge made one outside the region.
     plan, good = first_region("splan", obj, ["--cluster-vertices", "24"])
     refused(plan, good, lambda r: r.set("wedge", next(
