@@ -34,11 +34,14 @@ namespace {
 constexpr double kWindowGrowth = 1.5;  // a window grows the vertex count by at most 50%
 // Chunk sizes: a decoder uses a chunk's splits once the whole chunk is there, so a chunk's
 // bytes are the lag between what arrived and what shows. The first chunk holds
-// kFirstChunkSplits (a first view after a few hundred bytes); then each about the larger of
-// kLagBytes and kLagShare of the stream so far (estimated from the last chunk's bytes per
-// split), within kMaxChunkSplits. Groups continue across chunks (spec/format.md section 8).
-constexpr uint32_t kFirstChunkSplits = 48, kMinChunkSplits = 16, kMaxChunkSplits = 65536;
-constexpr double kLagBytes = 1536, kLagShare = 0.025;
+// kFirstChunkSplits (a first view after a few hundred bytes); then each about kEarlyShare of
+// the stream so far (at least kMinChunkBytes), until that reaches kLagBytes; then the larger
+// of kLagBytes and kLagShare of the stream so far (bytes estimated from the last chunk's bytes
+// per split), within kMaxChunkSplits. The early chunks grow with the stream because its first
+// kilobytes carry the largest error drops (a chunk costs about 10 bytes: header and coder
+// ending). Groups continue across chunks (spec/format.md section 8).
+constexpr uint32_t kFirstChunkSplits = 16, kMinChunkSplits = 16, kMaxChunkSplits = 65536;
+constexpr double kLagBytes = 1536, kLagShare = 0.025, kEarlyShare = 0.25, kMinChunkBytes = 96;
 // HEAD (curvature, fine_curvature) pairs the writer tries (eighths; spec/format.md section 13):
 // those best on some corpus mesh out of a wider set (plus no offset at all).
 struct Curvatures {
@@ -346,8 +349,8 @@ class SplitCoder {
   }
 
   // The end of a node's bytes (after flush()), then the next node: models from the first
-  // node's, its cell's candidates, chunks from kFirstChunkSplits again (spec/format.md
-  // section 15.4).
+  // node's, its cell's candidates (spec/format.md section 15.4); its chunks are sized by the
+  // whole stream's bytes so far, as a reader in file order sees them.
   void end_node() {
     for (size_t k = 0; k < candidates_; ++k) {
       const uint64_t start = node_start_bytes_[k];
@@ -493,7 +496,9 @@ class SplitCoder {
       trial_st_[k].split_bytes += trial_[k].size() - before;
       if (k == 0) {
         const double per_split = double(trial_[k].size() - before) / double(chunk_[k].size());
-        const double target = std::max(kLagBytes, kLagShare * double(trial_[k].size()));
+        const double so_far = double(plan_.base_stream.size() + trial_[k].size());
+        const double target = std::max({kMinChunkBytes, std::min(kLagBytes, kEarlyShare * so_far),
+                                        kLagShare * double(trial_[k].size())});
         chunk_limit_ = uint32_t(
             std::clamp(target / per_split, double(kMinChunkSplits), double(kMaxChunkSplits)));
       }
