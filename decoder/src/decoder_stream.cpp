@@ -344,7 +344,8 @@ Status Decoder::Impl::node_chunk(const uint8_t* p, size_t n) {
   if (stage != Stage::splits || nodes.present || attr_awaited)
     return fail(Status::corrupt, "NODE chunk out of place");
   std::string err;
-  if (!read_node_table(p, n, info.total_splits, n / 16 + 1, attrs != nullptr, nodes.table, err))
+  if (!read_node_table(p, n, info.total_splits, n / 16 + 1, attrs != nullptr,
+                       info.version_minor >= 1, nodes.table, err))
     return fail(Status::corrupt, err);
   // The chunks before it are the first node's, all of them (spec/format.md section 15.1).
   const NodeEntry& first = nodes.table.nodes[0];

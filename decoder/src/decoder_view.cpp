@@ -302,12 +302,14 @@ uint64_t Decoder::Impl::update_view(const View& v, uint64_t budget) {
   const size_t total = table.size();
   std::vector<uint8_t> want(total, 0);
   want[0] = 1;
-  // The nodes the view sees in enough detail, and their parents whatever their own spheres and
-  // errors (a node's cell meets up to eight parents' on each coarser level; the parents come
-  // first in file order, so one pass from the last node up reaches every ancestor).
+  // The nodes the view sees in enough detail and not facing away (spec/format.md section 15.5), and
+  // their parents whatever their own spheres, errors and cones (a node's cell meets up to eight
+  // parents' on each coarser level; the parents come first in file order, so one pass from the
+  // last node up reaches every ancestor).
   for (size_t k = total; k-- > 1;) {
     sel.priority[k] = projected_error(v, table[k]);
-    if (sel.priority[k] > v.pixel_error || (v.pixel_error <= 0 && sel.priority[k] >= 0))
+    if ((sel.priority[k] > v.pixel_error || (v.pixel_error <= 0 && sel.priority[k] >= 0)) &&
+        !(v.cull_facing_away && faces_away(v, table[k])))
       want[k] = 2;  // (seen; 1: a parent only)
     if (want[k])
       for (uint32_t p : sel.parents[k]) want[p] = 1;

@@ -80,4 +80,21 @@ float projected_error(const View& view, const NodeEntry& n) {
   return float(n.error * pixels_per_unit / dist);
 }
 
+// With d = center - eye, a the unit axis and s = cutoff / 127 >= sin t, t the cone's half-angle:
+// dot(d, a) >= s |d| + r puts d at most 90 - t - asin(r / |d|) degrees from a, so that every
+// point p of the sphere lies at most 90 - t degrees from it, and dot(n, p - eye) >= 0 for every
+// normal n of the cone (a face's plane passes through its corner in the sphere).
+bool faces_away(const View& view, const NodeEntry& n) {
+  if (!n.has_cone()) return false;
+  double dd = 0, da = 0, aa = 0;
+  for (int a = 0; a < 3; ++a) {
+    const double d = double(n.center[a]) - view.eye[a];
+    dd += d * d;
+    da += d * n.cone_axis[a];
+    aa += double(n.cone_axis[a]) * n.cone_axis[a];
+  }
+  const double len = std::sqrt(dd);
+  return len > n.radius && da >= std::sqrt(aa) * (n.cone_cutoff / 127.0 * len + n.radius);
+}
+
 }  // namespace pmz

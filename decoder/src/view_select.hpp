@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // What a view asks of a node of the table (spec/format.md section 15.2's sphere and error
-// bound): whether its sphere meets the view's frustum, and how many pixels its error spans.
+// bound): whether its sphere meets the view's frustum, how many pixels its error spans, and
+// whether its normal cone faces away from the eye.
 #pragma once
 #include "pmz/decoder.hpp"
 #include "pmz/node_table.hpp"
@@ -11,5 +12,10 @@ namespace pmz {
 // sphere (infinity with the eye inside the sphere), or -1 when the sphere lies wholly outside
 // the frustum.
 float projected_error(const View& view, const NodeEntry& n);
+
+// Whether node n's normal cone (spec/format.md section 15.5) faces away from the eye wherever in
+// its sphere its faces lie: then they all face away, and the view does not want n on its own
+// merits. False for a node without a cone.
+bool faces_away(const View& view, const NodeEntry& n);
 
 }  // namespace pmz

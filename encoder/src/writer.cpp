@@ -13,6 +13,7 @@
 #include <memory>
 
 #include "attr_writer.hpp"
+#include "node_cones.hpp"
 #include "pmz/base_codec.hpp"
 #include "pmz/cluster_plan.hpp"
 #include "pmz/fan_wedge.hpp"
@@ -286,9 +287,10 @@ class SplitCoder {
   }
 
   // A stream with a node table (nodes: its levels and nodes, split counts set; the groups
-  // of make_plan never straddle two nodes).
-  void set_nodes(const NodeTable* nodes) {
+  // of make_plan never straddle two nodes), whose cones gather each node's faces at its end.
+  void set_nodes(const NodeTable* nodes, NodeCones* cones) {
     nodes_ = nodes;
+    cones_ = cones;
     uint64_t at = 0;
     for (const NodeEntry& n : nodes->nodes) {
       node_first_.push_back(at);
@@ -359,6 +361,7 @@ class SplitCoder {
     }
     node_faces_.push_back(pm_.face_count() - node_start_faces_);
     node_start_faces_ = pm_.face_count();
+    cones_->node_done(pm_, node_start_vertices_, pm_.vertex_count());
     const uint32_t wedges = attrs_ ? attrs_->wedge_count() : 0;
     node_wedges_.push_back(wedges - node_start_wedges_);
     node_start_wedges_ = wedges;
@@ -379,6 +382,7 @@ class SplitCoder {
     }
     if (attrs_ && node_ > 0) attrs_->restart_models(first_attribute_models_);
     node_start_faces_ = pm_.face_count();
+    node_start_vertices_ = pm_.vertex_count();
     node_start_wedges_ = attrs_ ? attrs_->wedge_count() : 0;
     const NodeEntry& n = nodes_->nodes[node_];
     whole_ = nodes_->levels[n.level].side == 0;
@@ -534,6 +538,7 @@ class SplitCoder {
   // current node's grid and cell, per candidate where the node's bytes start and each node's
   // size, and the faces each node adds.
   const NodeTable* nodes_ = nullptr;
+  NodeCones* cones_ = nullptr;
   size_t node_ = 0;
   std::vector<uint64_t> node_first_;
   CellBins bins_;
@@ -543,6 +548,7 @@ class SplitCoder {
   uint64_t node_start_bytes_[kMaxCandidates] = {};
   std::vector<uint64_t> node_bytes_[kMaxCandidates];
   uint64_t node_start_faces_ = 0, node_start_wedges_ = 0;
+  uint32_t node_start_vertices_ = 0;
   std::vector<uint64_t> node_faces_, node_wedges_;
   std::vector<float> deviation_;
   std::unique_ptr<SplitModels> first_models_[kMaxCandidates];
@@ -615,10 +621,11 @@ bool check_full_decode(const IndexedMesh& mesh, const ProgressiveMesh& pm, const
 }  // namespace
 
 // The node table of a sequence made in levels of cells (SimplifyOptions::clusters): its grids,
-// and per node of `plan` its level, cell, split count and sphere. Faces, bytes and error bounds
-// are filled once the splits are coded.
+// and per node of `plan` its level, cell, split count and sphere. Faces, bytes, error bounds and
+// cones are filled once the splits are coded.
 NodeTable node_table_of(const CollapseSequence& seq, const ClusterPlan& plan) {
   NodeTable t;
+  t.cones = true;
   for (const CollapseSequence::Level& l : seq.levels) {
     NodeGrid g;
     g.side = l.grid.side;
@@ -708,7 +715,16 @@ bool write_pmz(const CollapseSequence& seq_in, const WriteOptions& opt, std::vec
   }
   std::vector<uint8_t> base_attributes;
   SplitCoder splits(seq, opt, plan, coords, attrs.get());
-  if (nodes) splits.set_nodes(nodes.get());
+  std::unique_ptr<NodeCones> cones;
+  if (nodes) {
+    Quantizer quant;
+    quant.init(h.position_bits, h.bbox_min, h.bbox_max);
+    cones = std::make_unique<NodeCones>(quant, coords.data());
+    // The spheres hold the input's positions; the decoded ones lie within half a step on each
+    // axis, and a cone's test (spec/format.md section 15.5) takes them in the sphere.
+    for (NodeEntry& n : nodes->nodes) n.radius += float(0.8660254 * double(quant.scale));
+    splits.set_nodes(nodes.get(), cones.get());
+  }
   if (!splits.start(h, base_attributes, error) || !splits.code_groups(error)) return false;
   const size_t best = splits.best();
   if (nodes)
@@ -717,7 +733,10 @@ bool write_pmz(const CollapseSequence& seq_in, const WriteOptions& opt, std::vec
       nodes->nodes[k].faces = splits.node_faces(k);
       nodes->nodes[k].wedges = splits.node_wedges(k);
     }
-  if (nodes) bound_node_errors(seq, plan, splits.deviations(), *nodes);
+  if (nodes) {
+    bound_node_errors(seq, plan, splits.deviations(), *nodes);
+    cones->finish(splits.mesh(), h.base_vertices, *nodes);
+  }
   h.curvature = kCurvatureCandidates[best].curvature;
   h.fine_curvature = kCurvatureCandidates[best].fine;
   WriteStats st = splits.stats(best);

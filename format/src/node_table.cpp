@@ -57,13 +57,19 @@ void write_node_table(std::vector<uint8_t>& out, const NodeTable& t) {
     put_f32le(out, n.radius);
     put_f32le(out, n.error);
   }
+  if (t.cones)
+    for (const NodeEntry& n : t.nodes) {
+      for (int a = 0; a < 3; ++a) out.push_back(uint8_t(n.cone_axis[a]));
+      out.push_back(n.cone_cutoff);
+    }
 }
 
 bool read_node_table(const uint8_t* p, size_t size, uint64_t total_splits, uint64_t max_nodes,
-                     bool attributes, NodeTable& t, std::string& error) {
+                     bool attributes, bool cones, NodeTable& t, std::string& error) {
   ByteReader r(p, size);
   t = {};
   t.attributes = attributes;
+  t.cones = cones;
   const uint64_t level_count = r.varint();
   if (!r.ok || level_count == 0 || level_count > kMaxNodeLevels)
     return error = "NODE: level count not in 1..32", false;
@@ -121,6 +127,13 @@ bool read_node_table(const uint8_t* p, size_t size, uint64_t total_splits, uint6
     t.nodes.push_back(n);
   }
   if (splits != total_splits) return error = "NODE: node split counts short of HEAD's total", false;
+  if (cones) {
+    if (r.remaining() < t.nodes.size() * 4) return error = "NODE: the cones end early", false;
+    for (NodeEntry& n : t.nodes) {
+      for (int a = 0; a < 3; ++a) n.cone_axis[a] = int8_t(r.u8());
+      n.cone_cutoff = r.u8();
+    }
+  }
   // Every node once per cell, after every node of a coarser level that overlaps it.
   const NodeIndex index(t);
   for (uint32_t k = 0; k < t.nodes.size(); ++k) {

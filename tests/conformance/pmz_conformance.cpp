@@ -568,7 +568,7 @@ bool derive(const fs::path& src, const fs::path& dir) {
     c[0].payload.insert(c[0].payload.end(), {0xAB, 0xCD});
     c[0].payload[1] = 3;
     emit("valid-minor-and-head-tail", assemble(c),
-         "valid: version 7.3 with two bytes after bbox_max, ignored");
+         "valid: minor version 3 with two bytes after bbox_max, ignored");
   }
   {
     // HEAD's counts as over-long (but at most 10-byte) varints: allowed.

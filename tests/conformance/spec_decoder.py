@@ -3,10 +3,11 @@
 """A second .pmz decoder, in Python, written by following the text of spec/format.md sections 2
 to 11 (container, HEAD, BASE, SPLT group tables and groups continued across chunks, the choice
 scan, wedge symbols and scores, the split, the position prediction, the per-vertex state, range
-coding), 14 (attributes) and 15 (nodes, draft), checked against the
+coding), 14 (attributes) and 15 (nodes), checked against the
 conformance vectors: for every .expected, the stream status after feeding the whole file, the
 status and split count after applying every split, and every level's vertex count, face count
-and SHA-256 must be the expected ones. Slow (pure Python) but small vectors take seconds.
+and SHA-256 must be the expected ones; and every normal cone of an encoder-made vector (15.5)
+must hold its node's faces (a writer obligation). Slow (pure Python) but small vectors take seconds.
 
     python3 tests/conformance/spec_decoder.py tests/conformance [MAX_SPLITS]
 """
@@ -772,9 +773,10 @@ def cell_index(level, x, a):  # spec/format.md section 15.1
     return (x - origin[a]) // side
 
 
-def read_nodes(p, total_splits, attributes):
+def read_nodes(p, total_splits, attributes, cones):
     """The NODE chunk's table (spec/format.md section 15.1): levels [(side, origin)] and nodes
-    [{level, cell, splits, faces, wedges (with attributes), bytes}]."""
+    [{level, cell, splits, faces, wedges (with attributes), bytes, cone}]; cones: HEAD's
+    version_minor is 1 or more, so a normal cone follows per node (15.5)."""
     level_count, at = varint(p, 0)
     if not 1 <= level_count <= 32:
         raise Refused("corrupt")
@@ -827,6 +829,15 @@ def read_nodes(p, total_splits, attributes):
         nodes.append(n)
     if sum(n["splits"] for n in nodes) != total_splits:
         raise Refused("corrupt")
+    for n in nodes:  # 15.5: i8 axis[3], u8 cutoff; none without a cone
+        n["cone"] = None
+        if cones:
+            if at + 4 > len(p):
+                raise Refused("corrupt")
+            axis, cutoff = struct.unpack_from("<3b", p, at), p[at + 3]
+            at += 4
+            if axis != (0, 0, 0) and cutoff <= 127:
+                n["cone"] = (axis, cutoff)
     for k, n in enumerate(nodes):  # 15.3: every parent before the node
         side, origin = levels[n["level"]]
         for m in range(n["level"] + 1, level_count):
@@ -915,7 +926,8 @@ def level0(data):
             elif typ == 6 and head["flags"] & 2:  # spec/format.md section 15.1
                 if table is not None or awaited:
                     raise Refused("corrupt")
-                t = read_nodes(payload, head["total_splits"], bool(head["flags"] & 1))
+                t = read_nodes(payload, head["total_splits"], bool(head["flags"] & 1),
+                               head["minor"] >= 1)
                 n0 = t["nodes"][0]
                 if (n0["splits"] != splits or n0["bytes"] != node_bytes or carry
                         or len(t["nodes"]) < 2 or t["levels"][n0["level"]][0] > 0):
@@ -1325,6 +1337,32 @@ class Splits:
         return len(self.F) // 3 - self.node_faces == n["faces"] and \
             (not self.attrs or self.attrs.W - self.node_wedges == n["wedges"])
 
+    def cone_faults(self, k):
+        """spec/format.md section 15.5: the faces of node k (a corner among its vertices) whose
+        normal at the output positions (spec/format.md section 5) lies outside its cone, on the mesh as it is."""
+        n = self.nodes["nodes"][k]
+        if n["cone"] is None:
+            return []
+        axis, cutoff = n["cone"]
+        first = self.node_first_vertex[k]
+        end = first + n["splits"]
+        p = struct.unpack(f"<{3 * len(self.c)}f", positions(self.c, self.head))
+        least = math.sqrt(1 - (cutoff / 127) ** 2)
+        length = math.sqrt(sum(x * x for x in axis))
+        bad = []
+        for f in range(len(self.F) // 3):
+            t = self.F[3 * f : 3 * f + 3]
+            if not any(first <= x < end for x in t):
+                continue
+            e = [[p[3 * t[i] + a] - p[3 * t[0] + a] for a in range(3)] for i in (1, 2)]
+            nrm = [e[0][(a + 1) % 3] * e[1][(a + 2) % 3] - e[0][(a + 2) % 3] * e[1][(a + 1) % 3]
+                   for a in range(3)]
+            size = math.sqrt(sum(x * x for x in nrm))
+            if size > 0 and sum(nrm[a] * axis[a] for a in range(3)) / (size * length) < \
+                    least - 1e-9:
+                bad.append(f)
+        return bad
+
     def in_cell(self, c):
         level, cell = self.cell
         return all(cell_index(level, c[a], a) == cell[a] for a in range(3))
@@ -1341,6 +1379,8 @@ class Splits:
         for n in self.nodes["nodes"] if self.nodes else []:
             node_first.append(at)
             at += n["splits"]
+        self.node_first_vertex = [self.head["base_vertices"] + x for x in node_first]
+        self.bad_cones = set()  # (node, face) outside the node's cone (15.5)
         self.cell, self.node_faces = None, len(self.F) // 3
         self.node_wedges = self.attrs.W if self.attrs else 0
         try:
@@ -1393,6 +1433,12 @@ class Splits:
                     applied += 1
                     if applied in levels:
                         hashes[applied] = self.hash()
+                    if self.nodes and applied in node_first[1:] + [self.head["total_splits"]]:
+                        k = len([x for x in node_first if x < applied]) - 1  # its last split
+                        self.bad_cones.update((k, f) for f in self.cone_faults(k))
+                        if applied == self.head["total_splits"]:  # and in the full mesh
+                            for m in range(len(node_first)):
+                                self.bad_cones.update((m, f) for f in self.cone_faults(m))
                     if self.nodes and applied == self.head["total_splits"] and \
                             not self.node_counts_match(len(self.nodes["nodes"]) - 1):
                         raise Refused("corrupt")  # 15.2: the last node's faces and a-wedges
@@ -1429,8 +1475,13 @@ def main():
                 skipped += 1
                 continue
             hashes = {}
-            split_status, applied = Splits(head, base, chunks, nodes).run(set(levels), hashes)
+            splits = Splits(head, base, chunks, nodes)
+            split_status, applied = splits.run(set(levels), hashes)
             got["refined"] = f"{status if status != 'ok' else split_status} {applied}"
+            # (the writer's obligation: for the encoder-made vectors, not the hand-edited ones)
+            if exp.parent.name == "vectors" and status == split_status == "ok" and \
+                    nodes and splits.bad_cones:
+                got["cones"] = f"{len(splits.bad_cones)} faces outside their node's cone"
             for level, h in hashes.items():
                 got[f"level {level}"] = h
             meshes += len(hashes)

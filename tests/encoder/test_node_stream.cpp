@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -110,7 +111,7 @@ NodeChunk find_node_chunk(const std::vector<uint8_t>& bytes, uint64_t total_spli
       out.at = at;
       out.size = size;
       EXPECT_TRUE(pmz::read_node_table(bytes.data() + at + f.header_size, size_t(f.payload_size),
-                                       total_splits, 1u << 20, false, out.table, error))
+                                       total_splits, 1u << 20, false, true, out.table, error))
           << error;
       return out;
     }
@@ -445,10 +446,12 @@ struct ViewStart {
   }
 };
 
-// A view of every node (each one's error spans more than -1 pixel).
+// A view of every node (each one's error spans more than -1 pixel, none culled by its cone).
 pmz::View every_node() {
   const float dir[3] = {0, 0, 1};
-  return view_from(dir, 20, -1);
+  pmz::View v = view_from(dir, 20, -1);
+  v.cull_facing_away = false;
+  return v;
 }
 
 TEST_F(NodeStream, AViewOfEveryNodeInAnyOrderIsTheWholeStream) {
@@ -635,12 +638,25 @@ TEST_F(NodeStream, AViewHoldsTheIdsOfTheNodesItApplied) {
             whole.indices);
 }
 
-// Every node whose own sphere meets the view and whose error bound spans more than the pixel
-// error is applied once the view is complete, with its parents, even those whose spheres lie
-// outside the frustum or whose errors are smaller on screen (a node's cell meets up to eight
-// parents' per coarser level).
-TEST_F(NodeStream, AViewAppliesEveryNodeItSeesWithItsParents) {
-  ViewStart v(*bytes_, seq_->collapses.size());
+// The stream as format 13.0 writes it: HEAD's minor version 0, so the cones are bytes after
+// the table that a decoder ignores (spec/format.md section 15.1).
+std::vector<uint8_t> as_minor_zero(std::vector<uint8_t> bytes) {
+  pmz::ChunkFrame f;
+  EXPECT_EQ(pmz::parse_chunk_frame(bytes.data() + 8, bytes.size() - 8, f), pmz::FrameStatus::ok);
+  EXPECT_EQ(f.type, pmz::kChunkHead);
+  bytes[8 + f.header_size + 1] = 0;
+  pmz::repair_chunk_crc(bytes.data() + 8, f);
+  return bytes;
+}
+
+// Every node whose own sphere meets the view, whose error bound spans more than the pixel error
+// and whose normal cone does not face away is applied once the view is complete, with its
+// parents, even those whose spheres lie outside the frustum, whose errors are smaller on screen
+// (a node's cell meets up to eight parents' per coarser level) or which face away. A node facing
+// away that no node needs as a parent is not applied; without cones (format 13.0) none is left.
+void expect_view_applies_what_it_sees(const std::vector<uint8_t>& bytes, uint64_t splits,
+                                      bool cones) {
+  ViewStart v(bytes, splits);
   auto& [whole, c, d] = v;
   const std::vector<pmz::NodeEntry>& table = c.table.nodes;
   std::vector<uint64_t> first_face(table.size());
@@ -650,22 +666,26 @@ TEST_F(NodeStream, AViewAppliesEveryNodeItSeesWithItsParents) {
     faces += table[k].faces;
   }
   const float dirs[4][3] = {{1, 0, 0}, {0, 0.6f, 0.8f}, {-0.8f, 0, -0.6f}, {0, -1, 0}};
-  size_t seen = 0, parent_unseen = 0;
+  size_t seen = 0, parent_unseen = 0, culled = 0, culled_parent = 0;
   for (int round = 0; round < 8; ++round) {
     const pmz::View view = view_from(dirs[round % 4], 1.2f, round < 4 ? 0 : 0.5f);
     for (int step = 0; step < 1000; ++step) {
       d.update_view(view);
       if (d.view_complete()) break;
       for (uint32_t k : d.nodes_to_fetch()) {
-        const std::vector<uint8_t> b = node_bytes(d, *bytes_, k);
+        const std::vector<uint8_t> b = node_bytes(d, bytes, k);
         ASSERT_EQ(d.feed_node(k, b.data(), b.size()), pmz::Status::ok) << d.error_message();
       }
     }
     ASSERT_TRUE(d.view_complete()) << round;
-    std::vector<uint8_t> needed(table.size(), 0);
+    std::vector<uint8_t> needed(table.size(), 0), away(table.size(), 0);
     for (size_t k = table.size(); k-- > 1;) {
       const float e = pmz::projected_error(view, table[k]);
-      needed[k] = needed[k] || e > view.pixel_error || (view.pixel_error <= 0 && e >= 0);
+      away[k] = cones && pmz::faces_away(view, table[k]);
+      const bool sees = e > view.pixel_error || (view.pixel_error <= 0 && e >= 0);
+      culled_parent += sees && away[k] && needed[k];
+      needed[k] = needed[k] || (sees && !away[k]);
+      culled += sees && away[k] && !needed[k];
       seen += needed[k] && e >= 0;
       if (!needed[k]) continue;
       for (uint32_t p : pmz::NodeIndex(c.table).parents(uint32_t(k))) {
@@ -681,7 +701,76 @@ TEST_F(NodeStream, AViewAppliesEveryNodeItSeesWithItsParents) {
     expect_closed(d, whole.positions, "round " + std::to_string(round));
   }
   EXPECT_GT(seen, 0u);
-  EXPECT_GT(parent_unseen, 0u);  // (the case this is about did occur)
+  EXPECT_GT(parent_unseen, 0u);  // (the cases this is about did occur)
+  if (cones) {
+    EXPECT_GT(culled, 0u);
+    EXPECT_GT(culled_parent, 0u);
+  }
+}
+
+TEST_F(NodeStream, AViewAppliesEveryNodeItSeesWithItsParents) {
+  expect_view_applies_what_it_sees(*bytes_, seq_->collapses.size(), true);
+}
+
+TEST_F(NodeStream, AStreamWithoutConesSelectsByFrustumAndErrorAlone) {
+  const std::vector<uint8_t> old = as_minor_zero(*bytes_);
+  pmz::Decoder d;
+  d.feed(old.data(), old.size());
+  EXPECT_EQ(d.info().version_minor, 0u);
+  expect_view_applies_what_it_sees(old, seq_->collapses.size(), false);
+}
+
+// Every cone holds the normals of its node's faces (spec/format.md section 15.5): the faces with
+// a corner among the node's vertices, right after its last split in file order and in the full
+// mesh, at the decoded positions; and most nodes of a smooth surface have a cone.
+TEST_F(NodeStream, EveryConeHoldsItsNodesFaces) {
+  const NodeChunk c = find_node_chunk(*bytes_, seq_->collapses.size());
+  ASSERT_TRUE(c.table.cones);
+  pmz::Decoder d;
+  ASSERT_EQ(d.feed(bytes_->data(), bytes_->size()), pmz::Status::ok);
+  d.finish();
+  const std::vector<pmz::NodeEntry>& table = c.table.nodes;
+  std::vector<uint64_t> first_split(table.size() + 1, 0);
+  for (size_t k = 0; k < table.size(); ++k) first_split[k + 1] = first_split[k] + table[k].splits;
+  size_t with_cone = 0, checked = 0;
+  auto check = [&](size_t k, const char* when) {
+    const pmz::NodeEntry& n = table[k];
+    if (!n.has_cone()) return;
+    double axis[3], len = 0;
+    for (int a = 0; a < 3; ++a) len += double(n.cone_axis[a]) * n.cone_axis[a];
+    for (int a = 0; a < 3; ++a) axis[a] = n.cone_axis[a] / std::sqrt(len);
+    const double least = std::sqrt(1 - (n.cone_cutoff / 127.0) * (n.cone_cutoff / 127.0));
+    const uint32_t first = d.info().base_vertices + uint32_t(first_split[k]);
+    const uint32_t end = first + uint32_t(n.splits);
+    const float* p = d.positions();
+    for (uint32_t f = 0; f < d.face_count(); ++f) {
+      const uint32_t* t = d.indices() + size_t(f) * 3;
+      if (!((t[0] >= first && t[0] < end) || (t[1] >= first && t[1] < end) ||
+            (t[2] >= first && t[2] < end)))
+        continue;
+      double e[2][3], nrm[3];
+      for (int a = 0; a < 3; ++a) {
+        e[0][a] = double(p[t[1] * 3 + a]) - p[t[0] * 3 + a];
+        e[1][a] = double(p[t[2] * 3 + a]) - p[t[0] * 3 + a];
+      }
+      for (int a = 0; a < 3; ++a)
+        nrm[a] = e[0][(a + 1) % 3] * e[1][(a + 2) % 3] - e[0][(a + 2) % 3] * e[1][(a + 1) % 3];
+      const double l = std::sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
+      if (!(l > 0)) continue;
+      EXPECT_GE((nrm[0] * axis[0] + nrm[1] * axis[1] + nrm[2] * axis[2]) / l, least - 1e-9)
+          << when << ", node " << k << ", face " << f;
+      ++checked;
+    }
+  };
+  for (size_t k = 0; k < table.size(); ++k) {
+    d.refine(first_split[k + 1] - d.splits_applied());
+    ASSERT_EQ(d.splits_applied(), first_split[k + 1]);
+    check(k, "as the node leaves them");
+    with_cone += table[k].has_cone();
+  }
+  for (size_t k = 0; k < table.size(); ++k) check(k, "in the full mesh");
+  EXPECT_GT(with_cone, table.size() / 2);
+  EXPECT_GT(checked, size_t(d.face_count()));
 }
 
 // The faces drawn: those of the nodes applied (the others' are degenerate).
@@ -776,7 +865,8 @@ TEST_F(NodeStream, AFaceBudgetBoundsTheFacesAViewApplies) {
     for (uint32_t k : fetched) EXPECT_TRUE(now[k]) << what << ": node " << k << " fetched, unused";
     for (size_t k = 1; k < table.size(); ++k) {  // (a parent only is taken with a child)
       const float e = pmz::projected_error(view, table[k]);
-      const bool seen = e > view.pixel_error || (view.pixel_error <= 0 && e >= 0);
+      const bool seen = (e > view.pixel_error || (view.pixel_error <= 0 && e >= 0)) &&
+                        !pmz::faces_away(view, table[k]);  // (its cone facing away: not seen)
       if (!seen || now[k]) continue;
       ++left_out;
       std::vector<uint8_t> taken = now;  // k with its parents not applied
@@ -904,7 +994,7 @@ TEST(NodeStreamAttributes, WedgesPerNodeAreChecked) {
     if (f.type == pmz::kChunkNodes) {
       std::string error;
       ASSERT_TRUE(pmz::read_node_table(bytes.data() + at + f.header_size, size_t(f.payload_size),
-                                       seq.collapses.size(), 1u << 20, true, c.table, error))
+                                       seq.collapses.size(), 1u << 20, true, true, c.table, error))
           << error;
       c.at = at;
       c.size = f.header_size + size_t(f.payload_size);
@@ -989,7 +1079,8 @@ TEST(NodeTable, ReadBackAndRefusedWhenMalformed) {
   pmz::write_node_table(payload, t);
   pmz::NodeTable back;
   std::string error;
-  ASSERT_TRUE(pmz::read_node_table(payload.data(), payload.size(), 14, 100, false, back, error))
+  ASSERT_TRUE(
+      pmz::read_node_table(payload.data(), payload.size(), 14, 100, false, false, back, error))
       << error;
   ASSERT_EQ(back.nodes.size(), 4u);
   EXPECT_EQ(back.levels[1].origin[0], -1);
@@ -998,13 +1089,16 @@ TEST(NodeTable, ReadBackAndRefusedWhenMalformed) {
   EXPECT_EQ(pmz::NodeIndex(back).parents(3), (std::vector<uint32_t>{0, 1, 2}));
   // Every prefix is refused, and so is a table whose counts do not add up to HEAD's.
   for (size_t n = 0; n < payload.size(); ++n)
-    EXPECT_FALSE(pmz::read_node_table(payload.data(), n, 14, 100, false, back, error)) << n;
-  EXPECT_FALSE(pmz::read_node_table(payload.data(), payload.size(), 15, 100, false, back, error));
-  EXPECT_FALSE(pmz::read_node_table(payload.data(), payload.size(), 13, 100, false, back, error));
+    EXPECT_FALSE(pmz::read_node_table(payload.data(), n, 14, 100, false, false, back, error)) << n;
+  EXPECT_FALSE(
+      pmz::read_node_table(payload.data(), payload.size(), 15, 100, false, false, back, error));
+  EXPECT_FALSE(
+      pmz::read_node_table(payload.data(), payload.size(), 13, 100, false, false, back, error));
   auto refused = [&](pmz::NodeTable bad, const std::string& why) {
     std::vector<uint8_t> p;
     pmz::write_node_table(p, bad);
-    EXPECT_FALSE(pmz::read_node_table(p.data(), p.size(), 14, 100, false, back, error)) << why;
+    EXPECT_FALSE(pmz::read_node_table(p.data(), p.size(), 14, 100, false, false, back, error))
+        << why;
     EXPECT_NE(error.find(why), std::string::npos) << error;
   };
   pmz::NodeTable bad = t;
@@ -1025,6 +1119,121 @@ TEST(NodeTable, ReadBackAndRefusedWhenMalformed) {
   bad = t;
   bad.nodes[3].faces = 9;
   refused(bad, "two per split");
+}
+
+// faces_away (spec/format.md section 15.5's test): a cone facing the eye's way, a cone across
+// the view, an eye inside the sphere and no cone are not culled; the cutoff's limit is where the
+// text puts it; and whenever a node is culled, every normal of its cone makes a dot product >= 0
+// with every point of its sphere as seen from the eye (sampled).
+TEST(ViewSelect, ANodeFacesAwayOnlyWhenItsWholeSphereDoes) {
+  const float eye[3] = {0, 0, 10}, target[3] = {0, 0, 0};
+  const pmz::View view = pmz::look_at(eye, target, 1.0f, 800, 600, 1e-3f, 1);
+  pmz::NodeEntry n;
+  n.radius = 1;
+  n.cone_axis[2] = -127;  // normals along -z: away from the eye
+  n.cone_cutoff = 0;
+  EXPECT_TRUE(pmz::faces_away(view, n));
+  n.cone_axis[2] = 127;
+  EXPECT_FALSE(pmz::faces_away(view, n));
+  n.cone_axis[2] = 0;
+  n.cone_axis[0] = 127;  // edge-on at the centre, towards the eye at some points of the sphere
+  EXPECT_FALSE(pmz::faces_away(view, n));
+  n.cone_axis[0] = 0;
+  n.cone_axis[2] = -127;
+  n.cone_cutoff = 114;  // 10 >= s 10 + 1 while s <= 0.9 = 114.3 / 127
+  EXPECT_TRUE(pmz::faces_away(view, n));
+  n.cone_cutoff = 115;
+  EXPECT_FALSE(pmz::faces_away(view, n));
+  n.cone_cutoff = 0;
+  n.radius = 20;  // the eye inside the sphere
+  EXPECT_FALSE(pmz::faces_away(view, n));
+  n.radius = 1;
+  n.cone_cutoff = 255;  // no cone
+  EXPECT_FALSE(pmz::faces_away(view, n));
+  std::mt19937 rng(7);
+  auto uniform = [&](double lo, double hi) {
+    return std::uniform_real_distribution<double>(lo, hi)(rng);
+  };
+  size_t culled = 0;
+  for (int trial = 0; trial < 4000; ++trial) {
+    pmz::NodeEntry m;
+    for (int a = 0; a < 3; ++a) {
+      m.center[a] = float(uniform(-3, 3));
+      m.cone_axis[a] = int8_t(std::lround(uniform(-127, 127)));
+    }
+    m.radius = float(uniform(0, 1.5));
+    m.cone_cutoff = uint8_t(std::lround(uniform(0, 127)));
+    if (!m.has_cone() || !pmz::faces_away(view, m)) continue;
+    ++culled;
+    double a[3], len = 0;
+    for (int k = 0; k < 3; ++k) len += double(m.cone_axis[k]) * m.cone_axis[k];
+    for (int k = 0; k < 3; ++k) a[k] = m.cone_axis[k] / std::sqrt(len);
+    const double t = std::asin(m.cone_cutoff / 127.0);
+    for (int sample = 0; sample < 50; ++sample) {
+      // A unit normal within the cone (at its rim every other time), a point in the sphere.
+      double w[3], wa = 0, wl = 0, p[3], dot = 0;
+      for (int k = 0; k < 3; ++k) w[k] = uniform(-1, 1), wa += w[k] * a[k];
+      for (int k = 0; k < 3; ++k) w[k] -= wa * a[k], wl += w[k] * w[k];
+      if (!(wl > 1e-12)) continue;
+      const double phi = sample % 2 ? t : uniform(0, t);
+      for (int k = 0; k < 3; ++k) {
+        p[k] = m.center[k] + m.radius * uniform(-1, 1) / std::sqrt(3.0);
+        dot += (std::cos(phi) * a[k] + std::sin(phi) * w[k] / std::sqrt(wl)) * (p[k] - eye[k]);
+      }
+      EXPECT_GE(dot, -1e-6) << trial;
+    }
+  }
+  EXPECT_GT(culled, 100u);
+}
+
+// Format 13.1's cones follow the last node (spec/format.md section 15.1): read back as written,
+// a table cut inside them refused, bytes after them ignored; read as 13.0 (cones = false), they
+// are such bytes and no node has a cone.
+TEST(NodeTable, ConesReadBackAndAShortBlockIsRefused) {
+  pmz::NodeTable t;
+  t.levels = {{4, {0, 0, 0}}, {0, {0, 0, 0}}};
+  t.cones = true;
+  for (int k = 0; k < 3; ++k) {
+    pmz::NodeEntry n;
+    n.level = k == 0 ? 1 : 0;
+    n.cell[0] = k;
+    n.splits = 2;
+    n.bytes = 9;
+    n.cone_axis[0] = int8_t(-127 + k);
+    n.cone_axis[2] = int8_t(5 * k);
+    n.cone_cutoff = uint8_t(k == 2 ? 255 : 40 + k);
+    t.nodes.push_back(n);
+  }
+  std::vector<uint8_t> payload;
+  pmz::write_node_table(payload, t);
+  std::vector<uint8_t> without;
+  t.cones = false;
+  pmz::write_node_table(without, t);
+  ASSERT_EQ(payload.size(), without.size() + 12);
+  pmz::NodeTable back;
+  std::string error;
+  ASSERT_TRUE(
+      pmz::read_node_table(payload.data(), payload.size(), 6, 100, false, true, back, error))
+      << error;
+  ASSERT_TRUE(back.cones);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_EQ(back.nodes[k].cone_axis[0], -127 + k);
+    EXPECT_EQ(back.nodes[k].cone_axis[1], 0);
+    EXPECT_EQ(back.nodes[k].cone_axis[2], 5 * k);
+    EXPECT_EQ(back.nodes[k].cone_cutoff, k == 2 ? 255 : 40 + k);
+    EXPECT_EQ(back.nodes[k].has_cone(), k < 2);
+  }
+  for (size_t n = without.size(); n < payload.size(); ++n) {
+    EXPECT_FALSE(pmz::read_node_table(payload.data(), n, 6, 100, false, true, back, error)) << n;
+    EXPECT_NE(error.find("cones end early"), std::string::npos) << error;
+  }
+  payload.push_back(7);  // (a later minor's field)
+  EXPECT_TRUE(
+      pmz::read_node_table(payload.data(), payload.size(), 6, 100, false, true, back, error));
+  ASSERT_TRUE(
+      pmz::read_node_table(payload.data(), payload.size(), 6, 100, false, false, back, error));
+  EXPECT_FALSE(back.cones);
+  for (const pmz::NodeEntry& n : back.nodes) EXPECT_FALSE(n.has_cone());
 }
 
 }  // namespace

@@ -413,17 +413,18 @@ void fuzz_base(const uint8_t* data, size_t size) {
 }
 
 // A NODE payload (spec/format.md section 15.1) after a u32 split total and a flags byte (bit 0:
-// attributes): a table accepted is consistent (split counts sum to the total, every node after
-// its parents), writes back to bytes that read as the same table, and bins vertices (coordinates
-// from the payload's bytes) into its cells without going out of bounds.
+// attributes, bit 1: cones follow the nodes, 15.5): a table accepted is consistent (split counts
+// sum to the total, every node after its parents), writes back to bytes that read as the same
+// table, and bins vertices (coordinates from the payload's bytes) into its cells without going out
+// of bounds.
 void fuzz_node_table(const uint8_t* data, size_t size) {
   if (size < 5) return;
   uint32_t total;
   std::memcpy(&total, data, 4);
-  const bool attributes = data[4] & 1;
+  const bool attributes = data[4] & 1, cones = data[4] & 2;
   pmz::NodeTable t;
   std::string error;
-  if (!pmz::read_node_table(data + 5, size - 5, total, 4096, attributes, t, error)) {
+  if (!pmz::read_node_table(data + 5, size - 5, total, 4096, attributes, cones, t, error)) {
     PMZ_FUZZ_CHECK(!error.empty());
     return;
   }
@@ -437,13 +438,15 @@ void fuzz_node_table(const uint8_t* data, size_t size) {
   std::vector<uint8_t> again;
   pmz::write_node_table(again, t);
   pmz::NodeTable back;
-  PMZ_FUZZ_CHECK(
-      pmz::read_node_table(again.data(), again.size(), total, 4096, attributes, back, error));
+  PMZ_FUZZ_CHECK(pmz::read_node_table(again.data(), again.size(), total, 4096, attributes, cones,
+                                      back, error));
   PMZ_FUZZ_CHECK(back.nodes.size() == t.nodes.size() && back.levels.size() == t.levels.size());
   for (size_t k = 0; k < t.nodes.size(); ++k)
     PMZ_FUZZ_CHECK(back.nodes[k].splits == t.nodes[k].splits &&
                    back.nodes[k].cell[0] == t.nodes[k].cell[0] &&
-                   back.nodes[k].bytes == t.nodes[k].bytes);
+                   back.nodes[k].bytes == t.nodes[k].bytes &&
+                   back.nodes[k].cone_cutoff == t.nodes[k].cone_cutoff &&
+                   back.nodes[k].cone_axis[2] == t.nodes[k].cone_axis[2]);
   std::vector<int32_t> coords((size - 5) / 4 * 3 / 3 * 3);
   for (size_t i = 0; i + 4 <= size - 5 && i / 4 < coords.size(); i += 4)
     std::memcpy(&coords[i / 4], data + 5 + i, 4);

@@ -188,6 +188,7 @@ def main():
             # HEAD: version (2 bytes), varint flags, 4 bytes (position bits, curvatures, level),
             # varint base counts, varint total splits (spec/format.md section 4)
             if kind == 1:
+                node_minor = payload[1]
                 node_flags, k = varint(payload, 2)
                 k += 4
                 _, e = varint(payload, k)
@@ -199,8 +200,10 @@ def main():
             elif kind == 3:
                 put('coding', '%s-SPLT-%d' % (name, at), b'\x06\xff\xfb\x00' + payload)
             elif kind == 6:  # NODE: part 8, after HEAD's split total (u32) and flags byte
+                # (bit 0 attributes, bit 1 cones: HEAD's minor version 1 or more)
+                flags = (node_flags & 1) | (2 if node_minor >= 1 else 0)
                 put('coding', '%s-NODE-%d' % (name, at),
-                    b'\x08' + struct.pack('<I', node_total) + bytes([node_flags & 1]) + payload)
+                    b'\x08' + struct.pack('<I', node_total) + bytes([flags]) + payload)
             at = j + 4 + size
     # fuzz_coding, other parts: a few hand-made inputs.
     put('coding', 'reader', b'\x00\x10' + bytes(range(16)) + b'\x81\x80\x01\xff\xff\xff\xff\x0f' * 4)

@@ -110,6 +110,10 @@ struct View {
   // Refine a node while its error bound would span more than this many pixels on screen (0:
   // every node in view, those that move nothing too).
   float pixel_error = 1;
+  // Leave out the nodes whose normal cone faces away from the eye (spec/format.md section 15.5)
+  // unless a node the view wants is their child: for closed surfaces (their backs hidden). False
+  // for surfaces seen from behind (open ones, two-sided materials).
+  bool cull_facing_away = true;
 };
 
 // A perspective view from `eye` towards `target` (y up) with a viewport of width x height

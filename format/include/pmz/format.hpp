@@ -13,7 +13,7 @@ namespace pmz {
 
 inline constexpr uint8_t kSignature[8] = {0x89, 'P', 'M', 'Z', 0x0D, 0x0A, 0x1A, 0x0A};
 inline constexpr uint32_t kVersionMajor = 13;
-inline constexpr uint32_t kVersionMinor = 0;
+inline constexpr uint32_t kVersionMinor = 1;
 
 // Chunk = u8 type | varint payload_size | u32le crc32(type, size varint, payload) | payload
 // (spec/format.md section 3). Types other than these four are skipped (forward compatibility).

@@ -58,10 +58,20 @@ struct NodeEntry {
   float radius = 0;
   float error =
       0;  // geometric error its splits remove, in model units (spec/format.md section 15.2)
+  // Its normal cone (format 13.1, spec/format.md section 15.5): the faces around the vertices
+  // its splits add have normals within asin(cone_cutoff / 127) of the axis cone_axis (not unit).
+  // A zero axis or a cutoff above 127: no cone (kNoCone, what a writer writes).
+  int8_t cone_axis[3] = {0, 0, 0};
+  uint8_t cone_cutoff = kNoCone;
+  static constexpr uint8_t kNoCone = 255;
+  bool has_cone() const {
+    return cone_cutoff <= 127 && (cone_axis[0] | cone_axis[1] | cone_axis[2]) != 0;
+  }
 };
 
 struct NodeTable {
   bool attributes = false;       // the stream's (HEAD flag bit 0): nodes state their wedges
+  bool cones = false;            // format 13.1: a cone per node after the last node's error
   std::vector<NodeGrid> levels;  // finest first; only the last may have side 0
   std::vector<NodeEntry> nodes;  // in file order
 };
@@ -72,8 +82,9 @@ void write_node_table(std::vector<uint8_t>& out, const NodeTable& t);
 // Parses and checks a NODE payload against HEAD's counts (spec/format.md section 15.1): false with
 // a one-line reason for a malformed or inconsistent table (a node before one of its parents, a cell
 // twice, split counts that do not sum to total_splits, ...). max_nodes bounds the node count.
+// cones: the stream's HEAD minor version is 1 or more, so the cones follow the nodes (15.5).
 bool read_node_table(const uint8_t* p, size_t size, uint64_t total_splits, uint64_t max_nodes,
-                     bool attributes, NodeTable& t, std::string& error);
+                     bool attributes, bool cones, NodeTable& t, std::string& error);
 
 // The nodes of coarser levels whose cells overlap node k's (its parents, spec/format.md
 // section 15.3), in ascending order; `index` as made by NodeIndex.
