@@ -77,6 +77,20 @@ ldflags=($link_opt -flto "${features[@]}" --no-entry -sSTANDALONE_WASM=1 -sFILES
   -sALLOW_MEMORY_GROWTH=1 -sWASM_BIGINT=1 -sMALLOC=${PMZ_WASM_MALLOC:-emmalloc}
   --js-library "$root/web/wasm_imports.js"
   -sEXPORTED_FUNCTIONS="[$exports,\"_malloc\",\"_free\"]")
+# The threaded module (pmz_wasm_mt.js, .wasm, .worker.js; web/src/index.js loads it for
+# createDecoder({ workers: N > 1 }) where shared memory is available: node, cross-origin-isolated
+# pages): the same sources built with -pthread (shared memory and atomics in every object), and
+# emscripten's JS runtime, which starts the web workers (PTHREAD_POOL_SIZE: Module.pmzPool, as
+# many as index.js asks, made and loaded before the module resolves; STRICT=2: pthread_create
+# fails beyond them instead of waiting for a worker the blocked thread cannot start). Its glue
+# runs in node through web/wasm_mt_pre.js (emscripten 3.1.6's ES module glue names CommonJS's
+# require and __dirname there). Outside the size budget (reported on its own line below).
+mt_ldflags=($link_opt -flto "${features[@]}" -pthread -sFILESYSTEM=0 -sALLOW_MEMORY_GROWTH=1
+  -sWASM_BIGINT=1 -sMALLOC=${PMZ_WASM_MALLOC:-emmalloc} -sMODULARIZE=1 -sEXPORT_ES6=1
+  -sEXPORT_NAME=createPmzThreaded -sENVIRONMENT=web,worker,node -sPTHREAD_POOL_SIZE=Module.pmzPool
+  -sPTHREAD_POOL_SIZE_STRICT=2 -Wno-pthreads-mem-growth
+  --js-library "$root/web/wasm_imports.js" --extern-pre-js "$root/web/wasm_mt_pre.js"
+  -sEXPORTED_FUNCTIONS="[$exports,\"_malloc\",\"_free\"]")
 
 # The wasm is built by ninja (web/build/build.ninja, written here): each source compiled on its
 # own (em++ -MMD: its headers are tracked), so a run recompiles only the sources whose file or
@@ -115,11 +129,12 @@ mapfile -t builds < <(for set in hot cold; do
   for f in "${files[@]}"; do echo "$set/$(basename "$f" .cpp).o $f"; done | LC_ALL=C sort
 done)
 objects=("${builds[@]%% *}")
+mt_objects=("${objects[@]/#/obj-mt/}")
 objects=("${objects[@]/#/obj/}")
 # Objects of sources that are gone.
-for o in "$out"/obj/*/*.o; do
+for o in "$out"/obj/*/*.o "$out"/obj-mt/*/*.o; do
   [ -e "$o" ] || continue
-  [[ " ${objects[*]} " == *" ${o#"$out"/} "* ]] || rm -f "$o" "$o.d"
+  [[ " ${objects[*]} ${mt_objects[*]} " == *" ${o#"$out"/} "* ]] || rm -f "$o" "$o.d"
 done
 {
   echo "# Written by scripts/web.sh (run that, not ninja): the WebAssembly decoder."
@@ -142,17 +157,25 @@ done
     echo "  description = copy (no wasm-opt)"
   fi
   for line in "${builds[@]}"; do
-    o=obj/${line%% *} f=${line#* }
-    if [[ $o == obj/hot/* ]]; then level=$opt; else level=$cold_opt; fi
-    echo "build $(ninja_path "$o"): cxx $(ninja_path "$root/$f") | toolchain.txt"
-    echo "  flags = $(ninja_words "${cxxflags[@]}" $level)"
-    echo "  opt = $level"
-    echo "  src = $f"
+    for set in obj obj-mt; do
+      o=$set/${line%% *} f=${line#* }
+      if [[ $o == */hot/* ]]; then level=$opt; else level=$cold_opt; fi
+      threads=()
+      [ $set = obj ] || threads=(-pthread)
+      echo "build $(ninja_path "$o"): cxx $(ninja_path "$root/$f") | toolchain.txt"
+      echo "  flags = $(ninja_words "${cxxflags[@]}" "${threads[@]}" $level)"
+      echo "  opt = $level${threads:+ -pthread}"
+      echo "  src = $f"
+    done
   done
   echo "build pmz_wasm.link.wasm: link $(printf '%s ' "${objects[@]}")| toolchain.txt $(ninja_path "$root/web/wasm_imports.js")"
   echo "  flags = $(ninja_words "${ldflags[@]}")"
   echo "build pmz_wasm.wasm: post pmz_wasm.link.wasm | toolchain.txt"
-  echo "default pmz_wasm.wasm"
+  # (the glue names the .wasm and worker files after its own: linked in mt/, post-optimized out)
+  echo "build mt/pmz_wasm_mt.js | mt/pmz_wasm_mt.wasm mt/pmz_wasm_mt.worker.js: link $(printf '%s ' "${mt_objects[@]}")| toolchain.txt $(ninja_path "$root/web/wasm_imports.js") $(ninja_path "$root/web/wasm_mt_pre.js")"
+  echo "  flags = $(ninja_words "${mt_ldflags[@]}")"
+  echo "build pmz_wasm_mt.wasm: post mt/pmz_wasm_mt.wasm | toolchain.txt"
+  echo "default pmz_wasm.wasm pmz_wasm_mt.wasm"
 } | write_if_changed "$out/build.ninja"
 ninja_jobs=${PMZ_WEB_JOBS:-$(nproc)}
 if (cd "$out" && ninja -n -j "$ninja_jobs") | grep -q '^ninja: no work to do'; then
@@ -189,6 +212,10 @@ sync_tree() {  # STAGE DEST: DEST made equal to STAGE; changed=1 when a file was
 cp web/pkg/package.json "$stage/pkg/"
 cp web/README.md "$stage/pkg/README.md"  # the package's README is the web one
 cp web/src/*.js web/src/*.d.ts "$out/pmz_wasm.wasm" "$stage/pkg/"
+# The threaded module; its worker also as .cjs, the name node's worker_threads gets (the
+# package is "type": "module", and the worker script is CommonJS in node).
+cp "$out/mt/pmz_wasm_mt.js" "$out/mt/pmz_wasm_mt.worker.js" "$out/pmz_wasm_mt.wasm" "$stage/pkg/"
+cp "$out/mt/pmz_wasm_mt.worker.js" "$stage/pkg/pmz_wasm_mt.worker.cjs"
 changed=0
 sync_tree "$stage/pkg" "$pkg"
 tgz=(web/dist/pmz-decoder-*.tgz)
@@ -219,6 +246,13 @@ wasm_bytes=$(stat -c %s "$out/pmz_wasm.wasm")
 glue_bytes=$(stat -c %s web/src/pmz_wasm.js)
 gz_bytes=$(cat "$out/pmz_wasm.wasm" web/src/pmz_wasm.js | gzip -9 | wc -c)
 say "size: wasm $wasm_bytes + glue $glue_bytes bytes ($gz_bytes gzip -9)"
+mt_files=("$out/pmz_wasm_mt.wasm" "$out/mt/pmz_wasm_mt.js" "$out/mt/pmz_wasm_mt.worker.js")
+mt_bytes=$(cat "${mt_files[@]}" | wc -c)
+mt_gz=0
+for f in "${mt_files[@]}"; do mt_gz=$((mt_gz + $(gzip -9 <"$f" | wc -c))); done
+say "size: threaded module $(stat -c %s "${mt_files[0]}") + glue $(stat -c %s "${mt_files[1]}")" \
+  "+ worker $(stat -c %s "${mt_files[2]}") = $mt_bytes bytes ($mt_gz gzip -9, each file" \
+  "alone; outside the budget)"
 # The size budget (docs/benchmarks.md "WebAssembly size"): the module and its loader at most
 # 120,000 bytes and 50,000 gzip -9. Format 13.0's node table and views took it past that; until
 # it is met again the build fails above the sizes reached, PMZ_WASM_MAX_BYTES and

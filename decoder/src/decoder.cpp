@@ -4,6 +4,9 @@
 // between levels with the shared ProgressiveMesh core (the chunks: decoder_stream.cpp; decoding
 // for a view: decoder_view.cpp).
 #include <atomic>
+#if defined(__EMSCRIPTEN_PTHREADS__)
+#include <pthread.h>
+#endif
 #include <system_error>
 #include <thread>
 
@@ -210,7 +213,7 @@ void Decoder::Impl::first_apply_worker(Frontier& w, uint64_t last) {
 // prefix there, the splits after it are undone and the serial error reported. Returns the splits
 // applied (0: nothing to run in parallel here; the serial path goes on).
 uint64_t Decoder::Impl::parallel_nodes(uint64_t max_splits, uint64_t face_target) {
-#if defined(__wasm__)
+#if defined(__wasm__) && !defined(__EMSCRIPTEN_PTHREADS__)
   (void)max_splits, (void)face_target;
   return 0;
 #else
@@ -294,12 +297,30 @@ uint64_t Decoder::Impl::parallel_nodes(uint64_t max_splits, uint64_t face_target
     for (size_t j; (j = next++) < work.size();) go(j, false);
   };
   {
+#if defined(__EMSCRIPTEN_PTHREADS__)
+    // The threaded WebAssembly module (scripts/web.sh): pthread_create fails once the pool of
+    // web workers made at load is in use (PTHREAD_POOL_SIZE_STRICT=2) and this thread runs the
+    // rest; without exceptions compiled in, std::thread would abort there instead.
+    std::vector<pthread_t> pool;
+    auto entry = [](void* f) -> void* {
+      (*static_cast<decltype(run)*>(f))();
+      return nullptr;
+    };
+    for (uint32_t t = 1; t < std::min<size_t>(threads, work.size()); ++t) {
+      pthread_t id;
+      if (pthread_create(&id, nullptr, entry, &run) != 0) break;
+      pool.push_back(id);
+    }
+    run();
+    for (pthread_t id : pool) pthread_join(id, nullptr);
+#else
     std::vector<std::jthread> pool;
     try {  // (fewer threads if the system has none to give: this one runs the rest)
       for (uint32_t t = 1; t < std::min<size_t>(threads, work.size()); ++t) pool.emplace_back(run);
     } catch (const std::system_error&) {
     }
     run();
+#endif
   }
   // The merge: where the serial decoder would have stopped (stop, with its error).
   uint64_t stop = s1, work_sum = frontier.ring_work;

@@ -38,8 +38,8 @@ Decoder::Decoder(const DecoderLimits& limits) : impl_(new Impl) {
 }
 
 void Decoder::set_threads(uint32_t n) {
-#if defined(__wasm__)
-  n = 1;  // (built without threads)
+#if defined(__wasm__) && !defined(__EMSCRIPTEN_PTHREADS__)
+  n = 1;  // (the WebAssembly build without threads: scripts/web.sh's single-threaded module)
 #endif
   impl_->threads = n ? n : std::max(1u, std::thread::hardware_concurrency());
 }

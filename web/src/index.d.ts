@@ -66,11 +66,22 @@ export interface DecoderOptions {
   /** Hard caps checked against the header before allocating; 0 or absent: the defaults. */
   maxVertices?: number;
   maxFaces?: number;
-  /** The .wasm bytes, when the file beside the module cannot be fetched or read. */
+  /** The .wasm bytes, when the file beside the module cannot be fetched or read: the
+   * single-threaded module's (pmz_wasm.wasm), so one worker. */
   wasmBinary?: ArrayBuffer | Uint8Array;
+  /** Threads that decode a stream's ready nodes at once (streams with a node table, without
+   * attributes); default the cores (navigator.hardwareConcurrency, node's
+   * os.availableParallelism()), at most 64. More than one loads the threaded module
+   * (pmz_wasm_mt.*, workers - 1 web workers) where shared memory is available: node, and
+   * cross-origin-isolated pages (COOP and COEP headers; README); elsewhere, or when its files
+   * fail to load, the decoder runs on one (Decoder.workers). The mesh, ids, change reports
+   * and errors do not depend on it. */
+  workers?: number;
 }
 
 export declare class Decoder {
+  /** The threads decoding: DecoderOptions.workers where the threaded module runs, else 1. */
+  readonly workers: number;
   /** Consumes a slice of the stream (any slicing gives the same mesh). */
   feed(bytes: Uint8Array | ArrayBuffer): PmzStatus;
   /** End of input: 'truncated' when the end marker was not seen. */

@@ -21,6 +21,29 @@ const REFINE_BATCH = 16384n;  // splits per call into the instance (see refine()
 const VIEW_BYTES = 88;  // sizeof(pmz_view) in wasm32
 
 let modulePromise = null;
+const threadedModules = new Map();  // workers -> the threaded module's promise
+
+const inNode = typeof process === 'object' && !!(process.versions && process.versions.node) &&
+  typeof window === 'undefined';
+
+// The cores: navigator.hardwareConcurrency in browsers and workers, os.availableParallelism()
+// (os.cpus().length before node 18.14) in node.
+async function defaultWorkers() {
+  if (inNode) {
+    const os = await import('node:os');
+    return Math.max(1, typeof os.availableParallelism === 'function' ? os.availableParallelism()
+                                                                   : os.cpus().length);
+  }
+  return Math.max(1, (typeof navigator === 'object' && navigator.hardwareConcurrency) || 1);
+}
+
+// Whether the threaded module can run here: shared WebAssembly memory and workers, which
+// browsers give only to cross-origin-isolated pages (COOP and COEP headers; web/README.md).
+function threadsAvailable() {
+  if (typeof SharedArrayBuffer !== 'function' || typeof Atomics !== 'object') return false;
+  if (inNode) return true;
+  return globalThis.crossOriginIsolated === true && typeof Worker === 'function';
+}
 
 // One WebAssembly instance serves every decoder. In node the .wasm beside this file is read
 // with fs (node's fetch cannot read file: URLs); in browsers and workers it is fetched
@@ -29,8 +52,7 @@ async function instantiate(options) {
   const moduleOptions = {};
   if (options.wasmBinary) {
     moduleOptions.wasmBinary = options.wasmBinary;
-  } else if (typeof process === 'object' && process.versions && process.versions.node &&
-             typeof window === 'undefined') {
+  } else if (inNode) {
     const { readFile } = await import('node:fs/promises');
     moduleOptions.wasmBinary = await readFile(new URL('./pmz_wasm.wasm', import.meta.url));
   }
@@ -46,6 +68,59 @@ function loadModule(options) {
   return modulePromise;
 }
 
+// The threaded module (pmz_wasm_mt.js: emscripten's runtime, scripts/web.sh) with workers - 1
+// web workers (node: worker_threads) beside the calling thread, made and loaded before it
+// resolves. Seen by the decoder as the single-threaded module is (HEAPU8, _name per export).
+async function instantiateThreaded(workers, options) {
+  const { default: create } = await import('./pmz_wasm_mt.js');
+  const moduleOptions = { pmzPool: workers - 1 };
+  if (inNode) {
+    const { readFile } = await import('node:fs/promises');
+    moduleOptions.wasmBinary = await readFile(new URL('./pmz_wasm_mt.wasm', import.meta.url));
+    // (the worker script is CommonJS in node: its .cjs copy; browsers take the .js beside)
+    moduleOptions.locateFile = (file, dir) => dir + file.replace(/\.worker\.js$/, '.worker.cjs');
+  }
+  const em = await create(moduleOptions);
+  const pool = em.PThread.unusedWorkers;
+  // node: the idle workers do not keep the process alive.
+  if (inNode) for (const w of pool) if (typeof w.unref === 'function') w.unref();
+  const memory = em.wasmMemory;
+  let heap = new Uint8Array(memory.buffer);
+  const module = {
+    workers,
+    threadStarts: 0,  // threads the decoder started (pmz_decoder_refine's parallel nodes)
+    // A thread that grows the memory leaves the other threads' views at the old size (a
+    // SharedArrayBuffer is not detached): a view of the current size each time.
+    get HEAPU8() {
+      if (heap.byteLength !== memory.buffer.byteLength) heap = new Uint8Array(memory.buffer);
+      return heap;
+    },
+  };
+  const take = em.PThread.getNewWorker;
+  em.PThread.getNewWorker = function getNewWorker() {
+    const w = take.call(this);
+    if (w) ++module.threadStarts;
+    return w;
+  };
+  for (const [name, value] of Object.entries(em))
+    if (name.startsWith('_pmz_') || name === '_malloc' || name === '_free') module[name] = value;
+  return module;
+}
+
+// The module for `workers` threads: the threaded one when it can run here and more than one
+// is asked for, else (or when it fails to load: e.g. its files were not deployed) the
+// single-threaded one, and one worker.
+function loadModuleFor(workers, options) {
+  if (workers < 2 || !threadsAvailable() || options.wasmBinary) return loadModule(options);
+  let p = threadedModules.get(workers);
+  if (!p) {
+    p = instantiateThreaded(workers, options).catch(() => loadModule(options));
+    threadedModules.set(workers, p);
+    p.catch(() => threadedModules.delete(workers));
+  }
+  return p;
+}
+
 function toU64(n) {
   if (n === undefined || n === Infinity) return ALL;
   if (typeof n === 'bigint') return n < 0n ? 0n : n & ALL;
@@ -57,7 +132,8 @@ function cString(m, ptr) {
   const heap = m.HEAPU8;
   let end = ptr;
   while (heap[end] !== 0) ++end;
-  return new TextDecoder().decode(heap.subarray(ptr, end));
+  // (a copy: TextDecoder takes no view of shared memory, the threaded module's)
+  return new TextDecoder().decode(heap.slice(ptr, end));
 }
 
 export class Decoder {
@@ -72,7 +148,12 @@ export class Decoder {
     this._input = 0;
     this._inputSize = 0;
     if (!this._ptr || !this._scratch) throw new Error('pmz: out of memory creating a decoder');
+    this._workers = module.workers || 1;
+    module._pmz_decoder_set_threads(this._ptr, this._workers);
   }
+
+  // The threads decoding: createDecoder()'s workers where the threaded module runs, else 1.
+  get workers() { return this._workers; }
 
   // Runs a call into the instance; an abort there (a failed allocation: exceptions are not
   // compiled in) leaves the instance unusable, so it becomes out_of_memory from then on.
@@ -83,7 +164,8 @@ export class Decoder {
       return fn(this._m);
     } catch (e) {
       this._dead = 'pmz: out of memory: ' + String(e && e.message ? e.message : e).split('\n')[0];
-      modulePromise = null;  // the next createDecoder() gets a fresh instance
+      // The next createDecoder() gets a fresh instance.
+      if (this._workers > 1) threadedModules.delete(this._workers); else modulePromise = null;
       return fallback;
     }
   }
@@ -127,15 +209,18 @@ export class Decoder {
   // In calls of at most REFINE_BATCH splits: V8 runs a wasm function's first calls in its
   // baseline tier and swaps in the optimized code only for later calls (there is no on-stack
   // replacement for wasm), so one call refining a whole mesh stays in baseline code throughout.
+  // With workers, the batches double from there: the decoder hands a level's nodes to its
+  // threads only as far as the call's splits reach whole nodes.
   refine(maxSplits) {
     const want = toU64(maxSplits);
-    let total = 0n;
+    let total = 0n, size = REFINE_BATCH;
     this._call((m) => {
       while (total < want) {
-        const batch = want - total < REFINE_BATCH ? want - total : REFINE_BATCH;
+        const batch = want - total < size ? want - total : size;
         const n = m._pmz_decoder_refine(this._ptr, batch);
         total += n;
         if (n < batch) break;
+        if (this._workers > 1) size *= 2n;
       }
     });
     return Number(total);
@@ -426,9 +511,16 @@ export class Decoder {
 }
 
 // A new decoder. options: maxVertices, maxFaces (0: the library's defaults), wasmBinary (the
-// .wasm bytes, when the default location cannot be fetched).
+// .wasm bytes, when the default location cannot be fetched: the single-threaded module, one
+// worker), workers (threads decoding a stream's ready nodes at once; default the cores:
+// navigator.hardwareConcurrency, node's os.availableParallelism()). More than one takes the
+// threaded module where shared memory is available (node; browsers: cross-origin-isolated
+// pages), else the single-threaded one: Decoder.workers says which. The mesh, ids, change
+// reports and errors are the same whatever the workers.
 export async function createDecoder(options = {}) {
-  return new Decoder(await loadModule(options), options);
+  let workers = options.workers ?? await defaultWorkers();
+  workers = Number.isFinite(workers) && workers >= 1 ? Math.min(Math.floor(workers), 64) : 1;
+  return new Decoder(await loadModuleFor(workers, options), options);
 }
 
 // Feeds a ReadableStream (e.g. fetch()'s response.body) into the decoder as it arrives, then

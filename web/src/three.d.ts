@@ -12,7 +12,8 @@ export interface PMZOptions extends DecoderOptions {
   frameBudgetMs?: number;
   /** false: the caller calls stream.update() itself (default: every animation frame). */
   autoUpdate?: boolean;
-  /** Decode in a Web Worker (worker.js): stream() gives a PMZWorkerStream. */
+  /** Decode in a Web Worker (worker.js): stream() gives a PMZWorkerStream (workers, the
+   * decoder's threads, apply there too). */
   worker?: boolean;
   /** The initial faceLimit (default null: none). */
   faceLimit?: number | null;

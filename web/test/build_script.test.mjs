@@ -28,15 +28,18 @@ function outputTimes() {
       else times[path.relative(webDir, p)] = statSync(p, { bigint: true }).mtimeNs;
     }
   };
-  for (const dir of ['build/obj', 'dist']) walk(path.join(webDir, dir));
-  times['build/pmz_wasm.wasm'] = statSync(path.join(webDir, 'build', 'pmz_wasm.wasm'), { bigint: true }).mtimeNs;
+  for (const dir of ['build/obj', 'build/obj-mt', 'build/mt', 'dist']) walk(path.join(webDir, dir));
+  for (const f of ['pmz_wasm.wasm', 'pmz_wasm_mt.wasm'])
+    times[`build/${f}`] = statSync(path.join(webDir, 'build', f), { bigint: true }).mtimeNs;
   return times;
 }
 
 test('a second scripts/web.sh run with no change rebuilds nothing and says so', () => {
   buildRun();
   const before = outputTimes();
-  assert.ok(Object.keys(before).some((f) => f.endsWith('.o')), 'no wasm objects under web/build/obj');
+  for (const dir of ['obj', 'obj-mt'])
+    assert.ok(Object.keys(before).some((f) => f.startsWith(`build/${dir}/`) && f.endsWith('.o')),
+      `no wasm objects under web/build/${dir}`);
   assert.ok(Object.keys(before).some((f) => /^dist\/pmz-decoder-.*\.tgz$/.test(f)), 'no tarball in web/dist');
   const again = buildRun();
   const after = outputTimes();

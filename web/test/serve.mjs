@@ -6,7 +6,9 @@
 // (Infinity: at once), delayMs (before the response starts), range ('honour' the default;
 // 'ignore': a 200 with the whole file; 'wrongrange': the slice asked for, its Content-Range one
 // byte later; 'stall': headers, then no body; 'front': ranges from byte 0 only, a 500 for others)}; server.requests[NAME]: when each
-// request came (Date.now()); server.ranges[NAME]: the Range header of each ('' without).
+// request came (Date.now()); server.ranges[NAME]: the Range header of each ('' without). Under
+// /coi/ the same files and streams come with the headers that make a page cross-origin
+// isolated (COOP same-origin, COEP require-corp: shared memory, the threaded decoder).
 import { copyFileSync, cpSync, createReadStream, mkdirSync, mkdtempSync, readFileSync, rmSync, statSync,
   writeFileSync } from 'node:fs';
 import http from 'node:http';
@@ -21,7 +23,13 @@ export function serveViewer(viewerDir, streams, bytesPerSecond) {
   const requests = {}, ranges = {};
   const server = http.createServer((req, res) => {
     const url = new URL(req.url, 'http://127.0.0.1');
-    const name = decodeURIComponent(url.pathname);
+    let name = decodeURIComponent(url.pathname);
+    if (name.startsWith('/coi/')) {
+      name = name.slice(4);
+      const writeHead = res.writeHead.bind(res);
+      res.writeHead = (status, headers = {}) => writeHead(status, { ...headers,
+        'cross-origin-opener-policy': 'same-origin', 'cross-origin-embedder-policy': 'require-corp' });
+    }
     if (name.startsWith('/stream/') && streams[name.slice(8)]) {
       const entry = streams[name.slice(8)];
       const { file, bytesPerSecond: rate = bytesPerSecond, delayMs = 0, range: mode = 'honour' } =

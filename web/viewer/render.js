@@ -65,7 +65,7 @@ async function viewDecodable(url) {
     const r = await fetch(url, { headers: { Range: `bytes=0-${PROBE_BYTES - 1}` } });
     const bytes = new Uint8Array(await r.arrayBuffer());
     if (r.status !== 206 || bytes.length > PROBE_BYTES) return false;
-    d = await createDecoder();
+    d = await createDecoder({ workers: 1 });
     d.feed(bytes);
     const info = d.info();
     return info.headerDone && (info.flags & 2) !== 0 && (info.flags & 1) === 0;
@@ -81,6 +81,9 @@ async function viewDecodable(url) {
 export function createView({ canvas, width, height, pixelRatio, query, post }) {
   const params = new URLSearchParams(query);
   const useWorker = params.get('worker') !== '0' && typeof Worker === 'function';
+  // ?workers=N: the decoder's threads (createDecoder's workers; default the cores, where the
+  // page is cross-origin isolated).
+  const workers = Number(params.get('workers')) >= 1 ? Math.floor(Number(params.get('workers'))) : undefined;
   // View-dependent decoding of streams with a node table (?view=0: streamed in order as others):
   // ?camera=EX,EY,EZ,TX,TY,TZ (the mesh's coordinates) the first camera, ?pixelerror=P;
   // ?maxfaces=N (MAX_FACES below) is their face budget (PMZViewStream.maxFaces).
@@ -365,8 +368,8 @@ export function createView({ canvas, width, height, pixelRatio, query, post }) {
       // Before the first bytes: resizing the drawing buffer at the first object frame delayed it.
       if (DECODE_SCALE !== 1) scaleForDecoding(true);
       const byView = viewDecoding && typeof source === 'string' && await viewDecodable(source);
-      const loader = new PMZLoader(undefined, byView ? { autoUpdate: false, view: { pixelError, maxFaces } }
-        : { geomorph: true, autoUpdate: false, worker: useWorker, faceLimit: faceLimit(0, Infinity) });
+      const loader = new PMZLoader(undefined, byView ? { autoUpdate: false, workers, view: { pixelError, maxFaces } }
+        : { geomorph: true, autoUpdate: false, worker: useWorker, workers, faceLimit: faceLimit(0, Infinity) });
       const stream = await loader.stream(source, (s) => {
         if (timing.firstBytes === null && s.bytes > 0) timing.firstBytes = performance.now();
         status.bytes = s.bytes;
