@@ -287,8 +287,12 @@ Status Decoder::Impl::split_chunk(const uint8_t* p, size_t n) {
     if (!r.open(p, n, e.splits - nodes.arrived_splits, *models, err, frontier.open))
       return fail(Status::corrupt, err);
     frontier.open = r.open_group();
+    // Its splits not applied yet: those the mesh arrays cover so far (cover_node_ids() gives
+    // the others that value when it grows them to the node).
     const uint64_t at = nodes.first_split[k] + nodes.arrived_splits;
-    std::fill_n(record.splits.begin() + ptrdiff_t(at), r.split_count(),
+    const uint64_t end = std::min<uint64_t>(at + r.split_count(), record.splits.size());
+    if (at < end)
+      std::fill(record.splits.begin() + ptrdiff_t(at), record.splits.begin() + ptrdiff_t(end),
                 Split{kNoCorner, kNoRank, kNoRank});
     nodes.arrived_splits += r.split_count();
     sel.readers[k].push_back(std::move(r));
