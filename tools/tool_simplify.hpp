@@ -66,8 +66,9 @@ struct SimplifierCli {
                    "penalised")
         ->capture_default_str();
     app.add_option("--cluster-vertices", cluster_vertices,
-                   "simplify in cells of about this many vertices first, then in cells twice as "
-                   "wide, up to the whole mesh, and write the stream in nodes that decode "
+                   "simplify in cells of about this many vertices first, then in wider cells of "
+                   "about as many of the vertices left, up to the whole mesh once that many are "
+                   "left, and write the stream in nodes that decode "
                    "independently (spec/format.md section 15); 0: the whole mesh at once, one "
                    "node; auto: 16384 for meshes of at least 65536 vertices, else 0")
         ->check(CLI::IsMember({"auto"}) | CLI::Range(0u, 1u << 30))

@@ -31,6 +31,16 @@ CellGrid cell_grid_for(const std::vector<int32_t>& coords, double area, uint32_t
   return g;
 }
 
+CellGrid next_cell_grid(const CellGrid& g, double area, uint32_t cell_vertices, uint64_t live) {
+  CellGrid next;
+  const double fitted =
+      std::sqrt(area * double(cell_vertices) / double(std::max<uint64_t>(live, 1)));
+  const int64_t least = g.side + (g.side + 3) / 4;  // ceil(5/4 side)
+  next.side = std::min(std::max(least, int64_t(std::min(fitted, double(g.side) * 2))), g.side * 2);
+  for (int a = 0; a < 3; ++a) next.origin[a] = g.origin[a] + g.side / 2;
+  return next;
+}
+
 bool grid_cuts(const CellGrid& g, const std::vector<int32_t>& coords) {
   const size_t n = coords.size() / 3;
   if (n == 0) return false;

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 // The cells of a hierarchical simplification: at every level a grid of cubes over the file's
-// integer coordinates (spec/format.md section 5), its side twice the level below's and its
-// planes half a cell of the level below away from that level's planes.
+// integer coordinates (spec/format.md section 5), its cells holding about as many of the
+// vertices left as the first level's hold of the mesh's, its planes half a cell of the level
+// below away from that level's planes.
 //
 // A collapse is confined to a cell when u, v and every neighbour of both lie in it; such a
 // collapse reads and writes only faces and vertices of its cell, so the collapses of different
@@ -26,6 +27,13 @@ double triangle_area(const int32_t p[3], const int32_t q[3], const int32_t r[3])
 // least 2 and more than extent / 2^20 (so fewer than 2^20 cells per axis), its planes from the
 // smallest coordinates.
 CellGrid cell_grid_for(const std::vector<int32_t>& coords, double area, uint32_t cell_vertices);
+
+// The grid of the level after one on grid g, which left `live` of the mesh's vertices: the
+// side of cells of about `cell_vertices` of them on a surface of `area` (so every level's cells
+// hold about as many vertices as the first level's, and the levels go on until few are left),
+// but at least 5/4 of g's side (levels end) and at most twice it; its planes half of g's side
+// from g's.
+CellGrid next_cell_grid(const CellGrid& g, double area, uint32_t cell_vertices, uint64_t live);
 
 // Whether a grid still cuts the coordinates (more than one cell along some axis).
 bool grid_cuts(const CellGrid& g, const std::vector<int32_t>& coords);

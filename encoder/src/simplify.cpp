@@ -1786,8 +1786,19 @@ bool run_cell_levels(Engine& engine, const SimplifyOptions& options,
     f(*lanes[0]);
     for (std::thread& t : others) t.join();
   };
+  // The vertices a level starts with (every vertex at the first level).
+  auto live_vertices = [&] {
+    uint64_t live = 0;
+    for (uint32_t v = 0; v < n; ++v) live += engine.m.out[v] != kNone;
+    return live;
+  };
+  // Cell levels while the grid cuts the mesh and more than a cell's vertices are left, at most
+  // kMaxCellLevels of them (spec/format.md section 15.1: 32 levels with the root).
+  constexpr size_t kMaxCellLevels = 31;
   for (CellGrid grid = detail::cell_grid_for(coords, area, clusters.vertices);
-       detail::grid_cuts(grid, coords); grid = grid.coarser()) {
+       levels.size() < kMaxCellLevels && detail::grid_cuts(grid, coords);
+       grid = detail::next_cell_grid(grid, area, clusters.vertices, live_vertices())) {
+    if (!levels.empty() && live_vertices() <= clusters.vertices) break;
     levels.push_back({grid, engine.record->size()});
     // The level's cells (ascending keys), their live vertices and faces (a face counts in the
     // cell of its first corner: the faces a cell can remove have all their corners in it).

@@ -39,7 +39,7 @@ before(async () => {
   const late = mkdtempSync(path.join(tmpdir(), 'pmz-web-late-'));
   const lateStream = encodeNative(writeTexturedTorus(late, { texture: 'late.png', kd: LATE_KD }),
     path.join(late, 'late.pmz'));
-  // A terrain with a node table (60 nodes): decoded for the camera, fetched by ranges.
+  // A terrain with a node table (115 nodes): decoded for the camera, fetched by ranges.
   const terrain = path.join(work, 'terrain.ply');
   nodesPmz = path.join(work, 'terrain.pmz');
   execFileSync(path.join(binDir, 'pmz-generate'), ['--faces', '60000', '-q', '-o', terrain]);

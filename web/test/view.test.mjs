@@ -12,7 +12,7 @@ import { after, before, test } from 'node:test';
 import { binDir, importPackage, importThreeLoader, nativeDecode, rootDir, sameBits } from './common.mjs';
 import { serveViewer } from './serve.mjs';
 
-// A terrain of about 60k faces encoded with a node table (clusters of 1000 vertices: 60 nodes).
+// A terrain of about 60k faces encoded with a node table (clusters of 1000 vertices: 115 nodes).
 let nodesPmz, server, base;
 const CLOSE = { eye: [0.2, 0.2, 0.15], target: [0.1, 0.1, 0], width: 800, height: 600, pixelError: 1 };
 const FAR = { eye: [0.5, 0.5, 3], target: [0.5, 0.5, 0], pixelError: 0 };

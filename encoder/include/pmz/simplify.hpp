@@ -78,13 +78,6 @@ struct CellGrid {
   int64_t side = 0;  // > 0 for a grid; 0: one cell, the whole mesh
   int64_t origin[3] = {0, 0, 0};
 
-  // The grid of the next level up: twice the side, its planes half this side away from these.
-  CellGrid coarser() const {
-    CellGrid g;
-    g.side = side * 2;
-    for (int a = 0; a < 3; ++a) g.origin[a] = origin[a] + side / 2;
-    return g;
-  }
   // The cell of integer coordinates c, the three indices packed 21 bits each (taken modulo
   // 2^21: grids are made with fewer cells than that per axis); 0 for every c when side is 0.
   uint64_t cell(const int32_t c[3]) const {
@@ -117,12 +110,13 @@ struct SimplifyOptions {
   // Hierarchical simplification (experimental; the encoder side of a cluster format). With
   // vertices > 0 and a mesh of more than twice that many vertices, the engine runs in levels:
   // the first on a grid of cells of about `vertices` vertices each (encoder/src/cluster_grid.hpp),
-  // each next on a grid of twice the side whose planes lie between the last one's, until a grid
-  // no longer cuts the mesh; then one level on the whole mesh, as without clusters. Within a
-  // level a collapse is legal only when u, v and every neighbour of both lie in one cell, and each
-  // cell is simplified on its own (its own heap and guard bound; the result does not depend on
-  // the other cells) until its cheapest collapse costs more than the level's threshold (the
-  // cost_quantile of the keys of the vertices inside cells at the level's start; 1: none) or
+  // each next on a wider grid (5/4 to twice the side) whose cells hold about `vertices` of the
+  // vertices left and whose planes lie between the last one's, until a grid no longer cuts the
+  // mesh or at most `vertices` are left; then one level on the whole mesh, as without clusters.
+  // Within a level a collapse is legal only when u, v and every neighbour of both lie in one cell,
+  // and each cell is simplified on its own (its own heap and guard bound; the result does not
+  // depend on the other cells) until its cheapest collapse costs more than the level's threshold
+  // (the cost_quantile of the keys of the vertices inside cells at the level's start; 1: none) or
   // its faces have dropped to phase_ratio of its faces at the level's start (or no legal
   // collapse is left in it). Cells are cut on the writer's integer coordinates:
   // position_bits must be the writer's (WriteOptions::position_bits).
