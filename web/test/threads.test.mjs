@@ -16,7 +16,7 @@ import { pathToFileURL } from 'node:url';
 import { binDir, importPackage, nativeDecode, sameBits, webDir } from './common.mjs';
 import { launchChromium, pageErrors, serveViewer } from './serve.mjs';
 
-// A terrain of about 60k faces with a node table (clusters of 1000 vertices: 115 nodes).
+// A terrain of about 60k faces with a node table (clusters of 1000 vertices: about a hundred nodes).
 let nodesPmz, bytes;
 before(() => {
   const dir = mkdtempSync(path.join(os.tmpdir(), 'pmz-threads-'));
