@@ -91,7 +91,8 @@ bool Decoder::Impl::first_apply(Frontier& f, uint64_t i, bool resume) {
       // nodes are merged in file order.)
       f.ring_work += k;
       if (!serial) f.rings.push_back(k);
-      if (f.ring_work > kRingWorkPerSplit * (i + 1) + kRingWorkSlack)
+      if (f.ring_work >
+          kRingWorkPerSplit * uint64_t(int64_t(i + 1) + f.ring_shift) + kRingWorkSlack)
         return stop(Status::limit_exceeded, kValences);
       // Decoded symbols cannot be put back: allocate what wedge_ranks needs before decoding them
       // (an allocation failure then leaves this split to retry, not a symbol lost).

@@ -132,6 +132,10 @@ struct Decoder::Impl {
     uint64_t group_first = 0;  // the first split of the group being found
     bool choice_ok = false;    // its scan can continue (else splits without a vertex are refused)
     uint64_t ring_work = 0;    // sum of ring sizes over first applications
+    // The ring-work bound allows kRingWorkPerSplit per first application: split i is the
+    // (i + 1 + ring_shift)-th (a view's node worker: its node's place among the splits the view
+    // first applied, in whatever order the view took the nodes; otherwise 0, file order).
+    int64_t ring_shift = 0;
     // Bounding box of the coordinates, its largest side as wedge_scratch.extent (64-bit scores
     // unchecked).
     int32_t box_lo[3] = {INT32_MAX, INT32_MAX, INT32_MAX},
@@ -242,6 +246,7 @@ struct Decoder::Impl {
     std::vector<float> priority;  // per node: pixels its error spans in the last view
     std::vector<uint32_t> fetch;  // see Decoder::nodes_to_fetch
     uint64_t available = 0, applied_splits = 0, ring_work = 0;
+    uint64_t first_applied = 0;  // splits a view first-applied (the ring-work bound's count)
     uint32_t applied_nodes = 0;
     uint32_t id_nodes = 0;     // the mesh arrays hold the ids of nodes [0, id_nodes)
     uint64_t face_budget = 0;  // see Decoder::set_view_face_budget (0: none)

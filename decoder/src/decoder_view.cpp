@@ -128,6 +128,7 @@ bool Decoder::Impl::first_apply_node(uint32_t k) {
   Frontier& w = *owned;
   start_worker(w, k, node_first_vertex(k), sel.first_face[k],
                frontier.choice.take_epochs(e.splits + 1), cell_list(k), sel.ring_work);
+  w.ring_shift = int64_t(sel.first_applied) - int64_t(first);
   w.lazy = std::move(sel.readers[k]);
   nodes.models[k]->inherit(*nodes.first_models);
   first_apply_worker(w, last);
@@ -144,6 +145,7 @@ bool Decoder::Impl::first_apply_node(uint32_t k) {
     return false;
   }
   sel.ring_work = w.ring_work;
+  sel.first_applied += e.splits;
   sel.sectors[k].assign(w.sectors.begin(), w.sectors.end());
   sel.decoded[k] = 1;
   nodes.models[k].reset();
