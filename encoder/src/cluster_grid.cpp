@@ -36,7 +36,9 @@ CellGrid next_cell_grid(const CellGrid& g, double area, uint32_t cell_vertices, 
   const double fitted =
       std::sqrt(area * double(cell_vertices) / double(std::max<uint64_t>(live, 1)));
   const int64_t least = g.side + (g.side + 3) / 4;  // ceil(5/4 side)
-  next.side = std::min(std::max(least, int64_t(std::min(fitted, double(g.side) * 2))), g.side * 2);
+  // (least <= 2 side for every side >= 1; fitted is clamped before the conversion, where a
+  // handful of live vertices would overflow it)
+  next.side = std::max(least, int64_t(std::min(fitted, double(g.side) * 2)));
   for (int a = 0; a < 3; ++a) next.origin[a] = g.origin[a] + g.side / 2;
   return next;
 }

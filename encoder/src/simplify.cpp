@@ -1795,10 +1795,11 @@ bool run_cell_levels(Engine& engine, const SimplifyOptions& options,
   // Cell levels while the grid cuts the mesh and more than a cell's vertices are left, at most
   // kMaxCellLevels of them (spec/format.md section 15.1: 32 levels with the root).
   constexpr size_t kMaxCellLevels = 31;
+  uint64_t live = live_vertices();
   for (CellGrid grid = detail::cell_grid_for(coords, area, clusters.vertices);
        levels.size() < kMaxCellLevels && detail::grid_cuts(grid, coords);
-       grid = detail::next_cell_grid(grid, area, clusters.vertices, live_vertices())) {
-    if (!levels.empty() && live_vertices() <= clusters.vertices) break;
+       live = live_vertices(), grid = detail::next_cell_grid(grid, area, clusters.vertices, live)) {
+    if (!levels.empty() && live <= clusters.vertices) break;
     levels.push_back({grid, engine.record->size()});
     // The level's cells (ascending keys), their live vertices and faces (a face counts in the
     // cell of its first corner: the faces a cell can remove have all their corners in it).
