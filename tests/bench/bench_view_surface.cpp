@@ -1,11 +1,14 @@
 // SPDX-License-Identifier: MIT
-// bench-view-surface MESH EX,EY,EZ,TX,TY,TZ [--surface F] [--size WxH] [--fov DEG]: how much of
-// MESH's surface a camera shows, as a fraction of its area: the faces that face the eye, whose
-// centroid lies in the frustum and is not hidden behind other faces (a depth buffer at a quarter
-// of the viewport's resolution; a face too small to cover a pixel centre is drawn at its
-// centroid's pixel). With --surface, the eye slides along the line from the target through the
-// given eye to where the camera shows fraction F of the surface (the close-up of a view benchmark,
-// found the same way on any mesh). Prints one JSON line with the camera and the fraction.
+// bench-view-surface MESH EX,EY,EZ,TX,TY,TZ [--surface F] [--onto-surface] [--size WxH]
+// [--fov DEG]: how much of MESH's surface a camera shows, as a fraction of its area: the faces that
+// face the eye, whose centroid lies in the frustum and is not hidden behind other faces (a depth
+// buffer at a quarter of the viewport's resolution; a face too small to cover a pixel centre is
+// drawn at its centroid's pixel). With --surface, the eye slides along the line from the target
+// through the given eye to where the camera shows fraction F of the surface (the close-up of a view
+// benchmark, found the same way on any mesh). With --onto-surface, the target first moves to where
+// the ray from the eye through it first meets the surface (a user looks at the surface and zooms
+// in; a target inside a flat model's box may lie under its surface). Prints one JSON line with the
+// camera and the fraction.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -118,6 +121,37 @@ double visible_fraction(const pmz::IndexedMesh& mesh, const Camera& cam) {
   return total > 0 ? shown / total : 0;
 }
 
+// The first point where the ray from `eye` through `target` meets a face of `mesh` (Moller and
+// Trumbore), written to `hit`; false when it meets none.
+bool first_hit(const pmz::IndexedMesh& mesh, const float eye[3], const float target[3],
+               float hit[3]) {
+  double d[3], best = std::numeric_limits<double>::infinity();
+  for (int a = 0; a < 3; ++a) d[a] = double(target[a]) - eye[a];
+  for (size_t f = 0; f < mesh.indices.size() / 3; ++f) {
+    const float* p[3];
+    for (int c = 0; c < 3; ++c) p[c] = &mesh.positions[size_t(mesh.indices[f * 3 + c]) * 3];
+    double e1[3], e2[3], s[3];
+    for (int a = 0; a < 3; ++a)
+      e1[a] = double(p[1][a]) - p[0][a], e2[a] = double(p[2][a]) - p[0][a],
+      s[a] = double(eye[a]) - p[0][a];
+    const double h[3] = {d[1] * e2[2] - d[2] * e2[1], d[2] * e2[0] - d[0] * e2[2],
+                         d[0] * e2[1] - d[1] * e2[0]};
+    const double det = e1[0] * h[0] + e1[1] * h[1] + e1[2] * h[2];
+    if (det == 0) continue;
+    const double u = (s[0] * h[0] + s[1] * h[1] + s[2] * h[2]) / det;
+    if (u < 0 || u > 1) continue;
+    const double q[3] = {s[1] * e1[2] - s[2] * e1[1], s[2] * e1[0] - s[0] * e1[2],
+                         s[0] * e1[1] - s[1] * e1[0]};
+    const double v = (d[0] * q[0] + d[1] * q[1] + d[2] * q[2]) / det;
+    if (v < 0 || u + v > 1) continue;
+    const double t = (e2[0] * q[0] + e2[1] * q[1] + e2[2] * q[2]) / det;
+    if (t > 0 && t < best) best = t;
+  }
+  if (!std::isfinite(best)) return false;
+  for (int a = 0; a < 3; ++a) hit[a] = float(eye[a] + best * d[a]);
+  return true;
+}
+
 bool parse_floats(const char* text, float* out, int n) {
   std::string s(text);
   for (int i = 0; i < n; ++i) {
@@ -137,8 +171,10 @@ bool parse_floats(const char* text, float* out, int n) {
 
 int main(int argc, char** argv) {
   if (argc < 3) {
-    std::fprintf(
-        stderr, "usage: %s MESH EX,EY,EZ,TX,TY,TZ [--surface F] [--size WxH] [--fov DEG]\n", kTool);
+    std::fprintf(stderr,
+                 "usage: %s MESH EX,EY,EZ,TX,TY,TZ [--surface F] [--onto-surface] [--size WxH] "
+                 "[--fov DEG]\n",
+                 kTool);
     return 2;
   }
   Camera cam;
@@ -147,9 +183,15 @@ int main(int argc, char** argv) {
   std::memcpy(cam.eye, c, sizeof cam.eye);
   std::memcpy(cam.target, c + 3, sizeof cam.target);
   double surface = -1;
-  for (int i = 3; i + 1 < argc; i += 2) {
+  bool onto_surface = false;
+  for (int i = 3; i < argc; i += 2) {
     const std::string opt = argv[i];
-    if (opt == "--surface") {
+    if (opt == "--onto-surface") {
+      onto_surface = true;
+      --i;  // (no value)
+    } else if (i + 1 >= argc) {
+      return pmz_bench::fail(kTool, opt + " takes a value");
+    } else if (opt == "--surface") {
       surface = std::atof(argv[i + 1]);
     } else if (opt == "--fov") {
       cam.fov = float(std::atof(argv[i + 1]));
@@ -166,6 +208,8 @@ int main(int argc, char** argv) {
   pmz::IndexedMesh mesh;
   std::string error;
   if (!pmz::read_mesh(argv[1], mesh, error)) return pmz_bench::fail(kTool, error);
+  if (onto_surface && !first_hit(mesh, cam.eye, cam.target, cam.target))
+    return pmz_bench::fail(kTool, "the ray from the eye through the target meets no face");
   double fraction = visible_fraction(mesh, cam);
   if (surface > 0 && surface < 1) {
     // The visible fraction grows with the distance until the whole front is in view: bisect the
