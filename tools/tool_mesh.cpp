@@ -49,14 +49,22 @@ bool read_mesh_input(const std::string& path, const std::string& stdin_format, I
     progress->update("reading", 0);
     read_progress = [progress](double f) { progress->update("reading", f); };
   }
-  // A file is parsed as it is read (the bar follows the bytes). The parsers go by the path's
-  // extension and look for the files it refers to (MTL, glTF buffers) beside it: stdin is read
-  // whole and goes through a temporary file named accordingly, and messages say "stdin" instead
-  // of its name.
+  // A file is parsed as it is read (the bar follows the bytes), and so is stdin, pipe or not.
+  // The parsers go by the path's extension and look for the files it refers to (MTL) beside it:
+  // stdin is parsed under the name of an empty temporary file with the format's extension, and
+  // messages say "stdin" instead of that name. A glTF from stdin is read whole (as a glTF file
+  // is: its buffers are addressed by offset) into that temporary file.
   ScratchFile scratch;
   PolygonSoup soup;
   bool ok = true;
-  if (from_stdin) {
+  const bool gltf = stdin_format == "gltf" || stdin_format == "glb";
+  if (from_stdin && !gltf) {
+    if (FILE* file = app_support::open_input(path, error))
+      ok = scratch.create({}, app_support::name(), "." + stdin_format, error) &&
+           read_polygon_soup(scratch.path(), file, soup, error, read_progress);
+    else
+      ok = false;
+  } else if (from_stdin) {
     ok = app_support::read_input(path, bytes, error, read_progress) &&
          no_external_gltf_buffers(stdin_format, bytes, error) &&
          scratch.create(bytes, app_support::name(), "." + stdin_format, error) &&

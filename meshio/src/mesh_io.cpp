@@ -117,8 +117,9 @@ bool parse_source(const std::string& path, const std::string& ext, ByteSource& i
   return ok;
 }
 
-// Streams `file` from its position when it can tell its size (a regular file); reads it whole
-// into memory otherwise (a pipe).
+// Streams `file` from its position: a regular file with its size known, anything else (a pipe,
+// a terminal) as a source of unknown size that ends where the file does. (glTF alone is read
+// whole, by parse_source: its buffers are addressed by offset.)
 bool read_open_file(const std::string& path, const std::string& ext, std::FILE* file,
                     PolygonSoup& out, std::string& error,
                     const std::function<void(double)>& progress, size_t window,
@@ -131,15 +132,7 @@ bool read_open_file(const std::string& path, const std::string& ext, std::FILE* 
     return parse_source(path, ext, in, out, error, read_failure);
   }
   std::clearerr(file);
-  std::string data;
-  char buf[1 << 16];
-  size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, file)) > 0) data.append(buf, n);
-  if (std::ferror(file)) {
-    error = read_failure(errno ? errno : EIO);
-    return false;
-  }
-  ByteSource in(data);
+  ByteSource in(file, ByteSource::kUnknownSize, window, progress);
   return parse_source(path, ext, in, out, error, read_failure);
 }
 

@@ -96,6 +96,12 @@ bool read_off_binary(const std::string& path, ByteSource& data, uint32_t extra, 
   // The reported failure: the first layout whose counts fit the file (else the first one's).
   std::string reported;
   bool counts_fit = false;
+  // Each layout is tried from the counts on: a source of unknown size is copied to a temporary
+  // file first, to know its size and seek back.
+  if (!data.make_seekable(error)) {
+    error = path + ": " + error;
+    return false;
+  }
   const uint64_t start = data.offset();
   for (int layout = 0; layout < 4; ++layout) {
     bool big_endian = layout == 1 || layout == 2, face_colors = layout == 1 || layout == 3;
@@ -157,9 +163,9 @@ bool read_off(const std::string& path, ByteSource& data, PolygonSoup& out, std::
     return false;
   }
   // Each vertex line needs at least 6 bytes, each face line at least 8.
-  out.positions.reserve(plausible(uint64_t(nv), data.remaining(), 6) * 3);
-  out.face_offsets.reserve(plausible(uint64_t(nf), data.remaining(), 8) + 1);
-  out.corners.reserve(plausible(uint64_t(nf), data.remaining(), 8) * 3);
+  out.positions.reserve(plausible(uint64_t(nv), data.reservable(), 6) * 3);
+  out.face_offsets.reserve(plausible(uint64_t(nf), data.reservable(), 8) + 1);
+  out.corners.reserve(plausible(uint64_t(nf), data.reservable(), 8) * 3);
   for (int64_t v = 0; v < nv; ++v) {
     if (!lines.next_nonblank(line)) {
       error = path + ": file ends after " + std::to_string(v) + " of " + std::to_string(nv) +

@@ -127,6 +127,7 @@ struct PlyBody {
     return true;
   }
   uint64_t remaining() const { return in.remaining(); }
+  uint64_t reservable() const { return in.reservable(); }
 };
 
 // Scale of an integer colour channel (uchar 0..255, ushort 0..65535); floats are 0..1 already.
@@ -261,15 +262,21 @@ PlyRoles assign_roles(const PlyElement& e) {
   return r;
 }
 
+std::string too_many_error(const std::string& path, const PlyElement& e) {
+  return path + ": PLY element '" + e.name + "' declares " + std::to_string(e.count) +
+         " entries, more than the file holds";
+}
+
 // Before an element's data: its attribute pools set up, the properties it must have and its
 // count checked (a count the remaining bytes cannot hold is refused before anything is
-// allocated), room reserved within what the data can hold.
+// allocated; from a source of unknown size, read_ply refuses it once the data has ended), room
+// reserved within what the data can hold.
 bool begin_element(const std::string& path, const PlyElement& e, const PlyRoles& roles,
                    const PlyBody& body, PolygonSoup& out, std::string& error) {
   SoupAttributes& attrs = out.attributes;
   if (roles.is_vertex) {
     // Bounded by the bytes left, as the positions below (a huge count threw length_error).
-    if (roles.has_normals()) attrs.normals.reserve(plausible(e.count, body.remaining(), 2) * 3);
+    if (roles.has_normals()) attrs.normals.reserve(plausible(e.count, body.reservable(), 2) * 3);
     if (roles.has_uv()) attrs.texcoords.assign(1, {});
     attrs.color_components = roles.color_components();
   }
@@ -291,11 +298,10 @@ bool begin_element(const std::string& path, const PlyElement& e, const PlyRoles&
   }
   const size_t min_bytes = std::max<size_t>(roles.min_bytes, 1);
   if (!body.ascii && e.count > body.remaining() / min_bytes) {
-    error = path + ": PLY element '" + e.name + "' declares " + std::to_string(e.count) +
-            " entries, more than the file holds";
+    error = too_many_error(path, e);
     return false;
   }
-  size_t reserve = plausible(e.count, body.remaining(), body.ascii ? 2 : min_bytes);
+  size_t reserve = plausible(e.count, body.reservable(), body.ascii ? 2 : min_bytes);
   if (roles.is_vertex) out.positions.reserve(out.positions.size() + reserve * 3);
   if (roles.is_face) out.face_offsets.reserve(reserve + 1), out.corners.reserve(reserve * 3);
   return true;
@@ -385,12 +391,18 @@ bool read_instance(const std::string& path, const PlyElement& e, const PlyRoles&
       error = malformed_error(path, e, n);
       return false;
     }
+    // From a source of unknown size, a count the bytes after it cannot hold is refused when the
+    // list fails (its size then learnt), with the message a file of known size gives.
+    const uint64_t list_start = body.in.offset();
+    const bool checked = body.ascii || body.in.size_known();
     for (uint64_t c = 0; c < uint64_t(count); ++c) {
-      if (!body.read(prop.type, v)) {
+      bool ok = body.read(prop.type, v);
+      if (!ok) error = malformed_error(path, e, n);
+      if (ok && take_list_item(path, roles, int(i), v, n, out, error)) continue;
+      if (!checked &&
+          count * double(ply_size(prop.type)) > double(body.in.learn_size() - list_start))
         error = malformed_error(path, e, n);
-        return false;
-      }
-      if (!take_list_item(path, roles, int(i), v, n, out, error)) return false;
+      return false;
     }
   }
   return true;
@@ -483,7 +495,15 @@ bool read_ply(const std::string& path, ByteSource& data, PolygonSoup& out, std::
     if (!begin_element(path, e, roles, body, out, error)) return false;
     have_vertices = have_vertices || roles.is_vertex;
     have_faces = have_faces || roles.is_face;
-    if (!read_element_data(path, e, roles, body, out, error)) return false;
+    // From a source of unknown size, a count the data cannot hold is refused when the data
+    // fails, with begin_element's message, as from a file.
+    const uint64_t start = data.offset();
+    const bool checked = body.ascii || data.size_known();
+    if (!read_element_data(path, e, roles, body, out, error)) {
+      if (!checked && e.count > (data.learn_size() - start) / std::max<size_t>(roles.min_bytes, 1))
+        error = too_many_error(path, e);
+      return false;
+    }
   }
   const bool per_vertex = index_vertex_attributes(out);
   if (!have_vertices || !have_faces) {

@@ -55,13 +55,23 @@ bool add_stl_corner(PolygonSoup& out, std::unordered_map<uint64_t, std::vector<u
 
 bool read_stl(const std::string& path, ByteSource& data, PolygonSoup& out, std::string& error) {
   std::unordered_map<uint64_t, std::vector<uint32_t>> buckets;
+  std::string_view head = data.peek(512);  // a shorter source has a known size from here
+  std::string_view first = head.substr(0, 512);
+  first = next_token(first);
+  // Binary files may start with "solid" too, and then the size decides: a source of unknown
+  // size is copied to a temporary file to know it. Any other source of unknown size is binary
+  // and read as it comes; its count is checked when its data ends.
+  const bool size_known = data.size_known();
+  if (!size_known && first == "solid") {
+    if (!data.make_seekable(error)) {
+      error = path + ": " + error;
+      return false;
+    }
+    head = data.peek(512);
+  }
   const uint64_t size = data.remaining();
-  std::string_view head = data.peek(512);
-  uint32_t declared = size >= 84 && head.size() >= 84 ? load_le32(head.data() + 80) : 0;
-  bool size_matches = size >= 84 && (size - 84) / 50 == declared && (size - 84) % 50 == 0;
-  head = head.substr(0, 512);
-  std::string_view first = next_token(head);
-  // Binary files may start with "solid" too; an exact size match decides.
+  const uint32_t declared = size >= 84 && head.size() >= 84 ? load_le32(head.data() + 80) : 0;
+  const bool size_matches = size >= 84 && (size - 84) / 50 == declared && (size - 84) % 50 == 0;
   if (!size_matches && first == "solid") {
     Lines lines{data, 0, 0};
     std::string_view line;
@@ -99,19 +109,22 @@ bool read_stl(const std::string& path, ByteSource& data, PolygonSoup& out, std::
     error = path + ": not an STL file (too short for binary, no 'solid' header)";
     return false;
   }
-  if ((size - 84) / 50 < declared) {
+  auto too_few = [&](uint64_t total) {
     error = path + ": binary STL declares " + std::to_string(declared) +
-            " triangles but holds only " + std::to_string((size - 84) / 50);
+            " triangles but holds only " + std::to_string((total - 84) / 50);
     return false;
-  }
+  };
+  if ((size - 84) / 50 < declared) return too_few(size);
   data.skip(std::min<size_t>(84, data.peek(84).size()));
-  out.positions.reserve(size_t(declared) * 3);  // bounded by the file size, checked above
-  out.corners.reserve(size_t(declared) * 3);
-  out.face_offsets.reserve(size_t(declared) + 1);
-  buckets.reserve(declared);
+  const size_t reserve = plausible(declared, data.reservable(), 50);  // checked above if known
+  out.positions.reserve(reserve * 3);
+  out.corners.reserve(reserve * 3);
+  out.face_offsets.reserve(reserve + 1);
+  buckets.reserve(reserve);
   for (uint32_t t = 0; t < declared; ++t) {
     std::string_view record = data.peek(50);
     if (record.size() < 50) {
+      if (!size_known) return too_few(data.learn_size());
       error = path + ": binary STL ends in triangle " + std::to_string(t);
       return false;
     }
@@ -120,7 +133,11 @@ bool read_stl(const std::string& path, ByteSource& data, PolygonSoup& out, std::
     for (int c = 0; c < 3; ++c) {
       float p[3];
       for (int k = 0; k < 3; ++k) p[k] = std::bit_cast<float>(load_le32(rec + c * 12 + k * 4));
-      if (!add_stl_corner(out, buckets, p, t, path, error)) return false;
+      if (add_stl_corner(out, buckets, p, t, path, error)) continue;
+      // A count the data cannot hold is the error reported first, as from a file.
+      if (!size_known && (data.learn_size() - 84) / 50 < declared)
+        return too_few(data.learn_size());
+      return false;
     }
     end_face(out);
   }

@@ -55,7 +55,8 @@ ByteSource::ByteSource(std::FILE* file, uint64_t size, size_t window,
       file_(file),
       start_(std::ftell(file)),
       window_(std::max<size_t>(window, 1)),
-      progress_(std::move(progress)) {}
+      progress_(std::move(progress)),
+      spilled_(nullptr, &std::fclose) {}
 
 std::string_view ByteSource::fill(size_t n) {
   if (!file_ || eof_) return view();
@@ -65,19 +66,59 @@ std::string_view ByteSource::fill(size_t n) {
   base_ += pos_, pos_ = 0, end_ = kept;
   if (buffer_.size() < std::max(n, window_))
     buffer_.resize(std::max({n, window_, buffer_.size() * 2}));
+  // A short read is retried: only the end of the file or an error ends the source (a read
+  // interrupted by a signal is retried too).
   while (end_ < n && !eof_) {
+    errno = 0;
     const size_t got = std::fread(buffer_.data() + end_, 1, buffer_.size() - end_, file_);
     end_ += got;
-    if (got == 0) {
-      eof_ = true;
-      if (std::ferror(file_)) errno_ = errno ? errno : EIO;
+    if (got > 0) continue;
+    if (std::ferror(file_) && errno == EINTR) {
+      std::clearerr(file_);
+      continue;
     }
+    eof_ = true;
+    if (std::ferror(file_)) errno_ = errno ? errno : EIO;
   }
-  // The file's true end, should it differ from the size it had when opened.
+  // The file's true end, should it differ from the size it had when opened (or be unknown).
   if (eof_ || base_ + end_ > size_) size_ = base_ + end_;
   data_ = std::string_view(buffer_.data(), end_);
-  if (progress_ && size_) progress_(double(base_ + end_) / double(size_));
+  if (progress_ && size_ && size_known()) progress_(double(base_ + end_) / double(size_));
   return view();
+}
+
+uint64_t ByteSource::learn_size() {
+  while (!size_known()) {
+    skip(end_ - pos_);
+    fill(window_);
+  }
+  return size_;
+}
+
+bool ByteSource::make_seekable(std::string& error) {
+  if (size_known()) return true;
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> copy(std::tmpfile(), &std::fclose);
+  auto fail = [&](int err) {
+    error = std::string("cannot buffer the input: ") + std::strerror(err);
+    return false;
+  };
+  if (!copy) return fail(errno);
+  const uint64_t at = offset();
+  uint64_t copied = 0;
+  for (std::string_view w = peek(1); !w.empty(); w = peek(1)) {
+    if (std::fwrite(w.data(), 1, w.size(), copy.get()) != w.size()) return fail(errno);
+    copied += w.size();
+    skip(w.size());
+  }
+  if (errno_) return false;
+  if (std::fflush(copy.get()) != 0 || std::fseek(copy.get(), 0, SEEK_SET) != 0) return fail(errno);
+  spilled_ = std::move(copy);
+  file_ = spilled_.get();
+  start_ = -long(at);
+  base_ = at, pos_ = end_ = 0, eof_ = false;
+  size_ = at + copied;
+  data_ = std::string_view();
+  return true;
 }
 
 std::string_view ByteSource::rest() {

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <functional>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -32,11 +33,16 @@ bool read_file(const std::string& path, std::string& data, std::string& error);
 // than the window grows it). A view it returns stays valid until the next peek or seek.
 class ByteSource {
  public:
-  explicit ByteSource(std::string_view data) : data_(data), end_(data.size()), size_(data.size()) {}
+  static constexpr uint64_t kUnknownSize = UINT64_MAX;
+  explicit ByteSource(std::string_view data)
+      : data_(data), end_(data.size()), size_(data.size()), spilled_(nullptr, &std::fclose) {}
   // `file` from its current position, which holds `size` bytes from there (a regular file's
-  // size: a file that ends sooner ends the source there). `progress`, if set, is told the
-  // fraction read at each refill.
+  // size: a file that ends sooner ends the source there), or kUnknownSize (a pipe): the source
+  // then ends where the file does, and its size is known from then on. `progress`, if set, is
+  // told the fraction read at each refill of a source of known size.
   ByteSource(std::FILE* file, uint64_t size, size_t window, std::function<void(double)> progress);
+  ByteSource(const ByteSource&) = delete;
+  ByteSource& operator=(const ByteSource&) = delete;
   // The bytes from the cursor, at least min(n, remaining()) of them (fewer: a read failed).
   std::string_view peek(size_t n) { return end_ - pos_ >= n ? view() : fill(n); }
   // What is in the window from the cursor (all of it from memory).
@@ -45,7 +51,24 @@ class ByteSource {
   std::string_view rest();
   void skip(size_t n) { pos_ += n; }  // n <= view().size()
   uint64_t offset() const { return base_ + pos_; }
+  bool size_known() const { return size_ != kUnknownSize; }
+  // The bytes from the cursor to the end; while the size is unknown, kUnknownSize - offset():
+  // more may come, and no count is refused for the bytes it needs.
   uint64_t remaining() const { return size_ - offset(); }
+  // What a reservation may count on the input still holding: remaining() when the size is
+  // known; else what the window holds, at least one window's worth (containers reserved that
+  // much grow as the data arrives, so that a count in a header allocates nothing by itself).
+  uint64_t reservable() const {
+    return size_known() ? remaining() : std::max<uint64_t>(end_ - pos_, window_);
+  }
+  // The size of the input. A source of unknown size is read to its end first, the bytes
+  // dropped (the cursor then is at the end): for an error message that needs the size.
+  uint64_t learn_size();
+  // Makes the size known and seek() work: a source of unknown size is copied from the cursor
+  // on into an unnamed temporary file and read from there (memory stays bounded; the disk holds
+  // the copy). False with `error` set ("cannot buffer the input: reason") when the copy fails;
+  // a failed read is read_errno()'s.
+  bool make_seekable(std::string& error);
   // Back (or on) to `offset` from the start. False when the file cannot seek.
   bool seek(uint64_t offset);
   // The errno of a failed read (the source then ends where it failed), or 0.
@@ -64,6 +87,7 @@ class ByteSource {
   int errno_ = 0;
   std::vector<char> buffer_;
   std::function<void(double)> progress_;
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> spilled_;  // make_seekable's copy
 };
 
 // ---- text scanning ----
@@ -161,8 +185,9 @@ inline bool push_vertex(PolygonSoup& out, const float p[3], const std::string& p
 
 inline void end_face(PolygonSoup& out) { out.face_offsets.push_back(uint32_t(out.corners.size())); }
 
-// Capacity to reserve for `declared` items that each take at least `min_bytes` of `available`:
-// a header cannot make us allocate more than the data could possibly hold.
+// Capacity to reserve for `declared` items that each take at least `min_bytes` of `available`
+// (a ByteSource's reservable()): a header cannot make us allocate more than the data could
+// possibly hold, or, from a source of unknown size, more than a window's worth.
 inline size_t plausible(uint64_t declared, uint64_t available, size_t min_bytes) {
   return size_t(std::min<uint64_t>(declared, available / min_bytes));
 }

@@ -2,15 +2,24 @@
 // Reading a mesh file as a stream (pmz/mesh_stream.hpp): through a window of any size, down to
 // one byte, the readers give the soup (or the error) that the same bytes give from memory, for
 // files whose lines, tokens and records cross the window's boundaries; a file cut at any byte
-// gives the same one line; a file larger than the default window reads as from memory.
+// gives the same one line; a file larger than the default window reads as from memory. A pipe,
+// whose size cannot be told, gives the same, and a header that declares far more than a pipe
+// brings allocates nothing for it.
 #include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <bit>
+#include <csignal>
 #include <cstdio>
 #include <fstream>
 #include <iterator>
+#include <new>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "pmz/mesh.hpp"
@@ -40,23 +49,61 @@ void expect_same_soup(const pmz::PolygonSoup& a, const pmz::PolygonSoup& b) {
   EXPECT_EQ(x.material_library, y.material_library);
 }
 
+// `bytes` served through a pipe by a thread, in writes of 1 to 97 bytes (the reader sees short
+// reads); the read end as a FILE, whose size cannot be told. The writer stops when the reader
+// closes its end early.
+class PipeFeed {
+ public:
+  explicit PipeFeed(std::string bytes) : bytes_(std::move(bytes)) {
+    std::signal(SIGPIPE, SIG_IGN);
+    int fds[2];
+    if (::pipe(fds) != 0) return;
+    file_ = ::fdopen(fds[0], "rb");
+    writer_ = std::thread([this, fd = fds[1]] {
+      for (size_t at = 0, step = 1; at < bytes_.size(); step = step % 97 + 13) {
+        const ssize_t n = ::write(fd, bytes_.data() + at, std::min(step, bytes_.size() - at));
+        if (n <= 0) break;
+        at += size_t(n);
+      }
+      ::close(fd);
+    });
+  }
+  ~PipeFeed() {
+    if (file_) std::fclose(file_);
+    if (writer_.joinable()) writer_.join();
+  }
+  std::FILE* file() const { return file_; }
+
+ private:
+  std::string bytes_;
+  std::FILE* file_ = nullptr;
+  std::thread writer_;
+};
+
+// Where expect_stream_as_memory reads the bytes from.
+enum class Via { disk, memory_file, pipe };
+
 // `bytes` as the file `name` read through a window of `window` bytes, against the same bytes
-// parsed from memory: the same result, soup or error. Returns whether it read. `on_disk`: a
-// file written to the temporary directory, else the bytes through fmemopen (a seekable FILE).
+// parsed from memory: the same result, soup or error. Returns whether it read. `via`: a file
+// written to the temporary directory, the bytes through fmemopen (a seekable FILE), or a pipe.
 bool expect_stream_as_memory(const TempDir& tmp, const std::string& name, std::string bytes,
-                             size_t window, bool on_disk = true) {
-  const std::string path = on_disk || bytes.empty() ? tmp.write(name, bytes) : tmp.path(name);
+                             size_t window, Via via = Via::disk) {
+  const bool on_disk = via == Via::disk || (via == Via::memory_file && bytes.empty());
+  const std::string path = on_disk ? tmp.write(name, bytes) : tmp.path(name);
   pmz::PolygonSoup memory, streamed;
   std::string memory_error, stream_error;
   const bool memory_ok = pmz::parse_polygon_soup(path, bytes, memory, memory_error);
-  std::FILE* f = on_disk || bytes.empty() ? std::fopen(path.c_str(), "rb")
-                                          : ::fmemopen(bytes.data(), bytes.size(), "rb");
+  PipeFeed feed(via == Via::pipe ? bytes : std::string());
+  std::FILE* f = via == Via::pipe ? feed.file()
+                 : on_disk        ? std::fopen(path.c_str(), "rb")
+                                  : ::fmemopen(bytes.data(), bytes.size(), "rb");
   EXPECT_NE(f, nullptr);
   if (!f) return false;
   const bool stream_ok = pmz::read_polygon_soup(path, f, streamed, stream_error, {}, window);
-  std::fclose(f);
-  EXPECT_EQ(stream_ok, memory_ok) << name << " window " << window << ": " << stream_error;
-  EXPECT_EQ(stream_error, memory_error) << name << " window " << window;
+  if (via != Via::pipe) std::fclose(f);
+  const char* how = via == Via::pipe ? " (pipe)" : "";
+  EXPECT_EQ(stream_ok, memory_ok) << name << how << " window " << window << ": " << stream_error;
+  EXPECT_EQ(stream_error, memory_error) << name << how << " window " << window;
   if (memory_ok && stream_ok) expect_same_soup(streamed, memory);
   return stream_ok;
 }
@@ -205,20 +252,23 @@ std::vector<Sample> samples(const Grid& g) {
 TEST(MeshStream, AnyWindowReadsTheSoupOfMemory) {
   TempDir tmp;
   for (const Sample& s : samples(Grid{6}))
-    for (size_t window : {1, 2, 3, 5, 7, 16, 61, 256, 4096})
+    for (size_t window : {1, 2, 3, 5, 7, 11, 16, 61, 256, 4096}) {
       EXPECT_TRUE(expect_stream_as_memory(tmp, s.name, s.bytes, window)) << s.name;
+      EXPECT_TRUE(expect_stream_as_memory(tmp, s.name, s.bytes, window, Via::pipe)) << s.name;
+    }
 }
 
 TEST(MeshStream, AFileCutAtAnyByteGivesTheErrorOfMemory) {
   TempDir tmp;
   for (const Sample& s : samples(Grid{3}))
     for (size_t cut = 0; cut < s.bytes.size(); ++cut)
-      for (size_t window : {1, 7, 64}) {
-        const bool ok = expect_stream_as_memory(tmp, s.name, s.bytes.substr(0, cut), window, false);
-        if (s.truncation_refused) {
-          EXPECT_FALSE(ok) << s.name << " cut at " << cut;
+      for (size_t window : {1, 7, 64})
+        for (Via via : {Via::memory_file, Via::pipe}) {
+          const bool ok = expect_stream_as_memory(tmp, s.name, s.bytes.substr(0, cut), window, via);
+          if (s.truncation_refused) {
+            EXPECT_FALSE(ok) << s.name << " cut at " << cut;
+          }
         }
-      }
 }
 
 TEST(MeshStream, TheFuzzRegressionsReadAsFromMemory) {
@@ -231,7 +281,8 @@ TEST(MeshStream, TheFuzzRegressionsReadAsFromMemory) {
     std::ifstream in(entry.path(), std::ios::binary);
     const std::string bytes((std::istreambuf_iterator<char>(in)), {});
     for (size_t window : {1, 3, 64})
-      expect_stream_as_memory(tmp, entry.path().filename().string(), bytes, window);
+      for (Via via : {Via::disk, Via::pipe})
+        expect_stream_as_memory(tmp, entry.path().filename().string(), bytes, window, via);
     ++read;
   }
   EXPECT_GT(read, 0);
@@ -258,19 +309,100 @@ TEST(MeshStream, AFileLargerThanTheWindowReadsAsFromMemory) {
   }
 }
 
-// A file that cannot seek (a pipe) is read whole, with the same result.
-TEST(MeshStream, APipeReadsAsAFile) {
+// Larger than the default window, through a pipe (popen, as a shell pipeline gives it): the soup
+// of the file, in every format; cut inside its last record, the error of the cut file.
+TEST(MeshStream, APipeLargerThanTheWindowReadsAsAFile) {
   TempDir tmp;
-  const std::string bytes = ascii_ply(Grid{5});
-  const std::string path = tmp.write("piped.ply", bytes);
-  std::FILE* pipe = ::popen(("cat '" + path + "'").c_str(), "r");
-  ASSERT_NE(pipe, nullptr);
-  pmz::PolygonSoup piped, memory;
-  std::string error;
-  ASSERT_TRUE(pmz::read_polygon_soup(path, pipe, piped, error, {}, 3)) << error;
-  ::pclose(pipe);
-  ASSERT_TRUE(pmz::parse_polygon_soup(path, bytes, memory, error)) << error;
-  expect_same_soup(piped, memory);
+  for (const Sample& s : samples(Grid{300})) {
+    ASSERT_GT(s.bytes.size(), pmz::kReadWindow) << s.name;
+    for (const std::string& bytes : {s.bytes, s.bytes.substr(0, s.bytes.size() - 10)}) {
+      const std::string path = tmp.write(s.name, bytes);
+      pmz::PolygonSoup from_file, piped;
+      std::string file_error, pipe_error;
+      const bool file_ok = pmz::read_polygon_soup(path, from_file, file_error);
+      std::FILE* pipe = ::popen(("cat '" + path + "'").c_str(), "r");
+      ASSERT_NE(pipe, nullptr);
+      const bool pipe_ok = pmz::read_polygon_soup(path, pipe, piped, pipe_error);
+      ::pclose(pipe);
+      EXPECT_EQ(pipe_ok, file_ok) << s.name << ": " << pipe_error;
+      EXPECT_EQ(pipe_error, file_error) << s.name;
+      if (bytes.size() == s.bytes.size()) {
+        EXPECT_TRUE(file_ok) << s.name << ": " << file_error;
+        EXPECT_EQ(from_file.face_count(), uint32_t(Grid{300}.faces())) << s.name;
+      }
+      if (file_ok && pipe_ok) expect_same_soup(piped, from_file);
+    }
+  }
+}
+
+// Headers declaring billions of entries over a few bytes of data, through a pipe, in a child
+// process whose address space is limited to 256 MB more than it has: each is refused with the
+// error the same bytes give from memory, without allocating for its counts (an allocation of
+// what a count asks fails in the child).
+TEST(MeshStream, AHostileHeaderThroughAPipeAllocatesNothingForItsCounts) {
+  TempDir tmp;
+  const std::string vertex = lef(0) + lef(0) + lef(0);
+  std::string stl(80, ' ');
+  stl += le32(0xFFFFFFFFu) + std::string(50 * 20, '\0');
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"huge-le.ply",
+       "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\n"
+       "property float y\nproperty float z\nproperty float nx\nproperty float ny\n"
+       "property float nz\nelement face 4000000000\nproperty list uchar uint vertex_indices\n"
+       "end_header\n" +
+           vertex + vertex + vertex},
+      {"huge-faces.ply",
+       "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+       "property float y\nproperty float z\nelement face 4000000000\n"
+       "property list uchar uint vertex_indices\nend_header\n" +
+           vertex + vertex + vertex + "\3" + le32(0) + le32(1) + le32(2)},
+      {"huge-list.ply",
+       "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+       "property float y\nproperty float z\nelement face 1\n"
+       "property list uint uint vertex_indices\nend_header\n" +
+           vertex + vertex + vertex + le32(0xFFFFFFF0u) + le32(0) + le32(1) + le32(2)},
+      {"huge.ply",
+       "ply\nformat ascii 1.0\nelement vertex 4000000000\nproperty float x\nproperty float y\n"
+       "property float z\nelement face 4000000000\nproperty list uchar int vertex_indices\n"
+       "end_header\n0 0 0\n1 0 0\n0 1 0\n"},
+      {"huge.off", "OFF\n4000000000 4000000000 0\n0 0 0\n1 0 0\n0 1 0\n"},
+      {"huge-binary.off", "OFF BINARY\n" + le32(0x7FFFFFFF) + le32(0x7FFFFFFF) + le32(0) + vertex},
+      {"huge.stl", stl},
+      {"huge.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3 4000000000\n"}};
+  for (const auto& [name, bytes] : cases) {
+    const std::string path = tmp.path(name);
+    pmz::PolygonSoup soup;
+    std::string memory_error;
+    EXPECT_FALSE(pmz::parse_polygon_soup(path, bytes, soup, memory_error)) << name;
+    ASSERT_FALSE(memory_error.empty()) << name;
+    std::fflush(nullptr);
+    const pid_t child = ::fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+      // 0: the memory error; 1: another error; 2: read; 3: no limit could be set; 4: an
+      // allocation failed.
+      long pages = 0;
+      std::FILE* statm = std::fopen("/proc/self/statm", "r");
+      if (!statm || std::fscanf(statm, "%ld", &pages) != 1) ::_exit(3);
+      std::fclose(statm);
+      const rlim_t limit = rlim_t(pages) * rlim_t(::sysconf(_SC_PAGESIZE)) + (rlim_t(256) << 20);
+      const rlimit as{limit, limit};
+      if (::setrlimit(RLIMIT_AS, &as) != 0) ::_exit(3);
+      try {
+        PipeFeed feed(bytes);
+        pmz::PolygonSoup piped;
+        std::string error;
+        const bool ok = pmz::read_polygon_soup(path, feed.file(), piped, error);
+        ::_exit(ok ? 2 : error == memory_error ? 0 : 1);
+      } catch (const std::bad_alloc&) {
+        ::_exit(4);
+      }
+    }
+    int status = 0;
+    ASSERT_EQ(::waitpid(child, &status, 0), child);
+    ASSERT_TRUE(WIFEXITED(status)) << name << ": the child ended by signal " << WTERMSIG(status);
+    EXPECT_EQ(WEXITSTATUS(status), 0) << name << ": expected \"" << memory_error << "\"";
+  }
 }
 
 }  // namespace

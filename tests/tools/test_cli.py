@@ -125,6 +125,125 @@ def case_encode_from_stdin():
           f"{r.returncode}: {err_text(r)}")
 
 
+def grid_mesh_files(d, n):
+    """An n x n grid (two triangles per cell) written in every format the readers take apart from
+    glTF, ascii and binary: {file name: path}. Written as generated: the test process stays small
+    (the tools it starts would report its resident set as theirs)."""
+    def vert(i):
+        return (i % n * 0.125, i // n * 0.25, ((i * 7919) % 13) * -0.0625)
+
+    def faces():
+        for r in range(n - 1):
+            for c in range(n - 1):
+                a = r * n + c
+                yield (a, a + 1, a + n + 1)
+                yield (a, a + n + 1, a + n)
+
+    nv, nf = n * n, 2 * (n - 1) * (n - 1)
+    text = lambda v: " ".join(repr(x) for x in v)
+    ply_head = ("ply\nformat {} 1.0\nelement vertex %d\nproperty float x\nproperty float y\n"
+                "property float z\nelement face %d\nproperty list uchar int vertex_indices\n"
+                "end_header\n") % (nv, nf)
+
+    def ascii_ply(w):
+        w(ply_head.format("ascii").encode())
+        for i in range(nv):
+            w((text(vert(i)) + "\n").encode())
+        for f in faces():
+            w(b"3 %d %d %d\n" % f)
+
+    def binary_ply(w):
+        w(ply_head.format("binary_little_endian").encode())
+        for i in range(nv):
+            w(struct.pack("<3f", *vert(i)))
+        for f in faces():
+            w(struct.pack("<B3i", 3, *f))
+
+    def obj(w):
+        for i in range(nv):
+            w(("v %s\n" % text(vert(i))).encode())
+        for f in faces():
+            w(b"f %d %d %d\n" % tuple(i + 1 for i in f))
+
+    def off(w):
+        w(b"OFF\n%d %d 0\n" % (nv, nf))
+        for i in range(nv):
+            w((text(vert(i)) + "\n").encode())
+        for f in faces():
+            w(b"3 %d %d %d\n" % f)
+
+    def binary_off(w):
+        w(b"OFF BINARY\n" + struct.pack("<3i", nv, nf, 0))
+        for i in range(nv):
+            w(struct.pack("<3f", *vert(i)))
+        for f in faces():
+            w(struct.pack("<4i", 3, *f))
+
+    def ascii_stl(w):
+        w(b"solid grid\n")
+        for f in faces():
+            w(("facet normal 0 0 1\nouter loop\n" +
+               "".join("vertex %s\n" % text(vert(i)) for i in f) + "endloop\nendfacet\n").encode())
+        w(b"endsolid grid\n")
+
+    def binary_stl(w):
+        w(b" " * 80 + struct.pack("<I", nf))
+        for f in faces():
+            w(struct.pack("<3f", 0, 0, 1) + b"".join(struct.pack("<3f", *vert(i)) for i in f) +
+              b"\0\0")
+
+    writers = {"grid.ply": ascii_ply, "grid-binary.ply": binary_ply, "grid.obj": obj,
+               "grid.off": off, "grid-binary.off": binary_off, "grid.stl": ascii_stl,
+               "grid-binary.stl": binary_stl}
+    paths = {}
+    for name, write in writers.items():
+        paths[name] = os.path.join(d, name)
+        with open(paths[name], "wb") as f:
+            write(f.write)
+    return paths
+
+
+def encode_piped(path, args):
+    """pmz-encode ARGS with the file's bytes on stdin through a pipe (cat | pmz-encode)."""
+    cat = subprocess.Popen(["cat", path], stdout=subprocess.PIPE)
+    r = run([tool("pmz-encode")] + args, stdin=cat.stdout)
+    cat.stdout.close()
+    cat.wait()
+    return r
+
+
+def case_encode_from_a_pipe_in_every_format():
+    # Each reader streams stdin (larger than its 1 MiB window here): a pipe, or a file given as
+    # stdin, encodes to the bytes of the file given by its path; cut short, it gives the error
+    # of the cut file.
+    d = fresh("encode_pipe_formats")
+    for name, path in grid_mesh_files(d, 240).items():
+        fmt = os.path.splitext(name)[1][1:]
+        ref, out = os.path.join(d, name + ".pmz"), os.path.join(d, name + ".stdin.pmz")
+        r = run([tool("pmz-encode"), path, "-o", ref])
+        check(r.returncode == 0, f"pmz-encode {name}: rc={r.returncode} {err_text(r)}")
+        size = os.path.getsize(path)
+        check(size > 1 << 20, f"{name} is not larger than the read window")
+        r = encode_piped(path, ["-", "--format", fmt, "-o", out])
+        check(r.returncode == 0, f"pmz-encode - --format {fmt} ({name}): rc={r.returncode} "
+              f"{err_text(r)}")
+        check(open(out, "rb").read() == open(ref, "rb").read(),
+              f"{name} through a pipe gave another stream than the file")
+        with open(path, "rb") as f:
+            r = run([tool("pmz-encode"), "-", "--format", fmt, "-o", out], stdin=f)
+        check(r.returncode == 0 and open(out, "rb").read() == open(ref, "rb").read(),
+              f"{name} as stdin gave another stream than the file: {err_text(r)}")
+        cut = os.path.join(d, "cut-" + name)
+        shutil.copy(path, cut)
+        os.truncate(cut, size * 2 // 3)
+        r_file = run([tool("pmz-encode"), cut, "-o", out])
+        r_pipe = encode_piped(cut, ["-", "--format", fmt, "-o", out])
+        check(r_file.returncode == r_pipe.returncode and
+              err_text(r_pipe) == err_text(r_file).replace(cut, "stdin"),
+              f"{name} cut short: the pipe said {r_pipe.returncode} {err_text(r_pipe)!r}, the "
+              f"file {r_file.returncode} {err_text(r_file)!r}")
+
+
 def case_compare_from_stdin():
     d = fresh("compare_stdin")
     half = os.path.join(d, "half.obj")

@@ -17,8 +17,11 @@ inline constexpr size_t kReadWindow = size_t(1) << 20;
 
 // read_polygon_soup of an open `file`, from its position to its end (the caller opens and
 // closes it, so it words the errors of opening). `path` names the format (extension) and the
-// messages; a failed read reads "path: cannot read: reason". A file that cannot seek (a pipe)
-// is read whole first. `progress`, if set, is told the fraction of the file read so far.
+// messages; a failed read reads "path: cannot read: reason". A file whose size cannot be told
+// (a pipe, stdin) is read as it comes too, to its end, with the same soup or error as the same
+// bytes from a file; a binary OFF, or an STL that starts with "solid", from such a file is first
+// copied to an unnamed temporary file (their layout depends on the size). `progress`, if set,
+// is told the fraction of a file of known size read so far.
 bool read_polygon_soup(const std::string& path, std::FILE* file, PolygonSoup& out,
                        std::string& error, const std::function<void(double)>& progress = {},
                        size_t window = kReadWindow);
