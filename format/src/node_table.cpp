@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <climits>
 #include <cmath>
+#include <optional>
 #include <tuple>
 
 #include "pmz/coding.hpp"
@@ -187,14 +188,48 @@ std::vector<uint32_t> NodeIndex::parents(uint32_t k) const {
 }
 
 void CellBins::build(const NodeTable& t, uint32_t level, const int32_t* coords, uint32_t count) {
-  const NodeIndex index(t);
   const NodeGrid& g = t.levels[level];
   bins_.assign(t.nodes.size(), {});
+  // The level's nodes by cell in a dense array over the box of their cells: every vertex is looked
+  // up once per level, and a search of the whole table per vertex was most of what decoding in
+  // nodes cost beyond one node. A box too large for its nodes (cells far apart: a table a writer
+  // would not make) is searched instead.
+  int64_t lo[3] = {INT64_MAX, INT64_MAX, INT64_MAX}, hi[3] = {INT64_MIN, INT64_MIN, INT64_MIN};
+  uint64_t level_nodes = 0;
+  for (const NodeEntry& n : t.nodes)
+    if (n.level == level) {
+      ++level_nodes;
+      for (int a = 0; a < 3; ++a)
+        lo[a] = std::min(lo[a], n.cell[a]), hi[a] = std::max(hi[a], n.cell[a]);
+    }
+  if (level_nodes == 0) return;
+  const uint64_t limit = std::max<uint64_t>(uint64_t(1) << 20, 64 * level_nodes);
+  uint64_t dim[3], cells = 1;
+  for (int a = 0; a < 3; ++a) {
+    dim[a] = uint64_t(hi[a] - lo[a]) + 1;  // (cells lie within +-2^32: read_node_table)
+    cells = dim[a] > limit ? limit + 1 : std::min(cells * dim[a], limit + 1);
+  }
+  const bool dense = cells <= limit;
+  constexpr uint32_t kNone = UINT32_MAX;
+  std::vector<uint32_t> node_of(dense ? cells : 0, kNone);
+  auto at = [&](const int64_t cell[3]) {
+    return (uint64_t(cell[2] - lo[2]) * dim[1] + uint64_t(cell[1] - lo[1])) * dim[0] +
+           uint64_t(cell[0] - lo[0]);
+  };
+  for (uint32_t k = 0; dense && k < t.nodes.size(); ++k)
+    if (t.nodes[k].level == level) node_of[at(t.nodes[k].cell)] = k;
+  std::optional<NodeIndex> index;
+  if (!dense) index.emplace(t);
   for (uint32_t v = 0; v < count; ++v) {
     int64_t cell[3] = {0, 0, 0};
+    bool inside = true;
     if (g.side)
-      for (int a = 0; a < 3; ++a) cell[a] = g.index(coords[size_t(v) * 3 + a], a);
-    if (const int64_t k = index.find(level, cell); k >= 0) bins_[size_t(k)].push_back(v);
+      for (int a = 0; a < 3; ++a) {
+        cell[a] = g.index(coords[size_t(v) * 3 + a], a);
+        inside = inside && cell[a] >= lo[a] && cell[a] <= hi[a];
+      }
+    const int64_t k = !dense ? index->find(level, cell) : inside ? int64_t(node_of[at(cell)]) : -1;
+    if (k >= 0 && k != kNone) bins_[size_t(k)].push_back(v);
   }
 }
 

@@ -12,6 +12,7 @@
 #include "pmz/base_codec.hpp"
 #include "pmz/coding.hpp"
 #include "pmz/fan_wedge.hpp"
+#include "pmz/node_table.hpp"
 #include "pmz/progressive_mesh.hpp"
 #include "pmz/range_coder.hpp"
 #include "pmz/split_chunk.hpp"
@@ -1832,4 +1833,53 @@ TEST(WedgeSymbols, ContextsAreTheSpecTable) {
   EXPECT_EQ(rank_context(false, true), 1u);
   EXPECT_EQ(rank_context(true, false), 2u);
   EXPECT_EQ(rank_context(true, true), 3u);
+}
+
+// CellBins puts each vertex in the bin of the node whose cell holds it on the level asked, in
+// ascending order, and no vertex whose cell has no node: on a level whose cells lie close
+// together (looked up in a dense array) and on one whose two cells lie 2^21 cells apart (searched
+// instead), both against a test of every vertex against every node's box.
+TEST(CellBins, EveryVertexInTheBinOfItsCellsNode) {
+  pmz::NodeTable t;
+  t.levels.resize(3);
+  t.levels[0].side = 10;
+  t.levels[0].origin[0] = -3;
+  t.levels[1].side = 1;
+  t.levels[2].side = 0;
+  auto node = [&](uint32_t level, int64_t x, int64_t y, int64_t z) {
+    pmz::NodeEntry n;
+    n.level = level;
+    n.cell[0] = x, n.cell[1] = y, n.cell[2] = z;
+    t.nodes.push_back(n);
+  };
+  node(2, 0, 0, 0);
+  node(1, 0, 0, 0);
+  node(1, int64_t(1) << 21, 0, 0);
+  for (int64_t x = -2; x <= 2; ++x)
+    for (int64_t y = 0; y <= 3; ++y) node(0, x, y, (x + y) % 2);
+  std::mt19937 rng(7);
+  std::vector<int32_t> coords;
+  for (int i = 0; i < 3000; ++i) {
+    coords.push_back(int32_t(rng() % 80) - 40);
+    coords.push_back(int32_t(rng() % 50) - 5);
+    coords.push_back(int32_t(rng() % 30) - 10);
+  }
+  for (int32_t x : {0, 1 << 21, (1 << 21) + 1})  // the level-1 cells and beside one
+    coords.insert(coords.end(), {x, 0, 0});
+  const uint32_t count = uint32_t(coords.size() / 3);
+  pmz::CellBins bins;
+  for (uint32_t level = 0; level < 3; ++level) {
+    bins.build(t, level, coords.data(), count);
+    size_t binned = 0;
+    for (uint32_t k = 0; k < t.nodes.size(); ++k) {
+      if (t.nodes[k].level != level) continue;
+      const pmz::CellBox box(t.levels[level], t.nodes[k].cell);
+      std::vector<uint32_t> want;
+      for (uint32_t v = 0; v < count; ++v)
+        if (box.contains(&coords[size_t(v) * 3])) want.push_back(v);
+      EXPECT_EQ(bins.take(k), want) << "level " << level << ", node " << k;
+      binned += want.size();
+    }
+    EXPECT_GT(binned, level == 1 ? 1u : 100u) << "level " << level;
+  }
 }
