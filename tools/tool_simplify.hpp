@@ -10,11 +10,12 @@
 
 namespace pmz::tool {
 
-// --cluster-vertices auto: cells of about 16,384 vertices for a mesh of at least 65,536
-// vertices, the whole mesh at once below (docs/benchmarks.md, "Nodes": on a 1.2M-face mesh 70
-// nodes for 0.7% more bytes and 1.00x the mean error at 10% of the faces; 4,096-vertex cells
-// cost 2.3% and 1.12x with one heap per level).
-inline constexpr uint32_t kAutoClusterVertices = 16384, kAutoClusterMeshVertices = 65536;
+// --cluster-vertices auto: cells of about 8,192 vertices for a mesh of at least 65,536
+// vertices, the whole mesh at once below. Smaller cells let a view fetch less around what it
+// shows and cost bytes (docs/benchmarks.md, "Nodes" and "Decoding for a view": against 16,384,
+// a close-up of a 4.8M-face scan reads about two thirds of the bytes, for 1.5-2% more bytes;
+// 4,096 costs 5%, past the 1.05x that a mesh in nodes may cost over one node).
+inline constexpr uint32_t kAutoClusterVertices = 8192, kAutoClusterMeshVertices = 65536;
 
 struct SimplifierCli {
   std::string metric = "guarded";
@@ -70,7 +71,7 @@ struct SimplifierCli {
                    "about as many of the vertices left, up to the whole mesh once that many are "
                    "left, and write the stream in nodes that decode "
                    "independently (spec/format.md section 15); 0: the whole mesh at once, one "
-                   "node; auto: 16384 for meshes of at least 65536 vertices, else 0")
+                   "node; auto: 8192 for meshes of at least 65536 vertices, else 0")
         ->check(CLI::IsMember({"auto"}) | CLI::Range(0u, 1u << 30))
         ->capture_default_str();
     app.add_option("--cell-threads", cell_threads,
