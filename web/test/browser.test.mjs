@@ -13,12 +13,13 @@ import path from 'node:path';
 import { after, before, test } from 'node:test';
 
 import { CHECKER_BLUE, CHECKER_RED, binDir, demoPmz, encodeNative, importPackage, nativeArrays, nativeDecode,
-  webDir, writeTexturedTorus, writeTiledPlane } from './common.mjs';
+  webDir, writeBumpyTorus, writeTexturedTorus, writeTiledPlane } from './common.mjs';
 import { launchChromium, serveViewer } from './serve.mjs';
 
 const RATE = 10 * 1024;  // bytes per second: the 80 KB sample takes about 8 s (frames are slow on a loaded machine)
 let server, browser;
 let nodesPmz, nodeCount;
+let torusPmz, torusNodes;  // a closed mesh in small nodes (no background may show through it)
 
 let textured;  // the seamed textured torus (red / blue checkerboard) as .pmz, checker.png beside it
 // The sample's first TRUNCATED_BYTES bytes (`head -c`): a truncated stream whose last good level
@@ -47,8 +48,13 @@ before(async () => {
   execFileSync(path.join(binDir, 'pmz-encode'), [terrain, '--cluster-vertices', '1000', '-o', nodesPmz],
     { stdio: ['ignore', 'ignore', 'inherit'] });
   nodeCount = JSON.parse(execFileSync(path.join(binDir, 'pmz-info'), ['--json', nodesPmz])).nodes;
+  torusPmz = path.join(work, 'torus.pmz');
+  execFileSync(path.join(binDir, 'pmz-encode'), [writeBumpyTorus(work), '--cluster-vertices', '300', '-o', torusPmz],
+    { stdio: ['ignore', 'ignore', 'inherit'] });
+  torusNodes = JSON.parse(execFileSync(path.join(binDir, 'pmz-info'), ['--json', torusPmz])).nodes;
   server = await serveViewer(path.join(webDir, 'dist', 'viewer'), { 'sample.pmz': demoPmz(),
     'nodes.pmz': { file: nodesPmz, bytesPerSecond: Infinity },
+    'torus.pmz': { file: torusPmz, bytesPerSecond: Infinity },
     'front.pmz': { file: nodesPmz, bytesPerSecond: Infinity, range: 'front' },
     'textured.pmz': textured, 'checker.png': path.join(work, 'checker.png'),
     // Served at once, as from a local server.
@@ -76,7 +82,8 @@ const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 
 // What the page shows (a screenshot: the composited page, the canvas drawn in a worker too) in
 // the band between the overlay and the controls, as a pmzSnapshot()-like {coverage, pixels}:
-// the share of pixels not the background, and a 200-pixel-wide copy.
+// the share of pixels not the background, and a copy `width` pixels wide (200 by default; the
+// page's width gives the band at full resolution).
 async function screenBand(page, file, width = 200) {
   const png = Buffer.from(await page.screenshot());
   if (file) writeFileSync(file, png);
@@ -532,6 +539,61 @@ test('a stream with a node table is decoded for ?camera=, its nodes fetched by r
   await tight.waitForFunction((n) => document.getElementById('overlay').textContent
     .includes(`(budget ${n.toLocaleString()})`), { timeout: 30000 }, budget);
   await tight.close();
+});
+
+// Pixels of the background colour (the clear colour exactly, as pmz-view's test counts them: the
+// surface's darkest shading comes within a few units of it) that do not reach the border of the
+// image through such pixels: seen through the surface, where no view of a closed mesh shows
+// background. px: RGBA rows of width w.
+const isBackground = (px, i) => px[4 * i] === 0x20 && px[4 * i + 1] === 0x24 && px[4 * i + 2] === 0x2a;
+function holes(px, w) {
+  const n = px.length / 4;
+  const bg = new Uint8Array(n), seen = new Uint8Array(n);
+  for (let i = 0; i < n; ++i) bg[i] = isBackground(px, i);
+  const h = n / w, stack = [];
+  for (let i = 0; i < n; ++i) {
+    const x = i % w, y = Math.floor(i / w);
+    if (bg[i] && (x === 0 || y === 0 || x === w - 1 || y === h - 1)) seen[i] = 1, stack.push(i);
+  }
+  while (stack.length) {
+    const i = stack.pop(), x = i % w, y = Math.floor(i / w);
+    for (const [nx, ny] of [[x - 1, y], [x + 1, y], [x, y - 1], [x, y + 1]]) {
+      const j = ny * w + nx;
+      if (nx >= 0 && ny >= 0 && nx < w && ny < h && bg[j] && !seen[j]) seen[j] = 1, stack.push(j);
+    }
+  }
+  let found = 0;
+  for (let i = 0; i < n; ++i) found += bg[i] && !seen[i];
+  return found;
+}
+
+test('a closed mesh viewed with nodes of several levels shows no background through it', async () => {
+  const { port } = server.address();
+  // The whole ring from low down (its hole hidden: all background reaches the border), and from
+  // just outside the tube (the surface fills the view: no background at all), as pmz-view's test.
+  for (const [name, camera] of [['ring', '0,0.25,-3,0,0,0'], ['tube', '0,0.2,-1.7,0,0,-1']]) {
+    const page = await browser.newPage();
+    await page.setViewport({ width: 800, height: 600 });
+    await page.goto(`http://127.0.0.1:${port}/index.html?src=/stream/torus.pmz&camera=${camera}&pixelerror=0.25`);
+    await page.waitForFunction(() => window.pmzStatus.complete || window.pmzStatus.error, { timeout: 120000 });
+    const s = await page.evaluate(() => ({ ...window.pmzStatus }));
+    assert.equal(s.error, '', name);
+    assert.ok(s.nodes > 1 && s.nodes < torusNodes, `${name}: ${s.nodes} of ${torusNodes} nodes`);
+    await settleForSnapshot(page);
+    const band = await screenBand(page, null, 800);
+    const found = holes(band.pixels, band.width);
+    // The counter finds a pixel punched into the surface (the middle row's first pixel whose
+    // neighbours are all surface).
+    const w = band.width, h = band.pixels.length / 4 / w, px = band.pixels.slice();
+    let inside = -1;
+    for (let i = Math.floor(h / 2) * w + 1; i < (h - 1) * w && inside < 0; ++i)
+      if (i % w > 0 && i % w < w - 1 && ![i, i - 1, i + 1, i - w, i + w].some((j) => isBackground(px, j))) inside = i;
+    assert.ok(inside >= 0, `${name}: no surface pixel in the middle row (coverage ${band.coverage})`);
+    px[4 * inside] = 0x20, px[4 * inside + 1] = 0x24, px[4 * inside + 2] = 0x2a;
+    assert.equal(holes(px, w), found + 1, `${name}: the hole counter misses a punched pixel`);
+    assert.equal(found, 0, `${name}: ${found} background pixels show through the surface (${s.nodes} of ${torusNodes} nodes)`);
+    await page.close();
+  }
 });
 
 test('a node range the server fails is shown as one line', async () => {

@@ -196,6 +196,29 @@ export function assimpTextured() {
   return existsSync(file) ? file : null;
 }
 
+// A closed torus with ripples (tests/viewer/viewer_test.py's bumpy torus), positions only, as an
+// OFF: rings * segments * 2 faces.
+export function writeBumpyTorus(dir, { rings = 192, segments = 96 } = {}) {
+  const lines = [];
+  for (let i = 0; i < rings; ++i) {
+    for (let j = 0; j < segments; ++j) {
+      const u = 2 * Math.PI * i / rings, v = 2 * Math.PI * j / segments;
+      const r = 0.35 * (1 + 0.18 * Math.sin(5 * u) * Math.cos(3 * v));
+      const p = [(1 + r * Math.cos(v)) * Math.cos(u), r * Math.sin(v), (1 + r * Math.cos(v)) * Math.sin(u)];
+      lines.push(p.map((x) => x.toFixed(6)).join(' '));
+    }
+  }
+  for (let i = 0; i < rings; ++i) {
+    for (let j = 0; j < segments; ++j) {
+      const v = (a, b) => (a % rings) * segments + (b % segments);
+      lines.push(`3 ${v(i, j)} ${v(i, j + 1)} ${v(i + 1, j + 1)}`, `3 ${v(i, j)} ${v(i + 1, j + 1)} ${v(i + 1, j)}`);
+    }
+  }
+  const file = path.join(dir, 'torus.off');
+  writeFileSync(file, [`OFF`, `${rings * segments} ${2 * rings * segments} 0`, ...lines].join('\n') + '\n');
+  return file;
+}
+
 // The same torus as an ASCII PLY with a normal and an RGB colour per vertex (colours varying
 // smoothly around it): colours and normals through the stream.
 export function writeColoredTorus(dir, { rings = 64, segments = 32 } = {}) {
