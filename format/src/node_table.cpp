@@ -207,7 +207,7 @@ void CellBins::build(const NodeTable& t, uint32_t level, const int32_t* coords, 
   uint64_t dim[3], cells = 1;
   for (int a = 0; a < 3; ++a) {
     dim[a] = uint64_t(hi[a] - lo[a]) + 1;  // (cells lie within +-2^32: read_node_table)
-    cells = dim[a] > limit ? limit + 1 : std::min(cells * dim[a], limit + 1);
+    cells = dim[a] > limit || cells > limit / dim[a] ? limit + 1 : cells * dim[a];  // (no wrap)
   }
   const bool dense = cells <= limit;
   constexpr uint32_t kNone = UINT32_MAX;
