@@ -63,10 +63,11 @@ void release_temp_slot(int slot) {
   g_temps[slot].state.store(0);
 }
 
-// Removes the temporaries of a target in `dir` ("." + name + ".tmp." + PID + "." + 6 characters)
-// whose process is gone: a writer killed by SIGKILL had no chance to remove its own. One whose
-// PID is alive (or belongs to another user's process) is left: it may still be written.
-void remove_stale_temporaries(const std::filesystem::path& dir, const std::string& prefix) {
+// Removes the temporaries in `dir` named `prefix` + PID + "." + 6 characters + `suffix` whose
+// process is gone: a process killed by SIGKILL had no chance to remove its own. One whose PID is
+// alive (or belongs to another user's process) is left: it may still be in use.
+void remove_stale_temporaries(const std::filesystem::path& dir, const std::string& prefix,
+                              const std::string& suffix = "") {
   std::error_code ec;
   std::filesystem::directory_iterator it(dir.empty() ? std::filesystem::path(".") : dir, ec), end;
   for (; !ec && it != end; it.increment(ec)) {
@@ -77,7 +78,7 @@ void remove_stale_temporaries(const std::filesystem::path& dir, const std::strin
     const long pid =
         std::isdigit(static_cast<unsigned char>(*digits)) ? std::strtol(digits, &after, 10) : 0;
     if (pid <= 0 || pid > INT_MAX || pid == long(::getpid()) || *after != '.' ||
-        std::strlen(after + 1) != 6)
+        std::strlen(after + 1) != 6 + suffix.size() || !name.ends_with(suffix))
       continue;
     if (::kill(pid_t(pid), 0) == 0 || errno != ESRCH) continue;
     struct stat st;
@@ -217,7 +218,10 @@ bool ScratchFile::create(const std::vector<uint8_t>& data, const std::string& pr
                          const std::string& suffix, std::string& error) {
   const char* env = std::getenv("TMPDIR");
   const std::string dir = env && *env ? env : "/tmp";
-  const std::string name = dir + "/" + prefix + ".XXXXXX" + suffix;
+  // The PID in the name lets a later run remove what a killed one left (as outputs do).
+  remove_stale_temporaries(dir, prefix + ".", suffix);
+  const std::string name =
+      dir + "/" + prefix + "." + std::to_string(::getpid()) + ".XXXXXX" + suffix;
   auto fail = [&](int err) {
     return error = cannot(dir, "cannot make a temporary file", err), false;
   };

@@ -558,9 +558,11 @@ def case_damaged_stream_one_line_every_tool():
 
 def case_stale_temporary_removed():
     d = fresh("stale")
+    scratch = fresh("stale_tmpdir")  # TMPDIR: where stdin is parsed under a scratch file's name
+    env = dict(os.environ, TMPDIR=scratch)
     out = os.path.join(d, "out.pmz")
-    # SIGKILL cannot be caught: the temporary stays, named after the dead process.
-    p = subprocess.Popen([tool("pmz-encode"), "-", "--format", "obj", "-o", out],
+    # SIGKILL cannot be caught: the temporaries stay, named after the dead process.
+    p = subprocess.Popen([tool("pmz-encode"), "-", "--format", "obj", "-o", out], env=env,
                          stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     temps = wait_for_temporary(d, p)
     if temps is None:
@@ -570,14 +572,27 @@ def case_stale_temporary_removed():
     p.wait(30)
     check(temps == [f".out.pmz.tmp.{p.pid}." + temps[0][-6:]],
           f"the temporary does not carry the writer's PID {p.pid}: {temps}")
+    left = os.listdir(scratch)
+    check(len(left) == 1 and left[0].startswith(f"pmz-encode.{p.pid}.") and
+          left[0].endswith(".obj"), f"the scratch file does not carry the PID {p.pid}: {left}")
     live = f".out.pmz.tmp.{os.getpid()}.abcdef"  # a running process's: still being written
     other = f".other.pmz.tmp.{p.pid}.abcdef"      # another output's: not this run's to remove
     for name in (live, other):
         open(os.path.join(d, name), "w").close()
+    live_scratch = f"pmz-encode.{os.getpid()}.abcdef.obj"  # a running process's
+    other_scratch = f"pmz-encode.{p.pid}.abcdef.ply"       # another format's name
+    for name in (live_scratch, other_scratch):
+        open(os.path.join(scratch, name), "w").close()
     r = run([tool("pmz-encode"), SAMPLE_OBJ, "-o", out])
     check(r.returncode == 0, f"pmz-encode after a kill: rc={r.returncode} {err_text(r)}")
     check(sorted(os.listdir(d)) == sorted(["out.pmz", live, other]),
           f"the dead run's temporary is not removed (or another is): {sorted(os.listdir(d))}")
+    # The next run parsing stdin in that format removes the dead run's scratch file.
+    with open(SAMPLE_OBJ, "rb") as f:
+        r = run([tool("pmz-encode"), "-", "--format", "obj", "-o", out], env=env, stdin=f)
+    check(r.returncode == 0, f"pmz-encode from stdin after a kill: rc={r.returncode} {err_text(r)}")
+    check(sorted(os.listdir(scratch)) == sorted([live_scratch, other_scratch]),
+          f"the dead run's scratch file is not removed (or another is): {os.listdir(scratch)}")
 
 
 def case_progress_bar_ends_before_messages():

@@ -44,9 +44,10 @@ class OutputFile {
   bool is_stdout_ = false;
 };
 
-// A temporary file in $TMPDIR (else /tmp) named PREFIX.XXXXXX+suffix, for library calls that
-// take a path (a mesh read from stdin, a mesh written for an output that is not a plain file);
-// removed by the destructor and by remove_output_temporaries().
+// A temporary file in $TMPDIR (else /tmp) named PREFIX.PID.XXXXXX+suffix, for library calls
+// that take a path (a mesh read from stdin is parsed under its name); removed by the destructor and
+// by remove_output_temporaries(), and one of a process that is gone (killed by SIGKILL) by the next
+// create() with the same prefix and suffix.
 class ScratchFile {
  public:
   ScratchFile() = default;
