@@ -52,39 +52,43 @@ inline uint64_t l1(int64_t x, int64_t y, int64_t z) {
   noted_.clear();
   cells_ = false;
   cell_.clear();
-  bits_.assign((size_t(base.vertex_count()) + 63) / 64, 0);
+  bits_.clear();
+  top_.clear();
+  size_bitmap((size_t(base.vertex_count()) + 63) / 64);
 }
 
 void VertexChoice::start_group(bool near) {
   PMZ_CHOICE_ARRAYS;
-  const size_t n = degree_.size();  // the vertex count: every noted vertex is below it
-  const size_t words = (n + 63) / 64;
-  if (near && bits_.size() < words) bits_.resize(words);  // writer only: the decoder reserve()d
+  const size_t words = (degree_.size() + 63) / 64;       // every noted vertex is below the count
+  if (near && bits_.size() < words) size_bitmap(words);  // writer only: the decoder reserve()d
   near_.swap(noted_);
   noted_.clear();
   if (!near) {
     near_.clear();
     return;
   }
-  if (near_.size() * 64 < n) {  // sparse: sort
-    std::sort(near_.begin(), near_.end());
-    near_.erase(std::unique(near_.begin(), near_.end()), near_.end());
-    return;
+  // A bitmap of the noted vertices and a summary of its nonzero words, then the set bits in
+  // index order, clearing both on the way: work in the noted count and the summary's n / 4096
+  // words (sorting them costs a mispredicted branch per comparison; no allocation: at most
+  // near_.size() distinct).
+  uint64_t* const bits = bits_.data();
+  uint64_t* const top = top_.data();
+  for (uint32_t w : near_) {
+    bits[w >> 6] |= uint64_t(1) << (w & 63);
+    top[w >> 12] |= uint64_t(1) << ((w >> 6) & 63);
   }
-  // Dense: a bitmap of the noted vertices, then its set bits in index order, clearing it as it
-  // goes (n / 64 words instead of a mark test per vertex; no allocation: at most near_.size()
-  // distinct).
-  uint64_t* bits = bits_.data();
-  for (uint32_t w : near_) bits[w >> 6] |= uint64_t(1) << (w & 63);
   near_.clear();
-  for (size_t i = 0; i < words; ++i) {
-    uint64_t x = bits[i];
-    if (!x) continue;
-    bits[i] = 0;
-    do {
-      near_.push_back(uint32_t(i * 64 + uint32_t(__builtin_ctzll(x))));
-      x &= x - 1;
-    } while (x);
+  for (size_t t = 0, e = top_.size(); t < e; ++t) {
+    for (uint64_t y = top[t]; y; y &= y - 1) {
+      const size_t i = t * 64 + uint32_t(__builtin_ctzll(y));
+      uint64_t x = bits[i];
+      bits[i] = 0;
+      do {
+        near_.push_back(uint32_t(i * 64 + uint32_t(__builtin_ctzll(x))));
+        x &= x - 1;
+      } while (x);
+    }
+    top[t] = 0;
   }
 }
 
@@ -158,7 +162,8 @@ PMZ_SMALL_IN_WASM void VertexChoice::grow(size_t k) {
   const size_t words = (shared().degree_.size() + 64) / 64;
   if (bits_.size() < words) {
     make_room(bits_, 1);
-    bits_.resize(words);
+    make_room(top_, 1);
+    size_bitmap(words);
   }
 }
 

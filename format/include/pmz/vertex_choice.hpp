@@ -202,7 +202,9 @@ class VertexChoice {
     shift_ = owner.shift_;
     umbrella_ = owner.umbrella_;
     epoch_ = excluded_ = epochs;
-    bits_.assign(owner.degree_.size() / 64 + 2, 0);
+    bits_.clear();
+    top_.clear();
+    size_bitmap(owner.degree_.size() / 64 + 2);
   }
   // The owner before attaching workers: a fresh epoch range of n values for them (the marks are
   // cleared first if it would wrap), returned as its first value; the owner's own epochs go on
@@ -233,6 +235,7 @@ class VertexChoice {
     key_.reserve(n);
     sums_.reserve(n);
     bits_.reserve(n / 64 + 2);
+    top_.reserve(n / 4096 + 2);
   }
   // After pm.split_gathered() (its ring and u_ring still those of the split), once u's
   // coordinates are known: coords holds 3 per vertex, u's included.
@@ -288,11 +291,16 @@ class VertexChoice {
   void grow(size_t k);  // reserve()'s work  // w's closed one-ring in mesh
   BigVector<uint32_t> degree_;
   std::vector<uint32_t> near_, noted_;
-  BigVector<RingSums> sums_;    // per vertex
-  BigVector<uint8_t> key_;      // per vertex: min(degree, 8) * 3 + umbrella class
-  uint32_t shift_ = 0;          // umbrella_shift
-  bool umbrella_ = true;        // umbrella sums kept (else every class is 0)
-  std::vector<uint64_t> bits_;  // start_group's bitmap of the noted vertices (all 0 between calls)
+  BigVector<RingSums> sums_;  // per vertex
+  BigVector<uint8_t> key_;    // per vertex: min(degree, 8) * 3 + umbrella class
+  uint32_t shift_ = 0;        // umbrella_shift
+  bool umbrella_ = true;      // umbrella sums kept (else every class is 0)
+  // start_group's bitmap of the noted vertices, and of its nonzero words (all 0 between calls).
+  std::vector<uint64_t> bits_, top_;
+  void size_bitmap(size_t words) {
+    bits_.resize(words);
+    top_.resize((words + 63) / 64);
+  }
   // Per vertex: epoch_ when in the near list being built (start_group), excluded_ when
   // excluded from the group being scanned, another value of epoch_ in independent().
   BigVector<uint32_t> mark_;
