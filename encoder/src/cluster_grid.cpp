@@ -14,20 +14,15 @@ double triangle_area(const int32_t p[3], const int32_t q[3], const int32_t r[3])
   return 0.5 * std::sqrt(x * x + y * y + z * z);
 }
 
-CellGrid cell_grid_for(const std::vector<int32_t>& coords, double area, uint32_t cell_vertices) {
-  const size_t n = coords.size() / 3;
-  int64_t lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
-  for (size_t v = 0; v < n; ++v)
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = v == 0 ? coords[a] : std::min<int64_t>(lo[a], coords[v * 3 + a]);
-      hi[a] = v == 0 ? coords[a] : std::max<int64_t>(hi[a], coords[v * 3 + a]);
-    }
-  const int64_t extent = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], int64_t(1)});
+CellGrid cell_grid_for(const CoordBox& box, double area, uint32_t cell_vertices) {
+  const uint64_t n = box.vertices;
+  const int64_t extent =
+      std::max({box.hi[0] - box.lo[0], box.hi[1] - box.lo[1], box.hi[2] - box.lo[2], int64_t(1)});
   const double side = n > 0 ? std::sqrt(area * double(cell_vertices) / double(n)) : 2.0;
   CellGrid g;
   g.side = std::max<int64_t>(2, (extent >> 20) + 1);
   if (side > double(g.side)) g.side = int64_t(std::min(side, double(extent) + 1));
-  for (int a = 0; a < 3; ++a) g.origin[a] = lo[a];
+  for (int a = 0; a < 3; ++a) g.origin[a] = box.lo[a];
   return g;
 }
 
@@ -43,13 +38,13 @@ CellGrid next_cell_grid(const CellGrid& g, double area, uint32_t cell_vertices, 
   return next;
 }
 
-bool grid_cuts(const CellGrid& g, const std::vector<int32_t>& coords) {
-  const size_t n = coords.size() / 3;
-  if (n == 0) return false;
-  const uint64_t first = g.cell(&coords[0]);
-  for (size_t v = 1; v < n; ++v)
-    if (g.cell(&coords[v * 3]) != first) return true;
-  return false;
+bool grid_cuts(const CellGrid& g, const CoordBox& box) {
+  if (box.vertices == 0 || g.side <= 0) return false;
+  // A cell's index along an axis does not decrease with the coordinate, so the vertices span more
+  // than one cell exactly when the box's two corners do.
+  const int32_t lo[3] = {int32_t(box.lo[0]), int32_t(box.lo[1]), int32_t(box.lo[2])};
+  const int32_t hi[3] = {int32_t(box.hi[0]), int32_t(box.hi[1]), int32_t(box.hi[2])};
+  return g.cell(lo) != g.cell(hi);
 }
 
 }  // namespace pmz::detail

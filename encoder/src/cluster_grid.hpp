@@ -22,11 +22,18 @@ namespace pmz::detail {
 // The area of the triangle (p, q, r) of integer coordinates.
 double triangle_area(const int32_t p[3], const int32_t q[3], const int32_t r[3]);
 
+// The integer coordinates of `vertices` vertices span the box [lo, hi] (each axis's smallest and
+// largest coordinate).
+struct CoordBox {
+  int64_t lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+  uint64_t vertices = 0;
+};
+
 // The finest grid for cells of about `cell_vertices` vertices on a surface of `area` with the
-// vertices `coords` (3 per vertex): the side s with s^2 / area * vertices = cell_vertices, at
-// least 2 and more than extent / 2^20 (so fewer than 2^20 cells per axis), its planes from the
-// smallest coordinates.
-CellGrid cell_grid_for(const std::vector<int32_t>& coords, double area, uint32_t cell_vertices);
+// vertices of `box`: the side s with s^2 / area * vertices = cell_vertices, at least 2 and more
+// than extent / 2^20 (so fewer than 2^20 cells per axis), its planes from the smallest
+// coordinates.
+CellGrid cell_grid_for(const CoordBox& box, double area, uint32_t cell_vertices);
 
 // The grid of the level after one on grid g, which left `live` of the mesh's vertices: the
 // side of cells of about `cell_vertices` of them on a surface of `area` (so every level's cells
@@ -35,7 +42,8 @@ CellGrid cell_grid_for(const std::vector<int32_t>& coords, double area, uint32_t
 // from g's.
 CellGrid next_cell_grid(const CellGrid& g, double area, uint32_t cell_vertices, uint64_t live);
 
-// Whether a grid still cuts the coordinates (more than one cell along some axis).
-bool grid_cuts(const CellGrid& g, const std::vector<int32_t>& coords);
+// Whether a grid still cuts the box's vertices (more than one cell along some axis: the vertices
+// at an axis's two ends lie in different cells).
+bool grid_cuts(const CellGrid& g, const CoordBox& box);
 
 }  // namespace pmz::detail

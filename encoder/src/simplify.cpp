@@ -1747,15 +1747,19 @@ bool run_cell_levels(Engine& engine, const SimplifyOptions& options,
       lo[a] = std::min(lo[a], engine.m.p(v)[a]), hi[a] = std::max(hi[a], engine.m.p(v)[a]);
   Quantizer quant;
   quant.init(clusters.position_bits, lo, hi);
-  std::vector<int32_t> coords(size_t(n) * 3);
-  for (uint32_t v = 0; v < n; ++v)
-    for (int a = 0; a < 3; ++a) coords[size_t(v) * 3 + a] = quant.quantize(engine.m.p(v)[a], a);
+  // Computed where needed rather than held: 12 bytes a vertex at the encode's peak.
+  auto coords = [&](uint32_t v, int32_t c[3]) {
+    for (int a = 0; a < 3; ++a) c[a] = quant.quantize(engine.m.p(v)[a], a);
+  };
+  detail::CoordBox box;
+  box.vertices = n;
+  for (int a = 0; a < 3; ++a)  // (quantizing does not reorder coordinates)
+    box.lo[a] = quant.quantize(lo[a], a), box.hi[a] = quant.quantize(hi[a], a);
   double area = 0;  // of the surface, in integer units
   for (uint32_t f = 0; f < engine.m.face_count(); ++f) {
-    const int32_t* p = &coords[size_t(engine.m.vert[HalfEdgeMesh::half_edge(f, 0)]) * 3];
-    const int32_t* q = &coords[size_t(engine.m.vert[HalfEdgeMesh::half_edge(f, 1)]) * 3];
-    const int32_t* r = &coords[size_t(engine.m.vert[HalfEdgeMesh::half_edge(f, 2)]) * 3];
-    area += detail::triangle_area(p, q, r);
+    int32_t c[3][3];
+    for (int k = 0; k < 3; ++k) coords(engine.m.vert[HalfEdgeMesh::half_edge(f, k)], c[k]);
+    area += detail::triangle_area(c[0], c[1], c[2]);
   }
   SimplifyOptions level = options;
   level.progress = nullptr;
@@ -1796,20 +1800,26 @@ bool run_cell_levels(Engine& engine, const SimplifyOptions& options,
   // kMaxCellLevels of them (spec/format.md section 15.1: 32 levels with the root).
   constexpr size_t kMaxCellLevels = 31;
   uint64_t live = live_vertices();
-  for (CellGrid grid = detail::cell_grid_for(coords, area, clusters.vertices);
-       levels.size() < kMaxCellLevels && detail::grid_cuts(grid, coords);
+  for (CellGrid grid = detail::cell_grid_for(box, area, clusters.vertices);
+       levels.size() < kMaxCellLevels && detail::grid_cuts(grid, box);
        live = live_vertices(), grid = detail::next_cell_grid(grid, area, clusters.vertices, live)) {
     if (!levels.empty() && live <= clusters.vertices) break;
     levels.push_back({grid, engine.record->size()});
     // The level's cells (ascending keys), their live vertices and faces (a face counts in the
     // cell of its first corner: the faces a cell can remove have all their corners in it).
+    // (Only where the cell changes from the vertex before: vertices are in Morton order, and a
+    // key per vertex would be 8 bytes a vertex at the encode's peak.)
     keys.clear();
     for (uint32_t v = 0; v < n; ++v) {
-      engine.cell[v] = grid.cell(&coords[size_t(v) * 3]);
-      if (engine.m.out[v] != kNone) keys.push_back(engine.cell[v]);
+      int32_t c[3];
+      coords(v, c);
+      engine.cell[v] = grid.cell(c);
+      if (engine.m.out[v] != kNone && (keys.empty() || keys.back() != engine.cell[v]))
+        keys.push_back(engine.cell[v]);
     }
     std::sort(keys.begin(), keys.end());
     keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    keys.shrink_to_fit();
     const size_t cells = keys.size();
     if (first.mode == FirstLevel::count) return first.cells = uint32_t(cells), true;
     start.assign(cells + 1, 0);
@@ -1863,6 +1873,7 @@ bool run_cell_levels(Engine& engine, const SimplifyOptions& options,
         const double threshold = keys_inside[at];
         level.max_cost = options.max_cost >= 0 ? std::min(options.max_cost, threshold) : threshold;
       }
+      std::vector<float>().swap(keys_inside);  // (not held while the cells run)
     }
     std::vector<std::vector<HalfEdgeCollapse>> records(cells);
     removed.assign(cells, 0);
