@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
-"""Decode speed, side by side: pmz-decode against draco_decoder (PLY out), the
-streaming pattern (bench-stream: 997-byte feeds, refine(5000) after each) and the refinement
-rates of pmz-info --decode (first, and again after coarsening).
+"""Decode speed, side by side: pmz-decode against draco_decoder (PLY out), with the default
+threads (the machine's cores) and with --threads 1 ("decode-1t"), the streaming pattern
+(bench-stream: 997-byte feeds, refine(5000) after each) and the refinement rates of pmz-info
+--decode (first, and again after coarsening).
 
 Each round runs every program once (with --baseline, which tree goes first alternates), so a
 shared machine's load hits them alike. bench-stream's figure is its decoder's CPU time from the
@@ -10,7 +11,8 @@ first feed to the last split (the file already read). Prints each round with the
 then the medians as one JSON line. --baseline DIR: another tree's build directory, whose
 pmz-decode, bench-stream and pmz-info run in the same rounds (before/after comparisons).
 --speed-pmz FILE: the same mesh encoded at the speed level (pmz-encode --level 1), run by the
---build tools in the same rounds as "speed" (target: pmz-decode at most 1.0x draco_decoder).
+--build tools in the same rounds as "speed". Targets: pmz-decode at most 1.0x draco_decoder's
+elapsed time, at most 1.8x with --threads 1.
 
   python3 tests/bench/decode_speed.py --build build --pmz bunny00-loop2.pmz \\
       --drc bunny00-loop2.drc [--speed-pmz bunny00-loop2-l1.pmz] [--baseline ../main/build]
@@ -52,6 +54,7 @@ def tools(build):
 def round_of(name, t, pmz, out):
     r = {}
     r[name + " decode"] = child_cpu([t["decode"], pmz, "-o", out])
+    r[name + " decode-1t"] = child_cpu([t["decode"], pmz, "-o", out, "--threads", "1"])
     s = subprocess.run([t["stream"], pmz, "--slice", "997", "--refine", "5000"], check=True,
                        capture_output=True, text=True).stdout
     j = json.loads(s)
@@ -101,6 +104,10 @@ def main():
                 r[name + " decode"][1] / r["draco decode"][1] for r in rounds),
             "decode_elapsed_vs_draco": statistics.median(
                 r[name + " decode"][0] / r["draco decode"][0] for r in rounds),
+            "decode_1t_elapsed_s": med(name + " decode-1t", 0),
+            "decode_1t_cpu_s": med(name + " decode-1t", 1),
+            "decode_1t_elapsed_vs_draco": statistics.median(
+                r[name + " decode-1t"][0] / r["draco decode"][0] for r in rounds),
             "stream_cpu_s": med(name + " stream", 1),
             "stream_splits_per_cpu_s": splits / med(name + " stream", 1),
             "first_refinement_cpu_ms": med(name + " info", 0),
