@@ -259,7 +259,7 @@ say "size: threaded module $(stat -c %s "${mt_files[0]}") + glue $(stat -c %s "$
 # PMZ_WASM_MAX_GZIP (lowered as the module shrinks, to the budget once it fits; raised only with
 # the reason in docs/benchmarks.md).
 budget_bytes=120000 budget_gzip=50000
-max_bytes=${PMZ_WASM_MAX_BYTES:-149000} max_gzip=${PMZ_WASM_MAX_GZIP:-65250}
+max_bytes=${PMZ_WASM_MAX_BYTES:-149550} max_gzip=${PMZ_WASM_MAX_GZIP:-65490}
 total_bytes=$((wasm_bytes + glue_bytes))
 if [ $total_bytes -gt $budget_bytes ] || [ "$gz_bytes" -gt $budget_gzip ]; then
   say "size: over the budget ($budget_bytes bytes, $budget_gzip gzip -9) by" \

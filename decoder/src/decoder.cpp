@@ -243,11 +243,16 @@ uint64_t Decoder::Impl::parallel_nodes(uint64_t max_splits, uint64_t face_target
   if (v1 > info.full_vertices) return 0;
   std::vector<std::unique_ptr<Frontier> > work;
   std::vector<uint64_t> face_start;
+  // Models per thread, the first node's copied in at each node it takes (the nodes' own group
+  // models are not used again: their chunks all arrived); back to the spares at the end.
+  std::vector<std::unique_ptr<SplitModels> > thread_models;
   PMZ_TRY {
     // Room for every id the workers write: the owner's arrays sized to the level's end.
     resize_level(faces, v1, s1);
     if (k == 1) nodes.first_models = std::move(nodes.models[0]);
-    nodes.models[k - 1].reset();  // its splits are all decoded
+    drop_models(k - 1);  // its splits are all decoded
+    for (size_t t = std::min<size_t>(threads, end - k); t--;)
+      thread_models.push_back(first_models_copy());
     if (nodes.bins_level != int64_t(lv)) {
       nodes.bins.build(nodes.table, lv, record.coords.data(), uint32_t(v0));
       nodes.bins_level = lv;
@@ -274,11 +279,14 @@ uint64_t Decoder::Impl::parallel_nodes(uint64_t max_splits, uint64_t face_target
   }
   frontier.lazy_first = s1;
   // The workers take the nodes in file order.
-  std::atomic<size_t> next{0};
-  auto go = [&](size_t j, bool resume) {
+  std::atomic<size_t> next{0}, slot{0};
+  auto go = [&](size_t j, bool resume, SplitModels* m) {
     Frontier& w = *work[j];
     PMZ_TRY {
-      if (!resume) nodes.models[k + j]->inherit(*nodes.first_models);
+      if (!resume) {
+        *m = *nodes.first_models;
+        for (SplitChunkReader& r : w.lazy) r.set_models(*m);
+      }
       const uint64_t last = nodes.first_split[k + j] + table[k + j].splits;
       if (resume && !first_apply(w, w.decoded, true)) return;
       for (;;) {  // (the fans ahead, as prefetch(): within the node's cell)
@@ -288,14 +296,20 @@ uint64_t Decoder::Impl::parallel_nodes(uint64_t max_splits, uint64_t face_target
                     frontier.choice.sums_bytes());
         if (w.decoded >= last || !first_apply(w, w.decoded)) break;
       }
+      if (w.paused && !resume) {  // the merge resumes it: its models kept
+        nodes.models[k + j] = std::make_unique<SplitModels>(*m);
+        for (SplitChunkReader& r : w.lazy) r.set_models(*nodes.models[k + j]);
+      }
     }
     PMZ_CATCH_BAD_ALLOC {
+      w.paused = false;
       w.status = Status::out_of_memory;
       w.message = "allocation failed while refining";
     }
   };
-  auto run = [&] {
-    for (size_t j; (j = next++) < work.size();) go(j, false);
+  auto run = [&] {  // (one call per thread: a models object each)
+    SplitModels* m = thread_models[slot++].get();
+    for (size_t j; (j = next++) < work.size();) go(j, false, m);
   };
   {
 #if defined(__EMSCRIPTEN_PTHREADS__)
@@ -323,6 +337,7 @@ uint64_t Decoder::Impl::parallel_nodes(uint64_t max_splits, uint64_t face_target
     run();
 #endif
   }
+  for (std::unique_ptr<SplitModels>& m : thread_models) spare_models(m);
   // The merge: where the serial decoder would have stopped (stop, with its error).
   uint64_t stop = s1, work_sum = frontier.ring_work;
   Status st = Status::ok;
@@ -346,7 +361,7 @@ uint64_t Decoder::Impl::parallel_nodes(uint64_t max_splits, uint64_t face_target
       }
       w.paused = false;
       w.face_end = UINT64_MAX;
-      go(j, true);
+      go(j, true, nullptr);
     }
     for (size_t t = 0; t < w.rings.size(); ++t) {
       work_sum += w.rings[t];
@@ -382,7 +397,7 @@ uint64_t Decoder::Impl::parallel_nodes(uint64_t max_splits, uint64_t face_target
     record.sector_corners.insert(record.sector_corners.end(), w.sectors.begin(),
                                  w.sectors.begin() + ptrdiff_t(corners));
     level.sector_end += corners;
-    if (j) nodes.models[k + j - 1].reset();
+    if (j) drop_models(k + j - 1);
     nodes.start_faces = face_start[j];
     nodes.applying = k + j + 1;
   }

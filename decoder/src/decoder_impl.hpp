@@ -211,6 +211,11 @@ struct Decoder::Impl {
     // The models the first node left (its split and attribute models): every later node's
     // start.
     std::unique_ptr<SplitModels> first_models;
+    // A node after the first has its models made as its first application starts (node_models);
+    // until then its chunks' groups are decoded with the group models of `arrival` (those of
+    // the node arriving). spare: the models of a node done, for one to come (memory already
+    // touched).
+    std::unique_ptr<SplitModels> arrival, spare;
     std::unique_ptr<AttributeModels> first_attribute_models;
     size_t applying = 0;  // nodes whose first application started
     uint64_t start_faces = 0, start_wedges = 0;
@@ -218,6 +223,13 @@ struct Decoder::Impl {
     int64_t bins_level = -1;
   } nodes;
   PMZ_COLD Status node_chunk(const uint8_t* p, size_t n);
+  PMZ_COLD std::unique_ptr<SplitModels> first_models_copy();
+  PMZ_COLD SplitModels& node_models(size_t k, std::deque<SplitChunkReader>& readers);
+  // Models done with: kept for a node to come.
+  void spare_models(std::unique_ptr<SplitModels>& m) noexcept {
+    if (m) nodes.spare = std::move(m);
+  }
+  void drop_models(size_t k) noexcept { spare_models(nodes.models[k]); }
   PMZ_COLD Status node_arrived(uint64_t bytes, bool attributes_done);
   PMZ_COLD bool start_node();
   // The faces and wedges node k (the one applied last) added are its table entry's.

@@ -282,6 +282,10 @@ Status Decoder::Impl::split_chunk(const uint8_t* p, size_t n) {
     if (!models) {
       models = std::make_unique<SplitModels>();
       models->speed = info.level == kLevelSpeed;
+      if (nodes.arrived_splits && nodes.arrival) {  // its first chunks' groups went there
+        models->groups = nodes.arrival->groups;
+        models->near = nodes.arrival->near;
+      }
     }
     SplitChunkReader r;
     if (!r.open(p, n, e.splits - nodes.arrived_splits, *models, err, frontier.open))
@@ -312,6 +316,13 @@ Status Decoder::Impl::split_chunk(const uint8_t* p, size_t n) {
       return fail(Status::corrupt, "SPLT after every node's splits");
     models = &nodes.models[nodes.arriving];
     max_splits = nodes.table.nodes[nodes.arriving].splits - nodes.arrived_splits;
+    if (!*models && nodes.arriving > 0) {  // its groups only, until its models are made
+      models = &nodes.arrival;
+      if (*models && nodes.arrived_splits == 0) {
+        (*models)->groups = UIntModel();
+        (*models)->near = kProbInit;
+      }
+    }
   }
   if (!*models) {
     *models = std::make_unique<SplitModels>();
@@ -403,6 +414,36 @@ Status Decoder::Impl::node_arrived(uint64_t bytes, bool attributes_done) {
   return Status::ok;
 }
 
+// A copy of the models the first node left (in a spare's memory if there is one).
+std::unique_ptr<SplitModels> Decoder::Impl::first_models_copy() {
+  if (!nodes.spare) return std::make_unique<SplitModels>(*nodes.first_models);
+  std::unique_ptr<SplitModels> m = std::move(nodes.spare);
+  *m = *nodes.first_models;
+  return m;
+}
+
+// Node k's models as its first application starts (spec/format.md section 15.4): those the first
+// node left but for the group models, its own (still in nodes.arrival while its chunks arrive;
+// made with its models when they arrived for a view). Its readers, the first of `readers`, decode
+// with them.
+SplitModels& Decoder::Impl::node_models(size_t k, std::deque<SplitChunkReader>& readers) {
+  std::unique_ptr<SplitModels>& m = nodes.models[k];
+  if (m) {
+    m->inherit(*nodes.first_models);
+  } else {
+    m = first_models_copy();
+    const bool arriving = k == nodes.arriving && nodes.arrived_splits && nodes.arrival;
+    m->groups = arriving ? nodes.arrival->groups : UIntModel();
+    m->near = arriving ? nodes.arrival->near : kProbInit;
+  }
+  uint64_t got = 0;
+  for (size_t i = 0; i < readers.size() && got < nodes.table.nodes[k].splits; ++i) {
+    readers[i].set_models(*m);
+    got += readers[i].split_count();
+  }
+  return *m;
+}
+
 // The first application of a node's first split (spec/format.md section 15.4): the node before
 // added the faces the table says; this one starts from the models the first node left (but for
 // its group model, its own from the initial state), its near list empty, and its candidates its
@@ -417,8 +458,8 @@ bool Decoder::Impl::start_node() {
       nodes.first_models = std::move(nodes.models[0]);
       if (attrs) nodes.first_attribute_models = std::make_unique<AttributeModels>(*attrs->models);
     }
-    nodes.models[k - 1].reset();  // its splits are all decoded
-    nodes.models[k]->inherit(*nodes.first_models);
+    drop_models(k - 1);  // its splits are all decoded
+    node_models(k, frontier.lazy);
     if (attrs) *attrs->models = *nodes.first_attribute_models;
   }
   const NodeEntry& e = nodes.table.nodes[k];

@@ -130,7 +130,7 @@ bool Decoder::Impl::first_apply_node(uint32_t k) {
                frontier.choice.take_epochs(e.splits + 1), cell_list(k), sel.ring_work);
   w.ring_shift = int64_t(sel.first_applied) - int64_t(first);
   w.lazy = std::move(sel.readers[k]);
-  nodes.models[k]->inherit(*nodes.first_models);
+  node_models(k, w.lazy);
   first_apply_worker(w, last);
   if (w.decoded != last || w.view.face_count() != w.face_end) {
     undo_worker(w, first);
@@ -148,7 +148,7 @@ bool Decoder::Impl::first_apply_node(uint32_t k) {
   sel.first_applied += e.splits;
   sel.sectors[k].assign(w.sectors.begin(), w.sectors.end());
   sel.decoded[k] = 1;
-  nodes.models[k].reset();
+  drop_models(k);
   uint64_t corners = 0;
   for (uint64_t t = first; t < last; ++t) {
     note_rewritten<3>({w.sectors.data() + corners, record.splits[t].b}, level.mesh.face_count());

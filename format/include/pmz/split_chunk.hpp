@@ -158,6 +158,9 @@ class SplitChunkReader {
   bool speed_residuals(const uint32_t context[3], int32_t residual[3]);
   uint64_t split_count() const { return count_; }
   size_t largest_group() const { return largest_; }
+  // The models the symbols after the groups are decoded with from now on (a node's, made as its
+  // first application starts: its groups were decoded with another object's group models).
+  void set_models(SplitModels& models) { models_ = &models; }
 
  private:
   SplitModels* models_ = nullptr;
