@@ -6,9 +6,13 @@
 // and their texture files kept; a glTF scene of several mesh nodes keeps its nodes, a stream per
 // mesh.
 #include <CLI/CLI.hpp>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cstdio>
 #include <filesystem>
 #include <mutex>
@@ -42,6 +46,77 @@ struct EncodeSettings {
   // --assemble: the mesh and the first level's cells from this plan (encode_plan.hpp), not
   // read from the input and simplified here.
   std::string plan_dir;
+  // --memory: what the encodes of this process may use at once (0: no bound).
+  uint64_t memory_budget = 0;
+};
+
+// The memory an encode of `mesh` takes at least at its peak (simplify() and write_pmz() hold
+// the whole mesh: docs/design.md section 10, "The memory budget"), from measured peaks of
+// geometry-only encodes (about 530-550 bytes a vertex on closed meshes with twice as many faces)
+// taken a little low, and with attributes the arrays that are certainly held at once: the input's
+// attributes twice (the input and the sequence's copy) and the engine's wedge per corner.
+uint64_t encode_memory(const pmz::IndexedMesh& mesh) {
+  const pmz::MeshAttributes& a = mesh.attributes;
+  uint64_t attributes = a.corner_wedges.size() * 4 + a.wedge_vertices.size() * 4 +
+                        a.normals.size() * 4 + a.colors.size() * 4 + a.face_materials.size() * 4;
+  for (const std::vector<float>& t : a.texcoords) attributes += t.size() * 4;
+  if (!a.empty()) attributes = 2 * attributes + uint64_t(mesh.face_count()) * 16;
+  return uint64_t(mesh.vertex_count()) * 250 + uint64_t(mesh.face_count()) * 130 + attributes;
+}
+
+// The encodes running at once (--out-dir -j) share the budget: each takes its estimate from it
+// before simplifying, waiting while the others hold too much of it, and gives it back when done.
+// One that needs more than the whole budget is refused.
+class MemoryBudget {
+ public:
+  explicit MemoryBudget(uint64_t bytes) : free_(bytes), total_(bytes) {}
+  // False with `error` when `bytes` exceed the whole budget; else waits until they are free.
+  bool take(uint64_t bytes, std::string& error) {
+    if (total_ == 0) return true;
+    if (bytes > total_)
+      return error = "encoding it needs about " + pmz::app_support::byte_size_text(bytes) +
+                     " of memory, more than the budget of " +
+                     pmz::app_support::byte_size_text(total_) + " (--memory)",
+             false;
+    std::unique_lock<std::mutex> lock(mutex_);
+    freed_.wait(lock, [&] { return free_ >= bytes; });
+    free_ -= bytes;
+    return true;
+  }
+  void give(uint64_t bytes) {
+    if (total_ == 0) return;
+#if defined(__GLIBC__)
+    // What the encode freed goes back to the system too: another thread's encode would not
+    // reuse this thread's malloc arena, and the process would hold both.
+    malloc_trim(0);
+#endif
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      free_ += bytes;
+    }
+    freed_.notify_all();
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable freed_;
+  uint64_t free_, total_;
+};
+
+// The budget's share an encode holds until it ends.
+struct MemoryShare {
+  MemoryBudget* budget = nullptr;
+  uint64_t bytes = 0;
+  // False with `error` when `n` bytes exceed the whole budget `b` (none: always true).
+  bool take(MemoryBudget* b, uint64_t n, std::string& error) {
+    if (!b) return true;
+    if (!b->take(n, error)) return false;
+    budget = b, bytes = n;
+    return true;
+  }
+  ~MemoryShare() {
+    if (budget) budget->give(bytes);
+  }
 };
 
 bool glb_output(const std::string& output, const EncodeSettings& settings) {
@@ -90,8 +165,9 @@ bool wrap_in_glb(const std::vector<uint8_t>& stream, const std::string& input, s
 // and written with the settings one mesh gets, its stream carried by its glTF mesh. `line` is
 // the summary; errors name the input.
 bool encode_scene(const pmz::GltfScene& scene, const std::string& input,
-                  const EncodeSettings& settings, app_support::Progress* progress, std::string& glb,
-                  std::string& line, std::string& error) {
+                  const EncodeSettings& settings, MemoryBudget* budget,
+                  app_support::Progress* progress, std::string& glb, std::string& line,
+                  std::string& error) {
   const size_t n = scene.mesh_count();
   std::vector<std::vector<uint8_t>> bytes(n);
   std::vector<pmz::GlbStream> streams(n);
@@ -108,6 +184,9 @@ bool encode_scene(const pmz::GltfScene& scene, const std::string& input,
       return error = input + ": " + which + ": no usable faces (all degenerate)", false;
     if (const std::string summary = stats.summary(); !summary.empty())
       app_support::print_error(input, which + ": " + summary);
+    MemoryShare share;
+    if (!share.take(budget, encode_memory(mesh), error))
+      return error = input + ": " + which + ": " + error, false;
     pmz::SimplifyOptions sopt = settings.simplify;
     settings.simplifier.apply_clusters(sopt, mesh.vertex_count());
     if (progress)
@@ -142,7 +221,8 @@ bool read_scene(const std::string& input, pmz::GltfScene& scene, std::string& er
 // Encodes one asset; on success `line` is its summary line, else `error` is one line naming
 // the file.
 bool encode(const std::string& input, const std::string& output, const EncodeSettings& settings,
-            app_support::Progress* progress, std::string& line, std::string& error) {
+            MemoryBudget* budget, app_support::Progress* progress, std::string& line,
+            std::string& error) {
   if (app_support::same_file(input, output))
     return error = output + ": is the input file; not overwriting it", false;
   const auto t0 = std::chrono::steady_clock::now();
@@ -158,7 +238,7 @@ bool encode(const std::string& input, const std::string& output, const EncodeSet
     if (!read_scene(input, scene, error)) return false;
     // One mesh node: the single-stream GLB below (the node's transform applied).
     if (scene.mesh_nodes() > 1) {
-      const bool ok = encode_scene(scene, input, settings, progress, glb, line, error);
+      const bool ok = encode_scene(scene, input, settings, budget, progress, glb, line, error);
       if (progress) progress->clear();
       if (!ok) return false;
       out.write(glb.data(), glb.size());
@@ -177,6 +257,15 @@ bool encode(const std::string& input, const std::string& output, const EncodeSet
                        : !plan.read_mesh(mesh, error)) {
     if (progress) progress->clear();
     return false;
+  }
+  MemoryShare share;
+  if (!share.take(budget, encode_memory(mesh), error)) {
+    if (progress) progress->clear();
+    return error = (!plan.dir.empty() ? plan.dir
+                    : input == "-"    ? "stdin"
+                                      : input) +
+                   ": " + error,
+           false;
   }
   pmz::SimplifyOptions sopt = settings.simplify;
   settings.simplifier.apply_clusters(sopt, mesh.vertex_count());
@@ -258,7 +347,9 @@ int encode_one(const std::string& input, const std::string& output, const Encode
                bool quiet, bool force_progress) {
   app_support::Progress progress(quiet, force_progress);
   std::string line, error;
-  if (!encode(input, output, settings, progress.enabled() ? &progress : nullptr, line, error)) {
+  MemoryBudget budget(settings.memory_budget);
+  if (!encode(input, output, settings, &budget, progress.enabled() ? &progress : nullptr, line,
+              error)) {
     app_support::print_error(error);
     return app_support::kExitFailure;
   }
@@ -280,6 +371,10 @@ int write_plan(const std::string& input, const tool::EncodePlan& plan,
   pmz::SimplifyOptions sopt = settings.simplify;
   settings.simplifier.apply_clusters(sopt, mesh.vertex_count());
   uint32_t tasks = 0;
+  MemoryBudget budget(settings.memory_budget);
+  MemoryShare share;
+  if (ok && !share.take(&budget, encode_memory(mesh), error))
+    ok = false, error = (input == "-" ? "stdin" : input) + ": " + error;
   if (ok && plan.exists())
     ok = false, error = plan.dir + ": holds a plan already (give a new or empty folder)";
   ok = ok && make_output_folder(plan.dir);
@@ -365,6 +460,12 @@ bool all_tasks_done(const tool::EncodePlan& plan) {
   return true;
 }
 
+// --memory's value in bytes (0: no bound); false when it is not one.
+bool memory_budget(const std::string& text, uint64_t& bytes) {
+  if (text == "auto") return bytes = app_support::machine_memory() / 10 * 9, true;
+  return app_support::parse_byte_size(text, bytes);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -427,6 +528,15 @@ int main(int argc, char** argv) {
   app.add_flag("--symbol-stats", settings.write.symbol_stats,
                "also print the code length per kind of split symbol (groups, choice, wedges, "
                "residual slots)");
+  std::string memory = "auto";
+  app.add_option("--memory", memory,
+                 "memory the encodes may use at once: an input whose encode needs more (an "
+                 "estimate from its vertex and face counts, once it is read) is refused, and "
+                 "encodes run at once with -j wait for each other within it; bytes, or with k, "
+                 "M, G: 1500M, 8G; 0: no bound; auto: 90% of the machine's memory (its RAM, or "
+                 "its cgroup's limit when lower)")
+      ->type_name("SIZE")
+      ->capture_default_str();
   std::string plan_dir, assemble_dir;
   std::vector<std::string> task;
   auto* plan_opt =
@@ -465,7 +575,8 @@ int main(int argc, char** argv) {
                                               app.get_option("--glb"),
                                               app.get_option("--quiet"),
                                               app.get_option("--progress"),
-                                              app.get_option("--cell-threads")};
+                                              app.get_option("--cell-threads"),
+                                              app.get_option("--memory")};
     if (!inputs.empty()) return usage("the input is the plan's (give it to --plan)");
     for (const CLI::Option* o : app.get_options())
       if (o->count() && !own.count(o))
@@ -482,6 +593,8 @@ int main(int argc, char** argv) {
     const bool given_glb = settings.glb, given_quiet = quiet, given_progress = force_progress;
     const uint32_t given_threads = simplifier.cell_threads;
     const bool threads_given = app.get_option("--cell-threads")->count() > 0;
+    const std::string given_memory = memory;
+    const bool memory_given = app.get_option("--memory")->count() > 0;
     try {
       std::reverse(args.begin(), args.end());
       app.parse(args);
@@ -497,6 +610,9 @@ int main(int argc, char** argv) {
     output = given_output, quiet = given_quiet, force_progress = given_progress;
     settings.glb = settings.glb || given_glb;
     if (threads_given) simplifier.cell_threads = given_threads;
+    if (memory_given) memory = given_memory;
+    if (!memory_budget(memory, settings.memory_budget))
+      return usage("--memory " + memory + ": not a size (1500M, 8G, 0 or auto)");
     simplifier.apply(settings.simplify);
     settings.simplify.clusters.position_bits = settings.write.position_bits;
     settings.stdin_format = format;
@@ -506,6 +622,8 @@ int main(int argc, char** argv) {
     return encode_one(inputs[0], output, settings, quiet, force_progress);
   }
   if (inputs.empty()) return usage("give an input mesh");
+  if (!memory_budget(memory, settings.memory_budget))
+    return usage("--memory " + memory + ": not a size (1500M, 8G, 0 or auto)");
   if (plan_opt->count()) {
     if (inputs.size() != 1) return usage("--plan takes one input");
     if (const std::string problem = tool::stdin_input_problem(inputs, format); !problem.empty())
@@ -558,13 +676,14 @@ int main(int argc, char** argv) {
                    [](const auto& a, const auto& b) { return a.first > b.first; });
   app_support::Progress progress(quiet, force_progress);
   std::mutex print_mutex;
+  MemoryBudget budget(settings.memory_budget);
   std::atomic<size_t> next{0};
   size_t finished = 0, failed = 0;
   auto worker = [&] {
     for (size_t k; (k = next.fetch_add(1)) < inputs.size();) {
       const size_t i = order[k].second;
       std::string line, error;
-      const bool ok = encode(inputs[i], outputs[i], settings, nullptr, line, error);
+      const bool ok = encode(inputs[i], outputs[i], settings, &budget, nullptr, line, error);
       std::lock_guard<std::mutex> lock(print_mutex);
       progress.clear();
       if (ok) {

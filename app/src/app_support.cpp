@@ -7,8 +7,10 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cctype>
 #include <cerrno>
 #include <climits>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <mutex>
@@ -146,6 +148,75 @@ bool same_file(const std::string& a, const std::string& b) {
   if (a == "-" || b == "-" || ::stat(a.c_str(), &sa) != 0 || ::stat(b.c_str(), &sb) != 0)
     return false;
   return S_ISREG(sa.st_mode) && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+}
+
+uint64_t machine_memory() {
+  uint64_t bytes = 0;
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+  if (pages > 0 && page > 0) bytes = uint64_t(pages) * uint64_t(page);
+  // A container's limit: "max" (or a huge number under cgroup v1) means none.
+  for (const char* path :
+       {"/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"}) {
+    FILE* f = std::fopen(path, "r");
+    if (!f) continue;
+    unsigned long long limit = 0;
+    const bool number = std::fscanf(f, "%llu", &limit) == 1;
+    std::fclose(f);
+    if (number && limit > 0 && (bytes == 0 || limit < bytes)) bytes = limit;
+  }
+  return bytes;
+}
+
+bool parse_byte_size(const std::string& text, uint64_t& bytes) {
+  size_t i = 0;
+  double value = 0, scale = 1;
+  bool digits = false, point = false;
+  for (; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c >= '0' && c <= '9') {
+      digits = true;
+      if (point) scale /= 10;
+      value = value * 10 + (c - '0');
+    } else if (c == '.' && !point) {
+      point = true;
+    } else {
+      break;
+    }
+  }
+  if (!digits) return false;
+  value *= scale;
+  static const char kUnits[] = "kmgt";
+  if (i + 1 == text.size() && (text[i] == 'B' || text[i] == 'b') && !point) {
+    ++i;  // plain bytes
+  } else if (i < text.size()) {
+    const char* unit = std::strchr(kUnits, std::tolower(static_cast<unsigned char>(text[i])));
+    if (!unit || !*unit) return false;
+    for (const char* u = kUnits; u <= unit; ++u) value *= 1024;
+    ++i;
+    if (i < text.size() && (text[i] == 'B' || text[i] == 'b')) ++i;
+  } else if (point) {
+    return false;  // (a fraction of a byte)
+  }
+  if (i != text.size() || value > double(uint64_t(1) << 62)) return false;
+  bytes = uint64_t(value + 0.5);
+  return true;
+}
+
+std::string byte_size_text(uint64_t bytes) {
+  static const char* kUnits[] = {"bytes", "KB", "MB", "GB", "TB"};
+  double value = double(bytes);
+  int unit = 0;
+  while (value >= 1024 && unit < 4) value /= 1024, ++unit;
+  char buf[32];
+  if (unit == 0)
+    std::snprintf(buf, sizeof buf, "%llu bytes", (unsigned long long)bytes);
+  else
+    std::snprintf(buf, sizeof buf,
+                  value < 10    ? "%.2f %s"
+                  : value < 100 ? "%.1f %s"
+                                : "%.0f %s",
+                  value, kUnits[unit]);
+  return buf;
 }
 
 std::string extension(const std::string& path) {

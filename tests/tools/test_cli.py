@@ -5,9 +5,9 @@
 temporaries removed on error and on signals, one-line errors with the reason, exit codes
 (0 ok, 1 failure, 2 usage), defaults in --help, the progress bar, pmz-info without decoding
 and on truncated files, unreachable decode targets, --faces 0 / --ratio 0 as the base mesh,
-batch encoding with --out-dir and -j, an encode split into tasks (--plan, --task with GNU
-parallel, --assemble), one definition of the simplifier's options (pmz-encode and
-pmz-simplify).
+batch encoding with --out-dir and -j, the encodes' memory budget (--memory), an encode split
+into tasks (--plan, --task with GNU parallel, --assemble), one definition of the simplifier's
+options (pmz-encode and pmz-simplify).
 
 usage: test_cli.py BIN_DIR SAMPLE_OBJ SAMPLE_PMZ WORK_DIR [CASE...]
 BIN_DIR holds pmz-encode, pmz-decode, pmz-info, pmz-simplify, pmz-compare (pmz-view optional).
@@ -914,6 +914,52 @@ def peak_kb(args):
     _, status, usage = os.wait4(p.pid, 0)
     p.returncode = os.waitstatus_to_exitcode(status)
     return p.returncode, usage.ru_maxrss
+
+
+def case_encode_memory_budget():
+    # --memory: an input whose encode needs more than the budget is refused once read (one line
+    # naming it, exit 1, nothing written, no plan); the estimate it states lies below the
+    # encode's measured peak and not far below; encodes run at once with -j share the budget
+    # (two that do not fit together run one after the other: the process peaks as one does);
+    # a size that is not one is a usage error; a task of a plan takes --memory.
+    d = fresh("encode_memory")
+    ply, ply2, out = (os.path.join(d, n) for n in ("t.ply", "u.ply", "t.pmz"))
+    r = run([tool("pmz-generate"), "--faces", "300000", "-o", ply, "-q"])
+    check(r.returncode == 0, f"pmz-generate: {err_text(r)}")
+    shutil.copy(ply, ply2)
+    rc, single = peak_kb([tool("pmz-encode"), ply, "-o", out, "-q", "--memory", "0"])
+    check(rc == 0, f"pmz-encode --memory 0: rc={rc}")
+    os.remove(out)
+    r = run([tool("pmz-encode"), ply, "-o", out, "-q", "--memory", "1M"])
+    lines = err_text(r).strip().splitlines()
+    check(r.returncode == 1 and len(lines) == 1 and ply in lines[0]
+          and "more than the budget of 1.00 MB (--memory)" in lines[0]
+          and sorted(os.listdir(d)) == ["t.ply", "u.ply"], f"--memory 1M: rc={r.returncode} {lines}")
+    m = re.search(r"needs about ([0-9.]+) (KB|MB|GB)", lines[0])
+    check(m, f"no estimate in: {lines[0]}")
+    estimate = float(m.group(1)) * {"KB": 1, "MB": 1024, "GB": 1024 * 1024}[m.group(2)]
+    check(0.5 * single <= estimate <= single,
+          f"estimate {estimate:.0f} KB against a measured peak of {single} KB")
+    for size in ("12Q", "1.5", "-3G", ""):
+        r = run([tool("pmz-encode"), ply, "-o", out, "--memory", size])
+        check(r.returncode == 2 and "--memory" in err_text(r), f"--memory '{size}': {err_text(r)}")
+    both = ["--out-dir", os.path.join(d, "out"), "-j", "2", "-q"]
+    rc, unbounded = peak_kb([tool("pmz-encode"), ply, ply2] + both + ["--memory", "0"])
+    check(rc == 0 and unbounded > 1.7 * single,
+          f"-j 2 unbounded: rc={rc}, peak {unbounded} KB against {single} KB for one")
+    budget = f"{int(estimate * 1.5)}k"
+    rc, shared = peak_kb([tool("pmz-encode"), ply, ply2] + both + ["--memory", budget])
+    check(rc == 0 and shared < 1.4 * single,
+          f"-j 2 within {budget}: rc={rc}, peak {shared} KB against {single} KB for one")
+    check(sorted(os.listdir(os.path.join(d, "out"))) == ["t.pmz", "u.pmz"], "-j 2 outputs")
+    plan = os.path.join(d, "plan")
+    r = run([tool("pmz-encode"), ply, "--plan", plan, "--memory", "1M"])
+    check(r.returncode == 1 and "(--memory)" in err_text(r)
+          and not os.path.exists(os.path.join(plan, "tasks")), f"--plan over the budget: {err_text(r)}")
+    r = run([tool("pmz-encode"), ply, "--plan", plan, "--memory", "1.5G"])
+    check(r.returncode == 0, f"--plan: {err_text(r)}")
+    r = run([tool("pmz-encode"), "--task", plan, "0", "--memory", "512MB"])
+    check(r.returncode == 0, f"--task with --memory: {err_text(r)}")
 
 
 def case_encode_task_reads_its_region():

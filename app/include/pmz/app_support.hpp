@@ -107,6 +107,17 @@ class Progress {
   const char* last_stage_ = nullptr;
 };
 
+// The memory a process of this machine may use, in bytes: the smaller of its physical memory
+// and the memory limit of its cgroup (v2 memory.max, v1 memory.limit_in_bytes) when one is set;
+// 0 when neither can be read.
+uint64_t machine_memory();
+
+// A byte count as a user writes it: digits with an optional k, M, G or T (powers of 1024; "1.5G"
+// allowed) and an optional B ("512MB"). False on anything else and on more than 2^62 bytes.
+bool parse_byte_size(const std::string& text, uint64_t& bytes);
+// Bytes as the tools print them: "812 MB", "4.73 GB" (powers of 1024, three significant figures).
+std::string byte_size_text(uint64_t bytes);
+
 // Adds --quiet and --progress to a tool.
 void add_progress_options(CLI::App& app, bool& quiet, bool& force);
 
