@@ -916,12 +916,21 @@ def peak_kb(args):
     return p.returncode, usage.ru_maxrss
 
 
+def sanitized(binary):
+    """Whether binary was built with AddressSanitizer (its memory is then not the program's)."""
+    with open(binary, "rb") as f:
+        return b"__asan_init" in f.read()
+
+
 def case_encode_memory_budget():
     # --memory: an input whose encode needs more than the budget is refused once read (one line
     # naming it, exit 1, nothing written, no plan); the estimate it states lies below the
     # encode's measured peak and not far below; encodes run at once with -j share the budget
     # (two that do not fit together run one after the other: the process peaks as one does);
-    # a size that is not one is a usage error; a task of a plan takes --memory.
+    # a size that is not one is a usage error; a task of a plan takes --memory. Under
+    # AddressSanitizer (shadow memory, freed blocks held in quarantine) the peaks are not the
+    # program's: only the release build's are compared.
+    measured = not sanitized(tool("pmz-encode"))
     d = fresh("encode_memory")
     ply, ply2, out = (os.path.join(d, n) for n in ("t.ply", "u.ply", "t.pmz"))
     r = run([tool("pmz-generate"), "--faces", "300000", "-o", ply, "-q"])
@@ -938,18 +947,18 @@ def case_encode_memory_budget():
     m = re.search(r"needs about ([0-9.]+) (KB|MB|GB)", lines[0])
     check(m, f"no estimate in: {lines[0]}")
     estimate = float(m.group(1)) * {"KB": 1, "MB": 1024, "GB": 1024 * 1024}[m.group(2)]
-    check(0.5 * single <= estimate <= single,
+    check(not measured or 0.5 * single <= estimate <= single,
           f"estimate {estimate:.0f} KB against a measured peak of {single} KB")
     for size in ("12Q", "1.5", "-3G", ""):
         r = run([tool("pmz-encode"), ply, "-o", out, "--memory", size])
         check(r.returncode == 2 and "--memory" in err_text(r), f"--memory '{size}': {err_text(r)}")
     both = ["--out-dir", os.path.join(d, "out"), "-j", "2", "-q"]
     rc, unbounded = peak_kb([tool("pmz-encode"), ply, ply2] + both + ["--memory", "0"])
-    check(rc == 0 and unbounded > 1.7 * single,
+    check(rc == 0 and (not measured or unbounded > 1.7 * single),
           f"-j 2 unbounded: rc={rc}, peak {unbounded} KB against {single} KB for one")
     budget = f"{int(estimate * 1.5)}k"
     rc, shared = peak_kb([tool("pmz-encode"), ply, ply2] + both + ["--memory", budget])
-    check(rc == 0 and shared < 1.4 * single,
+    check(rc == 0 and (not measured or shared < 1.4 * single),
           f"-j 2 within {budget}: rc={rc}, peak {shared} KB against {single} KB for one")
     check(sorted(os.listdir(os.path.join(d, "out"))) == ["t.pmz", "u.pmz"], "-j 2 outputs")
     plan = os.path.join(d, "plan")
