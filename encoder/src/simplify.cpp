@@ -356,11 +356,12 @@ class Engine : public EngineSettings, public EngineLane {
   void set_queued(uint32_t v, Candidate c) {
     target[v] = c.target, key[v] = c.cost, stale[v] |= kQueued;
   }
-  // After a cell level: every live vertex with a neighbour in another cell gets its T and key
-  // recomputed when next needed.
+  // After a cell level: every live vertex with a neighbour in another cell gets its T (none
+  // under QEM, which keeps no face and vertex terms) and key recomputed when next needed.
   void hold_borders() {
+    const uint8_t flags = metric == Metric::qem ? kCellHeld : kTorsionStale | kCellHeld;
     for (uint32_t v = 0; v < m.vertex_count(); ++v)
-      if (m.out[v] != kNone && !inner[v]) stale[v] |= kTorsionStale | kCellHeld;
+      if (m.out[v] != kNone && !inner[v]) stale[v] |= flags;
   }
   void add_counts(const SimplifyStats& s) {
     stats.cost_evaluations += s.cost_evaluations, stats.legality_checks += s.legality_checks;
