@@ -10,7 +10,7 @@ shift || true
 packages=(build-essential cmake ninja-build pkg-config git
   libopenmesh-dev libcli11-dev googletest libgtest-dev
   libglfw3-dev libepoxy-dev libimgui-dev libstb-dev libcurl4-openssl-dev
-  xvfb xauth libgl1-mesa-dri python3 parallel nginx
+  xvfb xauth libgl1-mesa-dri python3 parallel nginx time
   libmeshoptimizer-dev draco libopenmesh-apps python3-matplotlib
   clang-14 libclang-rt-14-dev clang-format ccache
   emscripten chromium libtinygltf-dev nlohmann-json3-dev)

@@ -909,11 +909,17 @@ def case_encode_plan_tasks_assemble():
 
 
 def peak_kb(args):
-    """Runs args; (exit status, its peak resident set in KB)."""
-    p = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    _, status, usage = os.wait4(p.pid, 0)
-    p.returncode = os.waitstatus_to_exitcode(status)
-    return p.returncode, usage.ru_maxrss
+    """Runs args; (exit status, its peak resident set in KB). Measured by GNU time, which forks
+    the command from its own small image: a child of this process would report at least this
+    process's own peak (Linux keeps the largest resident set across fork and exec)."""
+    check(os.path.exists("/usr/bin/time"), "/usr/bin/time is not installed (README.md, set-up)")
+    report = os.path.join(WORK, "peak.txt")
+    r = subprocess.run(["/usr/bin/time", "-f", "%M", "-o", report] + args,
+                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    with open(report) as f:
+        lines = f.read().split()
+    check(lines and lines[-1].isdigit(), f"/usr/bin/time wrote no peak for {args[0]}")
+    return r.returncode, int(lines[-1])
 
 
 def sanitized(binary):
@@ -989,8 +995,10 @@ def case_encode_task_reads_its_region():
     os.rename(os.path.join(plan, "mesh"), os.path.join(d, "mesh"))
     rc, task_kb = peak_kb([tool("pmz-encode"), "--task", plan, "5"])
     check(rc == 0, f"the task of cell 5 without the mesh: exit {rc}")
-    # (A third: under AddressSanitizer its shadow memory weighs more on the small task.)
-    check(task_kb * 3 < plan_kb, f"a task took {task_kb} KB, the plan {plan_kb} KB")
+    # (A quarter; under AddressSanitizer, whose shadow memory weighs more on the small task,
+    # 40%: 14.7 MB against 88 MB, and 69 MB against 220 MB.)
+    share = 0.4 if sanitized(tool("pmz-encode")) else 0.25
+    check(task_kb < share * plan_kb, f"a task took {task_kb} KB, the plan {plan_kb} KB")
     r = run([tool("pmz-encode"), "--task", bare, "5"])
     check(r.returncode == 0, f"the task of cell 5 on the whole mesh: {err_text(r)}")
     with open(os.path.join(plan, "5.cell"), "rb") as a, open(os.path.join(bare, "5.cell"), "rb") as b:
