@@ -115,6 +115,8 @@ class VertexHeap {
     pos.assign(vertex_count, kNone);
   }
   bool empty() const { return entries.empty(); }
+  // Trades the per-vertex index with another empty heap's (a lane borrowing an idle engine's).
+  void swap_index(VertexHeap& o) { pos.swap(o.pos); }
   // Empties the heap in time of its size (a lane's heap serves many cells).
   void clear() {
     for (const Entry& e : entries) pos[e.v] = kNone;
@@ -299,6 +301,7 @@ struct EngineSettings {
 
 class Engine : public EngineSettings, public EngineLane {
   std::shared_ptr<EngineData> data_ = std::make_shared<EngineData>();
+  Engine* lender_ = nullptr;  // whose heap index and marks this lane holds (Borrow)
 
  public:
   Engine() = default;
@@ -318,6 +321,24 @@ class Engine : public EngineSettings, public EngineLane {
     cells = keyed = true;
     heap.reset(m.vertex_count());
     mark.assign(m.vertex_count(), 0);
+  }
+  // A lane working on `o`'s own heap index and marks while o is idle, its heap empty (the cell
+  // levels' first lane: two arrays of 4 bytes a vertex less at the encode's peak), until
+  // give_back(); the marks' stamps go on from o's, so o's later stamps stay new.
+  struct Borrow {};
+  Engine(Engine& o, Borrow) : EngineSettings(o), data_(o.data_), lender_(&o) {
+    cells = keyed = true;
+    heap.swap_index(o.heap);
+    mark.swap(o.mark);
+    mark_id = o.mark_id;
+  }
+  ~Engine() { give_back(); }
+  void give_back() {
+    if (!lender_) return;
+    lender_->heap.swap_index(heap);
+    lender_->mark.swap(mark);
+    lender_->mark_id = mark_id;
+    lender_ = nullptr;
   }
 
   EngineData* data() { return data_.get(); }
@@ -1779,11 +1800,12 @@ bool run_cell_levels(Engine& engine, const SimplifyOptions& options,
   const uint32_t threads =
       clusters.threads ? clusters.threads : std::max(1u, std::thread::hardware_concurrency());
   std::vector<std::unique_ptr<Engine>> lanes;
-  std::vector<uint32_t> index(n), members;  // per vertex its cell's index; vertices by cell
+  std::vector<uint32_t> index, members;  // per vertex its cell's index; vertices by cell
   std::vector<uint64_t> keys, start, cell_faces, removed;
   std::vector<float> keys_inside;
   // f(lane) on `workers` lanes, one on this thread.
   auto on_lanes = [&](size_t workers, auto&& f) {
+    if (lanes.empty()) lanes.push_back(std::make_unique<Engine>(engine, Engine::Borrow{}));
     while (lanes.size() < workers)
       lanes.push_back(std::make_unique<Engine>(engine, Engine::Lane{}));
     std::vector<std::thread> others;
@@ -1824,6 +1846,7 @@ bool run_cell_levels(Engine& engine, const SimplifyOptions& options,
     const size_t cells = keys.size();
     if (first.mode == FirstLevel::count) return first.cells = uint32_t(cells), true;
     start.assign(cells + 1, 0);
+    index.resize(n);
     for (uint32_t v = 0; v < n; ++v) {
       if (engine.m.out[v] == kNone) continue;
       index[v] =
@@ -1840,6 +1863,7 @@ bool run_cell_levels(Engine& engine, const SimplifyOptions& options,
     cell_faces.assign(cells, 0);
     for (uint32_t f = 0; f < engine.m.face_count(); ++f)
       if (engine.m.face_alive(f)) ++cell_faces[index[engine.m.vert[HalfEdgeMesh::half_edge(f, 0)]]];
+    std::vector<uint32_t>().swap(index);  // (not held while the cells run)
     parallel_halves(n, [&](uint32_t begin, uint32_t end) {
       for (uint32_t v = begin; v < end; ++v) {
         bool in = engine.m.out[v] != kNone;
@@ -1936,6 +1960,7 @@ bool run_cell_levels(Engine& engine, const SimplifyOptions& options,
     if (options.target_faces && engine.faces <= options.target_faces) break;
   }
   for (const std::unique_ptr<Engine>& lane : lanes) engine.add_counts(lane->stats);
+  if (!lanes.empty()) lanes[0]->give_back();
   engine.cells = false;
   engine.load_keys();
   levels.push_back({CellGrid{}, engine.record->size()});
