@@ -341,6 +341,13 @@ class Engine : public EngineSettings, public EngineLane {
     lender_ = nullptr;
   }
 
+  // Frees the engine's arrays and its own heap and marks; nothing may use it afterwards.
+  void release() {
+    data_.reset();
+    heap = VertexHeap();
+    std::vector<uint32_t>().swap(mark);
+  }
+
   EngineData* data() { return data_.get(); }
   HalfEdgeMesh& m = data_->m;
   Features& feat = data_->feat;
@@ -2018,7 +2025,6 @@ bool simplify_levels(const IndexedMesh& input, const SimplifyOptions& options, F
     return false;
   if (first.mode != FirstLevel::run) return true;
   engine.run(options);
-  out.mesh = input;
   out.collapses = std::move(collapses);
   out.levels = std::move(levels);
   auto input_id = [&](uint32_t v) { return v == kNone ? kNoVertex : order[v]; };
@@ -2032,6 +2038,10 @@ bool simplify_levels(const IndexedMesh& input, const SimplifyOptions& options, F
         out.base_indices.push_back(order[engine.m.vert[HalfEdgeMesh::half_edge(f, k)]]);
   engine.stats.total = seconds_since(t0);
   if (options.stats) *options.stats = engine.stats;
+  // The engine's arrays go before the input is copied: held with the copy, they made a second
+  // peak as high as the cell levels'.
+  engine.release();
+  out.mesh = input;
   return true;
 }
 
