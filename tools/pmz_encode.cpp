@@ -52,16 +52,16 @@ struct EncodeSettings {
 
 // The memory an encode of `mesh` takes at least at its peak (simplify() and write_pmz() hold
 // the whole mesh: docs/design.md section 10, "The memory budget"), from measured peaks of
-// geometry-only encodes (about 530-550 bytes a vertex on closed meshes with twice as many faces)
-// taken a little low, and with attributes the arrays that are certainly held at once: the input's
-// attributes twice (the input and the sequence's copy) and the engine's wedge per corner.
+// geometry-only encodes (about 505-525 bytes a vertex on closed meshes with twice as many faces)
+// taken a little low, and with attributes the arrays that are certainly held with the engine:
+// the input's attributes and the engine's wedge per corner.
 uint64_t encode_memory(const pmz::IndexedMesh& mesh) {
   const pmz::MeshAttributes& a = mesh.attributes;
   uint64_t attributes = a.corner_wedges.size() * 4 + a.wedge_vertices.size() * 4 +
                         a.normals.size() * 4 + a.colors.size() * 4 + a.face_materials.size() * 4;
   for (const std::vector<float>& t : a.texcoords) attributes += t.size() * 4;
-  if (!a.empty()) attributes = 2 * attributes + uint64_t(mesh.face_count()) * 16;
-  return uint64_t(mesh.vertex_count()) * 250 + uint64_t(mesh.face_count()) * 130 + attributes;
+  if (!a.empty()) attributes += uint64_t(mesh.face_count()) * 16;
+  return uint64_t(mesh.vertex_count()) * 240 + uint64_t(mesh.face_count()) * 125 + attributes;
 }
 
 // The encodes running at once (--out-dir -j) share the budget: each takes its estimate from it
