@@ -258,14 +258,12 @@ bool encode(const std::string& input, const std::string& output, const EncodeSet
     if (progress) progress->clear();
     return false;
   }
+  // What the encode's errors name: the plan, stdin or the input.
+  const std::string source = !plan.dir.empty() ? plan.dir : input == "-" ? "stdin" : input;
   MemoryShare share;
   if (!share.take(budget, encode_memory(mesh), error)) {
     if (progress) progress->clear();
-    return error = (!plan.dir.empty() ? plan.dir
-                    : input == "-"    ? "stdin"
-                                      : input) +
-                   ": " + error,
-           false;
+    return error = source + ": " + error, false;
   }
   pmz::SimplifyOptions sopt = settings.simplify;
   settings.simplifier.apply_clusters(sopt, mesh.vertex_count());
@@ -283,12 +281,7 @@ bool encode(const std::string& input, const std::string& output, const EncodeSet
   std::string glb;
   ok = ok && (!as_glb || wrap_in_glb(bytes, input, glb, error));
   if (progress) progress->clear();
-  if (!ok)
-    return error = (!plan.dir.empty() ? plan.dir
-                    : input == "-"    ? "stdin"
-                                      : input) +
-                   ": " + error,
-           false;
+  if (!ok) return error = source + ": " + error, false;
   if (as_glb)
     out.write(glb.data(), glb.size());
   else
@@ -565,6 +558,11 @@ int main(int argc, char** argv) {
   if (int rc = app_support::parse(app, argc, argv); rc >= 0) return rc;
 
   auto usage = app_support::usage_error;
+  // --memory in bytes into the settings (after a plan's options are parsed again too).
+  auto settle_memory = [&] { return memory_budget(memory, settings.memory_budget); };
+  auto memory_problem = [&] {
+    return "--memory " + memory + ": not a size (1500M, 8G, 0 or auto)";
+  };
   const bool task_mode = task_opt->count() > 0, assemble_mode = assemble_opt->count() > 0;
   if (task_mode || assemble_mode) {
     if (assemble_mode && out_opt->count() == 0) return usage("--assemble needs -o FILE");
@@ -611,8 +609,7 @@ int main(int argc, char** argv) {
     settings.glb = settings.glb || given_glb;
     if (threads_given) simplifier.cell_threads = given_threads;
     if (memory_given) memory = given_memory;
-    if (!memory_budget(memory, settings.memory_budget))
-      return usage("--memory " + memory + ": not a size (1500M, 8G, 0 or auto)");
+    if (!settle_memory()) return usage(memory_problem());
     simplifier.apply(settings.simplify);
     settings.simplify.clusters.position_bits = settings.write.position_bits;
     settings.stdin_format = format;
@@ -622,8 +619,7 @@ int main(int argc, char** argv) {
     return encode_one(inputs[0], output, settings, quiet, force_progress);
   }
   if (inputs.empty()) return usage("give an input mesh");
-  if (!memory_budget(memory, settings.memory_budget))
-    return usage("--memory " + memory + ": not a size (1500M, 8G, 0 or auto)");
+  if (!settle_memory()) return usage(memory_problem());
   if (plan_opt->count()) {
     if (inputs.size() != 1) return usage("--plan takes one input");
     if (const std::string problem = tool::stdin_input_problem(inputs, format); !problem.empty())

@@ -11,7 +11,8 @@ first feed to the last split (the file already read). Prints each round with the
 then the medians as one JSON line. --baseline DIR: another tree's build directory, whose
 pmz-decode, bench-stream and pmz-info run in the same rounds (before/after comparisons).
 --speed-pmz FILE: the same mesh encoded at the speed level (pmz-encode --level 1), run by the
---build tools in the same rounds as "speed" (target: pmz-decode at most 1.0x draco_decoder).
+--build tools in the same rounds as "speed". Targets: pmz-decode at most 1.0x draco_decoder's
+elapsed time, at most 1.8x with --threads 1.
 
   python3 tests/bench/decode_speed.py --build build --pmz bunny00-loop2.pmz \\
       --drc bunny00-loop2.drc [--speed-pmz bunny00-loop2-l1.pmz] [--baseline ../main/build]
